@@ -1,0 +1,116 @@
+#!/usr/bin/env python3
+"""The project's task runner. Needs nothing but Python >= 3.10.
+
+    python3 tasks.py book    build the HTML book into _build/html
+    python3 tasks.py test    unit tests, doctests, every notebook (nbval), the strict book
+                             build and the browser check of the built pages
+    python3 tasks.py lab     open the chapters in JupyterLab
+    python3 tasks.py serve   serve the built book on http://127.0.0.1:8000
+    python3 tasks.py clean   remove the build directory
+
+Each task creates the virtual environment ``.venv`` on first use and installs the package
+with everything the book and the tests need; later runs reuse it and only reinstall when
+``pyproject.toml`` changes.
+"""
+
+import hashlib
+import os
+import shutil
+import subprocess
+import sys
+import time
+import venv
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent
+VENV = ROOT / ".venv"
+BIN = VENV / ("Scripts" if os.name == "nt" else "bin")
+PYTHON = BIN / ("python.exe" if os.name == "nt" else "python")
+STAMP = VENV / ".dqlab-installed"
+BUILD = ROOT / "_build"
+
+
+def say(message):
+    print(f"\n==> {message}", flush=True)
+
+
+def run(*args, env=None):
+    """Run a command from the repository root; stop the task if it fails."""
+    print("$ " + " ".join(str(a) for a in args), flush=True)
+    env = dict(os.environ if env is None else env)
+    env["PATH"] = f"{BIN}{os.pathsep}{env.get('PATH', '')}"  # kernels start from the venv
+    result = subprocess.run([str(a) for a in args], cwd=ROOT, env=env)
+    if result.returncode != 0:
+        sys.exit(result.returncode)
+
+
+def ensure_environment():
+    """Create ``.venv`` and install ``dqlab[book,test,dev]`` unless already up to date."""
+    if sys.version_info < (3, 10):
+        sys.exit(f"Python >= 3.10 is required, this is {sys.version.split()[0]}")
+    wanted = hashlib.sha256((ROOT / "pyproject.toml").read_bytes()).hexdigest()
+    if PYTHON.exists() and STAMP.exists() and STAMP.read_text() == wanted:
+        return
+    if not PYTHON.exists():
+        say(f"creating the virtual environment {VENV.relative_to(ROOT)}")
+        try:
+            venv.create(VENV, with_pip=True)
+        except Exception as exc:  # e.g. Debian without python3-venv
+            sys.exit(f"could not create a virtual environment ({exc}); "
+                     "on Debian/Ubuntu install the package python3-venv first")
+    say("installing dqlab with the book, test and dev extras (first run only)")
+    run(PYTHON, "-m", "pip", "install", "--quiet", "--upgrade", "pip")
+    run(PYTHON, "-m", "pip", "install", "--quiet", "-e", ".[book,test,dev]")
+    STAMP.write_text(wanted)
+
+
+def build_book(strict):
+    flags = ["-n", "--keep-going"] + (["-W", "--all"] if strict else [])
+    run(BIN / "jupyter-book", "build", ".", *flags)
+
+
+def task_book():
+    ensure_environment()
+    start = time.time()
+    build_book(strict=False)
+    index = BUILD / "html" / "index.html"
+    say(f"book built in {time.time() - start:.0f} s: open {index}\n"
+        "    (or run 'python3 tasks.py serve' and visit http://127.0.0.1:8000)")
+
+
+def task_test():
+    ensure_environment()
+    start = time.time()
+    say("building the book with warnings as errors (executes every chapter)")
+    build_book(strict=True)
+    say("unit tests, doctests, notebooks (nbval) and the browser check of the built book")
+    run(PYTHON, "-m", "pytest", "tests", "dqlab", "book", "--doctest-modules", "--nbval-lax",
+        "--nbval-cell-timeout=120")
+    say(f"all checks passed in {time.time() - start:.0f} s")
+
+
+def task_lab():
+    ensure_environment()
+    run(BIN / "jupyter", "lab", "--notebook-dir", ROOT / "book")
+
+
+def task_serve():
+    html = BUILD / "html"
+    if not (html / "index.html").exists():
+        sys.exit("no built book yet: run 'python3 tasks.py book' first")
+    say("serving the book on http://127.0.0.1:8000 (Ctrl-C to stop)")
+    run(sys.executable, "-m", "http.server", "8000", "--bind", "127.0.0.1", "--directory", html)
+
+
+def task_clean():
+    shutil.rmtree(BUILD, ignore_errors=True)
+    say("removed _build")
+
+
+TASKS = {"book": task_book, "test": task_test, "lab": task_lab, "serve": task_serve,
+         "clean": task_clean}
+
+if __name__ == "__main__":
+    if len(sys.argv) != 2 or sys.argv[1] not in TASKS:
+        sys.exit(__doc__)
+    TASKS[sys.argv[1]]()
