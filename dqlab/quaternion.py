@@ -1,0 +1,1027 @@
+r"""Quaternion algebra and rotations by unit quaternions.
+
+Conventions (the book's preface): a quaternion is stored scalar first,
+``q = (w, x, y, z)`` for :math:`q = w + x\,i + y\,j + z\,k`, multiplied with the Hamilton
+rule :math:`i^2 = j^2 = k^2 = ijk = -1`; a unit quaternion acts on a vector by the active
+rotation :math:`p' = q\,p\,q^*`. Every function takes array-likes of shape ``(..., 4)``
+(quaternions), ``(..., 3)`` (vectors) or ``(..., 3, 3)`` (matrices) and broadcasts over the
+leading axes. pyquaternion uses the same order; scipy's ``(x, y, z, w)`` does not.
+
+Array functions do the work; :class:`Quaternion` is a thin wrapper for notebooks.
+"""
+
+import math
+
+import numpy as np
+
+from ._checks import (
+    as_float_array,
+    check_finite,
+    components,
+    float_array,
+    pack,
+    stack_components,
+)
+
+__all__ = [
+    "quaternion_product", "quaternion_conjugate", "quaternion_norm", "quaternion_inverse",
+    "quaternion_normalize", "check_unit_quaternion", "rotate_vector",
+    "quaternion_from_axis_angle", "axis_angle_from_quaternion", "quaternion_from_matrix",
+    "matrix_from_quaternion", "quaternion_exp", "quaternion_log", "quaternion_power", "slerp",
+    "quaternion_distance", "quaternion_from_pyquaternion", "pyquaternion_from_quaternion",
+    "quaternion_identity", "Quaternion",
+]
+
+_Q = (4,)
+_V = (3,)
+_M = (3, 3)
+
+
+# --------------------------------------------------------------------------------------
+# Input handling (kept lean: a float64 ndarray goes through untouched)
+
+
+def _in(x, name, trailing=_Q):
+    return float_array(x, name, trailing)
+
+
+def _batch(*arrays):
+    """True when any input has leading axes; then every input is checked for NaN/inf first."""
+    if any(a.ndim > len(t) for a, _, t in arrays):
+        for a, name, _ in arrays:
+            check_finite(a, name)
+        return True
+    return False
+
+
+def _unit_or_raise(parts, name, tol):
+    """Raise unless the quaternion given by its components has norm 1 within ``tol``."""
+    w, x, y, z = parts
+    n2 = w * w + x * x + y * y + z * z
+    if isinstance(n2, np.ndarray):
+        if not np.isfinite(n2).all():
+            raise ValueError(f"{name} contains NaN or infinity")
+        bad = np.abs(np.sqrt(n2) - 1.0) > tol
+        if bad.any():
+            n = np.sqrt(n2)[bad].flat[0]
+            _raise_not_unit(name, n, tol)
+        return
+    if not n2 - n2 == 0.0:
+        raise ValueError(f"{name} contains NaN or infinity")
+    if abs(math.sqrt(n2) - 1.0) > tol:
+        _raise_not_unit(name, math.sqrt(n2), tol)
+
+
+def _raise_not_unit(name, n, tol):
+    if n == 0.0:
+        raise ValueError(f"{name} is the zero quaternion, which is not a rotation")
+    raise ValueError(
+        f"{name} must be a unit quaternion (norm 1 within {tol:g}), got norm {n:.12g}; "
+        "normalise it with quaternion_normalize first")
+
+
+def _sqrt(x):
+    return np.sqrt(x) if isinstance(x, np.ndarray) else math.sqrt(x)
+
+
+def _atan2(y, x):
+    if isinstance(y, np.ndarray) or isinstance(x, np.ndarray):
+        return np.arctan2(y, x)
+    return math.atan2(y, x)
+
+
+# --------------------------------------------------------------------------------------
+# Component formulas (floats or arrays)
+
+
+def _mul(aw, ax, ay, az, bw, bx, by, bz):
+    return (aw * bw - ax * bx - ay * by - az * bz,
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw)
+
+
+def _rot(w, x, y, z, vx, vy, vz):
+    # p' = p + w t + u x t with t = 2 u x p, u = (x, y, z): q p q* expanded for |q| = 1
+    tx = 2.0 * (y * vz - z * vy)
+    ty = 2.0 * (z * vx - x * vz)
+    tz = 2.0 * (x * vy - y * vx)
+    return (vx + w * tx + (y * tz - z * ty),
+            vy + w * ty + (z * tx - x * tz),
+            vz + w * tz + (x * ty - y * tx))
+
+
+def _matrix(w, x, y, z):
+    xx, yy, zz = x * x, y * y, z * z
+    xy, xz, yz = x * y, x * z, y * z
+    wx, wy, wz = w * x, w * y, w * z
+    return (1.0 - 2.0 * (yy + zz), 2.0 * (xy - wz), 2.0 * (xz + wy),
+            2.0 * (xy + wz), 1.0 - 2.0 * (xx + zz), 2.0 * (yz - wx),
+            2.0 * (xz - wy), 2.0 * (yz + wx), 1.0 - 2.0 * (xx + yy))
+
+
+def _from_matrix(r00, r01, r02, r10, r11, r12, r20, r21, r22):
+    # K = 4 q q^T written with the entries of R (active convention). Its diagonal holds
+    # 4w^2, 4x^2, 4y^2, 4z^2; the row of the largest one, divided by 2 sqrt(K_kk), is q.
+    # This is Shepperd's method: the division is always by the largest component.
+    tr = r00 + r11 + r22
+    K = ((1.0 + tr, r21 - r12, r02 - r20, r10 - r01),
+         (r21 - r12, 1.0 + r00 - r11 - r22, r01 + r10, r02 + r20),
+         (r02 - r20, r01 + r10, 1.0 - r00 + r11 - r22, r12 + r21),
+         (r10 - r01, r02 + r20, r12 + r21, 1.0 - r00 - r11 + r22))
+    if not isinstance(tr, np.ndarray):
+        diag = (K[0][0], K[1][1], K[2][2], K[3][3])
+        k = diag.index(max(diag))
+        row = K[k]
+        s = 0.5 / math.sqrt(row[k])
+        if row[0] < 0.0:
+            s = -s  # canonical sign: w >= 0
+        return tuple(c * s for c in row)
+    diag = np.stack(np.broadcast_arrays(K[0][0], K[1][1], K[2][2], K[3][3]), axis=-1)
+    k = np.argmax(diag, axis=-1)
+    row = [np.choose(k, (K[0][j], K[1][j], K[2][j], K[3][j])) for j in range(4)]
+    s = 0.5 / np.sqrt(np.take_along_axis(diag, k[..., None], axis=-1)[..., 0])
+    s = np.where(row[0] < 0.0, -s, s)
+    return tuple(c * s for c in row)
+
+
+# --------------------------------------------------------------------------------------
+# Algebra
+
+
+def quaternion_identity(shape=()):
+    """Identity quaternion(s) ``(1, 0, 0, 0)`` of shape ``shape + (4,)``.
+
+    Examples
+    --------
+    >>> quaternion_identity()
+    array([1., 0., 0., 0.])
+    >>> quaternion_identity((2,)).shape
+    (2, 4)
+    """
+    q = np.zeros(tuple(np.atleast_1d(shape).astype(int)) + (4,))
+    q[..., 0] = 1.0
+    return q
+
+
+def quaternion_product(a, b):
+    r"""Hamilton product :math:`a b` of quaternions.
+
+    .. math::
+
+        a b = (a_w b_w - \mathbf a\cdot\mathbf b,\;
+               a_w \mathbf b + b_w \mathbf a + \mathbf a \times \mathbf b)
+
+    Parameters
+    ----------
+    a, b : array_like, shape (..., 4)
+        Quaternions ``(w, x, y, z)``; leading axes broadcast.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        The product. As rotations, :math:`ab` applies ``b`` first, then ``a``.
+
+    Raises
+    ------
+    ValueError
+        If a shape is wrong or an input holds NaN or infinity.
+
+    Examples
+    --------
+    >>> i, j = [0, 1, 0, 0], [0, 0, 1, 0]
+    >>> quaternion_product(i, j)        # i j = k
+    array([0., 0., 0., 1.])
+    >>> quaternion_product(j, i)        # j i = -k
+    array([ 0.,  0.,  0., -1.])
+    """
+    a = _in(a, "a")
+    b = _in(b, "b")
+    _batch((a, "a", _Q), (b, "b", _Q))
+    return pack(_mul(*components(a), *components(b)), (a, "a", _Q), (b, "b", _Q))
+
+
+def quaternion_conjugate(q):
+    r"""Conjugate :math:`q^* = (w, -x, -y, -z)`; the inverse rotation when ``q`` is unit.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+
+    Examples
+    --------
+    >>> quaternion_conjugate([1, 2, 3, 4])
+    array([ 1., -2., -3., -4.])
+    """
+    q = as_float_array(q, "q", _Q)
+    out = -q
+    out[..., 0] = q[..., 0]
+    return out
+
+
+def quaternion_norm(q):
+    r"""Norm :math:`|q| = \sqrt{w^2 + x^2 + y^2 + z^2}`.
+
+    It is multiplicative: :math:`|ab| = |a|\,|b|`.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+
+    Returns
+    -------
+    ndarray, shape (...)
+
+    Examples
+    --------
+    >>> float(quaternion_norm([1, 1, 1, 1]))
+    2.0
+    """
+    q = as_float_array(q, "q", _Q)
+    return np.sqrt(np.sum(q * q, axis=-1))
+
+
+def _nonzero_norm(q, name):
+    n = np.sqrt(np.sum(q * q, axis=-1))
+    if np.any(n == 0.0):
+        raise ValueError(f"{name} is the zero quaternion, which has no inverse or direction")
+    return n
+
+
+def quaternion_inverse(q):
+    r"""Inverse :math:`q^{-1} = q^* / |q|^2` (equal to :math:`q^*` for a unit quaternion).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+        Non-zero quaternions.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+
+    Raises
+    ------
+    ValueError
+        If ``q`` is zero, holds NaN/inf, or has the wrong shape.
+
+    Examples
+    --------
+    >>> quaternion_inverse([0, 0, 2, 0]) + 0.0
+    array([ 0. ,  0. , -0.5,  0. ])
+    """
+    q = as_float_array(q, "q", _Q)
+    n = _nonzero_norm(q, "q")
+    return quaternion_conjugate(q) / (n * n)[..., None]
+
+
+def quaternion_normalize(q):
+    r"""Unit quaternion :math:`q / |q|` with the same direction.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+        Non-zero, finite quaternions.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+
+    Raises
+    ------
+    ValueError
+        If ``q`` is zero, holds NaN/inf, or has the wrong shape.
+
+    Examples
+    --------
+    >>> quaternion_normalize([0, 3, 0, 4])
+    array([0. , 0.6, 0. , 0.8])
+    """
+    q = as_float_array(q, "q", _Q)
+    return q / _nonzero_norm(q, "q")[..., None]
+
+
+def check_unit_quaternion(q, tol=1e-9, name="q"):
+    r"""Return ``q`` as a float array, or raise if it is not a unit quaternion.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+    tol : float
+        Largest accepted :math:`\bigl||q| - 1\bigr|`.
+    name : str
+        Name used in the error message.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+
+    Raises
+    ------
+    ValueError
+        Wrong shape, NaN/inf, zero quaternion, or norm not 1 within ``tol``.
+
+    Examples
+    --------
+    >>> check_unit_quaternion([0, 0, 0, 1])
+    array([0., 0., 0., 1.])
+    >>> check_unit_quaternion([1, 1, 0, 0])
+    Traceback (most recent call last):
+    ...
+    ValueError: q must be a unit quaternion (norm 1 within 1e-09), got norm 1.41421356237; ...
+    """
+    q = as_float_array(q, name, _Q)
+    _unit_or_raise(components(q), name, tol)
+    return q
+
+
+def rotate_vector(q, v, *, tol=1e-9):
+    r"""Rotate vectors by unit quaternions: :math:`v' = q\,v\,q^*` (active rotation).
+
+    With :math:`q = (w, \mathbf u)` and :math:`\mathbf t = 2\,\mathbf u \times \mathbf v`
+    this is computed as
+
+    .. math::
+
+        \mathbf v' = \mathbf v + w\,\mathbf t + \mathbf u \times \mathbf t .
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+        Unit quaternions (not normalised here: a non-unit ``q`` raises).
+    v : array_like, shape (..., 3)
+        Vectors; leading axes broadcast with those of ``q``.
+    tol : float
+        Tolerance on :math:`|q| = 1`.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+
+    Raises
+    ------
+    ValueError
+        Wrong shapes, NaN/inf, or ``q`` not unit.
+
+    Examples
+    --------
+    The thesis's example, the point (2, 1, 1) turned by 90 degrees about z:
+
+    >>> import numpy as np
+    >>> q = quaternion_from_axis_angle([0, 0, 1], np.pi / 2)
+    >>> np.round(rotate_vector(q, [2, 1, 1]), 12)
+    array([-1.,  2.,  1.])
+    """
+    q = _in(q, "q")
+    v = _in(v, "v", _V)
+    _batch((q, "q", _Q), (v, "v", _V))
+    qc = components(q)
+    _unit_or_raise(qc, "q", tol)
+    return pack(_rot(*qc, *components(v)), (v, "v", _V))
+
+
+# --------------------------------------------------------------------------------------
+# Conversions
+
+
+def quaternion_from_axis_angle(axis, angle):
+    r"""Unit quaternion of the rotation by ``angle`` about ``axis``.
+
+    .. math::
+
+        q = \left(\cos\tfrac{\theta}{2},\; \sin\tfrac{\theta}{2}\,\mathbf n\right),
+        \qquad \mathbf n = \mathbf{axis} / |\mathbf{axis}|
+
+    Parameters
+    ----------
+    axis : array_like, shape (..., 3)
+        Rotation axes, normalised here (a zero axis raises).
+    angle : array_like, shape (...)
+        Angles in radians (right-hand rule).
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+
+    Raises
+    ------
+    ValueError
+        Zero axis, NaN/inf, wrong shape.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> np.round(quaternion_from_axis_angle([0, 0, 2], np.pi / 2), 6)
+    array([0.707107, 0.      , 0.      , 0.707107])
+    """
+    axis = as_float_array(axis, "axis", _V)
+    angle = as_float_array(angle, "angle")
+    n = np.sqrt(np.sum(axis * axis, axis=-1))
+    if np.any(n == 0.0):
+        raise ValueError("axis is the zero vector, which has no direction")
+    half = 0.5 * angle
+    s = np.sin(half) / n
+    return stack_components([np.cos(half)] + [axis[..., i] * s for i in range(3)])
+
+
+def axis_angle_from_quaternion(q, *, tol=1e-9):
+    r"""Axis and angle of the rotation of a unit quaternion.
+
+    .. math::
+
+        \theta = 2\,\operatorname{atan2}(|\mathbf u|, |w|) \in [0, \pi], \qquad
+        \mathbf n = \operatorname{sign}(w)\,\mathbf u / |\mathbf u|
+
+    ``q`` and ``-q`` give the same result. For the identity (:math:`\theta = 0`) the axis
+    is undetermined and ``(1, 0, 0)`` is returned.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+        Unit quaternions.
+    tol : float
+        Tolerance on :math:`|q| = 1`.
+
+    Returns
+    -------
+    axis : ndarray, shape (..., 3)
+        Unit axes.
+    angle : ndarray, shape (...)
+        Angles in :math:`[0, \pi]`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> axis, angle = axis_angle_from_quaternion([0, 0, 0, -1])
+    >>> axis, round(float(angle), 12)
+    (array([ 0.,  0., -1.]), 3.14159265359)
+    """
+    q = check_unit_quaternion(q, tol)
+    u = q[..., 1:]
+    s = np.sqrt(np.sum(u * u, axis=-1))
+    w = q[..., 0]
+    angle = 2.0 * np.arctan2(s, np.abs(w))
+    sign = np.where(w < 0.0, -1.0, 1.0)
+    zero = s == 0.0
+    axis = u * (sign / np.where(zero, 1.0, s))[..., None]
+    axis = np.where(zero[..., None], np.array([1.0, 0.0, 0.0]), axis)
+    return axis, angle
+
+
+def quaternion_from_matrix(R, *, tol=1e-9):
+    r"""Unit quaternion (with :math:`w \ge 0`) of a rotation matrix, by Shepperd's method.
+
+    For the active convention :math:`R\,\mathbf v = q\,\mathbf v\,q^*` the symmetric matrix
+    :math:`K = 4\,q q^\mathsf{T}` is a linear function of the entries of :math:`R`:
+
+    .. math::
+
+        K = \begin{pmatrix}
+        1 + r_{00} + r_{11} + r_{22} & r_{21} - r_{12} & r_{02} - r_{20} & r_{10} - r_{01}\\
+        r_{21} - r_{12} & 1 + r_{00} - r_{11} - r_{22} & r_{01} + r_{10} & r_{02} + r_{20}\\
+        r_{02} - r_{20} & r_{01} + r_{10} & 1 - r_{00} + r_{11} - r_{22} & r_{12} + r_{21}\\
+        r_{10} - r_{01} & r_{02} + r_{20} & r_{12} + r_{21} & 1 - r_{00} - r_{11} + r_{22}
+        \end{pmatrix}.
+
+    Of the four ways to read :math:`q` off :math:`K` (the thesis's four cases), the one
+    dividing by the largest component, :math:`q = K_{k\cdot} / (2\sqrt{K_{kk}})` with
+    :math:`k = \arg\max_k K_{kk}`, is taken, so the result is accurate to rounding for
+    every angle, including 180 degrees. The thesis prints the four cases for the passive
+    convention; they return :math:`q^*`.
+
+    Parameters
+    ----------
+    R : array_like, shape (..., 3, 3)
+        Rotation matrices (checked: orthonormal with determinant +1 within ``tol``).
+    tol : float
+        Tolerance of the rotation-matrix check.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        Unit quaternions with :math:`w \ge 0`.
+
+    Raises
+    ------
+    ValueError
+        If ``R`` is not a rotation matrix, holds NaN/inf, or has the wrong shape.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> R = np.diag([-1.0, -1.0, 1.0])          # half turn about z
+    >>> quaternion_from_matrix(R)
+    array([0., 0., 0., 1.])
+    """
+    from .rotations import check_rotation_matrix
+
+    R = check_rotation_matrix(R, tol)
+    if R.ndim == 2:
+        parts = R.ravel().tolist()
+    else:
+        parts = [R[..., i, j] for i in range(3) for j in range(3)]
+    return stack_components(_from_matrix(*parts))
+
+
+def matrix_from_quaternion(q, *, tol=1e-9):
+    r"""Rotation matrix of a unit quaternion (active: :math:`R\mathbf v = q\mathbf v q^*`).
+
+    .. math::
+
+        R = \begin{pmatrix}
+        1 - 2(y^2 + z^2) & 2(xy - wz) & 2(xz + wy)\\
+        2(xy + wz) & 1 - 2(x^2 + z^2) & 2(yz - wx)\\
+        2(xz - wy) & 2(yz + wx) & 1 - 2(x^2 + y^2)
+        \end{pmatrix}
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+        Unit quaternions (a non-unit ``q`` raises; normalise it first).
+    tol : float
+        Tolerance on :math:`|q| = 1`.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> q = quaternion_from_axis_angle([0, 0, 1], np.pi / 2)
+    >>> np.round(matrix_from_quaternion(q), 12)
+    array([[ 0., -1.,  0.],
+           [ 1.,  0.,  0.],
+           [ 0.,  0.,  1.]])
+    """
+    q = _in(q, "q")
+    _batch((q, "q", _Q))
+    qc = components(q)
+    _unit_or_raise(qc, "q", tol)
+    m = stack_components(_matrix(*qc))
+    return m.reshape(m.shape[:-1] + (3, 3))
+
+
+# --------------------------------------------------------------------------------------
+# Exponential, logarithm, power, interpolation
+
+
+def quaternion_exp(q):
+    r"""Quaternion exponential.
+
+    .. math::
+
+        \exp(w, \mathbf v) = e^{w}\left(\cos|\mathbf v|,\;
+        \sin|\mathbf v|\,\frac{\mathbf v}{|\mathbf v|}\right)
+
+    The exponential of a pure quaternion :math:`(0, \tfrac{\theta}{2}\mathbf n)` is the
+    rotation by :math:`\theta` about :math:`\mathbf n`.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> np.round(quaternion_exp([0, 0, 0, np.pi / 4]), 6)
+    array([0.707107, 0.      , 0.      , 0.707107])
+    """
+    q = as_float_array(q, "q", _Q)
+    v = q[..., 1:]
+    a = np.sqrt(np.sum(v * v, axis=-1))
+    e = np.exp(q[..., 0])
+    # sin(a)/a written with np.sinc, which is exact at a = 0
+    s = e * np.sinc(a / np.pi)
+    out = np.empty(np.shape(q))
+    out[..., 0] = e * np.cos(a)
+    out[..., 1:] = v * s[..., None]
+    if not np.isfinite(out).all():
+        raise ValueError("q is too large: its exponential overflows")
+    return out
+
+
+def quaternion_log(q):
+    r"""Quaternion logarithm (principal value).
+
+    .. math::
+
+        \log q = \left(\ln|q|,\; \operatorname{atan2}(|\mathbf u|, w)\,
+        \frac{\mathbf u}{|\mathbf u|}\right)
+
+    For a unit quaternion of angle :math:`\theta` about :math:`\mathbf n` this is
+    :math:`(0, \tfrac{\theta}{2}\mathbf n)`. For a negative real ``q`` the direction is
+    undetermined and :math:`(1, 0, 0)` is used.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+        Non-zero quaternions.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+
+    Raises
+    ------
+    ValueError
+        If ``q`` is zero (its logarithm is :math:`-\infty`), NaN/inf, or of wrong shape.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> q = quaternion_from_axis_angle([0, 1, 0], np.pi / 2)
+    >>> np.round(quaternion_log(q) / np.pi, 12)
+    array([0.  , 0.  , 0.25, 0.  ])
+    """
+    q = as_float_array(q, "q", _Q)
+    n = _nonzero_norm(q, "q")
+    u = q[..., 1:]
+    s = np.sqrt(np.sum(u * u, axis=-1))
+    phi = np.arctan2(s, q[..., 0])
+    zero = s == 0.0
+    out = np.empty(np.shape(q))
+    out[..., 0] = np.log(n)
+    out[..., 1:] = u * (phi / np.where(zero, 1.0, s))[..., None]
+    out[..., 1] = np.where(zero, phi, out[..., 1])  # phi = pi for negative reals, else 0
+    return out
+
+
+def quaternion_power(q, t):
+    r"""Power :math:`q^t = \exp(t \log q)` of a non-zero quaternion.
+
+    For a unit quaternion of angle :math:`\theta` about :math:`\mathbf n`, :math:`q^t`
+    is the rotation by :math:`t\theta` about the same axis. Note that :math:`q` and
+    :math:`-q` have different powers (they travel the long and the short way round).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+    t : array_like, shape (...)
+        Exponents; broadcast with the leading axes of ``q``.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> q = quaternion_from_axis_angle([0, 0, 1], np.pi / 2)
+    >>> np.allclose(quaternion_power(q, 2), [0, 0, 0, 1])
+    True
+    """
+    t = as_float_array(t, "t")
+    return quaternion_exp(quaternion_log(q) * t[..., None])
+
+
+def slerp(q0, q1, t, *, tol=1e-9):
+    r"""Spherical linear interpolation between unit quaternions, along the shortest arc.
+
+    If :math:`q_0 \cdot q_1 < 0`, :math:`q_1` is replaced by :math:`-q_1` (same rotation),
+    so the path turns by at most 180 degrees. With :math:`\Omega` the angle between
+    :math:`q_0` and :math:`q_1` in :math:`\mathbb R^4`:
+
+    .. math::
+
+        \operatorname{slerp}(q_0, q_1, t)
+        = \frac{\sin((1-t)\Omega)}{\sin\Omega} q_0 + \frac{\sin(t\Omega)}{\sin\Omega} q_1
+        = q_0 (q_0^* q_1)^t .
+
+    The weights are computed with :math:`\operatorname{sinc}`, so :math:`q_0 = q_1` needs
+    no special case.
+
+    Parameters
+    ----------
+    q0, q1 : array_like, shape (..., 4)
+        Unit quaternions (checked).
+    t : array_like, shape (...)
+        Interpolation parameters (0 gives ``q0``, 1 gives ``q1`` or ``-q1``).
+    tol : float
+        Tolerance on the unit norms.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        Unit quaternions; leading axes are those of ``q0``, ``q1`` and ``t`` broadcast.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> q0 = [1, 0, 0, 0]
+    >>> q1 = quaternion_from_axis_angle([0, 0, 1], np.pi / 2)
+    >>> q = slerp(q0, q1, 0.5)
+    >>> round(float(np.degrees(axis_angle_from_quaternion(q)[1])), 9)
+    45.0
+    """
+    q0 = check_unit_quaternion(q0, tol, "q0")
+    q1 = check_unit_quaternion(q1, tol, "q1")
+    t = as_float_array(t, "t")
+    d = np.sum(q0 * q1, axis=-1)
+    q1 = np.where((d < 0.0)[..., None], -q1, q1)
+    omega = 2.0 * np.arctan2(np.linalg.norm(q0 - q1, axis=-1),
+                             np.linalg.norm(q0 + q1, axis=-1))
+    sinc = np.sinc(omega / np.pi)
+    a = (1.0 - t) * np.sinc((1.0 - t) * omega / np.pi) / sinc
+    b = t * np.sinc(t * omega / np.pi) / sinc
+    return a[..., None] * q0 + b[..., None] * q1
+
+
+def quaternion_distance(q0, q1, *, tol=1e-9):
+    r"""Angle of the rotation taking ``q0`` to ``q1``, in :math:`[0, \pi]`.
+
+    .. math::
+
+        d(q_0, q_1) = 4\,\operatorname{atan2}\bigl(|q_0 - q_1|,\; |q_0 + q_1|\bigr),
+        \quad\text{with } q_1 \to -q_1 \text{ if } q_0\cdot q_1 < 0 .
+
+    This is the angle of :math:`q_0^* q_1`; it is the same for :math:`\pm q_0`,
+    :math:`\pm q_1`, and is accurate for tiny angles (no ``arccos``).
+
+    Parameters
+    ----------
+    q0, q1 : array_like, shape (..., 4)
+        Unit quaternions.
+    tol : float
+        Tolerance on the unit norms.
+
+    Returns
+    -------
+    ndarray, shape (...)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> a = quaternion_from_axis_angle([1, 0, 0], 0.1)
+    >>> b = quaternion_from_axis_angle([1, 0, 0], -0.2)
+    >>> round(float(quaternion_distance(a, -b)), 12)
+    0.3
+    """
+    q0 = check_unit_quaternion(q0, tol, "q0")
+    q1 = check_unit_quaternion(q1, tol, "q1")
+    d = np.sum(q0 * q1, axis=-1)
+    q1 = np.where((d < 0.0)[..., None], -q1, q1)
+    return 4.0 * np.arctan2(np.linalg.norm(q0 - q1, axis=-1),
+                            np.linalg.norm(q0 + q1, axis=-1))
+
+
+# --------------------------------------------------------------------------------------
+# pyquaternion interoperability
+
+
+def quaternion_from_pyquaternion(pq):
+    """Array ``(w, x, y, z)`` from a ``pyquaternion.Quaternion`` (or a nested list of them).
+
+    pyquaternion stores the scalar first too, so no reordering is needed.
+
+    Parameters
+    ----------
+    pq : pyquaternion.Quaternion or sequence of them
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+
+    Examples
+    --------
+    >>> from pyquaternion import Quaternion as PyQuaternion
+    >>> quaternion_from_pyquaternion(PyQuaternion(1, 2, 3, 4))
+    array([1., 2., 3., 4.])
+    """
+    if hasattr(pq, "elements"):
+        return as_float_array(pq.elements, "pq", _Q).copy()
+    return np.array([quaternion_from_pyquaternion(p) for p in pq], dtype=float)
+
+
+def pyquaternion_from_quaternion(q):
+    """``pyquaternion.Quaternion`` from an array ``(w, x, y, z)``.
+
+    Parameters
+    ----------
+    q : array_like, shape (4,) or (..., 4)
+
+    Returns
+    -------
+    pyquaternion.Quaternion, or nested lists of them for a batch
+
+    Examples
+    --------
+    >>> pq = pyquaternion_from_quaternion([1, 0, 0, 0])
+    >>> type(pq).__name__, pq.elements
+    ('Quaternion', array([1., 0., 0., 0.]))
+    """
+    from pyquaternion import Quaternion as PyQuaternion
+
+    q = as_float_array(q, "q", _Q)
+    if q.ndim == 1:
+        return PyQuaternion(*q.tolist())
+    return [pyquaternion_from_quaternion(p) for p in q]
+
+
+# --------------------------------------------------------------------------------------
+# Class wrapper
+
+
+class Quaternion:
+    """A quaternion, or a batch of them, for readable notebook code.
+
+    A thin wrapper over the array functions of this module: every method calls one of
+    them, nothing is computed twice. ``.array`` is the ``(..., 4)`` float array.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4), or Quaternion
+        Components ``(w, x, y, z)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> Qz = Quaternion.from_axis_angle([0, 0, 1], np.pi / 2)
+    >>> Qy = Quaternion.from_axis_angle([0, 1, 0], np.pi)
+    >>> (Qy * Qz).apply([1, 0, 0]).round(12) + 0.0
+    array([0., 1., 0.])
+    >>> Quaternion([1, 2, 3, 4])
+    Quaternion([1., 2., 3., 4.])
+    """
+
+    __slots__ = ("array",)
+    __array_priority__ = 20
+
+    def __init__(self, q):
+        if isinstance(q, Quaternion):
+            q = q.array
+        self.array = as_float_array(q, "q", _Q)
+
+    # construction
+    @classmethod
+    def identity(cls, shape=()):
+        """The identity rotation ``(1, 0, 0, 0)`` (or a batch of them)."""
+        return cls(quaternion_identity(shape))
+
+    @classmethod
+    def from_axis_angle(cls, axis, angle):
+        """See :func:`quaternion_from_axis_angle`."""
+        return cls(quaternion_from_axis_angle(axis, angle))
+
+    @classmethod
+    def from_matrix(cls, R, *, tol=1e-9):
+        """See :func:`quaternion_from_matrix`."""
+        return cls(quaternion_from_matrix(R, tol=tol))
+
+    @classmethod
+    def from_pyquaternion(cls, pq):
+        """See :func:`quaternion_from_pyquaternion`."""
+        return cls(quaternion_from_pyquaternion(pq))
+
+    @classmethod
+    def exp(cls, q):
+        """See :func:`quaternion_exp`."""
+        return cls(quaternion_exp(_arr(q)))
+
+    # components
+    @property
+    def w(self):
+        """Scalar part, shape (...)."""
+        return self.array[..., 0]
+
+    @property
+    def vector(self):
+        """Vector part ``(x, y, z)``, shape (..., 3)."""
+        return self.array[..., 1:]
+
+    @property
+    def shape(self):
+        """Leading (batch) shape: ``()`` for a single quaternion."""
+        return self.array.shape[:-1]
+
+    def __len__(self):
+        if not self.shape:
+            raise TypeError("a single Quaternion has no len()")
+        return self.shape[0]
+
+    def __getitem__(self, index):
+        return Quaternion(self.array[index])
+
+    def __array__(self, dtype=None, copy=None):
+        return self.array if dtype is None else self.array.astype(dtype)
+
+    # algebra
+    def __mul__(self, other):
+        if isinstance(other, Quaternion):
+            return Quaternion(quaternion_product(self.array, other.array))
+        if np.ndim(other) == 0:
+            return Quaternion(self.array * float(other))
+        return NotImplemented
+
+    def __rmul__(self, other):
+        if np.ndim(other) == 0:
+            return Quaternion(self.array * float(other))
+        return NotImplemented
+
+    def __truediv__(self, other):
+        if np.ndim(other) == 0:
+            return Quaternion(self.array / float(other))
+        return NotImplemented
+
+    def __add__(self, other):
+        if isinstance(other, Quaternion):
+            return Quaternion(self.array + other.array)
+        return NotImplemented
+
+    def __sub__(self, other):
+        if isinstance(other, Quaternion):
+            return Quaternion(self.array - other.array)
+        return NotImplemented
+
+    def __neg__(self):
+        return Quaternion(-self.array)
+
+    def __pow__(self, t):
+        return self.power(t)
+
+    def __eq__(self, other):
+        if isinstance(other, Quaternion):
+            return bool(np.array_equal(self.array, other.array))
+        return NotImplemented
+
+    __hash__ = None
+
+    def conjugate(self):
+        """See :func:`quaternion_conjugate`."""
+        return Quaternion(quaternion_conjugate(self.array))
+
+    def inverse(self):
+        """See :func:`quaternion_inverse`."""
+        return Quaternion(quaternion_inverse(self.array))
+
+    def norm(self):
+        """See :func:`quaternion_norm` (a float for a single quaternion)."""
+        n = quaternion_norm(self.array)
+        return float(n) if n.ndim == 0 else n
+
+    def normalized(self):
+        """See :func:`quaternion_normalize`."""
+        return Quaternion(quaternion_normalize(self.array))
+
+    def log(self):
+        """See :func:`quaternion_log`."""
+        return Quaternion(quaternion_log(self.array))
+
+    def power(self, t):
+        """See :func:`quaternion_power`."""
+        return Quaternion(quaternion_power(self.array, t))
+
+    # rotations
+    def apply(self, v):
+        """Rotate vectors ``(..., 3)``; see :func:`rotate_vector`."""
+        return rotate_vector(self.array, v)
+
+    rotate = apply
+
+    def matrix(self):
+        """See :func:`matrix_from_quaternion`."""
+        return matrix_from_quaternion(self.array)
+
+    def axis_angle(self):
+        """``(axis, angle)``; see :func:`axis_angle_from_quaternion`."""
+        return axis_angle_from_quaternion(self.array)
+
+    def angle(self):
+        """Rotation angle in :math:`[0, \\pi]`."""
+        a = axis_angle_from_quaternion(self.array)[1]
+        return float(a) if a.ndim == 0 else a
+
+    def distance(self, other):
+        """See :func:`quaternion_distance`."""
+        d = quaternion_distance(self.array, _arr(other))
+        return float(d) if d.ndim == 0 else d
+
+    def slerp(self, other, t):
+        """See :func:`slerp`."""
+        return Quaternion(slerp(self.array, _arr(other), t))
+
+    def to_pyquaternion(self):
+        """See :func:`pyquaternion_from_quaternion`."""
+        return pyquaternion_from_quaternion(self.array)
+
+    def __repr__(self):
+        body = np.array2string(self.array, separator=", ", prefix="Quaternion(")
+        return f"Quaternion({body})"
+
+    def __str__(self):
+        if self.array.ndim != 1:
+            return repr(self)
+        w, x, y, z = self.array.tolist()
+        return f"{w:.6g} {x:+.6g}i {y:+.6g}j {z:+.6g}k"
+
+
+def _arr(x):
+    return x.array if isinstance(x, Quaternion) else x
