@@ -1,0 +1,319 @@
+r"""Differential kinematics: Jacobians, manipulability and singularities.
+
+The direct kinematic model (MCD in the French course notes) maps joint velocities to the
+velocity of the tool, :math:`\dot x = J(q)\, \dot q`. Two forms are used in the book:
+
+- the *geometric* Jacobian (:func:`geometric_jacobian`), whose rows are the linear velocity
+  of the tool centre point and the angular velocity of the tool, both in the world frame;
+- an *analytic* Jacobian, the derivative of a minimal set of coordinates; for the SCARA,
+  :math:`(x, y, z, \text{yaw})` (:func:`scara_jacobian`).
+"""
+
+import numpy as np
+
+from ._checks import as_float_array
+
+__all__ = [
+    "geometric_jacobian", "manipulability", "singular_values", "is_singular",
+    "xyz_yaw_jacobian", "scara_jacobian", "scara_jacobian_determinant", "scara_is_singular",
+]
+
+
+def geometric_jacobian(robot, q):
+    r"""Geometric Jacobian at the tool centre point, in the world frame, linear rows first.
+
+    Column :math:`i` for a revolute joint about the unit axis :math:`z_i` through
+    :math:`o_i`, and for a prismatic joint along :math:`z_i`:
+
+    .. math::
+
+       J_i = \begin{pmatrix} z_i \times (p_T - o_i) \\ z_i \end{pmatrix}
+       \quad\text{(revolute)},\qquad
+       J_i = \begin{pmatrix} z_i \\ 0 \end{pmatrix}
+       \quad\text{(prismatic)},
+
+    where :math:`p_T` is the TCP position. Then
+    :math:`(\dot p_T, \omega) = J(q)\, \dot q` with :math:`\omega` the tool's angular
+    velocity in the world frame. For standard DH the axis of joint :math:`i` is the z axis of
+    frame :math:`i-1`; for modified DH it is the z axis of frame :math:`i`.
+
+    Parameters
+    ----------
+    robot : Robot
+    q : array_like, shape (..., n)
+
+    Returns
+    -------
+    ndarray, shape (..., 6, n)
+
+    Examples
+    --------
+    The UR3 report's Jacobian (modified DH) at its joint angles, first column:
+
+    >>> import numpy as np
+    >>> from dqlab.models import ur3_mdh
+    >>> J = geometric_jacobian(ur3_mdh(), [0.1, -0.5, 0.8, -0.2, 0.5, 0.1])
+    >>> J[:, 0].round(8)
+    array([-0.49781088, -0.08817691,  0.        ,  0.        ,  0.        ,  1.        ])
+    """
+    q = robot.check_joints(q)
+    points, axes, X_WT = robot._axes_and_tcp(q)
+    p_T = X_WT[..., None, :3, 3]                                    # (..., 1, 3)
+    revolute = np.asarray([lk.is_revolute for lk in robot.links])
+    linear = np.where(revolute[:, None], np.cross(axes, p_T - points), axes)
+    angular = np.where(revolute[:, None], axes, 0.0)
+    return np.concatenate([np.swapaxes(linear, -1, -2), np.swapaxes(angular, -1, -2)],
+                          axis=-2)
+
+
+def singular_values(J):
+    """Singular values of Jacobians, largest first.
+
+    Parameters
+    ----------
+    J : array_like, shape (..., m, n)
+
+    Returns
+    -------
+    ndarray, shape (..., min(m, n))
+
+    Examples
+    --------
+    >>> singular_values([[2.0, 0.0], [0.0, 0.5]])
+    array([2. , 0.5])
+    """
+    J = as_float_array(J, "J")
+    if J.ndim < 2:
+        raise ValueError(f"J must have shape (..., m, n), got shape {J.shape}")
+    return np.linalg.svd(J, compute_uv=False)
+
+
+def manipulability(J):
+    r"""Yoshikawa's manipulability measure :math:`w = \sqrt{\det(J J^\top)}`.
+
+    Computed as the product of the singular values of :math:`J`, which is the same number
+    and stays accurate near singularities. It is zero exactly at a singular configuration.
+    Rows with different units (metres, radians) are mixed: compare values of one robot, or
+    pass only the linear rows ``J[..., :3, :]``.
+
+    Parameters
+    ----------
+    J : array_like, shape (..., m, n), m <= n
+
+    Returns
+    -------
+    ndarray, shape (...)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dqlab.models import ur3
+    >>> robot = ur3()
+    >>> q = np.array([0.3, -1.2, 1.0, -0.5, 1.1, 0.0])
+    >>> bool(manipulability(robot.jacobian(q)) > 0)
+    True
+    >>> q[4] = 0.0   # wrist singularity: joints 4 and 6 aligned
+    >>> float(manipulability(robot.jacobian(q))) < 1e-15
+    True
+    """
+    J = as_float_array(J, "J")
+    if J.ndim < 2 or J.shape[-2] > J.shape[-1]:
+        raise ValueError(f"J must have shape (..., m, n) with m <= n, got shape {J.shape}")
+    return np.prod(singular_values(J), axis=-1)
+
+
+def is_singular(J, tol=1e-6):
+    r"""Whether Jacobians are singular: smallest singular value below ``tol``.
+
+    Parameters
+    ----------
+    J : array_like, shape (..., m, n)
+    tol : float, optional
+        Threshold on :math:`\sigma_{\min}(J)`. For the UR3 (lengths of a few tenths of a
+        metre) ``1e-6`` flags configurations within about a micro-radian of a singularity.
+
+    Returns
+    -------
+    ndarray of bool, shape (...)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dqlab.models import ur3
+    >>> robot = ur3()
+    >>> bool(is_singular(robot.jacobian([0.3, -1.2, 1.0, -0.5, 1.1, 0.0])))
+    False
+    >>> bool(is_singular(robot.jacobian([0.3, -1.2, 0.0, -0.5, 1.1, 0.0])))   # elbow straight
+    True
+    """
+    return singular_values(J)[..., -1] < tol
+
+
+def xyz_yaw_jacobian(robot, q, *, tol=1e-9):
+    r"""Analytic Jacobian of :math:`(x, y, z, \text{yaw})` for a robot whose joint axes are
+    all vertical (a SCARA).
+
+    When every joint axis is parallel to the world z axis, the tool only turns about z, so
+    :math:`\dot{\text{yaw}} = \omega_z` and the analytic Jacobian is the geometric one
+    without the rows of :math:`\omega_x, \omega_y`: rows 0, 1, 2, 5.
+
+    Parameters
+    ----------
+    robot : Robot
+    q : array_like, shape (..., n)
+    tol : float, optional
+        Tolerance on the axes' deviation from vertical.
+
+    Returns
+    -------
+    ndarray, shape (..., 4, n)
+
+    Raises
+    ------
+    ValueError
+        If some joint axis is not vertical.
+
+    Examples
+    --------
+    >>> from dqlab.models import scara_rsm5
+    >>> xyz_yaw_jacobian(scara_rsm5(), [0.0, 0.0, 0.1, 0.0]).round(6)
+    array([[0.  , 0.  , 0.  , 0.  ],
+           [0.61, 0.26, 0.  , 0.  ],
+           [0.  , 0.  , 1.  , 0.  ],
+           [1.  , 1.  , 0.  , 1.  ]])
+    """
+    q = robot.check_joints(q)
+    _, axes, _ = robot._axes_and_tcp(q)
+    if np.any(np.abs(np.abs(axes[..., 2]) - 1.0) > tol):
+        raise ValueError("xyz_yaw_jacobian needs every joint axis vertical (a SCARA)")
+    J = geometric_jacobian(robot, q)
+    return J[..., [0, 1, 2, 5], :]
+
+
+def _scara_lengths(robot):
+    links = robot.links
+    ok = (robot.convention == "mdh" and robot.n == 4
+          and robot.joint_types == ("revolute", "revolute", "prismatic", "revolute")
+          and all(abs(lk.alpha) < 1e-12 for lk in links) and abs(links[0].a) < 1e-12
+          and abs(links[3].a) < 1e-12
+          and np.allclose(robot.base[:3, :3], np.eye(3))
+          and np.allclose(robot.tool[:2, 3], 0.0))
+    if not ok:
+        raise ValueError(
+            "the closed-form SCARA formulas need a modified-DH RRPR chain with all "
+            "alpha = 0, a_0 = a_3 = 0, an upright base and a tool without x/y offset "
+            "(like dqlab.models.scara_rsm5()); use xyz_yaw_jacobian otherwise")
+    return links[1].a, links[2].a
+
+
+def scara_jacobian(robot, q):
+    r"""Closed-form analytic Jacobian of the SCARA in :math:`(x, y, z, \text{yaw})`.
+
+    Differentiating the forward model of :func:`dqlab.models.scara_rsm5`,
+    :math:`x = l_1 C_1 + l_2 C_{12}`, :math:`y = l_1 S_1 + l_2 S_{12}`,
+    :math:`z = z_0 + q_3`, :math:`\text{yaw} = q_1 + q_2 + q_4 + \text{const}`:
+
+    .. math::
+
+       J(q) = \begin{pmatrix}
+         -l_1 S_1 - l_2 S_{12} & -l_2 S_{12} & 0 & 0 \\
+          l_1 C_1 + l_2 C_{12} &  l_2 C_{12} & 0 & 0 \\
+          0 & 0 & 1 & 0 \\
+          1 & 1 & 0 & 1
+       \end{pmatrix}
+
+    Parameters
+    ----------
+    robot : Robot
+        A SCARA as described by :func:`dqlab.models.scara_rsm5` (``l1 = links[1].a``,
+        ``l2 = links[2].a``).
+    q : array_like, shape (..., 4)
+
+    Returns
+    -------
+    ndarray, shape (..., 4, 4)
+
+    Raises
+    ------
+    ValueError
+        If the robot does not have that structure.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dqlab.models import scara_rsm5
+    >>> scara = scara_rsm5()
+    >>> q = [0.3, 0.8, 0.05, -0.2]
+    >>> np.allclose(scara_jacobian(scara, q), xyz_yaw_jacobian(scara, q))
+    True
+    """
+    l1, l2 = _scara_lengths(robot)
+    q = robot.check_joints(q)
+    q1, q2 = q[..., 0], q[..., 1]
+    s1, c1 = np.sin(q1), np.cos(q1)
+    s12, c12 = np.sin(q1 + q2), np.cos(q1 + q2)
+    J = np.zeros(q.shape[:-1] + (4, 4))
+    J[..., 0, 0] = -l1 * s1 - l2 * s12
+    J[..., 0, 1] = -l2 * s12
+    J[..., 1, 0] = l1 * c1 + l2 * c12
+    J[..., 1, 1] = l2 * c12
+    J[..., 2, 2] = 1.0
+    J[..., 3, 0] = 1.0
+    J[..., 3, 1] = 1.0
+    J[..., 3, 3] = 1.0
+    return J
+
+
+def scara_jacobian_determinant(robot, q):
+    r"""Determinant of the SCARA's analytic Jacobian: :math:`\det J = l_1 l_2 \sin q_2`.
+
+    The last two columns only touch :math:`z` and yaw, so the determinant is that of the
+    planar 2x2 block, :math:`l_1 l_2 (S_{12} C_1 - C_{12} S_1) = l_1 l_2 S_2`. It vanishes
+    for :math:`q_2 = 0` (arm stretched, the boundary of the workspace) and
+    :math:`q_2 = \pm\pi` (arm folded back, outside the RSM-5's :math:`\pm 145^\circ` range):
+    the singular configurations, independent of :math:`q_1, q_3, q_4`.
+
+    Parameters
+    ----------
+    robot : Robot
+    q : array_like, shape (..., 4)
+
+    Returns
+    -------
+    ndarray, shape (...)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dqlab.models import scara_rsm5
+    >>> round(float(scara_jacobian_determinant(scara_rsm5(), [0, np.pi / 2, 0, 0])), 6)
+    0.091
+    """
+    l1, l2 = _scara_lengths(robot)
+    q = robot.check_joints(q)
+    return l1 * l2 * np.sin(q[..., 1])
+
+
+def scara_is_singular(robot, q, tol=1e-6):
+    r"""Whether the SCARA is (within ``tol``) at a singular configuration.
+
+    Tests :math:`|\det J| < \text{tol}\; l_1 l_2`, that is :math:`|\sin q_2| < \text{tol}`.
+
+    Parameters
+    ----------
+    robot : Robot
+    q : array_like, shape (..., 4)
+    tol : float, optional
+
+    Returns
+    -------
+    ndarray of bool, shape (...)
+
+    Examples
+    --------
+    >>> from dqlab.models import scara_rsm5
+    >>> scara_is_singular(scara_rsm5(), [[0.2, 0.0, 0.1, 0.0], [0.2, 0.5, 0.1, 0.0]])
+    array([ True, False])
+    """
+    l1, l2 = _scara_lengths(robot)
+    return np.abs(scara_jacobian_determinant(robot, q)) < tol * l1 * l2

@@ -1,0 +1,825 @@
+r"""Serial kinematic chains: links in standard or modified Denavit--Hartenberg form.
+
+A :class:`Robot` is a list of :class:`Link` objects plus a base and a tool transform. It
+computes the forward kinematics (MGD in the French course notes) as homogeneous matrices
+(:meth:`Robot.fk`) and as unit dual quaternions, in the two ways of the thesis: a product of
+per-link dual quaternions (:meth:`Robot.fk_dq`) and a product of base-frame screw motions
+about the joint axes of the zero pose (:meth:`Robot.fk_dq_screw`).
+
+Conventions
+-----------
+Both Denavit--Hartenberg conventions are first-class. For link :math:`i`:
+
+- standard DH (``convention="dh"``, as Universal Robots publish their arms)
+
+  .. math::
+
+     X_{i-1,i} = R_z(\theta_i)\, T_z(d_i)\, T_x(a_i)\, R_x(\alpha_i)
+
+- modified DH (``convention="mdh"``, Khalil--Kleinfinger, the French course notes), where the
+  link stores :math:`a_{i-1}` in ``a``, :math:`\alpha_{i-1}` in ``alpha`` and :math:`r_i` in
+  ``d``:
+
+  .. math::
+
+     X_{i-1,i} = R_x(\alpha_{i-1})\, T_x(a_{i-1})\, R_z(\theta_i)\, T_z(r_i)
+
+The joint variable :math:`q_i` enters as :math:`\theta_i = q_i + \theta^0_i` for a revolute
+joint (``theta_offset`` holds :math:`\theta^0_i`, the "q_fig" row of a published table) and
+as :math:`d_i = q_i + d^0_i` for a prismatic joint (``d`` holds :math:`d^0_i`, and
+``theta_offset`` is then the constant :math:`\theta_i`). The whole chain is
+
+.. math::
+
+   X_{WT}(q) = X_{W0}\, X_{01}(q_1) \cdots X_{n-1,n}(q_n)\, X_{nT}
+
+with the base :math:`X_{W0}` and the tool :math:`X_{nT}` (both identity by default).
+Units are metres and radians.
+"""
+
+import math
+
+import numpy as np
+
+from ._checks import as_float_array
+
+__all__ = ["Link", "Robot", "REVOLUTE", "PRISMATIC"]
+
+REVOLUTE = "revolute"
+PRISMATIC = "prismatic"
+
+
+def _rot_x_h(alpha):
+    """4x4 rotation about x (plain numpy; used for the constant parts of a link)."""
+    c, s = math.cos(alpha), math.sin(alpha)
+    return np.array([[1.0, 0, 0, 0], [0, c, -s, 0], [0, s, c, 0], [0, 0, 0, 1.0]])
+
+
+def _trans_x_h(a):
+    T = np.eye(4)
+    T[0, 3] = a
+    return T
+
+
+class Link:
+    r"""One link of a serial chain: its Denavit--Hartenberg parameters and its joint.
+
+    Parameters
+    ----------
+    a : float
+        Link length in metres: :math:`a_i` (standard DH) or :math:`a_{i-1}` (modified DH).
+    alpha : float
+        Link twist in radians: :math:`\alpha_i` (standard DH) or :math:`\alpha_{i-1}`
+        (modified DH).
+    d : float
+        Link offset in metres along the joint axis: :math:`d_i` (standard DH) or :math:`r_i`
+        (modified DH). For a prismatic joint this is the constant added to the joint
+        variable.
+    theta_offset : float, optional
+        For a revolute joint, the constant added to the joint variable,
+        :math:`\theta_i = q_i + \theta^0_i` (the "q_fig" row of a table). For a prismatic
+        joint, the constant joint angle :math:`\theta_i`.
+    joint : {"revolute", "prismatic"}, optional
+        Joint type, :math:`\sigma_i = 0` or :math:`1` in the course notes.
+    limits : (float, float), optional
+        Lowest and highest joint value (radians or metres). Default: no limit.
+    name : str, optional
+        A label printed in :meth:`Robot.dh_table`.
+
+    Raises
+    ------
+    ValueError
+        If a parameter is not a finite number, the joint type is unknown or the limits are
+        not ordered.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> link = Link(a=0.0, alpha=np.pi / 2, d=0.1519)
+    >>> link.joint, link.sigma
+    ('revolute', 0)
+    >>> Link(a=0.0, alpha=0.0, d=0.0, joint="prismatic", limits=(0.0, 0.15)).sigma
+    1
+    """
+
+    def __init__(self, a, alpha, d, theta_offset=0.0, joint=REVOLUTE, limits=None, name=""):
+        values = {"a": a, "alpha": alpha, "d": d, "theta_offset": theta_offset}
+        for key, value in values.items():
+            try:
+                value = float(value)
+            except (TypeError, ValueError):
+                raise ValueError(f"Link {key} must be a number, got {value!r}") from None
+            if not math.isfinite(value):
+                raise ValueError(f"Link {key} must be finite, got {value!r}")
+            values[key] = value
+        if joint in (0, "R", "r"):
+            joint = REVOLUTE
+        elif joint in (1, "P", "p"):
+            joint = PRISMATIC
+        if joint not in (REVOLUTE, PRISMATIC):
+            raise ValueError(f"Link joint must be 'revolute' or 'prismatic', got {joint!r}")
+        if limits is None:
+            limits = (-math.inf, math.inf)
+        try:
+            lo, hi = (float(v) for v in limits)
+        except (TypeError, ValueError):
+            raise ValueError(f"Link limits must be a pair (lo, hi), got {limits!r}") from None
+        if math.isnan(lo) or math.isnan(hi) or not lo <= hi:
+            raise ValueError(f"Link limits must satisfy lo <= hi, got {limits!r}")
+        self.a = values["a"]
+        self.alpha = values["alpha"]
+        self.d = values["d"]
+        self.theta_offset = values["theta_offset"]
+        self.joint = joint
+        self.limits = (lo, hi)
+        self.name = str(name)
+
+    @property
+    def sigma(self):
+        """Joint type as in the course notes: 0 revolute, 1 prismatic."""
+        return int(self.joint == PRISMATIC)
+
+    @property
+    def is_revolute(self):
+        return self.joint == REVOLUTE
+
+    def __repr__(self):
+        return (f"Link(a={self.a!r}, alpha={self.alpha!r}, d={self.d!r}, "
+                f"theta_offset={self.theta_offset!r}, joint={self.joint!r}, "
+                f"limits={self.limits!r})")
+
+
+def _check_transform_like(T, name):
+    if T is None:
+        return np.eye(4)
+    T = as_float_array(T, name, (4, 4))
+    if T.shape != (4, 4):
+        raise ValueError(f"{name} must be one 4x4 transform, got shape {T.shape}")
+    R = T[:3, :3]
+    if (not np.allclose(T[3], [0, 0, 0, 1], atol=1e-9)
+            or not np.allclose(R.T @ R, np.eye(3), atol=1e-9)
+            or np.linalg.det(R) < 0):
+        raise ValueError(f"{name} must be a rigid transform (rotation block and last row "
+                         "[0, 0, 0, 1])")
+    return T.copy()
+
+
+class Robot:
+    r"""A serial kinematic chain with forward kinematics and Jacobian.
+
+    Parameters
+    ----------
+    links : sequence of Link
+        The links from the base to the flange.
+    convention : {"dh", "mdh"}, optional
+        Standard (``"dh"``) or modified (``"mdh"``, Khalil--Kleinfinger) Denavit--Hartenberg.
+    base : array_like, shape (4, 4), optional
+        :math:`X_{W0}`, the pose of the chain's frame 0 in the world frame W. Identity by
+        default.
+    tool : array_like, shape (4, 4), optional
+        :math:`X_{nT}`, the pose of the tool centre point (TCP) in the flange frame n.
+        Identity by default.
+    name : str, optional
+        Printed in :meth:`dh_table` and ``repr``.
+
+    Attributes
+    ----------
+    n : int
+        Number of joints.
+    links : tuple of Link
+    convention : str
+    base, tool : ndarray, shape (4, 4)
+    name : str
+
+    Examples
+    --------
+    A planar two-link arm in standard DH (lengths 1 and 0.5):
+
+    >>> import numpy as np
+    >>> arm = Robot([Link(1.0, 0.0, 0.0), Link(0.5, 0.0, 0.0)], name="planar 2R")
+    >>> arm.n
+    2
+    >>> X_WT = arm.fk([0.0, np.pi / 2])
+    >>> X_WT[:3, 3].round(12)
+    array([1. , 0.5, 0. ])
+    >>> arm.fk([[0.0, 0.0], [np.pi / 2, 0.0]])[:, :3, 3].round(12)
+    array([[1.5, 0. , 0. ],
+           [0. , 1.5, 0. ]])
+    """
+
+    def __init__(self, links, convention="dh", base=None, tool=None, name=""):
+        links = tuple(links)
+        if not links:
+            raise ValueError("Robot needs at least one link")
+        for i, link in enumerate(links):
+            if not isinstance(link, Link):
+                raise ValueError(f"links[{i}] must be a Link, got {type(link).__name__}")
+        if convention not in ("dh", "mdh"):
+            raise ValueError(f"convention must be 'dh' or 'mdh', got {convention!r}")
+        self._links = links
+        self._convention = convention
+        self.name = str(name)
+        self._base = _check_transform_like(base, "base")
+        self._tool = _check_transform_like(tool, "tool")
+        self._prepare()
+
+    # -- read-only description -------------------------------------------------------------
+    @property
+    def links(self):
+        return self._links
+
+    @property
+    def convention(self):
+        return self._convention
+
+    @property
+    def n(self):
+        return len(self._links)
+
+    @property
+    def base(self):
+        """:math:`X_{W0}`, shape (4, 4) (a copy; assign a new transform to change it)."""
+        return self._base.copy()
+
+    @base.setter
+    def base(self, value):
+        self._base = _check_transform_like(value, "base")
+        self._prepare()
+
+    @property
+    def tool(self):
+        """:math:`X_{nT}`, shape (4, 4) (a copy; assign a new transform to change it)."""
+        return self._tool.copy()
+
+    @tool.setter
+    def tool(self, value):
+        self._tool = _check_transform_like(value, "tool")
+        self._prepare()
+
+    @property
+    def joint_types(self):
+        """Tuple of ``"revolute"`` / ``"prismatic"``, one per joint."""
+        return tuple(link.joint for link in self._links)
+
+    @property
+    def limits(self):
+        """Joint limits as an array of shape (n, 2): lowest, highest."""
+        return np.array([link.limits for link in self._links], dtype=float)
+
+    # -- constant parts, precomputed once ------------------------------------------------
+    def _prepare(self):
+        n = self.n
+        self._revolute = np.array([lk.is_revolute for lk in self._links])
+        rev = self._revolute.astype(float)
+        self._theta_const = np.array([lk.theta_offset for lk in self._links])
+        self._d_const = np.array([lk.d for lk in self._links])
+        self._q_to_theta = rev            # theta = theta_const + q * rev
+        self._q_to_d = 1.0 - rev          # d = d_const + q * (1 - rev)
+        self._lo = np.array([lk.limits[0] for lk in self._links])
+        self._hi = np.array([lk.limits[1] for lk in self._links])
+        self._prismatic_idx = np.flatnonzero(~self._revolute)
+        # Each link is X_{i-1,i} = L_i @ J_i(theta_i, d_i) @ R_i with the joint motion
+        # J = Rz(theta) Tz(d) and constant L, R: L = I, R = Tx(a) Rx(alpha) in standard DH;
+        # L = Rx(alpha) Tx(a), R = I in modified DH.
+        L = np.empty((n, 4, 4))
+        R = np.empty((n, 4, 4))
+        for i, lk in enumerate(self._links):
+            if self._convention == "dh":
+                L[i] = np.eye(4)
+                R[i] = _trans_x_h(lk.a) @ _rot_x_h(lk.alpha)
+            else:
+                L[i] = _rot_x_h(lk.alpha) @ _trans_x_h(lk.a)
+                R[i] = np.eye(4)
+        self._L = L
+        self._R = R
+        # Pre-multiplied constants for the fast product:
+        # X_WT = (X_W0 L_1) J_1 (R_1 L_2) J_2 ... J_n (R_n X_nT)
+        K = np.empty((n + 1, 4, 4))
+        K[0] = self._base @ L[0]
+        for i in range(1, n):
+            K[i] = R[i - 1] @ L[i]
+        K[n] = R[n - 1] @ self._tool
+        self._K = K
+        self._screws = None  # zero-pose screw axes, computed on first use
+
+    # -- joint vectors -----------------------------------------------------------------------
+    def check_joints(self, q, *, limits="prismatic"):
+        """Validate joint vectors and return them as a float array.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Joint values: radians for revolute joints, metres for prismatic joints.
+        limits : {"prismatic", "all", "none"}, optional
+            Which joint limits to enforce. The default enforces only the prismatic ones (a
+            prismatic joint beyond its travel has no physical meaning, while a revolute angle
+            outside its software limits still describes a pose).
+
+        Returns
+        -------
+        ndarray, shape (..., n)
+
+        Raises
+        ------
+        ValueError
+            On a wrong last dimension, NaN or infinity, or a value beyond the enforced
+            limits (the message names the joint and the limit).
+
+        Examples
+        --------
+        >>> from dqlab.models import scara_rsm5
+        >>> scara = scara_rsm5()
+        >>> scara.check_joints([0.1, 0.2, 0.05, 0.0])
+        array([0.1 , 0.2 , 0.05, 0.  ])
+        >>> scara.check_joints([0.1, 0.2, 0.5, 0.0])
+        Traceback (most recent call last):
+        ...
+        ValueError: joint 3 (prismatic) = 0.5 is beyond its limits [0, 0.15]
+        """
+        q = np.asarray(q, dtype=float)
+        if q.ndim == 0 or q.shape[-1] != self.n:
+            raise ValueError(
+                f"q must have shape (..., {self.n}) for this {self.n}-joint robot, "
+                f"got shape {q.shape}")
+        if not np.isfinite(q).all():
+            raise ValueError("q contains NaN or infinity")
+        if limits == "none":
+            return q
+        if limits == "prismatic":
+            idx = self._prismatic_idx
+            if idx.size == 0:
+                return q
+        elif limits == "all":
+            idx = np.arange(self.n)
+        else:
+            raise ValueError(f"limits must be 'prismatic', 'all' or 'none', got {limits!r}")
+        sub = q[..., idx]
+        bad = (sub < self._lo[idx]) | (sub > self._hi[idx])
+        if bad.any():
+            where = np.argwhere(bad)[0]
+            j = idx[where[-1]]
+            value = sub[tuple(where)]
+            lk = self._links[j]
+            raise ValueError(
+                f"joint {j + 1} ({lk.joint}) = {value:.6g} is beyond its limits "
+                f"[{lk.limits[0]:.6g}, {lk.limits[1]:.6g}]")
+        return q
+
+    def _link_parameters(self, q):
+        """Joint angles theta and offsets d of every link, shape (..., n) each."""
+        theta = self._theta_const + q * self._q_to_theta
+        d = self._d_const + q * self._q_to_d
+        return theta, d
+
+    def _joint_motions(self, q):
+        """J_i = Rz(theta_i) Tz(d_i) for every link, shape (..., n, 4, 4)."""
+        theta, d = self._link_parameters(q)
+        c, s = np.cos(theta), np.sin(theta)
+        J = np.zeros(q.shape + (4, 4))
+        J[..., 0, 0] = c
+        J[..., 0, 1] = -s
+        J[..., 1, 0] = s
+        J[..., 1, 1] = c
+        J[..., 2, 2] = 1.0
+        J[..., 2, 3] = d
+        J[..., 3, 3] = 1.0
+        return J
+
+    def link_transforms(self, q):
+        r"""The link transforms :math:`X_{i-1,i}(q_i)`, without base and tool.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+
+        Returns
+        -------
+        ndarray, shape (..., n, 4, 4)
+            Entry ``i`` is the pose of frame ``i + 1`` in frame ``i``.
+
+        Examples
+        --------
+        >>> from dqlab.models import ur3_mdh
+        >>> X_01 = ur3_mdh().link_transforms([0.1, 0, 0, 0, 0, 0])[0]
+        >>> X_01.round(8)
+        array([[-0.09983342, -0.99500417,  0.        ,  0.        ],
+               [ 0.99500417, -0.09983342,  0.        ,  0.        ],
+               [ 0.        ,  0.        ,  1.        ,  0.152     ],
+               [ 0.        ,  0.        ,  0.        ,  1.        ]])
+        """
+        q = self.check_joints(q)
+        return self._L @ self._joint_motions(q) @ self._R
+
+    # -- forward kinematics, matrices ---------------------------------------------------
+    def fk(self, q, all_frames=False):
+        r"""Forward kinematics as homogeneous transforms.
+
+        .. math::
+
+           X_{WT}(q) = X_{W0} \prod_{i=1}^{n} X_{i-1,i}(q_i)\; X_{nT}
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Joint vectors (radians, metres for prismatic joints).
+        all_frames : bool, optional
+            If True, also return the intermediate frames.
+
+        Returns
+        -------
+        ndarray, shape (..., 4, 4) or (..., n + 1, 4, 4)
+            :math:`X_{WT}`, the pose of the tool (the flange when there is no tool) in the
+            world frame. With ``all_frames``, the poses of frames 0 (the base), 1, ...,
+            n in W, where the last one is the TCP (frame n composed with the tool).
+
+        Raises
+        ------
+        ValueError
+            See :meth:`check_joints`.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from dqlab.models import ur3
+        >>> X_WF = ur3().fk(np.zeros(6))
+        >>> X_WF.round(5)
+        array([[ 1.     ,  0.     ,  0.     , -0.4569 ],
+               [ 0.     ,  0.     , -1.     , -0.19425],
+               [ 0.     ,  1.     ,  0.     ,  0.06655],
+               [ 0.     ,  0.     ,  0.     ,  1.     ]])
+        >>> ur3().fk(np.zeros((5, 6)), all_frames=True).shape
+        (5, 7, 4, 4)
+        """
+        q = self.check_joints(q)
+        if not all_frames and q.ndim > 1 and q.size >= 64 * self.n:
+            return self._fk_batch(q)
+        J = self._joint_motions(q)
+        if all_frames:
+            M = self._L @ J @ self._R
+            frames = np.empty(q.shape[:-1] + (self.n + 1, 4, 4))
+            frames[..., 0, :, :] = self._base
+            X = self._base
+            for i in range(self.n):
+                X = X @ M[..., i, :, :]
+                frames[..., i + 1, :, :] = X
+            frames[..., self.n, :, :] = X @ self._tool
+            return frames
+        # X_WT = K_0 (J_1 K_1) (J_2 K_2) ... (J_n K_n)
+        M = J @ self._K[1:]
+        X = self._K[0] @ M[..., 0, :, :]
+        for i in range(1, self.n):
+            X = X @ M[..., i, :, :]
+        return X
+
+    def _fk_batch(self, q, chunk=8192):
+        """The same product as :meth:`fk` for many joint vectors, batch axis last.
+
+        The running product is kept column by column, only its top three rows, each column
+        an array of shape (3, N), so that every step is a handful of contiguous vector
+        operations: the joint motion ``X @ Rz(theta) Tz(d)`` mixes columns 0 and 1 and
+        shifts column 3, and the constant ``@ K_i`` adds multiples of columns (terms with
+        ``|K_i[k, j]| < 1e-15``, the rounding of ``cos(pi/2)``, are skipped). The batch is
+        processed in blocks of ``chunk`` joint vectors so that the work stays in cache.
+        """
+        lead = q.shape[:-1]
+        q2 = q.reshape(-1, self.n)
+        total = q2.shape[0]
+        out = np.zeros((total, 4, 4))
+        out[:, 3, 3] = 1.0
+        K = self._K
+        terms = [[[(k, K[i, k, j]) for k in range(4) if abs(K[i, k, j]) >= 1e-15]
+                  for j in range(4)] for i in range(self.n + 1)]
+        d_const = [None if self._revolute[i] else i for i in range(self.n)]
+        for start in range(0, total, chunk):
+            block = q2[start:start + chunk]
+            theta, d = self._link_parameters(block)
+            theta = np.ascontiguousarray(theta.T)                   # (n, N)
+            d = np.ascontiguousarray(d.T)
+            c, s = np.cos(theta), np.sin(theta)
+            N = block.shape[0]
+            X = [np.repeat(K[0][:3, j, None], N, axis=1) for j in range(4)]
+            for i in range(self.n):
+                ci, si = c[i], s[i]
+                di = d[i] if d_const[i] is not None else d[i, 0]
+                Y = (ci * X[0] + si * X[1], ci * X[1] - si * X[0], X[2], di * X[2] + X[3])
+                X = []
+                for col in terms[i + 1]:
+                    acc = None
+                    for k, value in col:
+                        term = Y[k] if value == 1.0 else value * Y[k]
+                        acc = term if acc is None else acc + term
+                    X.append(np.zeros_like(Y[0]) if acc is None else acc)
+            out[start:start + N, :3, :] = np.stack(X, axis=-1).transpose(1, 0, 2)
+        return out.reshape(lead + (4, 4))
+
+    def joint_axes(self, q):
+        r"""Points on the joint axes and their unit directions, in the world frame.
+
+        The joint :math:`i` moves along or about the z axis of the frame
+        :math:`X_{W0} X_{01} \cdots X_{i-2,i-1} L_i` (frame :math:`i-1` in standard DH,
+        frame :math:`i` in modified DH).
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+
+        Returns
+        -------
+        points : ndarray, shape (..., n, 3)
+        axes : ndarray, shape (..., n, 3)
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from dqlab.models import ur3
+        >>> points, axes = ur3().joint_axes(np.zeros(6))
+        >>> axes[:3].round(12)
+        array([[ 0.,  0.,  1.],
+               [ 0., -1.,  0.],
+               [ 0., -1.,  0.]])
+        """
+        points, axes, _ = self._axes_and_tcp(self.check_joints(q))
+        return points, axes
+
+    def _axes_and_tcp(self, q):
+        """Joint axis points and directions, shape (..., n, 3) each, and X_WT (..., 4, 4)."""
+        J = self._joint_motions(q)
+        points = np.empty(q.shape + (3,))
+        axes = np.empty(q.shape + (3,))
+        X = self._base
+        for i in range(self.n):
+            Y = X @ self._L[i]
+            points[..., i, :] = Y[..., :3, 3]
+            axes[..., i, :] = Y[..., :3, 2]
+            X = Y @ J[..., i, :, :] @ self._R[i]
+        X = X @ self._tool
+        return points, axes, np.broadcast_to(X, q.shape[:-1] + (4, 4))
+
+    # -- forward kinematics, dual quaternions --------------------------------------------
+    def fk_dq(self, q):
+        r"""Forward kinematics as a unit dual quaternion, link by link.
+
+        Each link is written as a product of three dual quaternions, the constant parts and
+        the joint's screw about its own z axis,
+
+        .. math::
+
+           \hat Q_{i-1,i} = \hat L_i\; \hat J_i(q_i)\; \hat R_i, \qquad
+           \hat J_i = \left(\cos\tfrac{\theta_i}{2} + \sin\tfrac{\theta_i}{2}\,k\right)
+                      + \varepsilon\,\tfrac12\, d_i k
+                      \left(\cos\tfrac{\theta_i}{2} + \sin\tfrac{\theta_i}{2}\,k\right)
+
+        and multiplied from the base to the tool,
+        :math:`\hat Q_{WT} = \hat Q_{W0} \hat Q_{01} \cdots \hat Q_{n-1,n} \hat Q_{nT}`
+        (thesis section 4.2, first construction).
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+
+        Returns
+        -------
+        ndarray, shape (..., 8)
+            :math:`(q_r, q_d)` of the pose :math:`X_{WT}`. Its sign is that of the product
+            (``-Q`` is the same pose).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from dqlab import dualquat
+        >>> from dqlab.models import ur3
+        >>> robot = ur3()
+        >>> q = [0.1, -0.5, 0.8, -0.2, 0.5, 0.1]
+        >>> Q = robot.fk_dq(q)
+        >>> np.allclose(dualquat.transform_from_dual_quaternion(Q), robot.fk(q))
+        True
+        """
+        from .dualquat import dual_quaternion_from_rotation_translation
+        from .dualquat import dual_quaternion_product as dq_mul
+        from .quaternion import quaternion_from_axis_angle
+
+        q = self.check_joints(q)
+        theta, d = self._link_parameters(q)
+        Lq, Rq, base_q, tool_q = self._constant_dual_quaternions()
+        r = quaternion_from_axis_angle(np.array([0.0, 0.0, 1.0]), theta)
+        t = np.zeros(q.shape + (3,))
+        t[..., 2] = d
+        Jq = dual_quaternion_from_rotation_translation(r, t)        # (..., n, 8)
+        Q = base_q
+        for i in range(self.n):
+            Q = dq_mul(dq_mul(dq_mul(Q, Lq[i]), Jq[..., i, :]), Rq[i])
+        Q = dq_mul(Q, tool_q)
+        return np.broadcast_to(Q, q.shape[:-1] + (8,)).copy()
+
+    def _constant_dual_quaternions(self):
+        from .dualquat import dual_quaternion_from_transform
+
+        cached = getattr(self, "_dq_consts", None)
+        if cached is None or cached[0] is not self._K:
+            consts = (dual_quaternion_from_transform(self._L),
+                      dual_quaternion_from_transform(self._R),
+                      dual_quaternion_from_transform(self._base),
+                      dual_quaternion_from_transform(self._tool))
+            self._dq_consts = (self._K, consts)
+            cached = self._dq_consts
+        return cached[1]
+
+    def zero_pose_screws(self):
+        r"""The joint axes at :math:`q = 0` in the world frame and the zero-pose TCP.
+
+        Returns
+        -------
+        points : ndarray, shape (n, 3)
+            A point on each joint axis.
+        axes : ndarray, shape (n, 3)
+            Unit direction of each joint axis.
+        X_WT0 : ndarray, shape (4, 4)
+            The pose of the tool at :math:`q = 0`.
+
+        Examples
+        --------
+        >>> from dqlab.models import ur3
+        >>> points, axes, X_WT0 = ur3().zero_pose_screws()
+        >>> points[1].round(4), axes[1].round(4)
+        (array([0.    , 0.    , 0.1519]), array([ 0., -1.,  0.]))
+        """
+        if self._screws is None:
+            zero = np.zeros(self.n)
+            points, axes = self.joint_axes(zero)
+            self._screws = (points, axes, self.fk(zero))
+        points, axes, X = self._screws
+        return points.copy(), axes.copy(), X.copy()
+
+    def fk_dq_screw(self, q):
+        r"""Forward kinematics as a product of base-frame screw motions (thesis, second way).
+
+        Joint :math:`i` turns the rest of the arm about its axis at the zero pose, the line
+        through :math:`p_i` with unit direction :math:`\omega_i` in the world frame. As a dual
+        quaternion that motion is the rotation :math:`r_i = \cos\frac{q_i}{2} +
+        \sin\frac{q_i}{2}\,\omega_i` followed by the translation :math:`p_i - r_i p_i r_i^*`
+        (a translation :math:`q_i \omega_i` for a prismatic joint). Then
+
+        .. math::
+
+           \hat Q_{WT}(q) = \hat S_1(q_1)\, \hat S_2(q_2) \cdots \hat S_n(q_n)\;
+           \hat Q_{WT}(0),
+
+        the dual-quaternion form of the product-of-exponentials formula.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+
+        Returns
+        -------
+        ndarray, shape (..., 8)
+            The same pose as :meth:`fk_dq` (possibly with the opposite sign).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from dqlab import dualquat
+        >>> from dqlab.models import ur3
+        >>> robot = ur3()
+        >>> q = [0, -np.pi / 2, 0, -np.pi / 2, 0, 0]
+        >>> Q = robot.fk_dq_screw(q)
+        >>> tcp = dualquat.dual_quaternion_apply(Q, [0.0, 0.0, 0.2])   # 0.2 m along flange z
+        >>> tcp.round(5) + 0.0
+        array([ 0.     , -0.39425,  0.69415])
+        """
+        from .dualquat import (
+            dual_quaternion_from_rotation_translation,
+            dual_quaternion_from_transform,
+        )
+        from .dualquat import dual_quaternion_product as dq_mul
+        from .quaternion import quaternion_from_axis_angle, rotate_vector
+
+        q = self.check_joints(q)
+        points, axes, X0 = self.zero_pose_screws()
+        Q = dual_quaternion_from_transform(X0)
+        rev = self._revolute
+        angle = np.where(rev, q, 0.0)                                # (..., n)
+        r = quaternion_from_axis_angle(axes, angle)                  # (..., n, 4)
+        moved = rotate_vector(r, np.broadcast_to(points, r.shape[:-1] + (3,)))
+        t = np.where(rev[:, None], points - moved, q[..., None] * axes)
+        S = dual_quaternion_from_rotation_translation(r, t)          # (..., n, 8)
+        for i in range(self.n - 1, -1, -1):
+            Q = dq_mul(S[..., i, :], Q)
+        return np.broadcast_to(Q, q.shape[:-1] + (8,)).copy()
+
+    # -- differential kinematics ----------------------------------------------------------
+    def jacobian(self, q):
+        r"""Geometric Jacobian at the TCP in the world frame, linear rows first.
+
+        See :func:`dqlab.jacobian.geometric_jacobian`.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+
+        Returns
+        -------
+        ndarray, shape (..., 6, n)
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from dqlab.models import ur3
+        >>> ur3().jacobian(np.zeros(6)).shape
+        (6, 6)
+        """
+        from .jacobian import geometric_jacobian
+
+        return geometric_jacobian(self, q)
+
+    # -- printing -------------------------------------------------------------------------
+    def dh_table(self):
+        """The parameter table as text, in the robot's own convention.
+
+        Angles are printed in degrees, lengths in metres. For modified DH the columns are
+        the course notes' :math:`\\sigma_i, \\alpha_{i-1}, a_{i-1}, \\theta_i, r_i`.
+
+        Returns
+        -------
+        str
+
+        Examples
+        --------
+        >>> from dqlab.models import ur3
+        >>> print(ur3().dh_table())
+        UR3 (standard DH, 6 joints)
+          i  joint      theta_i [deg]         d_i [m]    a_i [m]  alpha_i [deg]  limits
+          1  R          q1            0.1519     0          90     [-360, 360] deg
+          2  R          q2            0          -0.24365   0      [-360, 360] deg
+          3  R          q3            0          -0.21325   0      [-360, 360] deg
+          4  R          q4            0.11235    0          90     [-360, 360] deg
+          5  R          q5            0.08535    0          -90    [-360, 360] deg
+          6  R          q6            0.0819     0          0      [-360, 360] deg
+        """
+        rows = []
+        for i, lk in enumerate(self._links, start=1):
+            if lk.is_revolute:
+                theta = _var("q", i, lk.theta_offset, degrees=True)
+                d = _num(lk.d)
+                lim = _limits(lk.limits, degrees=True)
+            else:
+                theta = _num(math.degrees(lk.theta_offset))
+                d = _var("q", i, lk.d, degrees=False)
+                lim = _limits(lk.limits, degrees=False)
+            rows.append((str(i), "R" if lk.is_revolute else "P", theta, d, _num(lk.a),
+                         _num(math.degrees(lk.alpha)), lim))
+        if self._convention == "dh":
+            title = f"{self.name or 'robot'} (standard DH, {self.n} joints)"
+            header = ("i", "joint", "theta_i [deg]", "d_i [m]", "a_i [m]", "alpha_i [deg]",
+                      "limits")
+            order = (0, 1, 2, 3, 4, 5, 6)
+        else:
+            title = f"{self.name or 'robot'} (modified DH, {self.n} joints)"
+            header = ("i", "sigma", "alpha_i-1 [deg]", "a_i-1 [m]", "theta_i [deg]",
+                      "r_i [m]", "limits")
+            rows = [(r[0], str(int(r[1] == "P")), r[5], r[4], r[2], r[3], r[6]) for r in rows]
+            order = (0, 1, 2, 3, 4, 5, 6)
+        widths = [max(len(header[k]), *(len(r[k]) for r in rows)) for k in order]
+
+        def fmt(cells):
+            return "  " + "  ".join(c.ljust(w) for c, w in zip(cells, widths, strict=True)).rstrip()
+
+        lines = [title, fmt(header)] + [fmt(r) for r in rows]
+        extra = []
+        if not np.allclose(self._base, np.eye(4)):
+            extra.append("base X_W0 =\n" + _matrix_text(self._base))
+        if not np.allclose(self._tool, np.eye(4)):
+            extra.append("tool X_nT =\n" + _matrix_text(self._tool))
+        return "\n".join(lines + extra)
+
+    def __repr__(self):
+        return self.dh_table()
+
+
+def _num(x):
+    """Short number text: up to 6 significant digits, no trailing zeros."""
+    if abs(x) < 1e-12:
+        return "0"
+    return f"{x:.6g}"
+
+
+def _var(symbol, i, offset, degrees):
+    name = f"{symbol}{i}"
+    if abs(offset) < 1e-12:
+        return name
+    value = math.degrees(offset) if degrees else offset
+    sign = "+" if value > 0 else "-"
+    return f"{name} {sign} {_num(abs(value))}"
+
+
+def _limits(limits, degrees):
+    lo, hi = limits
+    if math.isinf(lo) and math.isinf(hi):
+        return "-"
+    if degrees:
+        return f"[{_num(math.degrees(lo))}, {_num(math.degrees(hi))}] deg"
+    return f"[{_num(lo)}, {_num(hi)}] m"
+
+
+def _matrix_text(T):
+    return "\n".join("  " + " ".join(f"{v:9.5f}" for v in row) for row in T)
