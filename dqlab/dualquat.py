@@ -73,6 +73,8 @@ def _dq_unit_or_raise(parts, name, tol):
         raise ValueError(msg) from None
     dot = rw * dw + rx * dx + ry * dy + rz * dz
     bad = np.max(np.abs(dot)) if isinstance(dot, np.ndarray) else abs(dot)
+    if not bad - bad == 0.0:
+        raise ValueError(f"{name} contains NaN or infinity")
     if not bad <= tol:
         raise ValueError(
             f"{name} must be a unit dual quaternion: <q_r, q_d> = {bad:.3g} should be 0 "
