@@ -274,6 +274,12 @@ def euler_zxz_from_matrix(R, *, tol=1e-9, singular_tol=1e-12):
     :math:`\theta = \pi(1 - z_z)/2`, :math:`\psi = \operatorname{atan2}(y_x, x_x)`.
     The case is detected when :math:`\sqrt{z_x^2 + z_y^2} \le` ``singular_tol``.
 
+    Near the singularity :math:`\psi` and :math:`\varphi` alone are ill-conditioned but
+    :math:`\psi \pm \varphi` is not (:math:`r_{00} + r_{11} = (1 + c_\theta)\cos(\psi +
+    \varphi)`, :math:`r_{10} - r_{01} = (1 + c_\theta)\sin(\psi + \varphi)`, and with
+    :math:`1 - c_\theta` for the difference); :math:`\varphi` is computed from it, so the
+    angles always reproduce :math:`R` to rounding error.
+
     Parameters
     ----------
     R : array_like, shape (..., 3, 3)
@@ -302,10 +308,23 @@ def euler_zxz_from_matrix(R, *, tol=1e-9, singular_tol=1e-12):
     zx, zy, zz = R[..., 0, 2], R[..., 1, 2], R[..., 2, 2]
     s = np.hypot(zx, zy)
     singular = s <= singular_tol
-    psi = np.where(singular, np.arctan2(R[..., 1, 0], R[..., 0, 0]), np.arctan2(zx, -zy))
-    theta = np.where(singular, np.where(zz > 0.0, 0.0, np.pi), np.arctan2(s, zz))
-    phi = np.where(singular, 0.0, np.arctan2(R[..., 2, 0], R[..., 2, 1]))
+    # psi + phi and psi - phi stay accurate where psi and phi alone do not (near the
+    # singularity): R00 + R11 = (1 + c_theta) cos(psi + phi), R10 - R01 = (1 + c_theta)
+    # sin(psi + phi), R00 - R11 = (1 - c_theta) cos(psi - phi), R10 + R01 = (1 - c_theta)
+    # sin(psi - phi). The spin is taken from the better-conditioned one.
+    upper = zz >= 0.0
+    total = np.where(upper, np.arctan2(R[..., 1, 0] - R[..., 0, 1], R[..., 0, 0] + R[..., 1, 1]),
+                     np.arctan2(R[..., 1, 0] + R[..., 0, 1], R[..., 0, 0] - R[..., 1, 1]))
+    psi = np.where(singular, total, np.arctan2(zx, -zy))
+    theta = np.where(singular, np.where(upper, 0.0, np.pi), np.arctan2(s, zz))
+    phi = np.where(upper, total - psi, psi - total)
+    phi = np.where(singular, 0.0, _wrap(phi))
     return np.stack([psi, theta, phi], axis=-1)
+
+
+def _wrap(angle):
+    """Angles wrapped to (-pi, pi]."""
+    return np.pi - np.mod(np.pi - angle, 2.0 * np.pi)
 
 
 def matrix_from_rpy(rpy):
@@ -362,6 +381,12 @@ def rpy_from_matrix(R, *, tol=1e-9, singular_tol=1e-12):
     :math:`\gamma = -\operatorname{sign}(\beta)\operatorname{atan2}(z_y, z_x)`. The case is
     detected when :math:`\sqrt{x_x^2 + x_y^2} \le` ``singular_tol``.
 
+    Near gimbal lock :math:`\alpha` and :math:`\gamma` alone are ill-conditioned but
+    :math:`\alpha \mp \gamma` is not (:math:`r_{12} - r_{01} = (1 + s_\beta)
+    \sin(\alpha - \gamma)`, :math:`r_{02} + r_{11} = (1 + s_\beta)\cos(\alpha - \gamma)`,
+    and with :math:`1 - s_\beta` for the sum); the roll is computed from it, so the angles
+    always reproduce :math:`R` to rounding error.
+
     Parameters
     ----------
     R : array_like, shape (..., 3, 3)
@@ -388,11 +413,15 @@ def rpy_from_matrix(R, *, tol=1e-9, singular_tol=1e-12):
     xx, xy, xz = R[..., 0, 0], R[..., 1, 0], R[..., 2, 0]
     c = np.hypot(xx, xy)
     singular = c <= singular_tol
-    sign = np.where(xz < 0.0, 1.0, -1.0)  # sign(beta) = -sign(x_z)
+    # yaw - roll (pitch > 0) and yaw + roll (pitch < 0) stay accurate near gimbal lock:
+    # R12 - R01 = (1 + s_beta) sin(alpha - gamma), R02 + R11 = (1 + s_beta) cos(alpha - gamma),
+    # R12 + R01 = -(1 - s_beta) sin(alpha + gamma), R11 - R02 = (1 - s_beta) cos(alpha + gamma).
+    up = xz <= 0.0  # pitch >= 0
+    combo = np.where(up, np.arctan2(R[..., 1, 2] - R[..., 0, 1], R[..., 0, 2] + R[..., 1, 1]),
+                     np.arctan2(-(R[..., 1, 2] + R[..., 0, 1]), R[..., 1, 1] - R[..., 0, 2]))
     yaw = np.where(singular, 0.0, np.arctan2(xy, xx))
-    pitch = np.where(singular, sign * (np.pi / 2), np.arctan2(-xz, c))
-    roll = np.where(singular, -sign * np.arctan2(R[..., 1, 2], R[..., 0, 2]),
-                    np.arctan2(R[..., 2, 1], R[..., 2, 2]))
+    pitch = np.where(singular, np.where(up, np.pi / 2, -np.pi / 2), np.arctan2(-xz, c))
+    roll = _wrap(np.where(up, yaw - combo, combo - yaw))
     return np.stack([roll, pitch, yaw], axis=-1)
 
 
@@ -485,7 +514,8 @@ def axis_angle_from_matrix(R, *, tol=1e-9):
     B = 0.5 * (R + np.swapaxes(R, -1, -2)) - cos[..., None, None] * np.eye(3)
     k = np.argmax(np.diagonal(B, axis1=-2, axis2=-1), axis=-1)
     col = np.take_along_axis(B, k[..., None, None], axis=-1)[..., 0]
-    col = col / np.sqrt(np.sum(col * col, axis=-1))[..., None]
+    cn = np.sqrt(np.sum(col * col, axis=-1))
+    col = col / np.where(cn == 0.0, 1.0, cn)[..., None]
     col = np.where((np.sum(col * r, axis=-1) < 0.0)[..., None], -col, col)
     axis = np.where((cos < 0.0)[..., None], col, axis_skew)
     axis = np.where((rn == 0.0)[..., None] & (cos > 0.0)[..., None],
