@@ -1,0 +1,165 @@
+r"""Closed-form inverse kinematics of the 3-DOF desktop arm (lab report, MGI).
+
+The chain is :func:`dqlab.models.desk_arm`: a base joint about the vertical, then a planar
+two-link arm (lengths :math:`l_1, l_2`) whose shoulder sits :math:`l_3` out and
+:math:`h = l_0 - l_4` up from the base frame. Every reachable point has up to four
+solutions: the arm faces the point or turns its back to it (base angle :math:`\varphi` or
+:math:`\varphi + \pi`), each with the elbow above or below the shoulder--hand line.
+"""
+
+import numpy as np
+
+from .._checks import as_float_array
+from .result import IKResult
+
+__all__ = ["desk_arm"]
+
+
+def _wrap(angle):
+    """Wrap angles to (-pi, pi]."""
+    return np.pi - np.mod(np.pi - angle, 2 * np.pi)
+
+
+def _arm_parameters(robot):
+    links = robot.links
+    ok = (robot.convention == "dh" and robot.n == 3
+          and robot.joint_types == ("revolute",) * 3
+          and abs(links[0].alpha - np.pi / 2) < 1e-12
+          and all(abs(lk.alpha) < 1e-12 for lk in links[1:])
+          and all(abs(lk.d) < 1e-12 for lk in links[1:])
+          and all(abs(lk.theta_offset) < 1e-12 for lk in links)
+          and np.allclose(robot.tool[:3, 3], 0.0))
+    if not ok:
+        raise ValueError(
+            "desk_arm needs a chain like dqlab.models.desk_arm(): standard DH, three "
+            "revolute joints, alpha = (pi/2, 0, 0), d_2 = d_3 = 0, no offsets, and a tool "
+            "without translation")
+    return links[0].d, links[0].a, links[1].a, links[2].a
+
+
+def desk_arm(robot, position, *, tol=1e-9):
+    r"""All closed-form solutions for the desktop arm to put its hand at ``position``.
+
+    With the target in the base frame :math:`(x, y, z)`, :math:`\rho = \sqrt{x^2 + y^2}` and
+    :math:`\varphi = \operatorname{atan2}(y, x)`:
+
+    .. math::
+
+       \theta_1 &= \varphi \;\text{(facing, } r = \rho) \quad\text{or}\quad
+       \varphi + \pi \;\text{(turned away, } r = -\rho),\\
+       u &= r - l_3,\qquad v = z - (l_0 - l_4),\\
+       \cos\theta_3 &= \frac{u^2 + v^2 - l_1^2 - l_2^2}{2 l_1 l_2},\qquad
+       \theta_3 = \pm\arccos(\cdot),\\
+       \theta_2 &= \operatorname{atan2}(v, u)
+                   - \operatorname{atan2}(l_2 \sin\theta_3,\; l_1 + l_2\cos\theta_3).
+
+    The angles are the chain's; :func:`dqlab.models.desk_arm_lab_from_joints` converts
+    them to the lab's :math:`(q_0, q_1, q_2)`.
+
+    **Erratum (lab report, MGI).** The report's law-of-cosines step computes
+    :math:`q_1 + q_2 = \arccos\big(((d - l_3)^2 + z^2 - l_1^2 - l_2^2) / (2 l_1 l_2)\big)`
+    with :math:`z` where it needs :math:`z - (l_0 - l_4)`, the height above the shoulder
+    (its derivation has it right; its code drops the offset). That is why its IK table
+    returns (90, 82, -6), (90, 52, 66), (90, 39, 19), (90, 86, 44) degrees instead of the
+    angles (90, 90, 0), (90, 51, 65), (90, 42, 21), (90, 90, 45) of its FK table; with the
+    offset restored, the formula returns the FK table's angles.
+
+    Parameters
+    ----------
+    robot : Robot
+        :func:`dqlab.models.desk_arm` (lengths are read from its links; a base transform is
+        allowed).
+    position : array_like, shape (..., 3)
+        Target hand positions in the world frame, metres.
+    tol : float, optional
+        Largest position error (metres) of a solution marked valid.
+
+    Returns
+    -------
+    IKResult
+        ``solutions`` of shape (..., 4, 3) in the order: facing with the elbow up, facing
+        with the elbow down, turned away with the elbow up, turned away with the elbow down
+        ("up": the elbow above the shoulder--hand line; :math:`\theta_3 \le 0` when facing,
+        :math:`\theta_3 \ge 0` when turned away). Angles are wrapped to
+        :math:`(-\pi, \pi]`. ``flags``: ``"unreachable"`` (no solution),
+        ``"base_singular"`` (target on the base axis: :math:`\theta_1` is arbitrary and
+        returned as 0 or :math:`\pi`), ``"elbow_singular"`` (arm stretched or folded: the
+        two elbows coincide). ``rotation_error`` is 0 (position-only problem).
+
+    Examples
+    --------
+    The lab's second check, 226 mm forwards along x at the table's height:
+
+    >>> import numpy as np
+    >>> from dqlab.models import desk_arm as desk_arm_model, desk_arm_lab_from_joints
+    >>> arm = desk_arm_model()
+    >>> result = desk_arm(arm, [0.226, 0.0, 0.0])
+    >>> result.valid
+    array([ True,  True,  True,  True])
+    >>> np.degrees(desk_arm_lab_from_joints(result.solutions[:2])).round(1)
+    array([[ 90. ,  51. ,  65. ],
+           [ 90. , -75.8, -40.2]])
+    >>> bool(desk_arm(arm, [1.0, 0.0, 0.0]).success)
+    False
+    """
+    h, l3, l1, l2 = _arm_parameters(robot)
+    p = as_float_array(position, "position", (3,))
+    X_0W = np.linalg.inv(robot.base)
+    p0 = p @ X_0W[:3, :3].T + X_0W[:3, 3]
+    x, y, z = p0[..., 0], p0[..., 1], p0[..., 2]
+    rho = np.hypot(x, y)
+    phi = np.arctan2(y, x)
+    base_singular = rho < 1e-12
+
+    theta1 = np.stack([phi, phi + np.pi], axis=-1)                  # (..., 2)
+    r = np.stack([rho, -rho], axis=-1)
+    u = r - l3
+    v = (z - h)[..., None]
+    c3 = (u * u + v * v - l1 * l1 - l2 * l2) / (2 * l1 * l2)
+    reachable = np.abs(c3) <= 1.0 + 1e-12
+    c3 = np.clip(c3, -1.0, 1.0)
+    s3 = np.sqrt(1.0 - c3 * c3)
+    # facing: elbow up is theta3 <= 0; turned away: elbow up is theta3 >= 0
+    s3_up = np.stack([-s3[..., 0], s3[..., 1]], axis=-1)
+    sols = []
+    for branch in (0, 1):
+        for sign in (1.0, -1.0):
+            sb = sign * s3_up[..., branch]
+            cb = c3[..., branch]
+            t3 = np.arctan2(sb, cb)
+            t2 = np.arctan2(v[..., 0], u[..., branch]) - np.arctan2(l2 * sb, l1 + l2 * cb)
+            sols.append(np.stack([theta1[..., branch], t2, t3], axis=-1))
+    solutions = _wrap(np.stack(sols, axis=-2))                      # (..., 4, 3)
+    ok = np.repeat(reachable, 2, axis=-1)
+    lo, hi = robot.limits.T
+    ok &= np.all((solutions >= lo) & (solutions <= hi), axis=-1)
+    # For an unreachable point the clipped cosine gives the closest pose, so the reported
+    # position error says how far out of reach the point is.
+    X = robot.fk(solutions)
+    position_error = np.linalg.norm(X[..., :3, 3] - p[..., None, :], axis=-1)
+    valid = ok & (position_error <= tol)
+    solutions = np.where(valid[..., None], solutions, 0.0)
+
+    k = np.hypot(u, v)                                                # (..., 2)
+    unreachable = ~np.any(valid, axis=-1)
+    reason = np.full(np.shape(x), "", dtype=object)
+    for idx in np.ndindex(reason.shape):
+        if not unreachable[idx]:
+            continue
+        parts = []
+        for branch, label in ((0, "facing it"), (1, "turned away")):
+            kk = float(k[idx + (branch,)])
+            if kk > l1 + l2:
+                parts.append(f"{label}, {kk - (l1 + l2):.4g} m beyond the reach")
+            elif kk < abs(l1 - l2):
+                parts.append(f"{label}, {abs(l1 - l2) - kk:.4g} m too close to the shoulder")
+            else:
+                parts.append(f"{label}, beyond the joint limits")
+        reason[idx] = "unreachable: " + "; ".join(parts)
+    flags = {
+        "unreachable": unreachable,
+        "base_singular": base_singular,
+        "elbow_singular": np.any(reachable & (np.abs(s3) < 1e-7), axis=-1) & ~unreachable,
+    }
+    return IKResult(solutions=solutions, valid=valid, position_error=position_error,
+                    rotation_error=np.zeros(valid.shape), flags=flags, reason=reason)

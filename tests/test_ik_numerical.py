@@ -1,0 +1,143 @@
+"""Tests for dqlab.ik.numerical: damped least squares, full pose and position only."""
+
+import time
+
+import numpy as np
+import pytest
+
+from dqlab import dualquat
+from dqlab.ik import numerical
+from dqlab.ik.numerical import pose_errors
+from dqlab.models import desk_arm, scara_rsm5, ur3
+from dqlab.robot import Link, Robot
+
+
+def test_full_pose_from_a_nearby_warm_start_on_1000_random_ur3_poses():
+    """>= 99 % converge; each converged answer reproduces the pose to 1e-9 m / 1e-9 rad."""
+    rng = np.random.default_rng(50)
+    robot = ur3()
+    q_true = rng.uniform(-np.pi, np.pi, size=(1000, 6))
+    q0 = q_true + rng.normal(scale=0.1, size=q_true.shape)
+    X = robot.fk(q_true)
+    start = time.perf_counter()
+    result = numerical(robot, X, q0)
+    elapsed = time.perf_counter() - start
+    assert result.solutions.shape == (1000, 1, 6)
+    assert result.valid.mean() >= 0.99
+    ok = result.valid[:, 0]
+    pe, re = pose_errors(robot.fk(result.solutions[ok, 0]), X[ok])
+    assert pe.max() <= 1e-9 and re.max() <= 1e-9
+    np.testing.assert_allclose(result.position_error[ok, 0], pe, atol=1e-15)
+    # failures (if any) are reported, never returned as answers
+    bad = ~ok
+    assert np.all(result.solutions[bad] == 0.0)
+    assert all("m" in r and ("converge" in r or "stalled" in r) for r in result.reason[bad])
+    assert np.all(result.reason[ok] == "")
+    assert elapsed < 5.0
+
+
+def test_position_only_and_dual_quaternion_targets():
+    rng = np.random.default_rng(51)
+    robot = ur3()
+    q_true = rng.uniform(-np.pi, np.pi, size=(300, 6))
+    q0 = q_true + rng.normal(scale=0.1, size=q_true.shape)
+    X = robot.fk(q_true)
+    result = numerical(robot, X[:, :3, 3], q0, position_only=True)
+    assert result.valid.mean() >= 0.99
+    ok = result.valid[:, 0]
+    reached = robot.fk(result.solutions[ok, 0])[:, :3, 3]
+    assert np.linalg.norm(reached - X[ok, :3, 3], axis=-1).max() <= 1e-9
+    assert np.all(result.rotation_error == 0.0)
+    # a full pose with position_only reports the (unconstrained) rotation error
+    with_pose = numerical(robot, X[:5], q0[:5], position_only=True)
+    assert with_pose.valid.all()
+    # dual quaternion targets
+    Q = dualquat.dual_quaternion_from_transform(X[:20])
+    by_dq = numerical(robot, Q, q0[:20])
+    by_matrix = numerical(robot, X[:20], q0[:20])
+    np.testing.assert_allclose(by_dq.solutions, by_matrix.solutions, atol=1e-8)
+
+
+def test_unreachable_target_fails_with_a_reason():
+    robot = ur3()
+    X = robot.fk([0.3, -1.2, 1.0, -0.5, 1.1, 0.2])
+    X[:3, 3] = [1.0, 0.0, 0.3]                # the UR3 reaches about 0.5 m
+    result = numerical(robot, X, np.zeros(6), max_iter=50)
+    assert not result.success
+    assert result.valid.shape == (1,) and result.reason.shape == ()
+    assert np.all(result.solutions == 0.0)
+    assert result.position_error[0] > 0.4
+    assert "position error" in str(result.reason) and "rotation error" in str(result.reason)
+    assert bool(result.flags["not_converged"])
+    short = numerical(robot, robot.fk(np.ones(6)), np.zeros(6), max_iter=1)
+    assert not short.success
+    assert "did not converge after 1 iterations" in str(short.reason)
+
+
+def test_joint_limits_are_respected():
+    rng = np.random.default_rng(52)
+    q_true = np.array([0.3, -1.2, 1.0, -0.5, 1.1, 0.2])
+    links = [Link(lk.a, lk.alpha, lk.d, limits=(q - 0.15, q + 0.15))
+             for lk, q in zip(ur3().links, q_true, strict=True)]
+    robot = Robot(links, name="UR3 with tight limits")
+    q0 = q_true + rng.uniform(-0.3, 0.3, size=(50, 6))   # some starts outside the limits
+    result = numerical(robot, robot.fk(q_true), q0)
+    assert result.valid.all()
+    lo, hi = robot.limits.T
+    assert np.all((result.solutions >= lo) & (result.solutions <= hi))
+    # a target only reachable beyond the limits is not reached
+    outside = robot.fk(np.clip(q_true + 0.3, -np.pi, np.pi))
+    assert not numerical(robot, outside, q_true).success
+
+
+def test_prismatic_and_small_robots():
+    rng = np.random.default_rng(53)
+    scara = scara_rsm5()
+    lo, hi = scara.limits.T
+    q_true = rng.uniform(lo + 0.02, hi - 0.02, size=(100, 4))
+    q_true[:, 2] = rng.uniform(0.02, 0.13, size=100)
+    q0 = np.clip(q_true + rng.normal(scale=0.05, size=q_true.shape), lo, hi)
+    result = numerical(scara, scara.fk(q_true), q0)
+    assert result.valid.mean() >= 0.97
+    arm = desk_arm()
+    q = rng.uniform(-2, 2, size=(100, 3))
+    p = arm.fk(q)[:, :3, 3]
+    result = numerical(arm, p, q + 0.05, position_only=True)
+    assert result.valid.mean() >= 0.97
+
+
+def test_warm_started_path_like_the_report():
+    """A circle of radius 5 cm in the (X, Z) plane, each point solved from the previous."""
+    robot = ur3()
+    q = np.array([0.3, -1.2, 1.0, -0.5, 1.1, 0.2])
+    centre = robot.fk(q)[:3, 3]
+    u = np.linspace(0, 2 * np.pi, 100)
+    R = 0.05
+    path = centre + R * np.stack([-np.sin(u), 0 * u, np.cos(u) - 1], axis=-1)
+    solutions = []
+    for p in path:
+        result = numerical(robot, p, q, position_only=True)
+        assert result.success
+        q = result.solutions[0]
+        solutions.append(q)
+    steps = np.abs(np.diff(np.array(solutions), axis=0)).max()
+    assert steps < 0.1                         # a continuous joint path
+
+
+def test_broadcasting_and_input_errors():
+    robot = ur3()
+    X = robot.fk([0.3, -1.2, 1.0, -0.5, 1.1, 0.2])
+    q0 = np.array([0.3, -1.2, 1.0, -0.5, 1.1, 0.2]) + np.linspace(-0.1, 0.1, 4)[:, None]
+    result = numerical(robot, X, q0.reshape(2, 2, 6))
+    assert result.solutions.shape == (2, 2, 1, 6)
+    assert result.reason.shape == (2, 2) and result.flags["not_converged"].shape == (2, 2)
+    with pytest.raises(ValueError, match="position_only"):
+        numerical(robot, X[:3, 3], q0[0])
+    with pytest.raises(ValueError, match="pose must have shape"):
+        numerical(robot, np.zeros(5), q0[0])
+    with pytest.raises(ValueError, match=r"shape \(\.\.\., 6\)"):
+        numerical(robot, X, np.zeros(5))
+    bad = X.copy()
+    bad[0, 0] = 2.0
+    with pytest.raises(ValueError):
+        numerical(robot, bad, q0[0])
