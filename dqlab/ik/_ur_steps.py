@@ -1,0 +1,404 @@
+r"""The steps of the closed-form UR inverse kinematics, one equation per function.
+
+These are the building blocks of :func:`dqlab.ik.ur`; each function solves one equation of
+the derivation (the book's inverse-kinematics chapter, after section 4.3 of the thesis) and
+works on arrays of any shape with plain numpy operations, so that a whole batch of poses is
+solved without a Python loop. Angles are in radians, lengths in metres, and the UR's
+standard Denavit-Hartenberg values are used with their published signs (``a2``, ``a3`` are
+negative).
+
+Notation. The pose is written relative to the arm's *zero pose* as the product of the six
+joint screws about their zero-pose axes (the thesis's axis-angle dual quaternions
+:math:`Q_1 \dots Q_6`): joint 1 turns about :math:`+z`, joints 2, 3, 4 and 6 about
+:math:`-y`, joint 5 about :math:`-z`. The rotation part of that product is
+
+.. math::
+
+    q_D = r_z(\theta_1)\, r_{-y}(\theta_{234})\, r_{-z}(\theta_5)\, r_{-y}(\theta_6),
+    \qquad \theta_{234} = \theta_2 + \theta_3 + \theta_4,
+
+where :math:`r_u(\theta) = \cos\frac{\theta}{2} + \sin\frac{\theta}{2}\, u` is the unit
+quaternion of a turn by :math:`\theta` about the unit axis :math:`u`.
+"""
+
+import numpy as np
+
+_TWO_PI = 2.0 * np.pi
+
+
+def wrap_angle(theta):
+    r"""Wrap angles to the interval (-pi, pi].
+
+    Parameters
+    ----------
+    theta : array_like, shape (...)
+        Angles in radians.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        ``theta - 2 pi k`` with the integer ``k`` that puts the result in (-pi, pi].
+
+    Examples
+    --------
+    >>> wrap_angle([np.pi, -np.pi, 3 * np.pi / 2, 0.5])
+    array([ 3.14159265,  3.14159265, -1.57079633,  0.5       ])
+    """
+    theta = np.asarray(theta, dtype=float)
+    w = theta - _TWO_PI * np.round(theta / _TWO_PI)
+    w = np.where(w > np.pi, w - _TWO_PI, w)          # rounding of theta / 2 pi
+    return np.where(w <= -np.pi, w + _TWO_PI, w)
+
+
+def wrist_center(p, z6, d6):
+    r"""Position of the wrist-2 point, :math:`p_5 = p_6 - d_6\, z_6`.
+
+    Joint 6 only turns the flange about its own :math:`z_6` axis, so the origin of frame 5
+    lies :math:`d_6` behind the flange along :math:`z_6`. In the thesis this is the
+    translation part of :math:`Q_{FK}\, Q_6^{-1} Q_5^{-1}`-type products, equation (4.5)
+    (whose printed :math:`Q_5^{-1}` carries the translation along :math:`i` instead of
+    :math:`j`).
+
+    Parameters
+    ----------
+    p, z6 : ndarray, shape (..., 3)
+        Flange position and flange :math:`z` axis in the base frame.
+    d6 : float
+        Wrist-3 offset.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+
+    Examples
+    --------
+    >>> wrist_center(np.array([0.0, -0.19425, 0.69415]), np.array([0.0, -1.0, 0.0]), 0.0819)
+    array([ 0.     , -0.11235,  0.69415])
+    """
+    return p - d6 * z6
+
+
+def shoulder_angles(x5, y5, d4):
+    r"""Both solutions of :math:`\sin\theta_1\, x_5 - \cos\theta_1\, y_5 = d_4` (thesis 4.9).
+
+    With :math:`h = \sqrt{x_5^2 + y_5^2 - d_4^2}` the two roots are
+    :math:`\theta_1 = \operatorname{atan2}(y_5, x_5) + \operatorname{atan2}(d_4, \pm h)`,
+    computed here as one well-conditioned ``atan2``:
+
+    .. math::
+
+        \theta_1 = \operatorname{atan2}(y_5 h_\pm + x_5 d_4,\; x_5 h_\pm - y_5 d_4),
+        \qquad h_\pm = \pm h .
+
+    The sign of :math:`h_\pm` is the shoulder branch: :math:`h_\pm = \cos\theta_1 x_5 +
+    \sin\theta_1 y_5` is the wrist centre's coordinate along :math:`x_1`. A solution exists
+    only if :math:`x_5^2 + y_5^2 \ge d_4^2`; when the difference is negative it is clipped to
+    zero here (the caller judges by forward kinematics whether the clipped answer is good
+    enough), and when it is zero the two roots coincide (shoulder singularity).
+
+    Parameters
+    ----------
+    x5, y5 : ndarray, shape (...)
+        Wrist-centre coordinates in the base frame.
+    d4 : float
+        Shoulder offset (distance of the arm plane from the base axis).
+
+    Returns
+    -------
+    theta1 : ndarray, shape (..., 2)
+        Branch 0 with :math:`h_\pm = +h`, branch 1 with :math:`h_\pm = -h`.
+    h : ndarray, shape (...)
+        :math:`h \ge 0` after clipping.
+    h2 : ndarray, shape (...)
+        :math:`x_5^2 + y_5^2 - d_4^2` before clipping (negative: the wrist centre is inside
+        the cylinder of radius :math:`d_4` about the base axis).
+
+    Examples
+    --------
+    >>> theta1, h, h2 = shoulder_angles(np.float64(0.3), np.float64(-0.11235), 0.11235)
+    >>> np.round(theta1, 6), float(h)
+    (array([0.      , 2.424928]), 0.3)
+    """
+    h2 = x5 * x5 + y5 * y5 - d4 * d4
+    h = np.sqrt(np.maximum(h2, 0.0))
+    hpm = np.stack([h, -h], axis=-1)
+    x5 = np.expand_dims(x5, -1)
+    y5 = np.expand_dims(y5, -1)
+    theta1 = np.arctan2(y5 * hpm + x5 * d4, x5 * hpm - y5 * d4)
+    return theta1, h, h2
+
+
+def relative_rotation_coefficients(q, half1):
+    r"""The four coefficients of :math:`L = r_z(\theta_1)^{-1} q_D` (thesis 4.14-4.17).
+
+    With :math:`q_D = (w, x, y, z)` and :math:`\bar c_1 = \cos\frac{\theta_1}{2}`,
+    :math:`\bar s_1 = \sin\frac{\theta_1}{2}`:
+
+    .. math::
+
+        L = (\bar c_1 w + \bar s_1 z,\; \bar c_1 x + \bar s_1 y,\;
+             \bar c_1 y - \bar s_1 x,\; \bar c_1 z - \bar s_1 w),
+
+    the right-hand sides of the thesis's equations :math:`M_2 = N_2` (4.14)-(4.17).
+
+    Parameters
+    ----------
+    q : sequence of four ndarrays, each of shape (...)
+        Components :math:`(w, x, y, z)` of the zero-pose-relative rotation :math:`q_D`.
+    half1 : ndarray, shape (...)
+        :math:`\theta_1 / 2`.
+
+    Returns
+    -------
+    tuple of four ndarrays
+        :math:`(L_w, L_x, L_y, L_z)`.
+
+    Examples
+    --------
+    >>> half = np.float64(0.25)
+    >>> q = np.cos(half), 0.0, 0.0, np.sin(half)  # a pure turn about z by 0.5 rad
+    >>> [round(float(c), 12) for c in relative_rotation_coefficients(q, half)]
+    [1.0, 0.0, 0.0, 0.0]
+    """
+    w, x, y, z = q
+    c, s = np.cos(half1), np.sin(half1)
+    return c * w + s * z, c * x + s * y, c * y - s * x, c * z - s * w
+
+
+def wrist_angles(L, sigma):
+    r""":math:`\theta_5` and the half sum/difference of :math:`\theta_{234}` and :math:`\theta_6`.
+
+    Expanding :math:`r_{-y}(\theta_{234})\, r_{-z}(\theta_5)\, r_{-y}(\theta_6)` gives
+
+    .. math::
+
+        L = \Big(\bar c_5 \cos\tfrac{\Sigma}{2},\; \bar s_5 \sin\tfrac{\Delta}{2},\;
+            -\bar c_5 \sin\tfrac{\Sigma}{2},\; -\bar s_5 \cos\tfrac{\Delta}{2}\Big),
+        \qquad \Sigma = \theta_{234} + \theta_6,\ \Delta = \theta_{234} - \theta_6,
+
+    with :math:`\bar c_5 = \cos\frac{\theta_5}{2}`, :math:`\bar s_5 = \sin\frac{\theta_5}{2}`.
+    Hence, with the wrist branch :math:`\sigma = \pm 1`,
+
+    .. math::
+
+        \bar c_5 = \sqrt{L_w^2 + L_y^2},\quad \bar s_5 = \sigma\sqrt{L_x^2 + L_z^2},\quad
+        \theta_5 = 2\operatorname{atan2}(\bar s_5, \bar c_5),
+
+        \tfrac{\Sigma}{2} = \operatorname{atan2}(-L_y, L_w),\qquad
+        \tfrac{\Delta}{2} = \operatorname{atan2}(\sigma L_x, -\sigma L_z).
+
+    No division by :math:`\bar s_5` or :math:`\bar c_5` occurs (the thesis divides by them
+    in 4.18-4.21 and then solves the 0/0-prone (4.28)); every quantity is an ``atan2`` of
+    two directly computed numbers, so :math:`\theta_5` keeps full accuracy near 0 and
+    :math:`\pm\pi`. Equivalently :math:`\cos\theta_5 = \bar c_5^2 - \bar s_5^2` is the
+    projection of the flange :math:`z` axis on the joint-2 axis.
+
+    Parameters
+    ----------
+    L : tuple of four ndarrays, shape (...)
+        Output of :func:`relative_rotation_coefficients`.
+    sigma : ndarray or float
+        Wrist branch, +1 (:math:`\theta_5 \in [0, \pi]`) or -1, broadcast against ``L``.
+
+    Returns
+    -------
+    theta5, half_sum, half_diff, c5bar, s5bar : ndarrays
+        :math:`\theta_5`, :math:`\Sigma/2`, :math:`\Delta/2`, and the magnitudes
+        :math:`|\bar c_5|`, :math:`|\bar s_5|`.
+
+    Examples
+    --------
+    >>> L = (np.cos(0.3) * np.cos(0.1), np.sin(0.3) * np.sin(0.2),
+    ...      -np.cos(0.3) * np.sin(0.1), -np.sin(0.3) * np.cos(0.2))
+    >>> [round(float(v), 12) for v in wrist_angles(L, 1.0)[:3]]
+    [0.6, 0.1, 0.2]
+    """
+    Lw, Lx, Ly, Lz = L
+    c5bar = np.hypot(Lw, Ly)
+    s5bar = np.hypot(Lx, Lz)
+    theta5 = 2.0 * np.arctan2(sigma * s5bar, c5bar)
+    half_sum = np.arctan2(-Ly, Lw)
+    half_diff = np.arctan2(sigma * Lx, -sigma * Lz)
+    return theta5, half_sum, half_diff, c5bar, s5bar
+
+
+def arm_plane_wrist(p5, c1, s1, d1):
+    r"""Wrist centre in the arm plane: :math:`P = (c_1 x_5 + s_1 y_5,\; z_5 - d_1)`.
+
+    The plane of the planar 3R chain (joints 2, 3, 4) contains the shoulder point
+    :math:`(0, 0, d_1)` and is spanned by :math:`x_1 = (c_1, s_1, 0)` and :math:`y_1 = z_0`.
+
+    Parameters
+    ----------
+    p5 : sequence of three ndarrays, shape (...)
+        Wrist-centre coordinates.
+    c1, s1 : ndarray
+        Cosine and sine of :math:`\theta_1`, broadcast against ``p5``.
+    d1 : float
+        Base height.
+
+    Returns
+    -------
+    Px, Py : ndarrays
+
+    Examples
+    --------
+    >>> [round(v, 12) for v in arm_plane_wrist((0.3, -0.11235, 0.2), 1.0, 0.0, 0.1519)]
+    [0.3, 0.0481]
+    """
+    x5, y5, z5 = p5
+    return c1 * x5 + s1 * y5, z5 - d1
+
+
+def wrist1_point(Px, Py, theta234, d5):
+    r"""Wrist-1 point in the arm plane, :math:`(X, Y) = P - d_5 (s_{234}, -c_{234})`.
+
+    The wrist-2 axis :math:`z_4 = (c_1 s_{234},\, s_1 s_{234},\, -c_{234})` carries the
+    offset :math:`d_5` from the wrist-1 point to the wrist centre; the thesis undoes it with
+    :math:`Q_4^{-1}` in (4.33)-(4.34) (where the printed :math:`Q_4^{-1}` is a copy of
+    :math:`Q_5^{-1}`). :math:`(X, Y)` is the point the planar 2R chain
+    :math:`a_2, a_3` must reach: :math:`X = a_2 c_2 + a_3 c_{23}`, :math:`Y = a_2 s_2 + a_3 s_{23}`.
+
+    Examples
+    --------
+    The thesis's pose, arm straight up: the wrist-1 point is :math:`|a_2 + a_3|` above the
+    shoulder.
+
+    >>> X, Y = wrist1_point(0.0, 0.54235, -np.pi, 0.08535)
+    >>> round(float(X), 12), round(float(Y), 12)
+    (0.0, 0.457)
+    """
+    return Px - d5 * np.sin(theta234), Py + d5 * np.cos(theta234)
+
+
+def elbow_angles(X, Y, a2, a3, elbow_sign):
+    r"""Planar 2R: :math:`\theta_3` from the law of cosines, :math:`\theta_2` by ``atan2``.
+
+    With :math:`\rho^2 = X^2 + Y^2` the law of cosines (thesis 4.37) reads
+    :math:`2 a_2 a_3 \cos\theta_3 = \rho^2 - a_2^2 - a_3^2`, and
+
+    .. math::
+
+        (2 a_2 a_3 \sin\theta_3)^2 = \big((a_2 + a_3)^2 - \rho^2\big)
+                                      \big(\rho^2 - (a_2 - a_3)^2\big),
+
+    whose factors are computed as products of sums and differences of lengths so that no
+    digits are lost near full stretch (:math:`\rho = |a_2 + a_3|`) or full fold. Then
+
+    .. math::
+
+        \theta_3 = \operatorname{atan2}\!\big(\pm\sqrt{K},\;
+                   \operatorname{sgn}(a_2 a_3)(\rho^2 - a_2^2 - a_3^2)\big),\qquad
+        \theta_2 = \operatorname{atan2}(Y k_1 - X k_2,\; X k_1 + Y k_2),
+
+    with :math:`k_1 = a_2 + a_3\cos\theta_3`, :math:`k_2 = a_3 \sin\theta_3` (thesis 4.41,
+    which is right). Negative :math:`K` (the point is out of the 2R chain's reach) is clipped
+    to zero: the arm is then stretched or folded towards the point.
+
+    Parameters
+    ----------
+    X, Y : ndarray
+        Wrist-1 point in the arm plane, relative to the shoulder.
+    a2, a3 : float
+        Upper-arm and forearm lengths (signed, as UR publishes them).
+    elbow_sign : ndarray or float
+        +1 or -1, the elbow branch (sign of :math:`\sin\theta_3` when :math:`a_2 a_3 > 0`).
+
+    Returns
+    -------
+    theta2, theta3 : ndarrays
+    outer, inner : ndarrays
+        :math:`(|a_2 + a_3| - \rho)(|a_2 + a_3| + \rho)` and
+        :math:`(\rho - |a_2 - a_3|)(\rho + |a_2 - a_3|)` before clipping; a negative value
+        says the point is beyond the outer or inside the inner reach.
+
+    Examples
+    --------
+    >>> t2, t3, outer, inner = elbow_angles(-0.3, 0.2, -0.24365, -0.21325, 1.0)
+    >>> round(float(t2), 6), round(float(t3), 6), bool(outer > 0), bool(inner > 0)
+    (-1.199206, 1.326258, True, True)
+    """
+    rho2 = X * X + Y * Y
+    rho = np.sqrt(rho2)
+    r_out = abs(a2 + a3)
+    r_in = abs(a2 - a3)
+    outer = (r_out - rho) * (r_out + rho)
+    inner = (rho - r_in) * (rho + r_in)
+    k = np.sqrt(np.maximum(outer, 0.0) * np.maximum(inner, 0.0))
+    sign_a = 1.0 if a2 * a3 >= 0 else -1.0
+    theta3 = np.arctan2(elbow_sign * k, sign_a * (rho2 - a2 * a2 - a3 * a3))
+    k1 = a2 + a3 * np.cos(theta3)
+    k2 = a3 * np.sin(theta3)
+    theta2 = np.arctan2(Y * k1 - X * k2, X * k1 + Y * k2)
+    return theta2, theta3, outer, inner
+
+
+def feasible_theta234(Px, Py, theta234_ref, a2, a3, d5):
+    r"""The angle :math:`\theta_{234}` nearest to a wanted value for which the arm reaches.
+
+    Used at a wrist singularity, where only :math:`\theta_{234} \pm \theta_6` is fixed by
+    the orientation: the wrist-1 point :math:`(X, Y) = P - d_5 (\sin t, -\cos t)` then
+    moves on a circle of radius :math:`d_5` about :math:`P`, and the 2R chain reaches it iff
+    :math:`(a_2 - a_3)^2 \le \rho^2(t) \le (a_2 + a_3)^2` with
+
+    .. math::
+
+        \rho^2(t) = |P|^2 + d_5^2 - 2 d_5 |P| \sin(t - \psi),
+        \qquad \psi = \operatorname{atan2}(P_y, P_x).
+
+    Each bound :math:`\rho^2 = R^2` gives :math:`\sin(t - \psi) = s_R =
+    (|P|^2 + d_5^2 - R^2) / (2 d_5 |P|)`, solved as
+    :math:`t = \psi + \operatorname{atan2}(2 d_5 |P| s_R, \pm\sqrt{F_R})` with
+    :math:`F_R = (R - |P| + d_5)(R + |P| - d_5)(|P| + d_5 - R)(|P| + d_5 + R)` (digits kept
+    at tangency). The wanted angle is returned when it is feasible, otherwise the feasible
+    boundary point nearest to it; when nothing is feasible the outer-reach tangency (the
+    closest approach) is returned and the caller's forward-kinematics check rejects it.
+
+    Parameters
+    ----------
+    Px, Py : ndarray, shape (...)
+        Wrist centre in the arm plane (see :func:`arm_plane_wrist`).
+    theta234_ref : ndarray, shape (...)
+        The wanted :math:`\theta_{234}`.
+    a2, a3, d5 : float
+
+    Returns
+    -------
+    ndarray, shape (...)
+
+    Examples
+    --------
+    The thesis's pose: the arm stands straight up, so only :math:`\theta_{234} = -\pi`
+    reaches, whatever is asked for.
+
+    >>> t = feasible_theta234(np.array([0.0]), np.array([0.5423500]), np.array([-2.8]),
+    ...                       -0.24365, -0.21325, 0.08535)
+    >>> np.round(np.abs(t), 6)
+    array([3.141593])
+    """
+    Px, Py, theta234_ref = np.broadcast_arrays(Px, Py, theta234_ref)
+    norm_p = np.hypot(Px, Py)
+    psi = np.arctan2(Py, Px)
+    two_d5p = 2.0 * d5 * norm_p
+    u_ref = wrap_angle(theta234_ref - psi)
+    sin_ref = np.sin(u_ref)
+    r_out, r_in = abs(a2 + a3), abs(a2 - a3)
+    s_lo_num = norm_p * norm_p + d5 * d5 - r_out * r_out   # 2 d5 |P| * s_lo (rho <= r_out)
+    s_hi_num = norm_p * norm_p + d5 * d5 - r_in * r_in     # 2 d5 |P| * s_hi (rho >= r_in)
+    ok = (sin_ref * two_d5p >= s_lo_num) & (sin_ref * two_d5p <= s_hi_num)
+
+    def roots(R, num):
+        f = (R - norm_p + d5) * (R + norm_p - d5) * (norm_p + d5 - R) * (norm_p + d5 + R)
+        c = np.sqrt(np.maximum(f, 0.0))
+        return np.arctan2(num, c), np.arctan2(num, -c), f >= 0
+
+    lo_a, lo_b, lo_ok = roots(r_out, s_lo_num)
+    hi_a, hi_b, hi_ok = roots(r_in, s_hi_num)
+    cands = np.stack([lo_a, lo_b, hi_a, hi_b], axis=-1)
+    usable = np.stack([lo_ok, lo_ok, hi_ok, hi_ok], axis=-1)
+    dist = np.abs(wrap_angle(cands - u_ref[..., None]))
+    dist = np.where(usable, dist, np.inf)
+    best = np.take_along_axis(cands, np.argmin(dist, axis=-1)[..., None], axis=-1)[..., 0]
+    # nothing feasible at all: the outer tangency u = pi/2 is the closest approach
+    best = np.where(np.any(usable, axis=-1), best, 0.5 * np.pi)
+    return np.where(ok, theta234_ref, psi + best)

@@ -1,0 +1,642 @@
+r"""Closed-form inverse kinematics of the Universal Robots arms, by dual quaternions.
+
+:func:`ur` returns every solution of a UR-family arm (UR3, UR5, UR10 and the e-series share
+the structure) for one pose or a batch, following the route of the thesis (section 4.3):
+write the pose as the product of the joint dual quaternions :math:`Q_1 \cdots Q_6` and
+equate the products :math:`M_i = Q_i M_{i+1}` with :math:`N_{i+1} = Q_i^{-1} N_i` term by
+term. The route has four steps, each a small function of :mod:`dqlab.ik._ur_steps`:
+
+1. :math:`\theta_1` from the translation of :math:`M_5 = N_5`: the wrist centre
+   :math:`p_5 = p_6 - d_6 z_6` satisfies :math:`\sin\theta_1 x_5 - \cos\theta_1 y_5 = d_4`,
+   two roots when :math:`x_5^2 + y_5^2 \ge d_4^2`
+   (:func:`~dqlab.ik._ur_steps.shoulder_angles`);
+2. :math:`\theta_5` and the sum and difference :math:`\theta_{234} \pm \theta_6` from the
+   rotation part of :math:`M_2 = N_2`, four quaternion coefficients read with ``atan2`` only
+   (:func:`~dqlab.ik._ur_steps.wrist_angles`);
+3. the wrist-1 point from the translation of :math:`Q_2 Q_3 Q_4 Q_4^{-1}`
+   (:func:`~dqlab.ik._ur_steps.wrist1_point`);
+4. the planar chain :math:`\theta_3, \theta_2` by the law of cosines and ``atan2``, then
+   :math:`\theta_4 = \theta_{234} - \theta_2 - \theta_3`
+   (:func:`~dqlab.ik._ur_steps.elbow_angles`).
+
+Every candidate is checked by forward kinematics (:meth:`dqlab.robot.Robot.fk`), as the
+thesis does, but against a tolerance of 1e-9 rather than its 1e-3.
+
+.. rubric:: Solution order
+
+Row ``k = 4 s + 2 e + w`` of the ``(..., 8, 6)`` solutions holds
+
+- ``s`` -- shoulder: 0 ("left") when the wrist centre lies on the :math:`+x_1` side of the
+  base axis, :math:`\cos\theta_1 x_5 + \sin\theta_1 y_5 \ge 0`; 1 ("right") otherwise;
+- ``e`` -- elbow: 0 ("up") when :math:`\sin\theta_3 \ge 0`; 1 ("down") when
+  :math:`\sin\theta_3 \le 0`;
+- ``w`` -- wrist: 0 (not flipped) when :math:`\theta_5 \in [0, \pi]`; 1 (flipped) when
+  :math:`\theta_5 \in [-\pi, 0]`.
+
+Angles are wrapped to :math:`(-\pi, \pi]`; :func:`equivalent_solutions` lists their
+:math:`2\pi`-equivalents within the joint limits and :func:`closest_solution` picks the one
+nearest a given configuration.
+
+.. rubric:: Errata of the source
+
+The thesis (section 4.3, program in 4.4) reaches the right solutions in exact arithmetic,
+but:
+
+1. The printed :math:`Q_5^{-1}` carries the translation :math:`\langle d_6 i\rangle`; undoing
+   :math:`Q_5` needs :math:`\langle d_6 j\rangle` (the program has it right:
+   ``vector=[0, d[5], 0]``).
+2. The :math:`Q_4^{-1}` of section 4.3.4 is a copy of :math:`Q_5^{-1}`; undoing the wrist-1
+   offset needs the translation :math:`\langle d_5 k\rangle` (again the program is right).
+3. (4.18)-(4.21) divide the four rotation equations by :math:`\cos\frac{\theta_5}{2}` and
+   :math:`\sin\frac{\theta_5}{2}`; the restatement of :math:`\alpha` and :math:`\gamma` in
+   4.4 divides by the wrong one (:math:`\bar s_5` for :math:`\alpha`, and :math:`\bar s_5`
+   for :math:`\gamma`), which the program repeats. Here nothing is divided:
+   :math:`\frac{\Sigma}{2} = \operatorname{atan2}(-L_y, L_w)` and
+   :math:`\frac{\Delta}{2} = \operatorname{atan2}(\sigma L_x, -\sigma L_z)`.
+4. The :math:`\theta_6` formula (4.28), :math:`\theta_6 = 2\operatorname{atan2}(\gamma -
+   \beta, \alpha + \delta)`, is 0/0 whenever :math:`\theta_2 + \theta_3 + \theta_4 \equiv
+   \pi` (then :math:`\gamma - \beta` and :math:`\alpha + \delta` both vanish with
+   :math:`\cos\frac{\theta_{234}}{2}`) -- a regular configuration, and the thesis's own test
+   pose is one. It also needs :math:`\theta_5 \neq 0, \pm\pi` for the divisions above. Here
+   :math:`\theta_6 = \frac{\Sigma}{2} - \frac{\Delta}{2}` and
+   :math:`\theta_{234} = \frac{\Sigma}{2} + \frac{\Delta}{2}`, defined everywhere.
+5. :math:`\theta_5` by (4.13), :math:`\pm\arccos\frac{x_6 \sin\theta_1 - y_6 \cos\theta_1 -
+   d_4}{d_6}`, loses half the digits near :math:`\theta_5 = 0` and :math:`\pm\pi`: an error
+   of :math:`10^{-16}` in the argument becomes :math:`10^{-8}` in the angle, although the
+   orientation determines :math:`\theta_5` to full accuracy there (the wrist singularity
+   spoils :math:`\theta_4` and :math:`\theta_6`, not :math:`\theta_5`). Here
+   :math:`\theta_5 = 2\operatorname{atan2}(\bar s_5, \bar c_5)` with both half-angle terms
+   computed as norms of quaternion coefficients. (For :math:`\theta_3`, (4.38), the
+   ``acos`` costs little more than the problem's own conditioning: near a straight or
+   folded elbow a rounding of the position moves :math:`\theta_3` by
+   :math:`\sqrt{\varepsilon}` whatever the formula -- the thesis's run prints
+   :math:`\theta_3 = \pm 2.98 \cdot 10^{-8}` at its test pose, and so does any correct
+   solver, give or take a factor; both reproduce the pose to :math:`10^{-16}`.)
+6. The program repairs ``acos`` arguments slightly outside :math:`[-1, 1]` by rounding them
+   to an integer: any argument in :math:`(-1.5, 1.5)` passes, so unreachable poses give
+   spurious "solutions" that only the 1e-3 forward-kinematics filter can reject (and
+   1e-3 is loose enough to let some through). Here the clipped candidates are kept only if
+   they reproduce the pose to ``tol``.
+7. The :math:`\theta_1` square root :math:`\sqrt{x_5^2 + y_5^2 - d_4^2}` of (4.11) fails
+   (NaN) at the shoulder singularity unless its argument is clipped at zero.
+8. The program's parameter arrays follow the row order of table 4.1 (Craig's modified DH:
+   :math:`\alpha_{i-1}, a_{i-1}`) while the values come from table 4.2 (standard DH), so
+   ``a[2]``, ``a[3]`` and ``alpha`` are shifted by one joint with respect to the
+   equations.
+9. At the wrist singularity (:math:`\theta_5 = 0` or :math:`\pm\pi`, where the thesis's
+   test pose lies) only :math:`\theta_{234} + \theta_6` (or the difference) is determined;
+   the thesis reports a single :math:`\theta_6 = 0` without saying that it chose it. Here
+   the choice is explicit (``q_ref``) and flagged.
+"""
+
+import numpy as np
+
+from . import _ur_steps as steps
+from .result import IKResult
+
+__all__ = ["ur", "ur_parameters", "equivalent_solutions", "closest_solution",
+           "distinct_solutions", "SOLUTION_ORDER"]
+
+_HALF_SQRT2 = np.sqrt(0.5)
+_SIGMA = np.array([1.0, -1.0])            # wrist branch w = 0, 1 (last axis)
+_ELBOW = np.array([[1.0], [-1.0]])        # elbow branch e = 0, 1 (middle axis)
+_UR_ALPHA = (np.pi / 2, 0.0, 0.0, np.pi / 2, -np.pi / 2, 0.0)
+
+#: ``(shoulder, elbow, wrist)`` labels of the eight rows, in order ``k = 4 s + 2 e + w``.
+SOLUTION_ORDER = tuple(
+    (s, e, w) for s in ("left", "right") for e in ("up", "down") for w in ("noflip", "flip"))
+
+_REASON_SHOULDER = ("shoulder: the wrist centre p5 = p6 - d6 z6 lies inside the cylinder "
+                    "x5^2 + y5^2 < d4^2 about the base axis")
+_REASON_OUTER = ("elbow: the wrist-1 point is farther from the shoulder than |a2| + |a3| on "
+                 "every branch")
+_REASON_INNER = ("elbow: the wrist-1 point is closer to the shoulder than ||a2| - |a3|| on "
+                 "every branch")
+_REASON_REACH = "elbow: the wrist-1 point is out of the forearm's reach on every branch"
+_REASON_TOL = "no branch reproduces the pose within tol"
+
+
+def ur_parameters(robot, *, atol=1e-12):
+    r"""The standard DH lengths of a UR-family arm, checked.
+
+    Parameters
+    ----------
+    robot : dqlab.robot.Robot
+        Six revolute joints in standard DH with :math:`\alpha = (\pi/2, 0, 0, \pi/2,
+        -\pi/2, 0)`, :math:`a_1 = a_4 = a_5 = a_6 = 0` and :math:`d_2 = d_3 = 0`.
+    atol : float
+        Tolerance of the structural checks.
+
+    Returns
+    -------
+    dict
+        ``d1, a2, a3, d4, d5, d6`` (floats) and ``offsets`` (the joint-angle offsets,
+        ndarray of shape (6,)).
+
+    Raises
+    ------
+    ValueError
+        If the robot does not have the UR structure.
+
+    Examples
+    --------
+    >>> from dqlab.models import ur3
+    >>> p = ur_parameters(ur3())
+    >>> p["d1"], p["a2"], p["a3"], p["d4"], p["d5"], p["d6"]
+    (0.1519, -0.24365, -0.21325, 0.11235, 0.08535, 0.0819)
+    """
+    links = getattr(robot, "links", None)
+    if links is None or len(links) != 6:
+        raise ValueError("ur() needs a six-joint UR-family robot (standard DH)")
+    if getattr(robot, "convention", "dh") != "dh":
+        raise ValueError("ur() needs the standard DH convention (robot.convention == 'dh')")
+    for i, link in enumerate(links):
+        if getattr(link, "joint", "revolute") != "revolute":
+            raise ValueError(f"ur() needs revolute joints; joint {i + 1} is {link.joint}")
+        if abs(steps.wrap_angle(link.alpha - _UR_ALPHA[i])) > atol:
+            raise ValueError("ur() needs a UR-family arm, alpha = (pi/2, 0, 0, pi/2, -pi/2, "
+                             f"0); joint {i + 1} has alpha = {link.alpha!r}")
+    for i in (0, 3, 4, 5):
+        if abs(links[i].a) > atol:
+            raise ValueError(f"ur() needs a{i + 1} = 0, got {links[i].a!r}")
+    for i in (1, 2):
+        if abs(links[i].d) > atol:
+            raise ValueError(f"ur() needs d{i + 1} = 0, got {links[i].d!r}")
+    if abs(links[1].a) <= atol or abs(links[2].a) <= atol or abs(links[3].d) <= atol:
+        raise ValueError("ur() needs nonzero a2, a3 and d4")
+    return {"d1": links[0].d, "a2": links[1].a, "a3": links[2].a, "d4": links[3].d,
+            "d5": links[4].d, "d6": links[5].d,
+            "offsets": np.array([lk.theta_offset for lk in links], dtype=float)}
+
+
+def _target(robot, pose, tool, pose_tol):
+    r"""Checked target: the pose as a unit dual quaternion in the world frame (``Q``, or the
+    4x4 ``T`` when given as a matrix), and the flange pose in frame 0 as rotation
+    quaternion ``q`` (..., 4), position ``p`` (..., 3) and flange z axis ``z6`` (..., 3)."""
+    from ..dualquat import (
+        check_unit_dual_quaternion,
+        dual_quaternion_conjugate,
+        dual_quaternion_from_transform,
+        dual_quaternion_inverse,
+        dual_quaternion_product,
+        rotation_translation_from_dual_quaternion,
+    )
+    from ..quaternion import rotate_vector
+
+    pose = np.asarray(pose, dtype=float)
+    T = None
+    if pose.ndim >= 2 and pose.shape[-2:] == (4, 4):
+        T = pose
+        try:
+            Q = dual_quaternion_from_transform(pose, tol=pose_tol)
+        except ValueError as exc:
+            raise ValueError(f"pose is not a rigid transform: {exc}") from None
+    elif pose.ndim >= 1 and pose.shape[-1] == 8:
+        Q = check_unit_dual_quaternion(pose, pose_tol, name="pose")
+    else:
+        raise ValueError("pose must have shape (..., 4, 4) (a transform) or (..., 8) (a unit "
+                         f"dual quaternion), got shape {pose.shape}")
+    eye = np.eye(4)
+    base = robot.base
+    robot_tool = robot.tool
+    if tool is not None:
+        tool = np.asarray(tool, dtype=float)
+        try:
+            tool_dq = dual_quaternion_from_transform(tool, tol=pose_tol)
+        except ValueError as exc:
+            raise ValueError(f"tool is not a rigid transform: {exc}") from None
+        if tool.shape != (4, 4):
+            raise ValueError(f"tool must have shape (4, 4), got {tool.shape}")
+    else:
+        tool = robot_tool
+        tool_dq = None
+    Q06 = Q
+    if not np.array_equal(base, eye):
+        Q06 = dual_quaternion_product(
+            dual_quaternion_conjugate(dual_quaternion_from_transform(base)), Q06)
+    if not np.array_equal(tool, eye):
+        if tool_dq is None:
+            tool_dq = dual_quaternion_from_transform(tool)
+        Q06 = dual_quaternion_product(Q06, dual_quaternion_inverse(tool_dq))
+    q, p = rotation_translation_from_dual_quaternion(Q06, tol=np.inf)
+    z6 = rotate_vector(q, np.array([0.0, 0.0, 1.0]), tol=np.inf)
+    return Q, T, q, p, z6, tool, robot_tool
+
+
+def _fk_residuals(robot, solutions, Q, T, tool, robot_tool):
+    r"""Position and rotation errors between robot.fk of the rows and the target."""
+    if T is None:
+        from ..dualquat import transform_from_dual_quaternion
+
+        T = transform_from_dual_quaternion(Q, tol=np.inf)
+    X = robot.fk(solutions)
+    if tool is not robot_tool and not np.array_equal(tool, robot_tool):
+        from ..transforms import transform_inverse
+
+        X = X @ (transform_inverse(robot_tool) @ tool)
+    T = T[..., None, :, :]
+    dp = X[..., :3, 3] - T[..., :3, 3]
+    position_error = np.sqrt(np.einsum("...i,...i->...", dp, dp))
+    # angle of R_fk^T R: its sine from the vector part sum_k a_k x b_k of the columns, its
+    # cosine from the trace; accurate for small angles
+    A = [X[..., i, :3] for i in range(3)]
+    B = [T[..., i, :3] for i in range(3)]
+
+    def dot(u, v):
+        return np.einsum("...k,...k->...", u, v)
+
+    vx = dot(A[1], B[2]) - dot(A[2], B[1])
+    vy = dot(A[2], B[0]) - dot(A[0], B[2])
+    vz = dot(A[0], B[1]) - dot(A[1], B[0])
+    sin2 = np.sqrt(vx * vx + vy * vy + vz * vz)
+    cos2 = dot(A[0], B[0]) + dot(A[1], B[1]) + dot(A[2], B[2]) - 1.0
+    return position_error, np.arctan2(sin2, cos2)
+
+
+def ur(robot, pose, *, tool=None, q_ref=None, tol=1e-9, singular_tol=5e-7, pose_tol=1e-9,
+       residuals="equations"):
+    r"""Every closed-form inverse-kinematics solution of a UR-family arm.
+
+    Solves :math:`X_{W0}\, X_{06}(q)\, X_{6T} = X` for the joint vector :math:`q` by the
+    dual-quaternion route of the thesis (section 4.3), corrected (see the module's
+    "Errata of the source"). A batch of poses is solved with array operations, without a
+    Python loop over the poses.
+
+    Parameters
+    ----------
+    robot : dqlab.robot.Robot
+        A UR-family arm in standard DH (for example :func:`dqlab.models.ur3`); its base
+        transform and tool are taken into account, and joint offsets are honoured.
+    pose : array_like, shape (..., 4, 4) or (..., 8)
+        Target pose(s) of the TCP in the world frame, as rigid transforms or unit dual
+        quaternions ``(q_r, q_d)`` (told apart by the trailing shape).
+    tool : array_like, shape (4, 4), optional
+        Flange-to-TCP transform :math:`X_{6T}` to use instead of ``robot.tool``.
+    q_ref : array_like, shape (6,) or (..., 6), optional
+        Reference configuration. At a wrist singularity, where only
+        :math:`\theta_{234} \pm \theta_6` is determined, :math:`\theta_6` is taken from
+        it (default 0), moved as little as needed for the arm to reach.
+    tol : float
+        A row is valid when it reproduces the pose to ``tol`` metres and ``tol`` radians.
+    singular_tol : float
+        A pose is flagged singular when a valid row has :math:`|\sin\theta_5|` (wrist) or
+        :math:`|\sin\theta_3|` (elbow) below it, or when :math:`h / d_4 =
+        \sqrt{x_5^2 + y_5^2 - d_4^2} / d_4` (shoulder) is. At an exactly singular elbow
+        or shoulder these come out near :math:`\sqrt{\varepsilon} \approx 10^{-8}` (up
+        to about :math:`10^{-7}`), the conditioning of those angles; the default leaves a
+        margin above that. :math:`\theta_5` itself is computed to full accuracy.
+    pose_tol : float
+        Tolerance of the rigidity check of ``pose`` (and ``tool``).
+    residuals : {"equations", "fk"}
+        How ``position_error`` and ``rotation_error`` are obtained (the ``valid`` mask is
+        the same either way). ``"equations"`` (default, fast): every step solves its
+        equation exactly unless it has to clip -- the wrist centre inside the shoulder
+        cylinder (by :math:`e_1 = d_4 - \sqrt{x_5^2 + y_5^2}`, normal to the arm plane)
+        or the wrist-1 point out of the forearm's reach (by :math:`e_2`, the distance to
+        the reach circle, in the arm plane) -- and the rotation is always reproduced, so
+        the forward-kinematics distance of a row is :math:`\sqrt{e_1^2 + e_2^2}` in
+        position and 0 in rotation, up to rounding (below 1e-14, reported as 0). Rows that
+        represent a wrist-singular family are checked by forward kinematics.
+        ``"fk"``: :meth:`dqlab.robot.Robot.fk` of every row against the target, as the
+        thesis filters its candidates (several times slower on batches).
+
+    Returns
+    -------
+    IKResult
+        ``solutions`` (..., 8, 6) in radians, wrapped to :math:`(-\pi, \pi]`, row
+        ``4 s + 2 e + w`` for shoulder ``s``, elbow ``e``, wrist ``w`` (see
+        :data:`SOLUTION_ORDER`; invalid rows hold zeros); ``valid`` (..., 8);
+        ``position_error`` and ``rotation_error`` (..., 8) of every row (before zeroing);
+        ``flags`` with boolean arrays (...) ``"wrist_singular"``, ``"shoulder_singular"``,
+        ``"elbow_singular"`` (set when a valid solution is near that singularity) and
+        ``"unreachable"`` (no valid solution); ``reason`` (...) says why a pose has no
+        solution. Branches that coincide at a singularity are all returned (equal rows);
+        :func:`distinct_solutions` marks the first of each group.
+
+    Raises
+    ------
+    ValueError
+        If the robot is not UR-shaped, or ``pose`` has the wrong shape, holds NaN, is not
+        a rigid transform or not a unit dual quaternion. Unreachable poses do not raise.
+
+    Notes
+    -----
+    Steps, with :math:`X_{06} = (q, p)` the flange pose in the base frame and
+    :math:`q_D = q\, q_0^*` its rotation relative to the zero pose
+    (:math:`q_0 = \cos\frac{\pi}{4} + \sin\frac{\pi}{4}\, i`, the flange at :math:`q = 0`):
+
+    .. math::
+
+        p_5 &= p - d_6 z_6, \qquad
+        \theta_1 = \operatorname{atan2}(y_5 h_\pm + x_5 d_4,\ x_5 h_\pm - y_5 d_4),\
+        L &= r_z(\theta_1)^* q_D, \qquad
+        \theta_5 = 2 \operatorname{atan2}\big(\sigma\sqrt{L_x^2 + L_z^2},
+                                             \sqrt{L_w^2 + L_y^2}\big),\
+        \theta_{234} &= \operatorname{atan2}(-L_y, L_w) + \operatorname{atan2}(\sigma L_x,
+                        -\sigma L_z), \quad
+        \theta_6 = \operatorname{atan2}(-L_y, L_w) - \operatorname{atan2}(\sigma L_x,
+                        -\sigma L_z),\
+        (X, Y) &= (c_1 x_5 + s_1 y_5 - d_5 s_{234},\ z_5 - d_1 + d_5 c_{234}),\
+        \theta_3 &= \operatorname{atan2}\big(\pm\sqrt{((a_2 + a_3)^2 - \rho^2)
+                     (\rho^2 - (a_2 - a_3)^2)},\ \rho^2 - a_2^2 - a_3^2\big), \quad
+        \theta_2 = \operatorname{atan2}(Y k_1 - X k_2, X k_1 + Y k_2),\
+        \theta_4 &= \theta_{234} - \theta_2 - \theta_3 ,
+
+    with :math:`\rho^2 = X^2 + Y^2`, :math:`k_1 = a_2 + a_3 c_3`, :math:`k_2 = a_3 s_3`.
+
+    Singularities: at the shoulder singularity (:math:`h = 0`) and the elbow singularity
+    (:math:`\sin\theta_3 = 0`) two branches coincide and both are returned. At the wrist
+    singularity the family :math:`\theta_6 \in \mathbb R` is represented by the member
+    nearest ``q_ref``'s :math:`\theta_6` that the arm can reach; this is done when the
+    whole family reproduces the pose within ``tol`` (:math:`|\sin\frac{\theta_5}{2}|` or
+    :math:`|\cos\frac{\theta_5}{2}|` below :math:`tol / (8\max(1, d_6))`); slightly further
+    from the singularity the unique, ill-conditioned solution is returned instead. Both are
+    flagged when :math:`|\sin\theta_5| <` ``singular_tol``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dqlab.models import ur3
+    >>> from dqlab.ik import ur
+    >>> robot = ur3()
+    >>> q = np.array([0.3, -1.2, 1.1, -0.4, 0.9, 0.2])
+    >>> result = ur(robot, robot.fk(q))
+    >>> result.solutions.shape, int(result.count)
+    ((8, 6), 8)
+    >>> bool(np.any(np.all(np.abs(result.solutions - q) < 1e-12, axis=-1)))
+    True
+    >>> bool(result.position_error[result.valid].max() < 1e-12)
+    True
+
+    A batch: a regular pose and the thesis's test pose (every singularity at once):
+
+    >>> poses = robot.fk(np.array([q, [0, -np.pi / 2, 0, -np.pi / 2, 0, 0]]))
+    >>> result = ur(robot, poses)
+    >>> result.count
+    array([8, 8])
+    >>> for name, flag in result.flags.items():
+    ...     print(name, flag)
+    wrist_singular [False  True]
+    shoulder_singular [False  True]
+    elbow_singular [False  True]
+    unreachable [False False]
+    """
+    if residuals not in ("fk", "equations"):
+        raise ValueError(f"residuals must be 'fk' or 'equations', got {residuals!r}")
+    prm = ur_parameters(robot)
+    d1, a2, a3, d4, d5, d6 = (prm[k] for k in ("d1", "a2", "a3", "d4", "d5", "d6"))
+    offsets = prm["offsets"]
+    Q, T, q, p, z6, tool_used, robot_tool = _target(robot, pose, tool, pose_tol)
+    batch = q.shape[:-1]
+    q = q.reshape(-1, 4)
+    n = q.shape[0]
+    p5 = steps.wrist_center(p.reshape(-1, 3), z6.reshape(-1, 3), d6)
+    x5, y5, z5 = p5[:, 0], p5[:, 1], p5[:, 2]
+
+    # Step 1, theta1: arrays (n, 2) over the shoulder branch s
+    theta1, h, h2 = steps.shoulder_angles(x5, y5, d4)
+    c1, s1 = np.cos(theta1), np.sin(theta1)
+
+    # Step 2, rotation: q_D = q q0^* with q0 = (1 + i)/sqrt(2), then L = r_z(theta1)^* q_D
+    qw, qx, qy, qz = q[:, 0:1], q[:, 1:2], q[:, 2:3], q[:, 3:4]
+    qD = (_HALF_SQRT2 * (qw + qx), _HALF_SQRT2 * (qx - qw),
+          _HALF_SQRT2 * (qy - qz), _HALF_SQRT2 * (qy + qz))
+    Lw, Lx, Ly, Lz = steps.relative_rotation_coefficients(qD, 0.5 * theta1)
+    # arrays (n, 2, 2) over (s, w); the wrist branch sigma = +1, -1
+    L = (Lw[..., None], Lx[..., None], Ly[..., None], Lz[..., None])
+    theta5, half_sum, half_diff, c5bar, s5bar = steps.wrist_angles(L, _SIGMA)
+    theta234 = half_sum + half_diff
+    theta6 = half_sum - half_diff
+    Px, Py = steps.arm_plane_wrist((x5[:, None], y5[:, None], z5[:, None]), c1, s1, d1)
+    Px, Py = Px[..., None], Py[..., None]                    # (n, 2, 1), (n, 1, 1)
+
+    # wrist singularity: the family theta234 -+ theta6 = const, represented by the member
+    # whose theta6 is nearest theta6_ref among those the arm can reach
+    rep_tol = tol / (8.0 * max(1.0, abs(d6)))
+    rep0 = np.broadcast_to(s5bar <= rep_tol, theta234.shape)
+    reppi = np.broadcast_to(c5bar <= rep_tol, theta234.shape) & ~rep0
+    rep = rep0 | reppi
+    any_rep = bool(rep.any())
+    if any_rep:
+        if q_ref is None:
+            theta6_ref = np.full(n, offsets[5])
+        else:
+            q_ref = np.asarray(q_ref, dtype=float)
+            theta6_ref = np.broadcast_to(q_ref[..., 5], batch).reshape(n) + offsets[5]
+        theta6_ref = np.broadcast_to(theta6_ref[:, None, None], theta234.shape)
+        full_sum = np.broadcast_to(2.0 * half_sum, theta234.shape)
+        full_diff = 2.0 * half_diff
+        want = np.where(rep0, full_sum - theta6_ref, full_diff + theta6_ref)[rep]
+        shape_sw = theta234.shape
+        got = steps.feasible_theta234(np.broadcast_to(Px, shape_sw)[rep],
+                                      np.broadcast_to(Py, shape_sw)[rep], want, a2, a3, d5)
+        theta234 = theta234.copy()
+        theta6 = theta6.copy()
+        theta234[rep] = got
+        theta6[rep] = np.where(rep0[rep], full_sum[rep] - got, got - full_diff[rep])
+
+    # Steps 3 and 4, the planar chain: arrays (n, 2, 2, 2) over (s, e, w)
+    X, Y = steps.wrist1_point(Px, Py, theta234, d5)          # (n, 2, 2) over (s, w)
+    X, Y = X[:, :, None, :], Y[:, :, None, :]
+    theta2, theta3, outer, inner = steps.elbow_angles(X, Y, a2, a3, _ELBOW)
+    theta4 = steps.wrap_angle(theta234[:, :, None, :] - theta2 - theta3)
+
+    sol = np.empty((n, 2, 2, 2, 6))
+    sol[..., 0] = theta1[:, :, None, None]
+    sol[..., 1] = theta2
+    sol[..., 2] = theta3
+    sol[..., 3] = theta4
+    sol[..., 4] = steps.wrap_angle(theta5)[:, :, None, :]
+    sol[..., 5] = steps.wrap_angle(theta6)[:, :, None, :]
+    sol = sol.reshape(n, 8, 6)
+    if offsets.any():
+        sol = steps.wrap_angle(sol - offsets)
+    else:
+        sol[sol <= -np.pi] += 2.0 * np.pi                     # atan2 may return -pi
+    sol = sol.reshape(batch + (8, 6))
+
+    # residuals and validity
+    if residuals == "fk":
+        position_error, rotation_error = _fk_residuals(
+            robot, sol, Q, T, tool_used, robot_tool)
+    else:
+        # distance lost by clipping: shoulder (normal to the arm plane) and elbow (in it)
+        e1 = np.maximum(-h2, 0.0) / (d4 + np.sqrt(x5 * x5 + y5 * y5))          # (n,)
+        r_out, r_in = abs(a2 + a3), abs(a2 - a3)
+        rho = np.sqrt(X * X + Y * Y)
+        e2 = np.maximum(np.maximum(rho - r_out, r_in - rho), 0.0)              # (n, 2, 1, 2)
+        e2 = np.broadcast_to(e2, (n, 2, 2, 2)).reshape(n, 8)
+        position_error = np.sqrt(e1[:, None] ** 2 + e2 ** 2)
+        rotation_error = np.zeros((n, 8))
+        position_error = position_error.reshape(batch + (8,))
+        rotation_error = rotation_error.reshape(batch + (8,))
+        if any_rep:
+            rows = np.broadcast_to(rep[:, :, None, :], (n, 2, 2, 2)).reshape(batch + (8,))
+            pe, re = _fk_residuals(robot, sol[rows][:, None, :], None,
+                                   _rows_target(Q, T, rows), tool_used, robot_tool)
+            position_error[rows] = pe[:, 0]
+            rotation_error[rows] = re[:, 0]
+    valid = (position_error <= tol) & (rotation_error <= tol)
+    solutions = np.where(valid[..., None], sol, 0.0)
+
+    # flags, over the valid rows
+    valid_n = valid.reshape(n, 2, 2, 2)
+    sin5 = (2.0 * s5bar * c5bar)[:, :, None, :]             # (n, 2, 1, 1)
+    sin3 = np.abs(np.sin(theta3))
+    any_valid = valid_n.any(axis=(1, 2, 3))
+    flags = {
+        "wrist_singular": np.any(valid_n & (sin5 < singular_tol), axis=(1, 2, 3)),
+        "shoulder_singular": any_valid & (h < singular_tol * d4),
+        "elbow_singular": np.any(valid_n & (sin3 < singular_tol), axis=(1, 2, 3)),
+        "unreachable": ~any_valid,
+    }
+    flags = {k: v.reshape(batch) for k, v in flags.items()}
+    reason = np.full(n, "", dtype=object)
+    if not any_valid.all():
+        beyond = (outer < 0).all(axis=(1, 2, 3))
+        inside = (inner < 0).all(axis=(1, 2, 3))
+        either = ((outer < 0) | (inner < 0)).all(axis=(1, 2, 3))
+        none = ~any_valid
+        reason[none] = _REASON_TOL
+        reason[none & either] = _REASON_REACH
+        reason[none & inside] = _REASON_INNER
+        reason[none & beyond] = _REASON_OUTER
+        shoulder_gap = np.maximum(-h2, 0.0) / (d4 + np.sqrt(x5 * x5 + y5 * y5))
+        reason[none & (shoulder_gap > tol)] = _REASON_SHOULDER
+    return IKResult(solutions=solutions, valid=valid, position_error=position_error,
+                    rotation_error=rotation_error, flags=flags, reason=reason.reshape(batch))
+
+
+def _rows_target(Q, T, rows):
+    r"""The target of each selected row, as 4x4, shape (m, 4, 4)."""
+    if T is None:
+        from ..dualquat import transform_from_dual_quaternion
+
+        T = transform_from_dual_quaternion(Q, tol=np.inf)
+    return np.broadcast_to(T[..., None, :, :], rows.shape + (4, 4))[rows]
+
+
+def distinct_solutions(result, atol=1e-9):
+    r"""Mark the first valid row of each group of equal solutions (angles compared mod 2 pi).
+
+    Parameters
+    ----------
+    result : IKResult
+        As returned by :func:`ur`.
+    atol : float
+        Two rows are equal when every joint differs by at most ``atol`` (mod :math:`2\pi`).
+
+    Returns
+    -------
+    ndarray of bool, shape (..., k)
+        True for valid rows that do not repeat an earlier valid row.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dqlab.models import ur3
+    >>> from dqlab.ik import ur
+    >>> robot = ur3()
+    >>> result = ur(robot, robot.fk([0, -np.pi / 2, 0, -np.pi / 2, 0, 0]))
+    >>> int(result.count), int(distinct_solutions(result, atol=1e-7).sum())
+    (8, 1)
+
+    (At that pose the elbow is straight and :math:`\theta_3 = \pm 3 \cdot 10^{-8}` on the two
+    elbow branches: the rounding of the pose moves it by :math:`\sqrt{\varepsilon}`.)
+    """
+    sol = result.solutions
+    valid = result.valid
+    diff = np.abs(steps.wrap_angle(sol[..., :, None, :] - sol[..., None, :, :]))
+    same = np.all(diff <= atol, axis=-1) & valid[..., :, None] & valid[..., None, :]
+    k = sol.shape[-2]
+    earlier = np.tril(np.ones((k, k), dtype=bool), -1)
+    return valid & ~np.any(same & earlier, axis=-1)
+
+
+def equivalent_solutions(q, limits=(-2 * np.pi, 2 * np.pi)):
+    r"""All :math:`2\pi`-equivalents of joint vectors within the joint limits.
+
+    A UR joint turns :math:`\pm 360` degrees, so each angle in :math:`(-\pi, \pi]` has one
+    more equivalent, :math:`q_i - 2\pi\operatorname{sgn} q_i`, and a joint vector up to
+    :math:`2^6 = 64`.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., n)
+        Joint vectors (radians).
+    limits : array_like, shape (2,) or (n, 2)
+        Lowest and highest joint value, for all joints or per joint (for example
+        ``robot.limits``). Each joint may have at most two equivalents within the limits
+        (a span of at most :math:`4\pi`).
+
+    Returns
+    -------
+    candidates : ndarray, shape (..., 2**n, n)
+        Candidate ``m`` shifts joint ``i`` by :math:`\pm 2\pi` when bit ``i`` of ``m`` is
+        set (towards zero); candidate 0 is ``q`` itself.
+    within : ndarray of bool, shape (..., 2**n)
+        Which candidates are within the limits.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> cands, ok = equivalent_solutions([0.5, -3.0, 0.0, 1.0, 2.0, -1.0])
+    >>> cands.shape, int(ok.sum())
+    ((64, 6), 64)
+    >>> cands[1].round(4)
+    array([-5.7832, -3.    ,  0.    ,  1.    ,  2.    , -1.    ])
+    """
+    q = np.asarray(q, dtype=float)
+    n = q.shape[-1]
+    limits = np.asarray(limits, dtype=float)
+    lo = np.broadcast_to(limits[..., 0], (n,))
+    hi = np.broadcast_to(limits[..., 1], (n,))
+    if np.any(hi - lo > 4 * np.pi + 1e-12):
+        raise ValueError("equivalent_solutions handles joint ranges of at most 4 pi")
+    bits = (np.arange(2 ** n)[:, None] >> np.arange(n)) & 1          # (2**n, n)
+    shift = np.where(q >= 0, -2 * np.pi, 2 * np.pi)[..., None, :]
+    cands = q[..., None, :] + bits * shift
+    within = np.all((cands >= lo) & (cands <= hi), axis=-1)
+    return cands, within
+
+
+def closest_solution(result, q_ref, limits=(-2 * np.pi, 2 * np.pi)):
+    r"""The valid solution nearest ``q_ref``, unwrapped to the equivalent nearest ``q_ref``.
+
+    The branch is chosen exactly as :meth:`IKResult.best` does (joint-wise distance modulo
+    :math:`2\pi`); then each joint is replaced by its :math:`2\pi`-equivalent within the
+    limits that is nearest ``q_ref`` (what a robot at ``q_ref`` should be sent, so that no
+    joint turns by more than half a turn when avoidable).
+
+    Parameters
+    ----------
+    result : IKResult
+    q_ref : array_like, shape (..., 6)
+    limits : array_like, shape (2,) or (6, 2)
+
+    Returns
+    -------
+    ndarray, shape (..., 6)
+
+    Raises
+    ------
+    ValueError
+        If some target has no valid solution (as :meth:`IKResult.best`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dqlab.models import ur3
+    >>> from dqlab.ik import ur
+    >>> robot = ur3()
+    >>> q = np.array([3.0, -1.0, 1.0, -2.0, 1.0, 6.0])      # joint 6 beyond pi
+    >>> closest_solution(ur(robot, robot.fk(q)), q).round(6)
+    array([ 3., -1.,  1., -2.,  1.,  6.])
+    """
+    best = result.best(q_ref)
+    q_ref = np.asarray(q_ref, dtype=float)
+    cands, within = equivalent_solutions(best, limits)
+    dist = np.abs(cands - q_ref[..., None, :]).sum(axis=-1)
+    dist = np.where(within, dist, np.inf)
+    index = np.argmin(dist, axis=-1)
+    return np.take_along_axis(cands, index[..., None, None], axis=-2)[..., 0, :]

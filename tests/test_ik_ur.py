@@ -1,0 +1,638 @@
+"""Tests of the closed-form UR inverse kinematics, :func:`dqlab.ik.ur`.
+
+Oracles: the project's forward kinematics (``robot.fk``), recomputed independently of the
+solver's own residuals, and ``ur_analytic_ik`` (C++ implementation of Hawkins' UR IK). Both
+use UR's standard DH frames: base frame at the foot of joint 1, z up; flange frame of the
+standard DH chain (z along the last joint axis); no tool. ``ur_analytic_ik``'s
+``*_with_tcp(pose, X_6T)`` variants solve for ``pose @ inv(X_6T)``, our ``tool=X_6T``.
+So the two solvers answer the same question without any frame conversion.
+"""
+
+import contextlib
+import os
+import sys
+
+import numpy as np
+import pytest
+
+from dqlab.ik import IKResult, ur
+from dqlab.models import ur3
+from dqlab.robot import Link, Robot
+
+urmod = sys.modules["dqlab.ik.ur"]  # the module (dqlab.ik.ur is the function)
+
+uik = pytest.importorskip("ur_analytic_ik")
+
+TWO_PI = 2.0 * np.pi
+THESIS_Q = np.array([0.0, -np.pi / 2, 0.0, -np.pi / 2, 0.0, 0.0])
+UR3 = dict(d1=0.1519, a2=-0.24365, a3=-0.21325, d4=0.11235, d5=0.08535, d6=0.0819)
+
+
+@pytest.fixture(scope="module")
+def robot():
+    return ur3()
+
+
+@contextlib.contextmanager
+def quiet_stdout():
+    """ur_analytic_ik prints a warning line to C stdout for each candidate it rejects."""
+    sys.stdout.flush()
+    fd = os.dup(1)
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, 1)
+    try:
+        yield
+    finally:
+        os.dup2(fd, 1)
+        os.close(devnull)
+        os.close(fd)
+
+
+def uik_solutions(module, poses):
+    with quiet_stdout():
+        return [np.array(module.inverse_kinematics(np.ascontiguousarray(T))).reshape(-1, 6)
+                for T in poses]
+
+
+def wrapped(x):
+    return np.angle(np.exp(1j * np.asarray(x)))
+
+
+def fk_errors(robot, q, T):
+    """Independent residuals: position (m) and rotation angle (rad) of fk(q) against T."""
+    X = robot.fk(q)
+    dp = np.linalg.norm(X[..., :3, 3] - T[..., :3, 3], axis=-1)
+    E = np.swapaxes(X[..., :3, :3], -1, -2) @ T[..., :3, :3]
+    v = np.stack([E[..., 2, 1] - E[..., 1, 2], E[..., 0, 2] - E[..., 2, 0],
+                  E[..., 1, 0] - E[..., 0, 1]], axis=-1)
+    angle = np.arctan2(np.linalg.norm(v, axis=-1), np.trace(E, axis1=-2, axis2=-1) - 1.0)
+    return dp, angle
+
+
+def recovery_error(result, q):
+    """Smallest joint-wise (mod 2 pi) distance from q to a valid solution, shape (...)."""
+    d = np.abs(wrapped(result.solutions - np.asarray(q)[..., None, :])).max(axis=-1)
+    return np.where(result.valid, d, np.inf).min(axis=-1)
+
+
+def assert_reproduces(robot, result, T, tol=1e-9):
+    """Every valid row reproduces its target (independent FK) and nothing is NaN."""
+    assert np.all(np.isfinite(result.solutions))
+    assert np.all(result.solutions[~result.valid] == 0.0)
+    assert np.all(np.abs(result.solutions) <= np.pi)
+    assert np.all(result.solutions[result.valid] > -np.pi)
+    Tb = np.broadcast_to(np.asarray(T)[..., None, :, :], result.solutions.shape[:-1] + (4, 4))
+    dp, da = fk_errors(robot, result.solutions[result.valid], Tb[result.valid])
+    assert dp.size == 0 or dp.max() <= tol, dp.max()
+    assert da.size == 0 or da.max() <= tol, da.max()
+
+
+def shoulder_margin(q, p=UR3):
+    """h = cos(t1) x5 + sin(t1) y5 of a configuration: 0 at the shoulder singularity."""
+    t2, t3, t4 = q[..., 1], q[..., 2], q[..., 3]
+    return (p["a2"] * np.cos(t2) + p["a3"] * np.cos(t2 + t3)
+            + p["d5"] * np.sin(t2 + t3 + t4))
+
+
+# --------------------------------------------------------------------------------------
+# The big round trip
+
+
+@pytest.mark.slow
+def test_round_trip_100k_against_fk_and_ur_analytic_ik(robot):
+    rng = np.random.default_rng(20260521)
+    q = rng.uniform(-np.pi, np.pi, (100_000, 6))
+    T = robot.fk(q)
+    result = ur(robot, T)
+    assert isinstance(result, IKResult)
+    assert result.solutions.shape == (100_000, 8, 6)
+
+    # 1. every valid solution reproduces the pose to 1e-9 m and 1e-9 rad (independent FK)
+    assert_reproduces(robot, result, T, tol=1e-9)
+    assert not result.flags["unreachable"].any()
+
+    # 2. the generating configuration is among the solutions for every non-singular pose
+    regular = ((np.abs(np.sin(q[:, 2])) > 1e-6) & (np.abs(np.sin(q[:, 4])) > 1e-6)
+               & (np.abs(shoulder_margin(q)) > 1e-6))
+    assert regular.mean() > 0.999
+    err = recovery_error(result, q)
+    assert err[regular].max() < 1e-8, err[regular].max()
+
+    # 3. as many solutions as ur_analytic_ik: it deduplicates (to 1e-12) and FK-filters
+    # (1e-9 per matrix entry); on random configurations no pose is near a boundary, and
+    # the counts agree on every pose (>= 99.9 % required). Where they can differ is shown
+    # by test_counts_near_boundaries_versus_ur_analytic_ik.
+    theirs = np.array([len(s) for s in uik_solutions(uik.ur3, T)])
+    agree = np.mean(result.count == theirs)
+    assert agree >= 0.999, agree
+    # the residuals of the fast mode are those of forward kinematics
+    fk_mode = ur(robot, T[:5000], residuals="fk")
+    np.testing.assert_array_equal(fk_mode.valid, result.valid[:5000])
+    assert fk_mode.position_error[fk_mode.valid].max() < 1e-14
+    assert fk_mode.rotation_error[fk_mode.valid].max() < 1e-13
+
+
+def test_counts_near_boundaries_versus_ur_analytic_ik(robot):
+    """Poses within 1e-14 .. 1e-4 of a singularity, where the two solvers may disagree.
+
+    Every disagreement found is near a singularity (some valid row within 1e-6 of it:
+    |sin t3|, |sin t5| or h / d4 below 1e-6), and comes from how each solver treats it:
+
+    - shoulder: ur_analytic_ik takes sqrt(x5^2 + y5^2 - d4^2) without clipping; where
+      rounding makes the argument negative it gets NaN and returns no solution at all,
+      where rounding makes it positive it returns both t1 roots, split by the noise (about
+      1e-8 apart). We clip: the double root is returned once per shoulder branch and
+      flagged.
+    - elbow: it snaps sin^2(t3) < 1e-12 to zero, which merges the two genuine elbow
+      branches t3 = +-e for |e| up to 1e-6, and it deduplicates without wrapping, so
+      t3 = pi and t3 = -pi count as two.
+    - wrist: at t5 = 0 (or pi) the solutions form a continuum. It returns up to two
+      members per branch (t6 = 0 and t6 = -pi after snapping its atan2 arguments below
+      1e-12 to zero), or drops branches through its 1e-9 per-entry FK filter; we return
+      one member per branch, the one nearest q_ref's t6 that the arm reaches (equal rows
+      for the two wrist branches), flagged.
+
+    All our valid rows reproduce the pose to 1e-9 (checked); where ur_analytic_ik lists
+    more distinct rows than we do, it is one of the cases above.
+    """
+    rng = np.random.default_rng(7)
+    n = 3000
+    q = rng.uniform(-np.pi, np.pi, (n, 6))
+    kind = rng.integers(0, 3, n)
+    tiny = 10.0 ** rng.uniform(-14, -4, n) * rng.choice([-1.0, 1.0], n)
+    at = rng.choice([0.0, np.pi], n)
+    q[kind == 0, 2] = (at + tiny)[kind == 0]
+    q[kind == 1, 4] = (at + tiny)[kind == 1]
+    sel = np.flatnonzero(kind == 2)
+    v = -(UR3["a2"] * np.cos(q[sel, 1]) + UR3["a3"] * np.cos(q[sel, 1] + q[sel, 2]))
+    v /= UR3["d5"]
+    sel, v = sel[np.abs(v) <= 1], v[np.abs(v) <= 1]
+    q[sel, 3] = np.arcsin(v) + tiny[sel] - q[sel, 1] - q[sel, 2]
+    T = robot.fk(q)
+    result = ur(robot, T)
+    assert_reproduces(robot, result, T)
+    assert result.count.min() >= 2
+    theirs = uik_solutions(uik.ur3, T)
+    count = np.array([len(s) for s in theirs])
+    distinct = urmod.distinct_solutions(result, atol=1e-12).sum(axis=-1)
+    differ = np.flatnonzero(distinct != count)
+    assert 0 < len(differ) < n
+    sin3 = np.abs(np.sin(result.solutions[..., 2]))
+    sin5 = np.abs(np.sin(result.solutions[..., 4]))
+    near = np.where(result.valid, np.minimum(sin3, sin5), np.inf).min(axis=-1)
+    near = np.minimum(near, np.abs(shoulder_margin(q)) / UR3["d4"])
+    assert near[differ].max() < 1e-6
+    more = np.flatnonzero(count > distinct)
+    for i in more:
+        pi_twice = np.any(np.isclose(np.abs(theirs[i][:, 2]), np.pi, atol=1e-12))
+        assert (result.flags["wrist_singular"][i] or result.flags["shoulder_singular"][i]
+                or pi_twice), i
+
+
+# --------------------------------------------------------------------------------------
+# The thesis's run
+
+
+def test_thesis_pose_is_singular_three_ways_and_has_one_solution(robot):
+    """q = (0, -pi/2, 0, -pi/2, 0, 0): the arm stands straight up (section 4.5).
+
+    - wrist: t5 = 0, so only t234 + t6 = -pi is fixed by the orientation;
+    - elbow: t3 = 0, the arm is stretched, the wrist-1 point is on the outer boundary of
+      the forearm's reach (|a2| + |a3| from the shoulder);
+    - shoulder: h = a2 c2 + a3 c23 + d5 s234 = 0, the wrist centre is on the cylinder
+      x5^2 + y5^2 = d4^2, the two t1 roots coincide;
+    - and the wrist-singular family t6 -> t6 + u, t234 -> t234 - u would move the wrist-1
+      point on a circle of radius d5 about the wrist centre, which here lies straight above
+      it: every u != 0 puts it beyond the reach. So the pose has exactly one solution,
+      the generating one, and all eight branches collapse onto it.
+
+    The thesis prints four "combinations", all this one solution: t1 = 0 or 2 pi, t4 =
+    -pi/2 or 3 pi/2, and t3 = +-2.98e-8 from acos(1 - 4.4e-16). That 3e-8 is not only the
+    acos: at a stretched elbow a rounding of the position moves t3 by sqrt(eps) in any
+    formula (ours gives +-3.1e-8; both reproduce the pose to 1e-16). ur_analytic_ik
+    returns no solution here.
+    """
+    T = robot.fk(THESIS_Q)
+    assert np.allclose(T[:3, 3], [0.0, -0.19425, 0.69415], atol=1e-12)
+    assert np.allclose(T @ [0, 0, 0.2, 1], [0.0, -0.39425, 0.69415, 1.0], atol=1e-12)
+    for q_ref in (None, [0, 0, 0, 0, 0, 0.7], [0, 0, 0, 0, 0, -2.5]):
+        result = ur(robot, T, q_ref=q_ref)
+        assert result.valid.all()
+        assert {k: bool(v) for k, v in result.flags.items()} == {
+            "wrist_singular": True, "shoulder_singular": True, "elbow_singular": True,
+            "unreachable": False}
+        assert result.reason == ""
+        assert_reproduces(robot, result, T, tol=1e-15)
+        # one solution: every row is the generating configuration, to sqrt(eps)
+        assert np.abs(wrapped(result.solutions - THESIS_Q)).max() < 1e-7
+        assert urmod.distinct_solutions(result, atol=1e-7).sum() == 1
+    with quiet_stdout():
+        assert len(uik.ur3.inverse_kinematics(T)) == 0
+    # just beyond the boundary: 1e-6 m higher is out of reach; 1e-12 m higher is within tol
+    up = T.copy()
+    up[2, 3] += 1e-6
+    result = ur(robot, up)
+    assert result.flags["unreachable"] and not result.valid.any()
+    assert result.reason == urmod._REASON_OUTER
+    assert np.all(result.solutions == 0.0)
+    up[2, 3] = T[2, 3] + 1e-12
+    result = ur(robot, up)
+    assert result.valid.all() and result.flags["elbow_singular"]
+
+
+def test_thesis_pose_as_its_program_stores_it(robot):
+    """The pose file holds the dual quaternion; the same answer comes from it."""
+    from dqlab.dualquat import dual_quaternion_from_transform
+
+    Q = dual_quaternion_from_transform(robot.fk(THESIS_Q))
+    result = ur(robot, Q)
+    assert result.valid.all() and result.flags["wrist_singular"]
+    assert np.abs(wrapped(result.solutions - THESIS_Q)).max() < 1e-7
+    result_neg = ur(robot, -Q)  # -Q is the same pose
+    np.testing.assert_allclose(result_neg.solutions, result.solutions, atol=1e-12)
+
+
+# --------------------------------------------------------------------------------------
+# Accuracy where the thesis's formulas lose it
+
+
+def test_theta234_near_pi_recovers_configuration(robot):
+    """(4.28) is 0/0 when t2 + t3 + t4 = pi; the half-angle atan2 forms are not."""
+    rng = np.random.default_rng(11)
+    q = rng.uniform(-np.pi, np.pi, (2000, 6))
+    q[:, 2] = rng.uniform(0.3, 2.8, 2000) * rng.choice([-1, 1], 2000)
+    q[:, 4] = rng.uniform(0.3, 2.8, 2000) * rng.choice([-1, 1], 2000)
+    delta = rng.uniform(-1e-12, 1e-12, 2000)
+    q[:, 3] = rng.choice([np.pi, -np.pi], 2000) + delta - q[:, 1] - q[:, 2]
+    regular = np.abs(shoulder_margin(q)) > 1e-4
+    T = robot.fk(q)
+    result = ur(robot, T)
+    assert_reproduces(robot, result, T)
+    assert recovery_error(result, q)[regular].max() < 1e-9
+
+
+@pytest.mark.parametrize("at", [0.0, np.pi, -np.pi])
+def test_theta5_near_wrist_singularity(robot, at):
+    """1e-6 <= |t5 - {0, pi}| <= 1e-3: recovered to 1e-8; the thesis divides by sin(t5/2)."""
+    rng = np.random.default_rng(12)
+    n = 2000
+    q = rng.uniform(-np.pi, np.pi, (n, 6))
+    q[:, 2] = rng.uniform(0.3, 2.8, n) * rng.choice([-1, 1], n)
+    off = 10.0 ** rng.uniform(-6, -3, n) * rng.choice([-1, 1], n)
+    q[:, 4] = wrapped(at + off)
+    # away from the shoulder singularity: there the rounding of the wrist centre moves t1
+    # by eps d4 / h, which the wrist's 1 / sin(t5) amplifies (any solver)
+    regular = np.abs(shoulder_margin(q)) > 1e-2
+    T = robot.fk(q)
+    result = ur(robot, T)
+    assert_reproduces(robot, result, T)
+    assert not result.flags["wrist_singular"].any()
+    assert recovery_error(result, q)[regular].max() < 1e-8
+
+
+@pytest.mark.parametrize("at", [0.0, np.pi])
+@pytest.mark.parametrize("off", [0.0, 1e-15, 3e-12, 1e-10, 5e-8])
+def test_theta5_at_wrist_singularity(robot, at, off):
+    """Closer than singular_tol: flagged, and every returned row reproduces the pose."""
+    rng = np.random.default_rng(13)
+    n = 500
+    q = rng.uniform(-np.pi, np.pi, (n, 6))
+    q[:, 2] = rng.uniform(0.3, 2.8, n) * rng.choice([-1, 1], n)
+    q[:, 4] = at + off * rng.choice([-1, 1], n)
+    T = robot.fk(q)
+    for q_ref in (None, rng.uniform(-np.pi, np.pi, (n, 6))):
+        result = ur(robot, T, q_ref=q_ref)
+        assert_reproduces(robot, result, T)
+        assert result.flags["wrist_singular"].all()
+        assert not result.flags["unreachable"].any()
+        # the generating configuration's branch is present: same t1, t5 and the
+        # determined combination t234 -+ t6 (where the arm reaches t6_ref)
+        t234 = q[:, 1] + q[:, 2] + q[:, 3]
+        comb = t234 + q[:, 5] if at == 0.0 else t234 - q[:, 5]
+        s = result.solutions
+        s_comb = (s[..., 1] + s[..., 2] + s[..., 3]
+                  + (s[..., 5] if at == 0.0 else -s[..., 5]))
+        match = (result.valid
+                 & (np.abs(wrapped(s[..., 0] - q[:, None, 0])) < 1e-6)
+                 & (np.abs(wrapped(s_comb - comb[:, None])) < 1e-6))
+        assert match.any(axis=-1).mean() > 0.99
+    # with q_ref = the generating configuration, the exact member comes back
+    result = ur(robot, T, q_ref=q)
+    regular = np.abs(shoulder_margin(q)) > 1e-4
+    assert recovery_error(result, q)[regular].max() < 1e-6
+
+
+def test_elbow_singularity(robot):
+    rng = np.random.default_rng(14)
+    n = 500
+    q = rng.uniform(-np.pi, np.pi, (n, 6))
+    q[:, 2] = rng.choice([0.0, np.pi], n)
+    q[:, 4] = rng.uniform(0.3, 2.8, n)
+    T = robot.fk(q)
+    result = ur(robot, T)
+    assert_reproduces(robot, result, T)
+    assert result.flags["elbow_singular"].all()
+    assert not result.flags["unreachable"].any()
+    # the two elbow branches of the generating shoulder/wrist branch coincide
+    err = recovery_error(result, q)
+    assert err.max() < 1e-6   # sqrt(eps) conditioning of t3 at a straight/folded elbow
+    regular = np.abs(shoulder_margin(q)) > 1e-4
+    assert (urmod.distinct_solutions(result, atol=1e-6).sum(-1)[regular]
+            < result.count[regular]).all()
+
+
+def test_shoulder_singularity(robot):
+    rng = np.random.default_rng(15)
+    n = 800
+    q = rng.uniform(-np.pi, np.pi, (n, 6))
+    q[:, 2] = rng.uniform(0.3, 2.8, n) * rng.choice([-1, 1], n)
+    q[:, 4] = rng.uniform(0.3, 2.8, n)
+    v = -(UR3["a2"] * np.cos(q[:, 1]) + UR3["a3"] * np.cos(q[:, 1] + q[:, 2])) / UR3["d5"]
+    keep = np.abs(v) <= 0.99
+    q, v = q[keep], v[keep]
+    q[:, 3] = np.arcsin(v) - q[:, 1] - q[:, 2]
+    assert np.abs(shoulder_margin(q)).max() < 1e-15
+    T = robot.fk(q)
+    result = ur(robot, T)
+    assert_reproduces(robot, result, T)
+    assert result.flags["shoulder_singular"].all()
+    assert recovery_error(result, q).max() < 1e-6
+    # both shoulder branches give the same t1
+    t1 = result.solutions[..., 0]
+    both = result.valid[:, :4].any(-1) & result.valid[:, 4:].any(-1)
+    assert both.mean() > 0.99
+    assert np.abs(wrapped(t1[:, 0] - t1[:, 4]))[result.valid[:, 0] & result.valid[:, 4]].max() \
+        < 1e-6
+
+
+def test_just_beyond_the_shoulder_cylinder(robot):
+    """Wrist centre 1e-6 m inside the cylinder of radius d4: unreachable, with reason."""
+    rng = np.random.default_rng(16)
+    q = rng.uniform(-np.pi, np.pi, (200, 6))
+    q[:, 2] = rng.uniform(0.5, 2.5, 200)
+    q[:, 4] = rng.uniform(0.5, 2.5, 200)
+    v = -(UR3["a2"] * np.cos(q[:, 1]) + UR3["a3"] * np.cos(q[:, 1] + q[:, 2])) / UR3["d5"]
+    keep = np.abs(v) <= 0.99
+    q, v = q[keep], v[keep]
+    q[:, 3] = np.arcsin(v) - q[:, 1] - q[:, 2]
+    T = robot.fk(q)
+    p5 = T[:, :3, 3] - UR3["d6"] * T[:, :3, 2]
+    radial = p5[:, :2] / np.linalg.norm(p5[:, :2], axis=-1, keepdims=True)
+    inside = T.copy()
+    inside[:, :2, 3] -= 1e-6 * radial
+    result = ur(robot, inside)
+    assert result.flags["unreachable"].all()
+    assert (result.reason == urmod._REASON_SHOULDER).all()
+    assert not np.any(result.valid) and np.all(result.solutions == 0.0)
+    # 1e-11 m inside is within tol: clipped, valid, flagged
+    inside[:, :2, 3] = T[:, :2, 3] - 1e-11 * radial
+    result = ur(robot, inside)
+    assert result.success.all() and result.flags["shoulder_singular"].all()
+    assert result.position_error[result.valid].max() < 1e-9
+
+
+def test_far_and_near_targets_are_unreachable_with_reasons(robot):
+    T = np.eye(4)
+    T[:3, 3] = [2.0, 0.3, 0.4]                  # 2 m away: beyond every branch
+    result = ur(robot, T)
+    assert result.flags["unreachable"] and result.reason == urmod._REASON_OUTER
+    # wrist centre exactly on the base axis: inside the shoulder cylinder
+    T = np.eye(4)
+    T[:3, 3] = [0.0, 0.0, 0.3 + UR3["d6"]]
+    result = ur(robot, T)
+    assert result.flags["unreachable"] and result.reason == urmod._REASON_SHOULDER
+    # (an inner-reach failure on every branch cannot happen on a UR: the two wrist
+    # branches put the wrist-1 point 2 d5 apart, more than 2 ||a2| - |a3||)
+    assert 2 * UR3["d5"] > 2 * abs(abs(UR3["a2"]) - abs(UR3["a3"]))
+
+
+def test_random_targets_never_raise_and_modes_agree(robot):
+    """Random poses, most unreachable: no NaN, no exception, the same valid mask whether
+    the residuals come from the equations or from forward kinematics."""
+    from dqlab.rotations import matrix_from_axis_angle
+
+    rng = np.random.default_rng(17)
+    n = 5000
+    T = np.tile(np.eye(4), (n, 1, 1))
+    axis = rng.normal(size=(n, 3))
+    T[:, :3, :3] = matrix_from_axis_angle(axis, rng.uniform(0, np.pi, n))
+    T[:, :3, 3] = rng.uniform(-0.6, 0.6, (n, 3))
+    fast = ur(robot, T)
+    slow = ur(robot, T, residuals="fk")
+    np.testing.assert_array_equal(fast.valid, slow.valid)
+    assert 0.05 < fast.flags["unreachable"].mean() < 0.95
+    assert_reproduces(robot, fast, T)
+    assert set(fast.reason[fast.flags["unreachable"]]) <= {
+        urmod._REASON_SHOULDER, urmod._REASON_OUTER, urmod._REASON_INNER,
+        urmod._REASON_REACH}
+    assert (fast.reason[~fast.flags["unreachable"]] == "").all()
+    # the analytic residuals are the FK distances wherever a row was clipped
+    np.testing.assert_allclose(fast.position_error, slow.position_error,
+                               atol=1e-12, rtol=1e-9)
+    assert slow.rotation_error.max() < 1e-12
+    theirs = np.array([len(s) for s in uik_solutions(uik.ur3, T)])
+    assert np.mean(theirs == fast.count) > 0.999
+
+
+# --------------------------------------------------------------------------------------
+# Conventions, order, inputs
+
+
+def test_solution_order(robot):
+    rng = np.random.default_rng(18)
+    q = rng.uniform(-np.pi, np.pi, (3000, 6))
+    T = robot.fk(q)
+    result = ur(robot, T)
+    s = result.solutions
+    p5 = T[:, :3, 3] - UR3["d6"] * T[:, :3, 2]
+    h = np.cos(s[..., 0]) * p5[:, None, 0] + np.sin(s[..., 0]) * p5[:, None, 1]
+    v = result.valid
+    assert np.all(h[:, :4][v[:, :4]] >= -1e-12) and np.all(h[:, 4:][v[:, 4:]] <= 1e-12)
+    for k in range(8):
+        e, w = (k >> 1) & 1, k & 1
+        sin3 = np.sin(s[v[:, k], k, 2])
+        t5 = s[v[:, k], k, 4]
+        assert np.all(sin3 >= 0) if e == 0 else np.all(sin3 <= 0)
+        assert np.all(t5 >= 0) if w == 0 else np.all(t5 <= 0)
+    assert urmod.SOLUTION_ORDER[5] == ("right", "up", "flip")
+
+
+@pytest.mark.parametrize("lead", [(), (1,), (7,), (2, 3)])
+def test_batch_shapes_match_single(robot, lead):
+    rng = np.random.default_rng(19)
+    q = rng.uniform(-np.pi, np.pi, lead + (6,))
+    T = robot.fk(q)
+    result = ur(robot, T)
+    assert result.solutions.shape == lead + (8, 6)
+    assert result.valid.shape == result.position_error.shape == lead + (8,)
+    assert result.reason.shape == lead
+    assert all(f.shape == lead for f in result.flags.values())
+    for idx in np.ndindex(*lead):
+        single = ur(robot, T[idx])
+        np.testing.assert_array_equal(single.solutions, result.solutions[idx])
+        np.testing.assert_array_equal(single.valid, result.valid[idx])
+
+
+def test_dual_quaternion_input_matches_matrix_input(robot):
+    from dqlab.dualquat import dual_quaternion_from_transform
+
+    rng = np.random.default_rng(20)
+    q = rng.uniform(-np.pi, np.pi, (500, 6))
+    T = robot.fk(q)
+    Q = dual_quaternion_from_transform(T)
+    a, b = ur(robot, T), ur(robot, Q)
+    np.testing.assert_array_equal(a.valid, b.valid)
+    np.testing.assert_allclose(a.solutions, b.solutions, atol=1e-12)
+    c = ur(robot, robot.fk_dq(q[0]))
+    assert recovery_error(c, q[0]) < 1e-10
+
+
+def test_invalid_inputs_raise(robot):
+    T = robot.fk(np.zeros(6))
+    bad = T.copy()
+    bad[0, 0] = 1.1
+    with pytest.raises(ValueError, match="pose"):
+        ur(robot, bad)
+    bad = T.copy()
+    bad[3, 0] = 0.5
+    with pytest.raises(ValueError):
+        ur(robot, bad)
+    with pytest.raises(ValueError, match="pose"):
+        ur(robot, np.array([1.0, 0, 0, 0, 0, 1, 0, 0]) * 1.01)
+    with pytest.raises(ValueError, match="pose"):
+        ur(robot, np.array([1.0, 0, 0, 0, 1.0, 0, 0, 0]))   # <q_r, q_d> != 0
+    with pytest.raises(ValueError, match="shape"):
+        ur(robot, np.eye(3))
+    nan = np.tile(T, (3, 1, 1))
+    nan[1, 0, 3] = np.nan
+    with pytest.raises(ValueError):
+        ur(robot, nan)
+    with pytest.raises(ValueError, match="UR"):
+        ur(Robot([Link(0, 0, 0)] * 6), T)
+    from dqlab.models import ur3_mdh
+
+    with pytest.raises(ValueError):
+        ur(ur3_mdh(), T)
+    with pytest.raises(ValueError, match="residuals"):
+        ur(robot, T, residuals="maybe")
+
+
+# --------------------------------------------------------------------------------------
+# Tool, base, offsets, other UR models
+
+
+def test_tool_and_base(robot):
+    from dqlab.rotations import matrix_from_axis_angle
+    from dqlab.transforms import transform_from
+
+    rng = np.random.default_rng(21)
+    X_6T = transform_from(matrix_from_axis_angle([1, 2, 3], 0.7), [0.01, -0.02, 0.15])
+    X_W0 = transform_from(matrix_from_axis_angle([0, 1, 1], 2.0), [1.0, -0.5, 0.2])
+    q = rng.uniform(-np.pi, np.pi, (300, 6))
+    # tool given to ur(): pose = fk(q) @ X_6T
+    T = robot.fk(q) @ X_6T
+    result = ur(robot, T, tool=X_6T)
+    assert recovery_error(result, q).max() < 1e-9
+    with quiet_stdout():
+        theirs = [uik.ur3.inverse_kinematics_with_tcp(np.ascontiguousarray(X), X_6T)
+                  for X in T[:50]]
+    for i, sols in enumerate(theirs):
+        assert len(sols) == result.count[i]
+        for s in sols:
+            d = np.abs(wrapped(result.solutions[i] - s)).max(-1)
+            assert np.where(result.valid[i], d, np.inf).min() < 1e-9
+    # tool and base on the robot
+    equipped = ur3()
+    equipped.base = X_W0
+    equipped.tool = X_6T
+    T = equipped.fk(q)
+    for mode in ("equations", "fk"):
+        result = ur(equipped, T, residuals=mode)
+        assert recovery_error(result, q).max() < 1e-9
+        assert_reproduces(equipped, result, T)
+
+
+def test_joint_offsets_are_honoured():
+    links = [Link(a=lk.a, alpha=lk.alpha, d=lk.d, theta_offset=off)
+             for lk, off in zip(ur3().links, [0.1, -np.pi / 2, 0.0, -np.pi / 2, 0.3, np.pi],
+                                strict=True)]
+    robot = Robot(links, name="UR3 with offsets")
+    rng = np.random.default_rng(22)
+    q = rng.uniform(-np.pi, np.pi, (500, 6))
+    T = robot.fk(q)
+    result = ur(robot, T)
+    assert_reproduces(robot, result, T)
+    assert recovery_error(result, q).max() < 1e-9
+
+
+@pytest.mark.parametrize("name", ["ur5", "ur10"])
+def test_other_ur_models(name):
+    import dqlab.models as models
+
+    robot = getattr(models, name)()
+    rng = np.random.default_rng(23)
+    q = rng.uniform(-np.pi, np.pi, (3000, 6))
+    T = robot.fk(q)
+    result = ur(robot, T)
+    assert_reproduces(robot, result, T)
+    assert recovery_error(result, q).max() < 1e-8
+    theirs = np.array([len(s) for s in uik_solutions(getattr(uik, name), T)])
+    assert np.mean(theirs == result.count) >= 0.999
+
+
+def test_every_ur_analytic_ik_solution_is_ours(robot):
+    rng = np.random.default_rng(24)
+    q = rng.uniform(-np.pi, np.pi, (2000, 6))
+    T = robot.fk(q)
+    result = ur(robot, T)
+    for i, sols in enumerate(uik_solutions(uik.ur3, T)):
+        for s in sols:
+            d = np.abs(wrapped(result.solutions[i] - s)).max(-1)
+            assert np.where(result.valid[i], d, np.inf).min() < 1e-9
+
+
+# --------------------------------------------------------------------------------------
+# Helpers
+
+
+def test_equivalent_solutions():
+    q = np.array([0.5, -3.0, 0.0, 3.1, -np.pi / 2, 2.0])
+    cands, within = urmod.equivalent_solutions(q)
+    assert cands.shape == (64, 6) and within.all()
+    assert np.allclose(wrapped(cands - q), 0.0)
+    assert len(np.unique(np.round(cands, 12), axis=0)) == 64
+    cands, within = urmod.equivalent_solutions(q, limits=(-np.pi, np.pi))
+    assert within.sum() == 1 and np.array_equal(cands[within][0], q)
+    lim = np.array([[-2 * np.pi, 2 * np.pi]] * 5 + [[-np.pi, np.pi]])
+    assert urmod.equivalent_solutions(q, limits=lim)[1].sum() == 32
+    batch = np.stack([q, -q])
+    assert urmod.equivalent_solutions(batch)[0].shape == (2, 64, 6)
+
+
+def test_closest_solution_is_consistent_with_best(robot):
+    rng = np.random.default_rng(25)
+    q = rng.uniform(-TWO_PI, TWO_PI, (200, 6))
+    T = robot.fk(q)
+    result = ur(robot, T)
+    best = result.best(q)
+    close = urmod.closest_solution(result, q)
+    assert np.allclose(wrapped(close - best), 0.0)
+    np.testing.assert_allclose(close, q, atol=1e-9)     # the unwrapped generating config
+    assert np.all(np.abs(close) <= TWO_PI)
+
+
+def test_distinct_solutions(robot):
+    result = ur(robot, robot.fk(np.array([0.3, -1.2, 1.1, -0.4, 0.9, 0.2])))
+    assert urmod.distinct_solutions(result).all()
+    result = ur(robot, robot.fk(THESIS_Q))
+    mask = urmod.distinct_solutions(result, atol=1e-7)
+    assert mask.tolist() == [True] + [False] * 7
+
+
+def test_wrap_angle():
+    from dqlab.ik._ur_steps import wrap_angle
+
+    x = np.array([-np.pi, np.pi, -3 * np.pi, 3 * np.pi, 0.0, -1e-300, 7.0])
+    w = wrap_angle(x)
+    assert np.all(w > -np.pi) and np.all(w <= np.pi)
+    assert np.allclose(np.exp(1j * w), np.exp(1j * x))
