@@ -65,7 +65,8 @@ def components(a):
     """
     if a.ndim == 1:
         return a.tolist()
-    return [a[..., i] for i in range(a.shape[-1])]
+    # one copy to a component-major layout makes every later operation contiguous
+    return list(np.ascontiguousarray(np.moveaxis(a, -1, 0)))
 
 
 def stack_components(parts):
@@ -74,16 +75,9 @@ def stack_components(parts):
     >>> stack_components([1.0, 2.0])
     array([1., 2.])
     """
-    for p in parts:
-        if isinstance(p, np.ndarray):
-            break
-    else:
-        return np.array(parts, dtype=float)
-    shape = np.broadcast_shapes(*(np.shape(p) for p in parts))
-    out = np.empty(shape + (len(parts),))
-    for i, p in enumerate(parts):
-        out[..., i] = p
-    return out
+    if type(parts[0]) is float and type(parts[-1]) is float:
+        return np.array(parts)
+    return np.stack(np.broadcast_arrays(*parts), axis=-1).astype(float, copy=False)
 
 
 def finite_or_raise(out, *named):
@@ -111,10 +105,41 @@ def pack(parts, *named):
     >>> pack([1.0, 2.0], (np.ones(2), "a", (2,)))
     array([1., 2.])
     """
-    for p in parts:
-        if isinstance(p, np.ndarray):
-            return finite_or_raise(stack_components(parts), *named)
-    s = sum(parts)
-    if s - s == 0.0:
-        return np.array(parts, dtype=float)
-    return finite_or_raise(np.array(parts, dtype=float), *named)
+    if type(parts[0]) is float and type(parts[-1]) is float:
+        s = sum(parts)
+        if s - s == 0.0:
+            return np.array(parts)
+        return finite_or_raise(np.array(parts), *named)
+    return finite_or_raise(stack_components(parts), *named)
+
+
+CHUNK = 8192
+
+
+def batched(kernel, inputs, out_trailing, chunk=CHUNK):
+    """Apply ``kernel`` to a batch in chunks of ``chunk`` elements and assemble the result.
+
+    ``inputs`` are ``(array, k)`` pairs, ``k`` being the number of trailing (per-element)
+    axes of that array; the leading axes broadcast. ``kernel`` receives the chunks (each
+    with one leading axis) and returns an array of trailing shape ``out_trailing``.
+    Chunks that fit in the processor cache make the many small element-wise operations of
+    a component formula about twice as fast as one pass over a large batch.
+
+    >>> batched(lambda a, b: a + b, [(np.ones((3, 2)), 1), (np.ones(2), 1)], (2,))
+    array([[2., 2.],
+           [2., 2.],
+           [2., 2.]])
+    """
+    shape = np.broadcast_shapes(*(a.shape[:a.ndim - k] for a, k in inputs))
+    n = 1
+    for s in shape:
+        n *= s
+    flat = [np.broadcast_to(a, shape + a.shape[a.ndim - k:]).reshape((n,) + a.shape[a.ndim - k:])
+            for a, k in inputs]
+    if n <= chunk:
+        out = kernel(*flat)
+    else:
+        out = np.empty((n,) + tuple(out_trailing))
+        for start in range(0, n, chunk):
+            out[start:start + chunk] = kernel(*(f[start:start + chunk] for f in flat))
+    return out.reshape(shape + tuple(out_trailing))

@@ -20,6 +20,7 @@ import numpy as np
 
 from ._checks import (
     as_float_array,
+    batched,
     check_finite,
     components,
     float_array,
@@ -28,6 +29,7 @@ from ._checks import (
 )
 from .quaternion import (
     _from_matrix,
+    _matrix,
     _mul,
     _rot,
     _unit_or_raise,
@@ -133,16 +135,23 @@ def dual_quaternion_product(A, B):
     """
     A = _in(A, "A")
     B = _in(B, "B")
-    if A.ndim > 1 or B.ndim > 1:
-        check_finite(A, "A")
-        check_finite(B, "B")
-    a = components(A)
-    b = components(B)
+    if A.ndim == 1 and B.ndim == 1:
+        return pack(_dq_mul(A.tolist(), B.tolist()), (A, "A", _D), (B, "B", _D))
+    check_finite(A, "A")
+    check_finite(B, "B")
+    return batched(_product_kernel, [(A, 1), (B, 1)], _D)
+
+
+def _dq_mul(a, b):
+    """(a_r + eps a_d)(b_r + eps b_d) on components: a_r b_r + eps (a_r b_d + a_d b_r)."""
     real = _mul(*a[:4], *b[:4])
     d1 = _mul(*a[:4], *b[4:])
     d2 = _mul(*a[4:], *b[:4])
-    return pack(real + (d1[0] + d2[0], d1[1] + d2[1], d1[2] + d2[2], d1[3] + d2[3]),
-                (A, "A", _D), (B, "B", _D))
+    return real + (d1[0] + d2[0], d1[1] + d2[1], d1[2] + d2[2], d1[3] + d2[3])
+
+
+def _product_kernel(A, B):
+    return stack_components(_dq_mul(components(A), components(B)))
 
 
 def dual_quaternion_conjugate(Q):
@@ -492,19 +501,29 @@ def dual_quaternion_from_transform(T, *, tol=1e-9):
     T = float_array(T, "T", (4, 4))
     if T.ndim == 2:
         a, b, c, d = T.tolist()
-        s = sum(a) + sum(b) + sum(c)
-        if not (s - s == 0.0 and d == [0.0, 0.0, 0.0, 1.0]):
+        err, det = _orthonormality(a, b, c)  # NaN or inf in R fail this test too
+        t = a[3] + b[3] + c[3]
+        if not (err <= tol and det > 0.0 and t - t == 0.0 and d == [0.0, 0.0, 0.0, 1.0]):
             check_transform(T, tol)  # raises with the right message
-        err, det = _orthonormality(a, b, c)
-        if not (err <= tol and det > 0.0):
-            _raise_not_rotation("the rotation block of T", err, det, tol)
+            raise ValueError("T contains NaN or infinity")
         qr = _from_matrix(a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2])
         qd = _mul(0.0, 0.5 * a[3], 0.5 * b[3], 0.5 * c[3], *qr)
         return np.array(qr + qd)
-    T = check_transform(T, tol)
-    qr = _from_matrix(*[T[..., i, j] for i in range(3) for j in range(3)])
-    qd = _mul(0.0, 0.5 * T[..., 0, 3], 0.5 * T[..., 1, 3], 0.5 * T[..., 2, 3], *qr)
-    return stack_components(qr + qd)
+    check_finite(T, "T")
+
+    def kernel(T):
+        e = components(T.reshape(-1, 16))
+        if not ((e[12] == 0.0).all() and (e[13] == 0.0).all() and (e[14] == 0.0).all()
+                and (e[15] == 1.0).all()):
+            check_transform(T, tol)  # raises with the right message
+        err, det = _orthonormality(e[0:3], e[4:7], e[8:11])
+        if not (err <= tol and det > 0.0):
+            _raise_not_rotation("the rotation block of T", err, det, tol)
+        qr = _from_matrix(e[0], e[1], e[2], e[4], e[5], e[6], e[8], e[9], e[10])
+        qd = _mul(0.0, 0.5 * e[3], 0.5 * e[7], 0.5 * e[11], *qr)
+        return stack_components(qr + qd)
+
+    return batched(kernel, [(T, 2)], _D)
 
 
 def transform_from_dual_quaternion(Q, *, tol=1e-9):
@@ -533,18 +552,26 @@ def transform_from_dual_quaternion(Q, *, tol=1e-9):
            [0., 0., 1., 0.],
            [0., 0., 0., 1.]])
     """
-    from .quaternion import _matrix
-
     Q = _in(Q, "Q")
-    c = components(Q)
+    if Q.ndim == 1:
+        return np.array(_transform_parts(Q.tolist(), tol)).reshape(4, 4)
+
+    def kernel(Q):
+        return stack_components(_transform_parts(components(Q), tol))
+
+    T = batched(kernel, [(Q, 1)], (16,))
+    return T.reshape(T.shape[:-1] + (4, 4))
+
+
+def _transform_parts(c, tol):
+    """The 16 entries of the 4x4 of a unit dual quaternion given by its components."""
     _dq_unit_or_raise(c, "Q", tol)
     rw, rx, ry, rz = c[:4]
     _, tx, ty, tz = _mul(*c[4:], rw, -rx, -ry, -rz)
     m = _matrix(rw, rx, ry, rz)
     z = 0.0 * rw
-    T = stack_components(m[0:3] + (2.0 * tx,) + m[3:6] + (2.0 * ty,) + m[6:9] + (2.0 * tz,)
-                         + (z, z, z, z + 1.0))
-    return T.reshape(T.shape[:-1] + (4, 4))
+    return (m[0:3] + (2.0 * tx,) + m[3:6] + (2.0 * ty,) + m[6:9] + (2.0 * tz,)
+            + (z, z, z, z + 1.0))
 
 
 def dual_quaternion_apply(Q, points, *, tol=1e-9):
@@ -576,15 +603,24 @@ def dual_quaternion_apply(Q, points, *, tol=1e-9):
     """
     Q = _in(Q, "Q")
     p = _in(points, "points", _V)
-    if Q.ndim > 1 or p.ndim > 1:
-        check_finite(Q, "Q")
-        check_finite(p, "points")
-    c = components(Q)
+    if Q.ndim == 1 and p.ndim == 1:
+        return pack(_apply_parts(Q.tolist(), p.tolist(), tol), (p, "points", _V))
+    check_finite(Q, "Q")
+    check_finite(p, "points")
+
+    def kernel(Q, p):
+        return stack_components(_apply_parts(components(Q), components(p), tol))
+
+    return batched(kernel, [(Q, 1), (p, 1)], _V)
+
+
+def _apply_parts(c, p, tol):
+    """R p + t on components, with (0, t) = 2 q_d q_r^*."""
     _dq_unit_or_raise(c, "Q", tol)
     rw, rx, ry, rz = c[:4]
     _, tx, ty, tz = _mul(*c[4:], rw, -rx, -ry, -rz)
-    x, y, z = _rot(rw, rx, ry, rz, *components(p))
-    return pack((x + 2.0 * tx, y + 2.0 * ty, z + 2.0 * tz), (p, "points", _V))
+    x, y, z = _rot(rw, rx, ry, rz, *p)
+    return x + 2.0 * tx, y + 2.0 * ty, z + 2.0 * tz
 
 
 def dual_quaternion_apply_vector(Q, vectors, *, tol=1e-9):

@@ -16,6 +16,7 @@ import numpy as np
 
 from ._checks import (
     as_float_array,
+    batched,
     check_finite,
     components,
     float_array,
@@ -45,15 +46,6 @@ def _in(x, name, trailing=_Q):
     return float_array(x, name, trailing)
 
 
-def _batch(*arrays):
-    """True when any input has leading axes; then every input is checked for NaN/inf first."""
-    if any(a.ndim > len(t) for a, _, t in arrays):
-        for a, name, _ in arrays:
-            check_finite(a, name)
-        return True
-    return False
-
-
 def _unit_or_raise(parts, name, tol):
     """Raise unless the quaternion given by its components has norm 1 within ``tol``."""
     w, x, y, z = parts
@@ -78,16 +70,6 @@ def _raise_not_unit(name, n, tol):
     raise ValueError(
         f"{name} must be a unit quaternion (norm 1 within {tol:g}), got norm {n:.12g}; "
         "normalise it with quaternion_normalize first")
-
-
-def _sqrt(x):
-    return np.sqrt(x) if isinstance(x, np.ndarray) else math.sqrt(x)
-
-
-def _atan2(y, x):
-    if isinstance(y, np.ndarray) or isinstance(x, np.ndarray):
-        return np.arctan2(y, x)
-    return math.atan2(y, x)
 
 
 # --------------------------------------------------------------------------------------
@@ -120,27 +102,43 @@ def _matrix(w, x, y, z):
             2.0 * (xz - wy), 2.0 * (yz + wx), 1.0 - 2.0 * (xx + yy))
 
 
+def _shepperd_row(k, r00, r01, r02, r10, r11, r12, r20, r21, r22):
+    # Row k of K = 4 q q^T written with the entries of R (active convention).
+    if k == 0:
+        return (1.0 + r00 + r11 + r22, r21 - r12, r02 - r20, r10 - r01)
+    if k == 1:
+        return (r21 - r12, 1.0 + r00 - r11 - r22, r01 + r10, r02 + r20)
+    if k == 2:
+        return (r02 - r20, r01 + r10, 1.0 - r00 + r11 - r22, r12 + r21)
+    return (r10 - r01, r02 + r20, r12 + r21, 1.0 - r00 - r11 + r22)
+
+
 def _from_matrix(r00, r01, r02, r10, r11, r12, r20, r21, r22):
-    # K = 4 q q^T written with the entries of R (active convention). Its diagonal holds
-    # 4w^2, 4x^2, 4y^2, 4z^2; the row of the largest one, divided by 2 sqrt(K_kk), is q.
-    # This is Shepperd's method: the division is always by the largest component.
-    tr = r00 + r11 + r22
-    K = ((1.0 + tr, r21 - r12, r02 - r20, r10 - r01),
-         (r21 - r12, 1.0 + r00 - r11 - r22, r01 + r10, r02 + r20),
-         (r02 - r20, r01 + r10, 1.0 - r00 + r11 - r22, r12 + r21),
-         (r10 - r01, r02 + r20, r12 + r21, 1.0 - r00 - r11 + r22))
-    if not isinstance(tr, np.ndarray):
-        diag = (K[0][0], K[1][1], K[2][2], K[3][3])
-        k = diag.index(max(diag))
-        row = K[k]
+    # The diagonal of K holds 4w^2, 4x^2, 4y^2, 4z^2; the row k of the largest one, divided
+    # by 2 sqrt(K_kk), is q (Shepperd's method: always divide by the largest component).
+    # K_00 > K_11 <=> trace > r00, etc., so the largest of (trace, r00, r11, r22) decides.
+    R = (r00, r01, r02, r10, r11, r12, r20, r21, r22)
+    if not isinstance(r00, np.ndarray):
+        tr = r00 + r11 + r22
+        if tr >= r00 and tr >= r11 and tr >= r22:
+            k = 0
+        elif r00 >= r11 and r00 >= r22:
+            k = 1
+        else:
+            k = 2 if r11 >= r22 else 3
+        row = _shepperd_row(k, *R)
         s = 0.5 / math.sqrt(row[k])
         if row[0] < 0.0:
             s = -s  # canonical sign: w >= 0
-        return tuple(c * s for c in row)
-    diag = np.stack(np.broadcast_arrays(K[0][0], K[1][1], K[2][2], K[3][3]), axis=-1)
-    k = np.argmax(diag, axis=-1)
-    row = [np.choose(k, (K[0][j], K[1][j], K[2][j], K[3][j])) for j in range(4)]
-    s = 0.5 / np.sqrt(np.take_along_axis(diag, k[..., None], axis=-1)[..., 0])
+        return (row[0] * s, row[1] * s, row[2] * s, row[3] * s)
+    row = _shepperd_row(0, *R)
+    best = row[0]
+    for k in (1, 2, 3):
+        other = _shepperd_row(k, *R)
+        larger = other[k] > best
+        best = np.where(larger, other[k], best)
+        row = [np.where(larger, other[j], row[j]) for j in range(4)]
+    s = 0.5 / np.sqrt(best)
     s = np.where(row[0] < 0.0, -s, s)
     return tuple(c * s for c in row)
 
@@ -197,8 +195,15 @@ def quaternion_product(a, b):
     """
     a = _in(a, "a")
     b = _in(b, "b")
-    _batch((a, "a", _Q), (b, "b", _Q))
-    return pack(_mul(*components(a), *components(b)), (a, "a", _Q), (b, "b", _Q))
+    if a.ndim == 1 and b.ndim == 1:
+        return pack(_mul(*a.tolist(), *b.tolist()), (a, "a", _Q), (b, "b", _Q))
+    check_finite(a, "a")
+    check_finite(b, "b")
+    return batched(_product_kernel, [(a, 1), (b, 1)], _Q)
+
+
+def _product_kernel(a, b):
+    return stack_components(_mul(*components(a), *components(b)))
 
 
 def quaternion_conjugate(q):
@@ -378,10 +383,19 @@ def rotate_vector(q, v, *, tol=1e-9):
     """
     q = _in(q, "q")
     v = _in(v, "v", _V)
-    _batch((q, "q", _Q), (v, "v", _V))
-    qc = components(q)
-    _unit_or_raise(qc, "q", tol)
-    return pack(_rot(*qc, *components(v)), (v, "v", _V))
+    if q.ndim == 1 and v.ndim == 1:
+        qc = q.tolist()
+        _unit_or_raise(qc, "q", tol)
+        return pack(_rot(*qc, *v.tolist()), (v, "v", _V))
+    check_finite(q, "q")
+    check_finite(v, "v")
+
+    def kernel(q, v):
+        qc = components(q)
+        _unit_or_raise(qc, "q", tol)
+        return stack_components(_rot(*qc, *components(v)))
+
+    return batched(kernel, [(q, 1), (v, 1)], _V)
 
 
 # --------------------------------------------------------------------------------------
@@ -517,14 +531,26 @@ def quaternion_from_matrix(R, *, tol=1e-9):
     >>> quaternion_from_matrix(R)
     array([0., 0., 0., 1.])
     """
-    from .rotations import check_rotation_matrix
+    from .rotations import _orthonormality, _raise_not_rotation
 
-    R = check_rotation_matrix(R, tol)
+    R = float_array(R, "R", _M)
     if R.ndim == 2:
-        parts = R.ravel().tolist()
-    else:
-        parts = [R[..., i, j] for i in range(3) for j in range(3)]
-    return stack_components(_from_matrix(*parts))
+        a, b, c = R.tolist()
+        err, det = _orthonormality(a, b, c)
+        if not (err <= tol and det > 0.0):  # also catches NaN
+            check_finite(R, "R")
+            _raise_not_rotation("R", err, det, tol)
+        return np.array(_from_matrix(*a, *b, *c))
+    check_finite(R, "R")
+
+    def kernel(R):
+        e = components(R.reshape(-1, 9))
+        err, det = _orthonormality(e[0:3], e[3:6], e[6:9])
+        if not (err <= tol and det > 0.0):
+            _raise_not_rotation("R", err, det, tol)
+        return stack_components(_from_matrix(*e))
+
+    return batched(kernel, [(R, 2)], _Q)
 
 
 def matrix_from_quaternion(q, *, tol=1e-9):
@@ -559,10 +585,18 @@ def matrix_from_quaternion(q, *, tol=1e-9):
            [ 0.,  0.,  1.]])
     """
     q = _in(q, "q")
-    _batch((q, "q", _Q))
-    qc = components(q)
-    _unit_or_raise(qc, "q", tol)
-    m = stack_components(_matrix(*qc))
+    if q.ndim == 1:
+        qc = q.tolist()
+        _unit_or_raise(qc, "q", tol)
+        return np.array(_matrix(*qc)).reshape(3, 3)
+    check_finite(q, "q")
+
+    def kernel(q):
+        qc = components(q)
+        _unit_or_raise(qc, "q", tol)
+        return stack_components(_matrix(*qc))
+
+    m = batched(kernel, [(q, 1)], (9,))
     return m.reshape(m.shape[:-1] + (3, 3))
 
 

@@ -10,7 +10,7 @@ Every function takes array-likes and broadcasts over leading axes.
 
 import numpy as np
 
-from ._checks import as_float_array
+from ._checks import as_float_array, components
 
 __all__ = [
     "rot_x", "rot_y", "rot_z", "matrix_from_euler_zxz", "euler_zxz_from_matrix",
@@ -149,16 +149,25 @@ def skew(v):
 
 
 def _orthonormality(a, b, c):
-    """Largest entry of |R^T R - I| and det R for a single matrix given by its rows."""
-    err = max(abs(a[0] * a[0] + b[0] * b[0] + c[0] * c[0] - 1.0),
-              abs(a[1] * a[1] + b[1] * b[1] + c[1] * c[1] - 1.0),
-              abs(a[2] * a[2] + b[2] * b[2] + c[2] * c[2] - 1.0),
-              abs(a[0] * a[1] + b[0] * b[1] + c[0] * c[1]),
-              abs(a[0] * a[2] + b[0] * b[2] + c[0] * c[2]),
-              abs(a[1] * a[2] + b[1] * b[2] + c[1] * c[2]))
-    det = (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-           + a[2] * (b[0] * c[1] - b[1] * c[0]))
-    return err, det
+    """Largest entry of |R^T R - I| and det R, R given by its rows ``a, b, c``.
+
+    The entries are floats (one matrix) or arrays (a batch: the largest error over the batch
+    and the smallest determinant are returned).
+    """
+    a0, a1, a2 = a[0], a[1], a[2]
+    b0, b1, b2 = b[0], b[1], b[2]
+    c0, c1, c2 = c[0], c[1], c[2]
+    errs = (abs(a0 * a0 + b0 * b0 + c0 * c0 - 1.0),
+            abs(a1 * a1 + b1 * b1 + c1 * c1 - 1.0),
+            abs(a2 * a2 + b2 * b2 + c2 * c2 - 1.0),
+            abs(a0 * a1 + b0 * b1 + c0 * c1),
+            abs(a0 * a2 + b0 * b2 + c0 * c2),
+            abs(a1 * a2 + b1 * b2 + c1 * c2))
+    det = a0 * (b1 * c2 - b2 * c1) - a1 * (b0 * c2 - b2 * c0) + a2 * (b0 * c1 - b1 * c0)
+    if isinstance(det, np.ndarray):
+        return (float(max(e.max(initial=0.0) for e in errs)),
+                float(det.min(initial=1.0)))
+    return max(errs), det
 
 
 def _raise_not_rotation(name, err, det, tol):
@@ -205,11 +214,10 @@ def check_rotation_matrix(R, tol=1e-9, name="R"):
     if R.ndim == 2:
         err, det = _orthonormality(*R.tolist())
     else:
-        E = np.abs(np.swapaxes(R, -1, -2) @ R - np.eye(3))
-        err = float(E.max()) if E.size else 0.0
-        det = np.linalg.det(R) if R.size else np.ones(1)
-    if not err <= tol or np.any(det < 0.0):
-        _raise_not_rotation(name, err, float(np.min(det)), tol)
+        e = components(R.reshape(R.shape[:-2] + (9,)))
+        err, det = _orthonormality(e[0:3], e[3:6], e[6:9])
+    if not (err <= tol and det > 0.0):
+        _raise_not_rotation(name, err, det, tol)
     return R
 
 

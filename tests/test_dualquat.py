@@ -275,7 +275,7 @@ def test_screw_special_cases():
     assert theta == 0 and abs(d - 5) < 1e-15 and not m.any()
     # -Q gives the same screw
     Q = random_dq(np.random.default_rng(1))
-    for a, b in zip(screw_from_dual_quaternion(Q), screw_from_dual_quaternion(-Q)):
+    for a, b in zip(screw_from_dual_quaternion(Q), screw_from_dual_quaternion(-Q), strict=True):
         np.testing.assert_allclose(a, b, atol=1e-14)
 
 
