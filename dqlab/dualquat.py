@@ -808,6 +808,9 @@ def screw_from_dual_quaternion(Q, *, tol=1e-9, small_angle=1e-12):
     translation (:math:`\theta \le` ``small_angle``) returns :math:`\theta = 0`,
     :math:`\mathbf l = \mathbf t / |\mathbf t|`, :math:`\mathbf m = 0`, :math:`d =
     |\mathbf t|`; the identity returns :math:`\mathbf l = (1, 0, 0)`, :math:`d = 0`.
+    For small non-zero angles the position of the axis is ill-conditioned (it recedes to
+    infinity as the motion tends to a translation); :func:`dual_quaternion_power` and
+    :func:`sclerp` therefore do not go through the screw parameters.
 
     Parameters
     ----------
@@ -912,12 +915,27 @@ def dual_quaternion_from_screw(l, m, theta, d):
 def dual_quaternion_power(Q, t, *, tol=1e-9):
     r"""Power :math:`Q^t` of a unit dual quaternion: the same screw, scaled.
 
+    In screw form (:func:`screw_from_dual_quaternion`) :math:`Q^t` turns by
+    :math:`t\theta` about the same axis and moves by :math:`t d` along it; :math:`Q^0 = 1`,
+    :math:`Q^1 = Q`, :math:`Q^{1/2} Q^{1/2} = Q`. The sign of :math:`Q` is chosen first so
+    that :math:`\theta \le \pi` (the short way round).
+
+    The screw axis is ill-conditioned for small angles (it recedes to infinity as the
+    motion tends to a translation), so the power is computed without it. With
+    :math:`Q = (\cos h, \mathbf u) + \varepsilon(q_{d,w}, \mathbf q_{d,v})`,
+    :math:`h = \theta/2`, :math:`\mathbf u = \sin h\, \mathbf l`, translation
+    :math:`\mathbf p` and :math:`\rho = \sin(th)/\sin h`:
+
     .. math::
 
-        Q^t = \text{screw}(\mathbf l, \mathbf m,\; t\theta,\; t d)
+        Q^t = \bigl(\cos th,\; \rho\,\mathbf u\bigr)
+        + \varepsilon\Bigl(-\tfrac t2\,\rho\,(\mathbf p\cdot\mathbf u),\;
+        \rho\,\mathbf q_{d,v}
+        + \tfrac12\,\frac{t\cos th - \rho\cos h}{\sin^2 h}\,
+        (\mathbf p\cdot\mathbf u)\,\mathbf u\Bigr),
 
-    :math:`Q^t` moves along the screw of :math:`Q`; :math:`Q^0 = 1`, :math:`Q^1 = Q`
-    (up to sign), :math:`Q^{1/2} Q^{1/2} = Q`.
+    where every factor stays accurate as :math:`h \to 0` (the fraction tends to
+    :math:`t(1 - t^2)/3`).
 
     Parameters
     ----------
@@ -937,9 +955,26 @@ def dual_quaternion_power(Q, t, *, tol=1e-9):
     >>> dual_quaternion_power(Q, 0.5) + 0.0
     array([1. , 0. , 0. , 0. , 0. , 0.5, 0. , 0. ])
     """
+    Q = check_unit_dual_quaternion(Q, tol)
     t = as_float_array(t, "t")
-    l, m, theta, d = screw_from_dual_quaternion(Q, tol=tol)
-    return dual_quaternion_from_screw(l, m, t * theta, t * d)
+    Q = Q * np.where(Q[..., :1] < 0.0, -1.0, 1.0)
+    w, u, qd = Q[..., 0], Q[..., 1:4], Q[..., 4:]
+    p = rotation_translation_from_dual_quaternion(Q, tol=np.inf)[1]
+    s2 = np.sum(u * u, axis=-1)
+    h = np.arctan2(np.sqrt(s2), w)
+    th = t * h
+    rho = t * np.sinc(th / np.pi) / np.sinc(h / np.pi)
+    small = s2 == 0.0
+    frac = np.where(small, t * (1.0 - t * t) / 3.0,
+                    (t * np.cos(th) - rho * w) / np.where(small, 1.0, s2))
+    pu = np.sum(p * u, axis=-1)
+    shape = np.broadcast_shapes(Q.shape[:-1], t.shape)
+    out = np.empty(shape + (8,))
+    out[..., 0] = np.cos(th)
+    out[..., 1:4] = rho[..., None] * u
+    out[..., 4] = -0.5 * t * rho * pu
+    out[..., 5:8] = rho[..., None] * qd[..., 1:] + (0.5 * frac * pu)[..., None] * u
+    return out
 
 
 def sclerp(Q0, Q1, t, *, tol=1e-9):

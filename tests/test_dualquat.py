@@ -513,3 +513,23 @@ def test_nan_in_dual_part_of_an_array_is_named():
         transform_from_dual_quaternion(Q)
     with pytest.raises(ValueError, match="Q contains NaN"):
         dual_quaternion_apply(Q, np.zeros(3))
+
+
+@pytest.mark.parametrize("angle", [0.0, 1e-14, 1e-10, 1e-7, 1e-4, np.pi - 1e-9, np.pi])
+def test_power_and_sclerp_accurate_for_nearly_pure_translations(angle):
+    rng = np.random.default_rng(17)
+    for _ in range(10):
+        q = quaternion_from_axis_angle(rng.normal(size=3), angle)
+        Q = dual_quaternion_from_rotation_translation(q, 10 * rng.normal(size=3))
+        H = dual_quaternion_power(Q, 0.5)
+        check_unit_dual_quaternion(H, tol=1e-14)
+        assert same_motion(dual_quaternion_product(H, H), Q, atol=1e-13)
+        T = dual_quaternion_power(Q, 1 / 3)
+        assert same_motion(dual_quaternion_product(T, dual_quaternion_product(T, T)), Q,
+                           atol=1e-13)
+        # ScLERP between poses of (almost) the same orientation: the position moves on
+        # the straight line
+        P0 = dual_quaternion_from_rotation_translation(q, [0, 0, 0])
+        P1 = dual_quaternion_from_rotation_translation(q, [1, 2, 3])
+        mid = rotation_translation_from_dual_quaternion(sclerp(P0, P1, 0.25))[1]
+        np.testing.assert_allclose(mid, [0.25, 0.5, 0.75], atol=1e-14)
