@@ -876,7 +876,8 @@ def dual_quaternion_from_screw(l, m, theta, d):
     l : array_like, shape (..., 3)
         Unit direction of the axis (checked to be unit within 1e-9).
     m : array_like, shape (..., 3)
-        Moment of the axis (checked orthogonal to ``l`` within 1e-9).
+        Moment of the axis (checked orthogonal to ``l`` within 1e-9 relative to
+        :math:`\max(1, |\mathbf m|)`).
     theta : array_like, shape (...)
         Rotation angle.
     d : array_like, shape (...)
@@ -899,7 +900,8 @@ def dual_quaternion_from_screw(l, m, theta, d):
     ln = np.sqrt(np.sum(l * l, axis=-1))
     if np.any(np.abs(ln - 1.0) > 1e-9):
         raise ValueError("l must be a unit vector (the direction of the screw axis)")
-    if np.any(np.abs(np.sum(l * m, axis=-1)) > 1e-9):
+    mn = np.sqrt(np.sum(m * m, axis=-1))
+    if np.any(np.abs(np.sum(l * m, axis=-1)) > 1e-9 * np.maximum(1.0, mn)):
         raise ValueError("m must be orthogonal to l (it is the moment c x l of the axis)")
     c, s = np.cos(0.5 * theta), np.sin(0.5 * theta)
     hd = 0.5 * d

@@ -533,3 +533,16 @@ def test_power_and_sclerp_accurate_for_nearly_pure_translations(angle):
         P1 = dual_quaternion_from_rotation_translation(q, [1, 2, 3])
         mid = rotation_translation_from_dual_quaternion(sclerp(P0, P1, 0.25))[1]
         np.testing.assert_allclose(mid, [0.25, 0.5, 0.75], atol=1e-14)
+
+
+@pytest.mark.parametrize("angle, atol", [(1e-8, 1e-7), (1e-6, 1e-9), (1e-3, 1e-12),
+                                         (np.pi - 1e-6, 1e-12), (np.pi, 1e-12)])
+def test_screw_round_trip_near_0_and_pi(angle, atol):
+    # near 0 the axis recedes to infinity: the round trip loses about eps / angle
+    rng = np.random.default_rng(18)
+    for _ in range(10):
+        q = quaternion_from_axis_angle(rng.normal(size=3), angle)
+        Q = dual_quaternion_from_rotation_translation(q, rng.normal(size=3))
+        l, m, theta, d = screw_from_dual_quaternion(Q)
+        assert abs(theta - angle) < 1e-12
+        assert same_motion(dual_quaternion_from_screw(l, m, theta, d), Q, atol=atol)
