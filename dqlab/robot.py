@@ -300,6 +300,13 @@ class Robot:
             K[i] = R[i - 1] @ L[i]
         K[n] = R[n - 1] @ self._tool
         self._K = K
+        # rows of K_1..K_n, for building M_i = Rz(theta_i) Tz(d_i) K_i directly: rows 0 and 1
+        # mix with cos/sin, row 2 gains d_i times row 3, row 3 stays [0, 0, 0, 1]
+        self._K_rows = [K[1:, r, :].copy() for r in range(4)]
+        M0 = K[1:].copy()
+        M0[:, 2, :] = K[1:, 2, :] + self._d_const[:, None] * K[1:, 3, :]
+        self._M_template = M0
+        self._has_prismatic = bool(self._prismatic_idx.size)
         self._screws = None  # zero-pose screw axes, computed on first use
 
     # -- joint vectors -----------------------------------------------------------------------
@@ -453,8 +460,8 @@ class Robot:
         q = self.check_joints(q)
         if not all_frames and q.ndim > 1 and q.size >= 64 * self.n:
             return self._fk_batch(q)
-        J = self._joint_motions(q)
         if all_frames:
+            J = self._joint_motions(q)
             M = self._L @ J @ self._R
             frames = np.empty(q.shape[:-1] + (self.n + 1, 4, 4))
             frames[..., 0, :, :] = self._base
@@ -464,8 +471,16 @@ class Robot:
                 frames[..., i + 1, :, :] = X
             frames[..., self.n, :, :] = X @ self._tool
             return frames
-        # X_WT = K_0 (J_1 K_1) (J_2 K_2) ... (J_n K_n)
-        M = J @ self._K[1:]
+        # X_WT = K_0 M_1 M_2 ... M_n with M_i = Rz(theta_i) Tz(d_i) K_i
+        theta, d = self._link_parameters(q)
+        c = np.cos(theta)[..., None]
+        s = np.sin(theta)[..., None]
+        K0r, K1r, K2r, K3r = self._K_rows
+        M = np.broadcast_to(self._M_template, q.shape + (4, 4)).copy()
+        M[..., 0, :] = c * K0r - s * K1r
+        M[..., 1, :] = s * K0r + c * K1r
+        if self._has_prismatic:
+            M[..., 2, :] = K2r + d[..., None] * K3r
         X = self._K[0] @ M[..., 0, :, :]
         for i in range(1, self.n):
             X = X @ M[..., i, :, :]
@@ -571,7 +586,8 @@ class Robot:
 
         and multiplied from the base to the tool,
         :math:`\hat Q_{WT} = \hat Q_{W0} \hat Q_{01} \cdots \hat Q_{n-1,n} \hat Q_{nT}`
-        (thesis section 4.2, first construction).
+        (thesis section 4.2, first construction). The constant factors of neighbouring
+        links, :math:`\hat R_i \hat L_{i+1}`, are multiplied once in advance.
 
         Parameters
         ----------
@@ -600,29 +616,27 @@ class Robot:
 
         q = self.check_joints(q)
         theta, d = self._link_parameters(q)
-        Lq, Rq, base_q, tool_q = self._constant_dual_quaternions()
+        Kq = self._constant_dual_quaternions()
         r = quaternion_from_axis_angle(np.array([0.0, 0.0, 1.0]), theta)
         t = np.zeros(q.shape + (3,))
         t[..., 2] = d
         Jq = dual_quaternion_from_rotation_translation(r, t)        # (..., n, 8)
-        Q = base_q
-        for i in range(self.n):
-            Q = dq_mul(dq_mul(dq_mul(Q, Lq[i]), Jq[..., i, :]), Rq[i])
-        Q = dq_mul(Q, tool_q)
-        return np.broadcast_to(Q, q.shape[:-1] + (8,)).copy()
+        # regrouped product: (Q_W0 L_1) J_1 (R_1 L_2) J_2 ... J_n (R_n Q_nT), with the
+        # constant neighbours premultiplied and every J_i (R_i L_{i+1}) in one call
+        M = dq_mul(Jq, Kq[1:])
+        Q = dq_mul(Kq[0], M[..., 0, :])
+        for i in range(1, self.n):
+            Q = dq_mul(Q, M[..., i, :])
+        return Q
 
     def _constant_dual_quaternions(self):
+        """The constant factors K_0 .. K_n of the chain as dual quaternions, (n + 1, 8)."""
         from .dualquat import dual_quaternion_from_transform
 
         cached = getattr(self, "_dq_consts", None)
         if cached is None or cached[0] is not self._K:
-            consts = (dual_quaternion_from_transform(self._L),
-                      dual_quaternion_from_transform(self._R),
-                      dual_quaternion_from_transform(self._base),
-                      dual_quaternion_from_transform(self._tool))
-            self._dq_consts = (self._K, consts)
-            cached = self._dq_consts
-        return cached[1]
+            self._dq_consts = (self._K, dual_quaternion_from_transform(self._K))
+        return self._dq_consts[1]
 
     def zero_pose_screws(self):
         r"""The joint axes at :math:`q = 0` in the world frame and the zero-pose TCP.
