@@ -82,9 +82,10 @@ def ur3():
     ==  ==========  ==========  ===========
 
     No tool: :meth:`~dqlab.robot.Robot.fk` returns the flange pose. The base frame sits at the
-    foot of the first joint's axis, z up. Joint limits are :math:`\pm 2\pi`. These are the
-    conventions of ``ur_analytic_ik`` and of the UR controller, whose forward kinematics
-    agree with this model to rounding.
+    foot of the first joint's axis, z up. Joint limits are :math:`\pm 2\pi`. These are also
+    the conventions of ``ur_analytic_ik``: its ``ur3.forward_kinematics(q1, ..., q6)``
+    returns the same base-to-flange matrix as :meth:`~dqlab.robot.Robot.fk` (the tests
+    check 1,000 random configurations to 1e-13).
 
     Returns
     -------

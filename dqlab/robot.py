@@ -92,6 +92,10 @@ class Link:
         If a parameter is not a finite number, the joint type is unknown or the limits are
         not ordered.
 
+    Notes
+    -----
+    A link is immutable: a :class:`Robot` precomputes the constant parts of its chain.
+
     Examples
     --------
     >>> import numpy as np
@@ -126,13 +130,18 @@ class Link:
             raise ValueError(f"Link limits must be a pair (lo, hi), got {limits!r}") from None
         if math.isnan(lo) or math.isnan(hi) or not lo <= hi:
             raise ValueError(f"Link limits must satisfy lo <= hi, got {limits!r}")
-        self.a = values["a"]
-        self.alpha = values["alpha"]
-        self.d = values["d"]
-        self.theta_offset = values["theta_offset"]
-        self.joint = joint
-        self.limits = (lo, hi)
-        self.name = str(name)
+        set_ = object.__setattr__       # a Link is immutable once built
+        set_(self, "a", values["a"])
+        set_(self, "alpha", values["alpha"])
+        set_(self, "d", values["d"])
+        set_(self, "theta_offset", values["theta_offset"])
+        set_(self, "joint", joint)
+        set_(self, "limits", (lo, hi))
+        set_(self, "name", str(name))
+
+    def __setattr__(self, key, value):
+        raise AttributeError("Link is immutable (a Robot precomputes its constant parts); "
+                             "build a new Link and Robot instead")
 
     @property
     def sigma(self):
@@ -762,13 +771,13 @@ class Robot:
         >>> from dqlab.models import ur3
         >>> print(ur3().dh_table())
         UR3 (standard DH, 6 joints)
-          i  joint      theta_i [deg]         d_i [m]    a_i [m]  alpha_i [deg]  limits
-          1  R          q1            0.1519     0          90     [-360, 360] deg
-          2  R          q2            0          -0.24365   0      [-360, 360] deg
-          3  R          q3            0          -0.21325   0      [-360, 360] deg
-          4  R          q4            0.11235    0          90     [-360, 360] deg
-          5  R          q5            0.08535    0          -90    [-360, 360] deg
-          6  R          q6            0.0819     0          0      [-360, 360] deg
+          i  joint  theta_i [deg]  d_i [m]  a_i [m]   alpha_i [deg]  limits
+          1  R      q1             0.1519   0         90             [-360, 360] deg
+          2  R      q2             0        -0.24365  0              [-360, 360] deg
+          3  R      q3             0        -0.21325  0              [-360, 360] deg
+          4  R      q4             0.11235  0         90             [-360, 360] deg
+          5  R      q5             0.08535  0         -90            [-360, 360] deg
+          6  R      q6             0.0819   0         0              [-360, 360] deg
         """
         rows = []
         for i, lk in enumerate(self._links, start=1):
@@ -786,14 +795,12 @@ class Robot:
             title = f"{self.name or 'robot'} (standard DH, {self.n} joints)"
             header = ("i", "joint", "theta_i [deg]", "d_i [m]", "a_i [m]", "alpha_i [deg]",
                       "limits")
-            order = (0, 1, 2, 3, 4, 5, 6)
         else:
             title = f"{self.name or 'robot'} (modified DH, {self.n} joints)"
             header = ("i", "sigma", "alpha_i-1 [deg]", "a_i-1 [m]", "theta_i [deg]",
                       "r_i [m]", "limits")
             rows = [(r[0], str(int(r[1] == "P")), r[5], r[4], r[2], r[3], r[6]) for r in rows]
-            order = (0, 1, 2, 3, 4, 5, 6)
-        widths = [max(len(header[k]), *(len(r[k]) for r in rows)) for k in order]
+        widths = [max(len(header[k]), *(len(r[k]) for r in rows)) for k in range(7)]
 
         def fmt(cells):
             return "  " + "  ".join(c.ljust(w) for c, w in zip(cells, widths, strict=True)).rstrip()

@@ -68,6 +68,10 @@ def test_link_rejects_bad_joint_type_and_limits():
         Link(0.0, 0.0, 0.0, limits=(1.0, -1.0))
     assert Link(0.0, 0.0, 0.0, joint=1).joint == "prismatic"
     assert Link(0.0, 0.0, 0.0, joint="R").sigma == 0
+    link = Link(0.1, 0.0, 0.0)
+    with pytest.raises(AttributeError, match="immutable"):
+        link.a = 0.2
+    assert "a=0.1" in repr(link)
 
 
 def test_robot_rejects_bad_construction():

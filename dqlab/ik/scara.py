@@ -105,6 +105,10 @@ def scara(robot, pose, *, tol=1e-9, rotation_tol=None):
     if rotation_tol is None:
         rotation_tol = tol
     l1, l2 = _scara_structure(robot)
+    shape = np.shape(pose)
+    if not (shape[-2:] == (4, 4) or shape[-1:] == (8,)):
+        raise ValueError("pose must have shape (..., 4, 4) (transform) or (..., 8) (dual "
+                         f"quaternion), got shape {shape}")
     X_WT, _ = _target_transforms(pose, position_only=False)
     X_0n = np.linalg.inv(robot.base) @ X_WT @ np.linalg.inv(robot.tool)
     R = X_0n[..., :3, :3]
