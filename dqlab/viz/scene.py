@@ -412,7 +412,7 @@ class Scene:
         self._robots[name] = _RobotDrawing(robot, path, n + 1)
         self.set_joints(q, name=name)
         if not self._camera_set:
-            self._frame_camera(sum(abs(float(k.a)) + abs(float(k.d)) for k in links) or reach)
+            self._frame_camera(self._robots[name].poses(q)[:, :3, 3], 1.2 * r_joint)
 
     def set_joints(self, q, *, name="robot"):
         """Pose a robot already in the scene at the joint vector ``q`` (radians)."""
@@ -501,10 +501,18 @@ class Scene:
             "position", [float(position[0]), float(position[2]), float(-position[1])])
         self._camera_set = True
 
-    def _frame_camera(self, size):
-        target = np.array([0.0, 0.0, 0.35 * size])
-        self.set_camera(target + size * np.array([0.62, -0.78, 0.42]), target)
-        self._camera_set = False  # a later, larger robot may reframe
+    def _frame_camera(self, points, pad):
+        """Aim the default camera so that ``points`` (k, 3), padded by ``pad``, fill the view."""
+        P = np.vstack([np.asarray(points, dtype=float).reshape(-1, 3), np.zeros((1, 3))])
+        lo, hi = P.min(axis=0), P.max(axis=0)
+        center = (lo + hi) / 2
+        radius = float(np.linalg.norm(hi - lo)) / 2 + pad
+        direction = np.array([0.62, -0.78, 0.42])
+        direction /= np.linalg.norm(direction)
+        # meshcat's camera sees 75 degrees vertically: a sphere of that radius fits.
+        distance = radius / np.sin(np.radians(75.0 / 2))
+        self.set_camera(center + distance * direction, center)
+        self._camera_set = False  # the next robot or animation reframes
 
     # -- animation -----------------------------------------------------------------------
 
@@ -539,6 +547,8 @@ class Scene:
         for i in range(drawing.n_bodies):
             self._add_track(f"{drawing.path}/body{i}", frames[:, i], t)
         self.set_joints(Q[0], name=name)
+        if not self._camera_set:
+            self._frame_camera(frames[..., :3, 3], 0.2 * _reach(drawing.robot.links))
         self._send_animation(loop, play)
 
     def animate_transforms(self, name, poses, *, fps=25.0, times=None, loop=True, play=True):
@@ -765,24 +775,29 @@ function dqlabFail(msg) {{
     if (dqlab.status === "loading") dqlabFail("the 3D viewer script is not loaded");
     return;
   }}
-  var commands = [{commands}];
-  var viewer = new MeshCat.Viewer(document.getElementById("pane"));
-  window.viewer = viewer;
-  commands.forEach(function (blob) {{
-    var raw = atob(blob), bytes = new Uint8Array(raw.length);
-    for (var i = 0; i < raw.length; i++) bytes[i] = raw.charCodeAt(i);
-    viewer.handle_command_bytearray(bytes);
-    dqlab.commands += 1;
-  }});
-  var view = {view};
-  if (view) {{
-    // meshcat turns its z-up scene into three.js's y-up world: (x, y, z) -> (x, z, -y).
-    // Its camera orbits the origin; ours orbits the scene's own centre.
-    var p = view.position, t = view.target;
-    viewer.camera.position.set(p[0], p[2], -p[1]);
-    viewer.controls.target.set(t[0], t[2], -t[1]);
-    viewer.controls.update();
-    viewer.set_dirty();
+  try {{
+    var commands = [{commands}];
+    var viewer = new MeshCat.Viewer(document.getElementById("pane"));
+    window.viewer = viewer;
+    commands.forEach(function (blob) {{
+      var raw = atob(blob), bytes = new Uint8Array(raw.length);
+      for (var i = 0; i < raw.length; i++) bytes[i] = raw.charCodeAt(i);
+      viewer.handle_command_bytearray(bytes);
+      dqlab.commands += 1;
+    }});
+    var view = {view};
+    if (view) {{
+      // meshcat turns its z-up scene into three.js's y-up world: (x, y, z) -> (x, z, -y).
+      // Its camera orbits the origin; ours orbits the scene's own centre.
+      var p = view.position, t = view.target;
+      viewer.camera.position.set(p[0], p[2], -p[1]);
+      viewer.controls.target.set(t[0], t[2], -t[1]);
+      viewer.controls.update();
+      viewer.set_dirty();
+    }}
+  }} catch (err) {{
+    dqlabFail("the 3D view failed: " + err);
+    throw err;
   }}
   dqlab.status = "ok";
 }})();

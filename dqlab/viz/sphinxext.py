@@ -9,6 +9,11 @@ Add ``dqlab.viz.sphinxext`` to the book's Sphinx extensions (``_config.yml``:
   carrying a copy each;
 * at the end of an HTML build it copies the script (three.js and meshcat, about 0.85 MB)
   with its licence notice to ``_static/dqlab/`` of the built site.
+
+It also removes duplicated inline scripts from every page. Sphinx 7.4 lists an inline script
+twice when an extension adds it after the builder has started (its file name is ``None`` in
+one copy and ``""`` in the other): sphinx-thebe's ``const THEBE_JS_URL = ...`` then raises
+"Identifier 'THEBE_JS_URL' has already been declared" on every page of a Jupyter Book.
 """
 
 import os
@@ -30,10 +35,25 @@ def _copy_viewer_script(app, exception):
         shutil.copyfile(licence, target.with_name(target.name + ".LICENSE.txt"))
 
 
+def _drop_duplicate_scripts(app, pagename, templatename, context, doctree):
+    scripts = context.get("script_files")
+    if not scripts:
+        return
+    seen, unique = set(), []
+    for script in scripts:
+        attributes = getattr(script, "attributes", {}) or {}
+        key = (getattr(script, "filename", str(script)) or "", tuple(sorted(attributes.items())))
+        if key not in seen:
+            seen.add(key)
+            unique.append(script)
+    scripts[:] = unique
+
+
 def setup(app):
     """Register the extension with Sphinx."""
     from .scene import BOOK_ROOT_ENV
 
     os.environ[BOOK_ROOT_ENV] = str(Path(app.srcdir).resolve())
     app.connect("build-finished", _copy_viewer_script)
+    app.connect("html-page-context", _drop_duplicate_scripts, priority=900)
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}

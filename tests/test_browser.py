@@ -1,0 +1,257 @@
+"""The built book in a real browser: headless Chromium opens every chapter page.
+
+For each page generated from a notebook or a Markdown file of ``book/`` it checks that
+
+* no JavaScript error is raised and no resource fails to load (page, frames, console);
+* MathJax typeset the math: every math element holds an ``mjx-container``, none is a MathJax
+  error, and no raw ``$$``, ``\\(`` or ``\\[`` is left in the text;
+* every ``<img>`` is loaded (``naturalWidth > 0``);
+* every 3D view (``iframe.dqlab-scene``) replayed all its commands and its WebGL canvas
+  shows something besides the background.
+
+Run it after building the book (``jb build .``): it reads ``_build/html`` (or the folder in
+the environment variable ``DQLAB_BOOK_HTML``). Screenshots go to ``test-artifacts/browser/``.
+Without Chromium the check is skipped, except under ``CI=true`` where it fails.
+"""
+
+import base64
+import functools
+import http.server
+import io
+import os
+import re
+import shutil
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.browser
+
+ROOT = Path(__file__).resolve().parents[1]
+BOOK = ROOT / "book"
+HTML = Path(os.environ.get("DQLAB_BOOK_HTML", ROOT / "_build" / "html"))
+ARTIFACTS = ROOT / "test-artifacts" / "browser"
+SKIP_MESSAGE = "browser check skipped: install chromium (apt-get install chromium) to enable it"
+
+CHROMIUM_ARGS = [
+    "--headless=new", "--no-sandbox",
+    # WebGL without a GPU: ANGLE on SwiftShader, Chromium's software renderer.
+    "--use-gl=angle", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+    # The book must work offline, and the machine may have no network at all.
+    "--disable-background-networking", "--disable-component-update", "--disable-sync",
+    "--no-first-run", "--disable-quic",
+]
+
+#: Share of the canvas that must show coloured objects for a view to count as drawn (the
+#: UR3 alone covers several percent of a view; an empty scene 0).
+MIN_DRAWN_FRACTION = 0.005
+
+
+def _sources():
+    return sorted(p for p in BOOK.rglob("*") if p.suffix in {".ipynb", ".md"}
+                  and ".ipynb_checkpoints" not in p.parts)
+
+
+def _pages():
+    """The built pages that come from a document of book/ (relative paths in HTML)."""
+    pages = []
+    for source in _sources():
+        page = source.relative_to(ROOT).with_suffix(".html")
+        if (HTML / page).exists():
+            pages.append(page.as_posix())
+    return pages
+
+
+def _chromium():
+    for candidate in (os.environ.get("DQLAB_CHROMIUM"), "/usr/bin/chromium",
+                      shutil.which("chromium"), shutil.which("chromium-browser"),
+                      shutil.which("google-chrome")):
+        if candidate and Path(candidate).exists():
+            return candidate
+    return None
+
+
+def _unavailable(reason):
+    if os.environ.get("CI", "").lower() == "true":
+        pytest.fail(f"{reason}; CI must run the browser check ({SKIP_MESSAGE})")
+    pytest.skip(SKIP_MESSAGE)
+
+
+class _QuietHandler(http.server.SimpleHTTPRequestHandler):
+    def log_message(self, *args):
+        pass
+
+
+@pytest.fixture(scope="module")
+def site():
+    """An HTTP server on 127.0.0.1 serving the built book, stopped after the tests."""
+    if not (HTML / "index.html").exists():
+        pytest.fail(f"no built book in {HTML}: build it first (jb build . or "
+                    f"'python3 tasks.py book'), then run the browser check")
+    handler = functools.partial(_QuietHandler, directory=str(HTML))
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    try:
+        yield f"http://127.0.0.1:{server.server_address[1]}"
+    finally:
+        server.shutdown()
+        server.server_close()
+        thread.join(timeout=10)
+
+
+@pytest.fixture(scope="module")
+def browser():
+    executable = _chromium()
+    if executable is None:
+        _unavailable("Chromium is not installed")
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        _unavailable("the Python package playwright is not installed")
+    with sync_playwright() as playwright:
+        chromium = playwright.chromium.launch(executable_path=executable, args=CHROMIUM_ARGS)
+        try:
+            yield chromium
+        finally:
+            chromium.close()
+
+
+def test_book_is_built():
+    """A missing build is an error, not a silently empty list of pages."""
+    assert (HTML / "index.html").exists(), (
+        f"no built book in {HTML}: build it first (jb build . or 'python3 tasks.py book'), "
+        f"then run the browser check")
+    assert _pages(), f"no page of {HTML} comes from a document of book/"
+
+
+_MATH_REPORT = """() => {
+  const maths = Array.from(document.querySelectorAll(".math"));
+  const untypeset = maths.filter(m => !m.querySelector("mjx-container")).length;
+  const body = document.querySelector("main") || document.body;
+  const copy = body.cloneNode(true);
+  copy.querySelectorAll("pre, code, script, style, .highlight, mjx-container")
+      .forEach(e => e.remove());
+  return {maths: maths.length, untypeset: untypeset,
+          containers: document.querySelectorAll("mjx-container").length,
+          // a TeX error, or an undefined macro (MathJax's noundefined writes it in red)
+          errors: document.querySelectorAll(
+            'mjx-merror, mjx-container [style*="color: red"]').length,
+          text: copy.textContent};
+}"""
+
+_MATHJAX_DONE = """() => !document.querySelector(".math") ||
+  (window.MathJax && MathJax.startup && MathJax.startup.promise &&
+   MathJax.startup.promise.then(() => true))"""
+
+_IMAGES = """async () => {
+  const imgs = Array.from(document.images);
+  await Promise.all(imgs.map(img => img.complete ? null : new Promise(r => {
+    img.addEventListener("load", r); img.addEventListener("error", r);
+    setTimeout(r, 10000);
+  })));
+  return imgs.filter(img => !(img.naturalWidth > 0)).map(img => img.getAttribute("src"));
+}"""
+
+
+def _drawn_fraction(png):
+    """Share of pixels showing a coloured object in front of the background.
+
+    A pixel counts when it differs clearly from its row's median (the backdrop is a vertical
+    gradient) and is clearly coloured: the grey floor grid and meshcat's default backdrop
+    and grid do not count; the blue joints, the RGB frames, points and paths do.
+    """
+    from PIL import Image
+
+    rgb = np.asarray(Image.open(io.BytesIO(png)).convert("RGB"), dtype=float)
+    background = np.median(rgb, axis=1, keepdims=True)
+    differs = np.abs(rgb - background).sum(axis=-1) > 90
+    coloured = rgb.max(axis=-1) - rgb.min(axis=-1) > 60
+    return float(np.mean(differs & coloured))
+
+
+def _check_scenes(page, name, problems):
+    views = page.query_selector_all("iframe.dqlab-scene")
+    for k, view in enumerate(views):
+        label = f"3D view {k + 1}"
+        expected = int(view.get_attribute("data-dqlab-scene"))
+        view.scroll_into_view_if_needed()
+        frame = view.content_frame()
+        try:
+            frame.wait_for_function("() => window.dqlab && dqlab.status !== 'loading'",
+                                    timeout=30_000)
+        except Exception:
+            problems.append(f"{label}: still loading after 30 s")
+            continue
+        status = frame.evaluate("() => ({status: dqlab.status, commands: dqlab.commands})")
+        page.wait_for_timeout(300)  # let the first frame render
+        view.screenshot(path=str(ARTIFACTS / f"{name}--view{k + 1}.png"))
+        if status["status"] != "ok":
+            problems.append(f"{label}: {status['status']}")
+            continue
+        if status["commands"] != expected:
+            problems.append(f"{label}: replayed {status['commands']} of {expected} commands")
+        data_url = frame.evaluate("() => viewer.capture_image()")
+        png = base64.b64decode(data_url.split(",", 1)[1])
+        (ARTIFACTS / f"{name}--view{k + 1}-canvas.png").write_bytes(png)
+        drawn = _drawn_fraction(png)
+        if drawn < MIN_DRAWN_FRACTION:
+            problems.append(f"{label}: the WebGL canvas is blank ({drawn:.2%} of it drawn)")
+
+
+@pytest.mark.parametrize("page_path", _pages() or ["(no built pages)"])
+def test_page_renders(page_path, site, browser):
+    if page_path == "(no built pages)":
+        pytest.fail(f"no built chapter pages in {HTML}: build the book first")
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    name = page_path.replace("/", "_").removesuffix(".html")
+    problems = []
+    page = browser.new_page(viewport={"width": 1280, "height": 900})
+
+    def on_console(message):
+        # Errors logged inside the 3D views; the theme's own console noise (e.g. pydata's
+        # "Got invalid theme mode" on a fresh profile) is not ours to judge.
+        if message.type == "error" and message.location.get("url", "") == "about:srcdoc":
+            problems.append(f"console error in a 3D view: {message.text[:300]}")
+
+    def on_response(response):
+        if response.status >= 400 and not response.url.endswith("favicon.ico"):
+            problems.append(f"HTTP {response.status}: {response.url[:200]}")
+
+    page.on("pageerror", lambda error: problems.append(f"JavaScript error: {error}"))
+    page.on("console", on_console)
+    page.on("requestfailed", lambda request: problems.append(
+        f"request failed: {request.url[:200]} ({request.failure})"))
+    page.on("response", on_response)
+    try:
+        page.goto(f"{site}/{page_path}", wait_until="load")
+        page.wait_for_function(_MATHJAX_DONE, timeout=30_000)
+
+        math = page.evaluate(_MATH_REPORT)
+        if math["maths"]:
+            if math["untypeset"] or not math["containers"]:
+                problems.append(f"MathJax left {math['untypeset']} of {math['maths']} "
+                                f"math elements untypeset")
+            if math["errors"]:
+                problems.append(f"MathJax reported {math['errors']} errors (mjx-merror)")
+        for raw in ("$$", "\\(", "\\["):
+            if raw in math["text"]:
+                at = math["text"].index(raw)
+                problems.append(f"raw {raw!r} left in the text: "
+                                f"{' '.join(math['text'][max(0, at - 60):at + 60].split())!r}")
+
+        broken = page.evaluate(_IMAGES)
+        problems.extend(f"image not loaded: {src}" for src in broken)
+
+        _check_scenes(page, name, problems)
+        page.screenshot(path=str(ARTIFACTS / f"{name}.png"), full_page=True)
+    finally:
+        page.close()
+    assert not problems, f"{page_path}:\n  " + "\n  ".join(problems)
+
+
+def test_artifacts_are_ignored_by_git():
+    ignore = (ROOT / ".gitignore").read_text()
+    assert re.search(r"^/?test-artifacts/?$", ignore, re.M), "test-artifacts/ must be ignored"
