@@ -141,3 +141,15 @@ def test_broadcasting_and_input_errors():
     bad[0, 0] = 2.0
     with pytest.raises(ValueError):
         numerical(robot, bad, q0[0])
+
+
+def test_an_exactly_singular_step_falls_back_to_least_squares(monkeypatch):
+    robot = ur3()
+    q_true = np.array([0.3, -1.2, 1.0, -0.5, 1.1, 0.2])
+
+    def singular(*args, **kwargs):
+        raise np.linalg.LinAlgError("Singular matrix")
+
+    monkeypatch.setattr(np.linalg, "solve", singular)
+    result = numerical(robot, robot.fk(q_true), q_true + 0.05)
+    assert result.success

@@ -3,6 +3,8 @@ both dual-quaternion constructions)."""
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from dqlab import dualquat
 from dqlab.models import desk_arm, scara_rsm5, six_r, ur3, ur3_mdh
@@ -271,3 +273,34 @@ def test_thesis_ur3_pose_by_the_screw_construction():
         tcp = dualquat.dual_quaternion_apply(Q, [0.0, 0.0, 0.2])
         np.testing.assert_allclose(tcp, [0.0, -0.39425, 0.69415], atol=1e-12)
         np.testing.assert_allclose(tcp.round(3), [0.0, -0.394, 0.694], atol=1e-12)
+
+
+# -- property: random chains of both conventions -----------------------------------------
+
+_finite = st.floats(min_value=-2.0, max_value=2.0, allow_nan=False, allow_infinity=False)
+_link = st.tuples(_finite, _finite, _finite, _finite, st.booleans())
+
+
+@given(links=st.lists(_link, min_size=1, max_size=7),
+                  convention=st.sampled_from(["dh", "mdh"]),
+                  seed=st.integers(0, 2**32 - 1))
+@settings(max_examples=60, deadline=None)
+def test_random_chains_fk_dual_quaternions_and_jacobian_agree(links, convention, seed):
+    rng = np.random.default_rng(seed)
+    chain = [Link(a, alpha, d, theta_offset=off, joint="prismatic" if p else "revolute")
+             for a, alpha, d, off, p in links]
+    robot = Robot(chain, convention=convention, base=random_transform(rng),
+                  tool=random_transform(rng))
+    q = rng.uniform(-np.pi, np.pi, size=(5, robot.n))
+    X = robot.fk(q)
+    np.testing.assert_allclose(dualquat.transform_from_dual_quaternion(robot.fk_dq(q)), X,
+                               atol=1e-11)
+    np.testing.assert_allclose(dualquat.transform_from_dual_quaternion(robot.fk_dq_screw(q)),
+                               X, atol=1e-11)
+    h = 1e-6
+    J = robot.jacobian(q)
+    for j in range(robot.n):
+        dq = np.zeros(robot.n)
+        dq[j] = h
+        v = (robot.fk(q + dq)[:, :3, 3] - robot.fk(q - dq)[:, :3, 3]) / (2 * h)
+        np.testing.assert_allclose(J[:, :3, j], v, atol=1e-6)

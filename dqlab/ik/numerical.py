@@ -97,7 +97,7 @@ def _residual(X, X_target, position_only):
 
 
 def numerical(robot, pose, q0, *, position_only=False, tol=1e-10, rotation_tol=None,
-              max_iter=100, damping=1e-2, min_damping=1e-6, max_damping=1e6,
+              max_iter=100, damping=1e-2, min_damping=1e-9, max_damping=1e6,
               max_step=0.5):
     r"""Inverse kinematics by damped least squares, from a warm start ``q0``.
 
@@ -218,7 +218,10 @@ def numerical(robot, pose, q0, *, position_only=False, tol=1e-10, rotation_tol=N
         Jt = np.swapaxes(J, -1, -2)
         A = Jt @ J + (lam[idx] ** 2)[:, None, None] * np.eye(n)
         g = (Jt @ e[idx][..., None])[..., 0]
-        step = np.linalg.solve(A, g[..., None])[..., 0]
+        try:
+            step = np.linalg.solve(A, g[..., None])[..., 0]
+        except np.linalg.LinAlgError:   # an exactly singular system: least-squares step
+            step = (np.linalg.pinv(A) @ g[..., None])[..., 0]
         biggest = np.max(np.abs(step), axis=-1, keepdims=True)
         step *= np.minimum(1.0, max_step / np.maximum(biggest, 1e-300))
         q_try = np.clip(qa + step, lo, hi)
