@@ -1,32 +1,19 @@
 """Inverse kinematics: closed-form solvers and a numerical solver, one result type for all.
 
-- :func:`ur` -- every closed-form solution of a UR-family arm, by dual quaternions;
-- :func:`numerical` -- damped least squares, position-only or full pose;
-- :func:`desk_arm` -- the 3-DOF desktop arm in closed form;
-- :func:`scara` -- the SCARA RSM-5 in closed form.
+- :func:`dqlab.ik.ur.ur` -- every closed-form solution of a UR-family arm, by dual
+  quaternions;
+- :func:`dqlab.ik.numerical.numerical` -- damped least squares, position-only or full pose;
+- :func:`dqlab.ik.arm3.desk_arm` -- the 3-DOF desktop arm in closed form;
+- :func:`dqlab.ik.scara.scara` -- the SCARA RSM-5 in closed form.
+
+Each returns an :class:`dqlab.ik.result.IKResult`. They are reached as ``dqlab.ik.ur``,
+``dqlab.ik.numerical``, ``dqlab.ik.desk_arm`` and ``dqlab.ik.scara``.
 """
 
+from .arm3 import desk_arm
+from .numerical import numerical
 from .result import IKResult
+from .scara import scara
+from .ur import ur
 
-__all__ = ["IKResult"]
-
-try:  # each solver lives in its own module
-    from .ur import ur  # noqa: F401
-    __all__.append("ur")
-except ImportError:  # pragma: no cover
-    pass
-try:
-    from .numerical import numerical  # noqa: F401
-    __all__.append("numerical")
-except ImportError:  # pragma: no cover
-    pass
-try:
-    from .arm3 import desk_arm  # noqa: F401
-    __all__.append("desk_arm")
-except ImportError:  # pragma: no cover
-    pass
-try:
-    from .scara import scara  # noqa: F401
-    __all__.append("scara")
-except ImportError:  # pragma: no cover
-    pass
+__all__ = ["IKResult", "desk_arm", "numerical", "scara", "ur"]
