@@ -44,6 +44,23 @@ def lab_mgi_as_printed(x, y, z, restore_offset=False):
     return np.degrees([q0, q1, q2])
 
 
+def test_lab_derivation_sign_slip_gives_q1_minus_pi():
+    """Réponse 9 prints Cramer's determinant as +k^2 (it is -k^2): its atan2 for q1 is off
+    by pi; the code (Réponse 10) has the signs right."""
+    l0_l4, l1, l2, l3 = 35.0, 144.0, 162.0, 67.0
+    q = desk_arm_joints_from_lab(np.radians([90, 51, 65]))
+    x, y, z = desk_arm().fk(q)[:3, 3] * 1000
+    d, h = np.hypot(x, y), z - l0_l4
+    qbar = np.arccos(((d - l3) ** 2 + h ** 2 - l1 ** 2 - l2 ** 2) / (2 * l1 * l2))
+    s, c = np.sin(qbar), np.cos(qbar)
+    printed = np.arctan2(-l2 * s * (d - l3) - (l1 + l2 * c) * h,
+                         l2 * s * h - (l1 + l2 * c) * (d - l3))
+    code = np.arctan2(l2 * s * (d - l3) + (l1 + l2 * c) * h,
+                      -l2 * s * h + (l1 + l2 * c) * (d - l3))
+    np.testing.assert_allclose(np.degrees(code), 51.0, atol=1e-9)
+    np.testing.assert_allclose(np.degrees(printed), 51.0 - 180.0, atol=1e-9)
+
+
 def lab_angles_deg(result):
     return np.degrees(desk_arm_lab_from_joints(result.solutions))
 

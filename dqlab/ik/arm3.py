@@ -62,7 +62,12 @@ def desk_arm(robot, position, *, tol=1e-9):
     (its derivation has it right; its code drops the offset). That is why its IK table
     returns (90, 82, -6), (90, 52, 66), (90, 39, 19), (90, 86, 44) degrees instead of the
     angles (90, 90, 0), (90, 51, 65), (90, 42, 21), (90, 90, 45) of its FK table; with the
-    offset restored, the formula returns the FK table's angles.
+    offset restored, the formula returns the FK table's angles. A second slip, in the
+    derivation only: Cramer's determinant is
+    :math:`-l_2^2\sin^2\bar q_2 - (l_1 + l_2\cos\bar q_2)^2 = -k^2`, printed as
+    :math:`+k^2`, so the printed :math:`\cos q_1, \sin q_1` and the atan2 built from them
+    have the wrong sign and give :math:`q_1 - \pi`; the code's ``num`` and ``den`` carry the
+    right signs.
 
     Parameters
     ----------
