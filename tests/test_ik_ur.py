@@ -300,7 +300,7 @@ def test_theta5_at_wrist_singularity(robot, at, off):
     q[:, 2] = rng.uniform(0.3, 2.8, n) * rng.choice([-1, 1], n)
     q[:, 4] = at + off * rng.choice([-1, 1], n)
     T = robot.fk(q)
-    for q_ref in (None, rng.uniform(-np.pi, np.pi, (n, 6))):
+    for q_ref in (None, rng.uniform(-np.pi, np.pi, (n, 6)), np.full(6, 20.0)):
         result = ur(robot, T, q_ref=q_ref)
         assert_reproduces(robot, result, T)
         assert result.flags["wrist_singular"].all()
@@ -636,3 +636,60 @@ def test_wrap_angle():
     w = wrap_angle(x)
     assert np.all(w > -np.pi) and np.all(w <= np.pi)
     assert np.allclose(np.exp(1j * w), np.exp(1j * x))
+
+
+# --------------------------------------------------------------------------------------
+# The errata are real: the thesis's formulas, evaluated in floating point
+
+
+def _thesis_quantities(robot, q):
+    """L = r_z(t1)^* q_D of the generating configurations (the thesis's M2 = N2 terms)."""
+    from dqlab.ik._ur_steps import relative_rotation_coefficients
+    from dqlab.quaternion import quaternion_from_matrix, quaternion_product
+
+    T = robot.fk(q)
+    q0_conj = np.array([np.sqrt(0.5), -np.sqrt(0.5), 0.0, 0.0])
+    qD = quaternion_product(quaternion_from_matrix(T[..., :3, :3]), q0_conj)
+    return T, relative_rotation_coefficients(np.moveaxis(qD, -1, 0), 0.5 * q[..., 0])
+
+
+def test_thesis_theta6_formula_fails_at_theta234_pi(robot):
+    """(4.28) with (4.18)-(4.21): 0/0 at t2 + t3 + t4 = pi; the atan2 forms are exact."""
+    rng = np.random.default_rng(30)
+    q = rng.uniform(-np.pi, np.pi, (500, 6))
+    q[:, 4] = rng.uniform(0.5, 2.5, 500)
+    q[:, 3] = np.pi - q[:, 1] - q[:, 2]
+    T, (Lw, Lx, Ly, Lz) = _thesis_quantities(robot, q)
+    c5, s5 = np.cos(q[:, 4] / 2), np.sin(q[:, 4] / 2)
+    alpha, beta, gamma, delta = Lw / c5, Lx / s5, -Ly / c5, -Lz / s5
+    assert np.abs(gamma - beta).max() < 1e-14 and np.abs(alpha + delta).max() < 1e-14
+    theta6_thesis = 2 * np.arctan2(gamma - beta, alpha + delta)
+    assert np.abs(wrapped(theta6_thesis - q[:, 5])).max() > 0.5     # garbage
+    result = ur(robot, T)
+    regular = np.abs(shoulder_margin(q)) > 1e-2
+    assert recovery_error(result, q)[regular].max() < 1e-9
+    # away from that line the thesis's formula is right
+    q[:, 3] += 1.0
+    T, (Lw, Lx, Ly, Lz) = _thesis_quantities(robot, q)
+    alpha, beta, gamma, delta = Lw / c5, Lx / s5, -Ly / c5, -Lz / s5
+    theta6_thesis = 2 * np.arctan2(gamma - beta, alpha + delta)
+    assert np.abs(wrapped(theta6_thesis - q[:, 5])).max() < 1e-12
+
+
+def test_thesis_theta5_acos_loses_half_the_digits(robot):
+    """(4.13) by acos near t5 = 0 against 2 atan2(s5bar, c5bar)."""
+    rng = np.random.default_rng(31)
+    q = rng.uniform(-np.pi, np.pi, (500, 6))
+    q[:, 2] = rng.uniform(0.5, 2.5, 500)
+    q[:, 4] = 1e-7
+    T = robot.fk(q)
+    x6, y6 = T[:, 0, 3], T[:, 1, 3]
+    t1 = q[:, 0]
+    arg = (x6 * np.sin(t1) - y6 * np.cos(t1) - UR3["d4"]) / UR3["d6"]
+    theta5_thesis = np.arccos(np.clip(arg, -1, 1))
+    thesis_error = np.abs(theta5_thesis - 1e-7)
+    result = ur(robot, T)
+    ours = result.solutions[..., 4]
+    our_error = np.where(result.valid, np.abs(ours - 1e-7), np.inf).min(axis=-1)
+    assert thesis_error.max() > 1e-9          # digits lost
+    assert our_error.max() < 1e-14

@@ -24,6 +24,7 @@ quaternion of a turn by :math:`\theta` about the unit axis :math:`u`.
 import numpy as np
 
 _TWO_PI = 2.0 * np.pi
+_PLUS_MINUS = np.array([1.0, -1.0])
 
 
 def wrap_angle(theta):
@@ -45,9 +46,11 @@ def wrap_angle(theta):
     array([ 3.14159265,  3.14159265, -1.57079633,  0.5       ])
     """
     theta = np.asarray(theta, dtype=float)
-    w = theta - _TWO_PI * np.round(theta / _TWO_PI)
-    w = np.where(w > np.pi, w - _TWO_PI, w)          # rounding of theta / 2 pi
-    return np.where(w <= -np.pi, w + _TWO_PI, w)
+    w = theta - _TWO_PI * np.round(theta * (1.0 / _TWO_PI))   # exact when |theta| < pi
+    outside = (w <= -np.pi) | (w > np.pi)     # -pi, or a rounding of theta / (2 pi)
+    if outside.any():
+        w = np.where(w > np.pi, w - _TWO_PI, np.where(w <= -np.pi, w + _TWO_PI, w))
+    return w
 
 
 def wrist_center(p, z6, d6):
@@ -83,7 +86,8 @@ def shoulder_angles(x5, y5, d4):
 
     With :math:`h = \sqrt{x_5^2 + y_5^2 - d_4^2}` the two roots are
     :math:`\theta_1 = \operatorname{atan2}(y_5, x_5) + \operatorname{atan2}(d_4, \pm h)`,
-    computed here as one well-conditioned ``atan2``:
+    that is :math:`e^{i\theta_1} \propto (x_5 + i y_5)(h_\pm + i d_4)`, computed as one
+    well-conditioned ``atan2``:
 
     .. math::
 
@@ -93,39 +97,44 @@ def shoulder_angles(x5, y5, d4):
     The sign of :math:`h_\pm` is the shoulder branch: :math:`h_\pm = \cos\theta_1 x_5 +
     \sin\theta_1 y_5` is the wrist centre's coordinate along :math:`x_1`. A solution exists
     only if :math:`x_5^2 + y_5^2 \ge d_4^2`; when the difference is negative it is clipped to
-    zero here (the caller judges by forward kinematics whether the clipped answer is good
-    enough), and when it is zero the two roots coincide (shoulder singularity).
+    zero here (the caller judges whether the clipped answer is good enough), and when it is
+    zero the two roots coincide (shoulder singularity). The cosine and sine of
+    :math:`\theta_1` are the two ``atan2`` arguments divided by their norm
+    :math:`\sqrt{(x_5^2 + y_5^2)(h^2 + d_4^2)}`.
 
     Parameters
     ----------
-    x5, y5 : ndarray, shape (...)
+    x5, y5 : ndarray, shape (n,)
         Wrist-centre coordinates in the base frame.
     d4 : float
         Shoulder offset (distance of the arm plane from the base axis).
 
     Returns
     -------
-    theta1 : ndarray, shape (..., 2)
-        Branch 0 with :math:`h_\pm = +h`, branch 1 with :math:`h_\pm = -h`.
-    h : ndarray, shape (...)
+    theta1, c1, s1 : ndarray, shape (2, n)
+        :math:`\theta_1`, :math:`\cos\theta_1`, :math:`\sin\theta_1`; row 0 with
+        :math:`h_\pm = +h`, row 1 with :math:`h_\pm = -h`.
+    h : ndarray, shape (n,)
         :math:`h \ge 0` after clipping.
-    h2 : ndarray, shape (...)
+    h2 : ndarray, shape (n,)
         :math:`x_5^2 + y_5^2 - d_4^2` before clipping (negative: the wrist centre is inside
         the cylinder of radius :math:`d_4` about the base axis).
 
     Examples
     --------
-    >>> theta1, h, h2 = shoulder_angles(np.float64(0.3), np.float64(-0.11235), 0.11235)
-    >>> np.round(theta1, 6), float(h)
-    (array([0.      , 2.424928]), 0.3)
+    >>> theta1, c1, s1, h, h2 = shoulder_angles(np.array([0.3]), np.array([-0.11235]), 0.11235)
+    >>> np.round(theta1.ravel(), 6), np.round(h, 12)
+    (array([0.      , 2.424928]), array([0.3]))
     """
-    h2 = x5 * x5 + y5 * y5 - d4 * d4
+    r2 = x5 * x5 + y5 * y5
+    h2 = r2 - d4 * d4
     h = np.sqrt(np.maximum(h2, 0.0))
-    hpm = np.stack([h, -h], axis=-1)
-    x5 = np.expand_dims(x5, -1)
-    y5 = np.expand_dims(y5, -1)
-    theta1 = np.arctan2(y5 * hpm + x5 * d4, x5 * hpm - y5 * d4)
-    return theta1, h, h2
+    hpm = _PLUS_MINUS[:, None] * h
+    num_c = x5 * hpm - y5 * d4
+    num_s = y5 * hpm + x5 * d4
+    theta1 = np.arctan2(num_s + 0.0, num_c)    # + 0.0 turns -0.0 into 0.0: never -pi
+    norm = np.sqrt(np.maximum(r2 * (h * h + d4 * d4), 1e-300))
+    return theta1, num_c / norm, num_s / norm, h, h2
 
 
 def relative_rotation_coefficients(q, half1):
@@ -214,9 +223,11 @@ def wrist_angles(L, sigma):
     [0.6, 0.1, 0.2]
     """
     Lw, Lx, Ly, Lz = L
-    c5bar = np.hypot(Lw, Ly)
-    s5bar = np.hypot(Lx, Lz)
-    theta5 = 2.0 * np.arctan2(sigma * s5bar, c5bar)
+    c5bar = np.sqrt(Lw * Lw + Ly * Ly)
+    s5bar = np.sqrt(Lx * Lx + Lz * Lz)
+    # (sigma * sigma = 1 gives c5bar the broadcast shape: atan2 is fastest on equal shapes)
+    theta5 = 2.0 * np.arctan2(sigma * s5bar, (sigma * sigma) * c5bar)
+    theta5 = np.where(theta5 == -np.pi, np.pi, theta5)
     half_sum = np.arctan2(-Ly, Lw)
     half_diff = np.arctan2(sigma * Lx, -sigma * Lz)
     return theta5, half_sum, half_diff, c5bar, s5bar
@@ -279,44 +290,52 @@ def elbow_angles(X, Y, a2, a3, elbow_sign):
 
     .. math::
 
-        (2 a_2 a_3 \sin\theta_3)^2 = \big((a_2 + a_3)^2 - \rho^2\big)
-                                      \big(\rho^2 - (a_2 - a_3)^2\big),
+        (2 a_2 a_3 \sin\theta_3)^2 = K = \big((a_2 + a_3)^2 - \rho^2\big)
+                                         \big(\rho^2 - (a_2 - a_3)^2\big),
 
-    whose factors are computed as products of sums and differences of lengths so that no
-    digits are lost near full stretch (:math:`\rho = |a_2 + a_3|`) or full fold. Then
+    whose factors are computed as products of sums and differences of lengths, so that the
+    sine keeps the digits the data carry near full stretch (:math:`\rho = |a_2 + a_3|`) or
+    full fold (there :math:`\theta_3` itself is ill-conditioned: a rounding of
+    :math:`\rho` moves it by about :math:`\sqrt{\varepsilon}`). Then
 
     .. math::
 
-        \theta_3 = \operatorname{atan2}\!\big(\pm\sqrt{K},\;
+        \theta_3 = \pm\operatorname{atan2}\!\big(\sqrt{K},\;
                    \operatorname{sgn}(a_2 a_3)(\rho^2 - a_2^2 - a_3^2)\big),\qquad
         \theta_2 = \operatorname{atan2}(Y k_1 - X k_2,\; X k_1 + Y k_2),
 
     with :math:`k_1 = a_2 + a_3\cos\theta_3`, :math:`k_2 = a_3 \sin\theta_3` (thesis 4.41,
-    which is right). Negative :math:`K` (the point is out of the 2R chain's reach) is clipped
-    to zero: the arm is then stretched or folded towards the point.
+    which is right), :math:`\cos\theta_3` and :math:`\sin\theta_3` taken from the same two
+    numbers divided by :math:`2|a_2 a_3|`. Negative :math:`K` (the point is out of the 2R
+    chain's reach) is clipped to zero: the arm is then stretched or folded towards the
+    point.
 
     Parameters
     ----------
-    X, Y : ndarray
+    X, Y : ndarray, shape (..., 1, m)
         Wrist-1 point in the arm plane, relative to the shoulder.
     a2, a3 : float
         Upper-arm and forearm lengths (signed, as UR publishes them).
-    elbow_sign : ndarray or float
-        +1 or -1, the elbow branch (sign of :math:`\sin\theta_3` when :math:`a_2 a_3 > 0`).
+    elbow_sign : ndarray, shape (2, 1)
+        ``[[1], [-1]]``: the elbow branches (sign of :math:`\sin\theta_3` when
+        :math:`a_2 a_3 > 0`), on the second-last axis.
 
     Returns
     -------
-    theta2, theta3 : ndarrays
-    outer, inner : ndarrays
+    theta2, theta3 : ndarrays, shape (..., 2, m)
+    outer, inner : ndarrays, shape (..., 1, m)
         :math:`(|a_2 + a_3| - \rho)(|a_2 + a_3| + \rho)` and
         :math:`(\rho - |a_2 - a_3|)(\rho + |a_2 - a_3|)` before clipping; a negative value
         says the point is beyond the outer or inside the inner reach.
+    sin3 : ndarray, shape (..., 1, m)
+        :math:`|\sin\theta_3|`.
 
     Examples
     --------
-    >>> t2, t3, outer, inner = elbow_angles(-0.3, 0.2, -0.24365, -0.21325, 1.0)
-    >>> round(float(t2), 6), round(float(t3), 6), bool(outer > 0), bool(inner > 0)
-    (-1.199206, 1.326258, True, True)
+    >>> t2, t3, outer, inner, s3 = elbow_angles(np.array([[-0.3]]), np.array([[0.2]]),
+    ...                                         -0.24365, -0.21325, np.array([[1.0], [-1.0]]))
+    >>> np.round(t2.ravel(), 6), np.round(t3.ravel(), 6), bool(outer > 0), bool(inner > 0)
+    (array([-1.199206,  0.0232  ]), array([ 1.326258, -1.326258]), True, True)
     """
     rho2 = X * X + Y * Y
     rho = np.sqrt(rho2)
@@ -325,12 +344,22 @@ def elbow_angles(X, Y, a2, a3, elbow_sign):
     outer = (r_out - rho) * (r_out + rho)
     inner = (rho - r_in) * (rho + r_in)
     k = np.sqrt(np.maximum(outer, 0.0) * np.maximum(inner, 0.0))
-    sign_a = 1.0 if a2 * a3 >= 0 else -1.0
-    theta3 = np.arctan2(elbow_sign * k, sign_a * (rho2 - a2 * a2 - a3 * a3))
-    k1 = a2 + a3 * np.cos(theta3)
-    k2 = a3 * np.sin(theta3)
-    theta2 = np.arctan2(Y * k1 - X * k2, X * k1 + Y * k2)
-    return theta2, theta3, outer, inner
+    m = 2.0 * abs(a2 * a3)
+    cos_num = rho2 - (a2 * a2 + a3 * a3)
+    if a2 * a3 < 0:
+        cos_num = -cos_num
+    theta3 = np.arctan2(k, cos_num) * elbow_sign
+    theta3[theta3 == -np.pi] = np.pi           # the folded elbow, t3 = pi on both branches
+    k1 = a2 + (a3 / m) * cos_num
+    k2 = (a3 / m) * k
+    Yk1, Xk1, Xk2, Yk2 = Y * k1, X * k1, X * k2, Y * k2
+    num = elbow_sign * Xk2
+    np.subtract(Yk1, num, out=num)
+    num += 0.0                                 # never -0.0, so theta2 is never -pi
+    den = elbow_sign * Yk2
+    den += Xk1
+    theta2 = np.arctan2(num, den)
+    return theta2, theta3, outer, inner, k / m
 
 
 def feasible_theta234(Px, Py, theta234_ref, a2, a3, d5):
@@ -377,7 +406,7 @@ def feasible_theta234(Px, Py, theta234_ref, a2, a3, d5):
     array([3.141593])
     """
     Px, Py, theta234_ref = np.broadcast_arrays(Px, Py, theta234_ref)
-    norm_p = np.hypot(Px, Py)
+    norm_p = np.sqrt(Px * Px + Py * Py)
     psi = np.arctan2(Py, Px)
     two_d5p = 2.0 * d5 * norm_p
     u_ref = wrap_angle(theta234_ref - psi)

@@ -47,17 +47,22 @@ but:
    ``vector=[0, d[5], 0]``).
 2. The :math:`Q_4^{-1}` of section 4.3.4 is a copy of :math:`Q_5^{-1}`; undoing the wrist-1
    offset needs the translation :math:`\langle d_5 k\rangle` (again the program is right).
-3. (4.18)-(4.21) divide the four rotation equations by :math:`\cos\frac{\theta_5}{2}` and
-   :math:`\sin\frac{\theta_5}{2}`; the restatement of :math:`\alpha` and :math:`\gamma` in
-   4.4 divides by the wrong one (:math:`\bar s_5` for :math:`\alpha`, and :math:`\bar s_5`
-   for :math:`\gamma`), which the program repeats. Here nothing is divided:
-   :math:`\frac{\Sigma}{2} = \operatorname{atan2}(-L_y, L_w)` and
-   :math:`\frac{\Delta}{2} = \operatorname{atan2}(\sigma L_x, -\sigma L_z)`.
+3. (4.18)-(4.21) divide the four rotation equations by :math:`\bar c_5 =
+   \cos\frac{\theta_5}{2}` (for :math:`\alpha, \gamma`) and :math:`\bar s_5 =
+   \sin\frac{\theta_5}{2}` (for :math:`\beta, \delta`), which blows up near
+   :math:`\theta_5 = \pm\pi` and :math:`\theta_5 = 0`. The restatement of :math:`\alpha`
+   and :math:`\gamma` in section 4.4 divides them by :math:`\bar s_5` instead of
+   :math:`\bar c_5` (the program's ``tm1``, ``tm3`` divide correctly). Here nothing is
+   divided: :math:`\frac{\Sigma}{2} = \operatorname{atan2}(-L_y, L_w)` and
+   :math:`\frac{\Delta}{2} = \operatorname{atan2}(\sigma L_x, -\sigma L_z)`, with
+   :math:`\alpha = \cos\frac{\Sigma}{2}`, :math:`\gamma = \sin\frac{\Sigma}{2}`,
+   :math:`\beta = \sin\frac{\Delta}{2}`, :math:`\delta = \cos\frac{\Delta}{2}`.
 4. The :math:`\theta_6` formula (4.28), :math:`\theta_6 = 2\operatorname{atan2}(\gamma -
    \beta, \alpha + \delta)`, is 0/0 whenever :math:`\theta_2 + \theta_3 + \theta_4 \equiv
-   \pi` (then :math:`\gamma - \beta` and :math:`\alpha + \delta` both vanish with
-   :math:`\cos\frac{\theta_{234}}{2}`) -- a regular configuration, and the thesis's own test
-   pose is one. It also needs :math:`\theta_5 \neq 0, \pm\pi` for the divisions above. Here
+   \pi`: by the sum-to-product formulas :math:`\gamma - \beta = 2\cos\frac{\theta_{234}}{2}
+   \sin\frac{\theta_6}{2}` and :math:`\alpha + \delta = 2\cos\frac{\theta_{234}}{2}
+   \cos\frac{\theta_6}{2}`, both zero there -- a regular configuration, and the thesis's own
+   test pose is one. It also needs :math:`\theta_5 \neq 0, \pm\pi` for the divisions above. Here
    :math:`\theta_6 = \frac{\Sigma}{2} - \frac{\Delta}{2}` and
    :math:`\theta_{234} = \frac{\Sigma}{2} + \frac{\Delta}{2}`, defined everywhere.
 5. :math:`\theta_5` by (4.13), :math:`\pm\arccos\frac{x_6 \sin\theta_1 - y_6 \cos\theta_1 -
@@ -79,15 +84,18 @@ but:
    they reproduce the pose to ``tol``.
 7. The :math:`\theta_1` square root :math:`\sqrt{x_5^2 + y_5^2 - d_4^2}` of (4.11) fails
    (NaN) at the shoulder singularity unless its argument is clipped at zero.
-8. The program's parameter arrays follow the row order of table 4.1 (Craig's modified DH:
-   :math:`\alpha_{i-1}, a_{i-1}`) while the values come from table 4.2 (standard DH), so
-   ``a[2]``, ``a[3]`` and ``alpha`` are shifted by one joint with respect to the
-   equations.
+8. The program's parameter arrays are laid out in the row order of table 4.1 (Craig's
+   modified DH, :math:`\alpha_{i-1}, a_{i-1}`), while the text gives table 4.2 (UR's
+   standard DH, :math:`\alpha_i, a_i`) as the parameters: read with table 4.2's indices,
+   ``a`` and ``alpha`` are shifted by one joint. Here the lengths come from the robot's
+   standard-DH links, ``robot.links[i].d / .a / .alpha``.
 9. At the wrist singularity (:math:`\theta_5 = 0` or :math:`\pm\pi`, where the thesis's
    test pose lies) only :math:`\theta_{234} + \theta_6` (or the difference) is determined;
    the thesis reports a single :math:`\theta_6 = 0` without saying that it chose it. Here
    the choice is explicit (``q_ref``) and flagged.
 """
+
+import math
 
 import numpy as np
 
@@ -98,8 +106,10 @@ __all__ = ["ur", "ur_parameters", "equivalent_solutions", "closest_solution",
            "distinct_solutions", "SOLUTION_ORDER"]
 
 _HALF_SQRT2 = np.sqrt(0.5)
-_SIGMA = np.array([1.0, -1.0])            # wrist branch w = 0, 1 (last axis)
-_ELBOW = np.array([[1.0], [-1.0]])        # elbow branch e = 0, 1 (middle axis)
+_TWO_PI = 2.0 * np.pi
+_EYE_BYTES = np.eye(4).tobytes()
+_SIGMA = np.array([[1.0], [-1.0]])        # wrist branch w = 0, 1, axis -2 of (s, w, n)
+_ELBOW = np.array([[[1.0]], [[-1.0]]])    # elbow branch e = 0, 1, axis -3 of (s, e, w, n)
 _UR_ALPHA = (np.pi / 2, 0.0, 0.0, np.pi / 2, -np.pi / 2, 0.0)
 
 #: ``(shoulder, elbow, wrist)`` labels of the eight rows, in order ``k = 4 s + 2 e + w``.
@@ -116,6 +126,13 @@ _REASON_REACH = "elbow: the wrist-1 point is out of the forearm's reach on every
 _REASON_TOL = "no branch reproduces the pose within tol"
 
 
+def _shift(x):
+    """x moved into (-pi, pi] by at most one turn (x in (-3 pi, 3 pi]); x may be reused."""
+    x = x - _TWO_PI * (x > np.pi)
+    x += _TWO_PI * (x <= -np.pi)
+    return x
+
+
 def ur_parameters(robot, *, atol=1e-12):
     r"""The standard DH lengths of a UR-family arm, checked.
 
@@ -130,8 +147,8 @@ def ur_parameters(robot, *, atol=1e-12):
     Returns
     -------
     dict
-        ``d1, a2, a3, d4, d5, d6`` (floats) and ``offsets`` (the joint-angle offsets,
-        ndarray of shape (6,)).
+        ``d1, a2, a3, d4, d5, d6`` (floats) and ``offsets`` (the six joint-angle offsets,
+        a list of floats).
 
     Raises
     ------
@@ -153,7 +170,7 @@ def ur_parameters(robot, *, atol=1e-12):
     for i, link in enumerate(links):
         if getattr(link, "joint", "revolute") != "revolute":
             raise ValueError(f"ur() needs revolute joints; joint {i + 1} is {link.joint}")
-        if abs(steps.wrap_angle(link.alpha - _UR_ALPHA[i])) > atol:
+        if abs(math.remainder(link.alpha - _UR_ALPHA[i], 2.0 * math.pi)) > atol:
             raise ValueError("ur() needs a UR-family arm, alpha = (pi/2, 0, 0, pi/2, -pi/2, "
                              f"0); joint {i + 1} has alpha = {link.alpha!r}")
     for i in (0, 3, 4, 5):
@@ -166,7 +183,7 @@ def ur_parameters(robot, *, atol=1e-12):
         raise ValueError("ur() needs nonzero a2, a3 and d4")
     return {"d1": links[0].d, "a2": links[1].a, "a3": links[2].a, "d4": links[3].d,
             "d5": links[4].d, "d6": links[5].d,
-            "offsets": np.array([lk.theta_offset for lk in links], dtype=float)}
+            "offsets": [lk.theta_offset for lk in links]}
 
 
 def _target(robot, pose, tool, pose_tol):
@@ -196,7 +213,6 @@ def _target(robot, pose, tool, pose_tol):
     else:
         raise ValueError("pose must have shape (..., 4, 4) (a transform) or (..., 8) (a unit "
                          f"dual quaternion), got shape {pose.shape}")
-    eye = np.eye(4)
     base = robot.base
     robot_tool = robot.tool
     if tool is not None:
@@ -210,11 +226,15 @@ def _target(robot, pose, tool, pose_tol):
     else:
         tool = robot_tool
         tool_dq = None
+    moved = base.tobytes() != _EYE_BYTES
+    tooled = np.ascontiguousarray(tool, dtype=float).tobytes() != _EYE_BYTES
+    if T is not None and not (moved or tooled):
+        return Q, T, Q[..., :4], T[..., :3, 3], T[..., :3, 2], tool, robot_tool
     Q06 = Q
-    if not np.array_equal(base, eye):
+    if moved:
         Q06 = dual_quaternion_product(
             dual_quaternion_conjugate(dual_quaternion_from_transform(base)), Q06)
-    if not np.array_equal(tool, eye):
+    if tooled:
         if tool_dq is None:
             tool_dq = dual_quaternion_from_transform(tool)
         Q06 = dual_quaternion_product(Q06, dual_quaternion_inverse(tool_dq))
@@ -385,117 +405,121 @@ def ur(robot, pose, *, tool=None, q_ref=None, tol=1e-9, singular_tol=5e-7, pose_
         raise ValueError(f"residuals must be 'fk' or 'equations', got {residuals!r}")
     prm = ur_parameters(robot)
     d1, a2, a3, d4, d5, d6 = (prm[k] for k in ("d1", "a2", "a3", "d4", "d5", "d6"))
-    offsets = prm["offsets"]
     Q, T, q, p, z6, tool_used, robot_tool = _target(robot, pose, tool, pose_tol)
     batch = q.shape[:-1]
-    q = q.reshape(-1, 4)
-    n = q.shape[0]
-    p5 = steps.wrist_center(p.reshape(-1, 3), z6.reshape(-1, 3), d6)
-    x5, y5, z5 = p5[:, 0], p5[:, 1], p5[:, 2]
+    # Work with the batch axis last: (branch axes..., n), so that every operation runs over
+    # long contiguous rows.
+    n = math.prod(batch)
+    q = np.ascontiguousarray(q.reshape(n, 4).T)
+    p5 = np.ascontiguousarray(steps.wrist_center(p, z6, d6).reshape(n, 3).T)
+    x5, y5, z5 = p5
 
-    # Step 1, theta1: arrays (n, 2) over the shoulder branch s
-    theta1, h, h2 = steps.shoulder_angles(x5, y5, d4)
-    c1, s1 = np.cos(theta1), np.sin(theta1)
+    # Step 1, theta1: arrays (2, n) over the shoulder branch s
+    theta1, c1, s1, h, h2 = steps.shoulder_angles(x5, y5, d4)
 
     # Step 2, rotation: q_D = q q0^* with q0 = (1 + i)/sqrt(2), then L = r_z(theta1)^* q_D
-    qw, qx, qy, qz = q[:, 0:1], q[:, 1:2], q[:, 2:3], q[:, 3:4]
+    qw, qx, qy, qz = q
     qD = (_HALF_SQRT2 * (qw + qx), _HALF_SQRT2 * (qx - qw),
           _HALF_SQRT2 * (qy - qz), _HALF_SQRT2 * (qy + qz))
-    Lw, Lx, Ly, Lz = steps.relative_rotation_coefficients(qD, 0.5 * theta1)
-    # arrays (n, 2, 2) over (s, w); the wrist branch sigma = +1, -1
-    L = (Lw[..., None], Lx[..., None], Ly[..., None], Lz[..., None])
+    L = steps.relative_rotation_coefficients(qD, 0.5 * theta1)
+    # arrays (2, 2, n) over (s, w), the wrist branch sigma = +1, -1
+    L = tuple(c[:, None, :] for c in L)
     theta5, half_sum, half_diff, c5bar, s5bar = steps.wrist_angles(L, _SIGMA)
     theta234 = half_sum + half_diff
     theta6 = half_sum - half_diff
-    Px, Py = steps.arm_plane_wrist((x5[:, None], y5[:, None], z5[:, None]), c1, s1, d1)
-    Px, Py = Px[..., None], Py[..., None]                    # (n, 2, 1), (n, 1, 1)
+    Px, Py = steps.arm_plane_wrist((x5, y5, z5), c1, s1, d1)
+    Px = Px[:, None, :]                                       # (2, 1, n)
 
     # wrist singularity: the family theta234 -+ theta6 = const, represented by the member
     # whose theta6 is nearest theta6_ref among those the arm can reach
     rep_tol = tol / (8.0 * max(1.0, abs(d6)))
-    rep0 = np.broadcast_to(s5bar <= rep_tol, theta234.shape)
-    reppi = np.broadcast_to(c5bar <= rep_tol, theta234.shape) & ~rep0
-    rep = rep0 | reppi
-    any_rep = bool(rep.any())
+    rep0 = s5bar <= rep_tol                                   # (2, 1, n)
+    reppi = (c5bar <= rep_tol) & ~rep0
+    any_rep = bool(rep0.any() or reppi.any())
     if any_rep:
+        shape = theta234.shape
+        rep0 = np.broadcast_to(rep0, shape)
+        rep = rep0 | np.broadcast_to(reppi, shape)
+        offset6 = prm["offsets"][5]
         if q_ref is None:
-            theta6_ref = np.full(n, offsets[5])
+            theta6_ref = np.full(n, offset6)
         else:
             q_ref = np.asarray(q_ref, dtype=float)
-            theta6_ref = np.broadcast_to(q_ref[..., 5], batch).reshape(n) + offsets[5]
-        theta6_ref = np.broadcast_to(theta6_ref[:, None, None], theta234.shape)
-        full_sum = np.broadcast_to(2.0 * half_sum, theta234.shape)
+            theta6_ref = np.broadcast_to(q_ref[..., 5], batch).reshape(n) + offset6
+        theta6_ref = np.broadcast_to(theta6_ref, shape)
+        full_sum = np.broadcast_to(2.0 * half_sum, shape)
         full_diff = 2.0 * half_diff
         want = np.where(rep0, full_sum - theta6_ref, full_diff + theta6_ref)[rep]
-        shape_sw = theta234.shape
-        got = steps.feasible_theta234(np.broadcast_to(Px, shape_sw)[rep],
-                                      np.broadcast_to(Py, shape_sw)[rep], want, a2, a3, d5)
+        got = steps.feasible_theta234(np.broadcast_to(Px, shape)[rep],
+                                      np.broadcast_to(Py, shape)[rep], want, a2, a3, d5)
         theta234 = theta234.copy()
         theta6 = theta6.copy()
-        theta234[rep] = got
-        theta6[rep] = np.where(rep0[rep], full_sum[rep] - got, got - full_diff[rep])
+        theta234[rep] = steps.wrap_angle(got)
+        theta6[rep] = steps.wrap_angle(
+            np.where(rep0[rep], full_sum[rep] - got, got - full_diff[rep]))
 
-    # Steps 3 and 4, the planar chain: arrays (n, 2, 2, 2) over (s, e, w)
-    X, Y = steps.wrist1_point(Px, Py, theta234, d5)          # (n, 2, 2) over (s, w)
-    X, Y = X[:, :, None, :], Y[:, :, None, :]
-    theta2, theta3, outer, inner = steps.elbow_angles(X, Y, a2, a3, _ELBOW)
-    theta4 = steps.wrap_angle(theta234[:, :, None, :] - theta2 - theta3)
+    # Steps 3 and 4, the planar chain: arrays (2, 2, 2, n) over (s, e, w)
+    X, Y = steps.wrist1_point(Px, Py, theta234, d5)          # (2, 2, n) over (s, w)
+    X, Y = X[:, None], Y[:, None]                             # (2, 1, 2, n)
+    theta2, theta3, outer, inner, sin3 = steps.elbow_angles(X, Y, a2, a3, _ELBOW)
+    # theta4 = theta234 - theta2 - theta3, with theta234 in (-pi, pi]: in (-3 pi, 3 pi]
+    theta4 = _shift(theta234)[:, None] - theta2
+    theta4 -= theta3
+    theta4 = _shift(theta4)
 
-    sol = np.empty((n, 2, 2, 2, 6))
-    sol[..., 0] = theta1[:, :, None, None]
-    sol[..., 1] = theta2
-    sol[..., 2] = theta3
-    sol[..., 3] = theta4
-    sol[..., 4] = steps.wrap_angle(theta5)[:, :, None, :]
-    sol[..., 5] = steps.wrap_angle(theta6)[:, :, None, :]
-    sol = sol.reshape(n, 8, 6)
-    if offsets.any():
-        sol = steps.wrap_angle(sol - offsets)
-    else:
-        sol[sol <= -np.pi] += 2.0 * np.pi                     # atan2 may return -pi
-    sol = sol.reshape(batch + (8, 6))
+    out = np.empty((6, 2, 2, 2, n))
+    out[0] = theta1[:, None, None, :]
+    out[1] = theta2
+    out[2] = theta3
+    out[3] = theta4
+    out[4] = theta5[:, None]
+    out[5] = _shift(theta6)[:, None]                         # theta6 in [-2 pi, 2 pi]
+    out = out.reshape(6, 8, n)
+    if any(prm["offsets"]):
+        out = steps.wrap_angle(out - np.array(prm["offsets"])[:, None, None])
+    sol = np.ascontiguousarray(out.transpose(2, 1, 0)).reshape(batch + (8, 6))
 
-    # residuals and validity
+    # residuals and validity, arrays (8, n)
     if residuals == "fk":
         position_error, rotation_error = _fk_residuals(
             robot, sol, Q, T, tool_used, robot_tool)
+        position_error = position_error.reshape(n, 8).T
+        rotation_error = rotation_error.reshape(n, 8).T
     else:
         # distance lost by clipping: shoulder (normal to the arm plane) and elbow (in it)
         e1 = np.maximum(-h2, 0.0) / (d4 + np.sqrt(x5 * x5 + y5 * y5))          # (n,)
         r_out, r_in = abs(a2 + a3), abs(a2 - a3)
         rho = np.sqrt(X * X + Y * Y)
-        e2 = np.maximum(np.maximum(rho - r_out, r_in - rho), 0.0)              # (n, 2, 1, 2)
-        e2 = np.broadcast_to(e2, (n, 2, 2, 2)).reshape(n, 8)
-        position_error = np.sqrt(e1[:, None] ** 2 + e2 ** 2)
-        rotation_error = np.zeros((n, 8))
-        position_error = position_error.reshape(batch + (8,))
-        rotation_error = rotation_error.reshape(batch + (8,))
+        e2 = np.maximum(np.maximum(rho - r_out, r_in - rho), 0.0)              # (2, 1, 2, n)
+        position_error = np.empty((2, 2, 2, n))
+        position_error[...] = np.sqrt(e1 * e1 + e2 * e2)
+        position_error = position_error.reshape(8, n)
+        rotation_error = np.zeros((8, n))
         if any_rep:
-            rows = np.broadcast_to(rep[:, :, None, :], (n, 2, 2, 2)).reshape(batch + (8,))
-            pe, re = _fk_residuals(robot, sol[rows][:, None, :], None,
-                                   _rows_target(Q, T, rows), tool_used, robot_tool)
-            position_error[rows] = pe[:, 0]
-            rotation_error[rows] = re[:, 0]
-    valid = (position_error <= tol) & (rotation_error <= tol)
-    solutions = np.where(valid[..., None], sol, 0.0)
+            rows = np.broadcast_to(rep[:, None], (2, 2, 2, n)).reshape(8, n)
+            rows_n = np.ascontiguousarray(rows.T).reshape(batch + (8,))
+            pe, re = _fk_residuals(robot, sol[rows_n][:, None, :], None,
+                                   _rows_target(Q, T, rows_n), tool_used, robot_tool)
+            position_error.T[rows.T] = pe[:, 0]
+            rotation_error.T[rows.T] = re[:, 0]
+    valid = (position_error <= tol) & (rotation_error <= tol)               # (8, n)
 
     # flags, over the valid rows
-    valid_n = valid.reshape(n, 2, 2, 2)
-    sin5 = (2.0 * s5bar * c5bar)[:, :, None, :]             # (n, 2, 1, 1)
-    sin3 = np.abs(np.sin(theta3))
-    any_valid = valid_n.any(axis=(1, 2, 3))
+    valid4 = valid.reshape(2, 2, 2, n)
+    sin5 = 2.0 * s5bar * c5bar                                # (2, 1, n) over (s, -)
+    any_valid = valid.any(axis=0)
     flags = {
-        "wrist_singular": np.any(valid_n & (sin5 < singular_tol), axis=(1, 2, 3)),
+        "wrist_singular": (valid4 & (sin5 < singular_tol)[:, None]).reshape(8, n).any(0),
         "shoulder_singular": any_valid & (h < singular_tol * d4),
-        "elbow_singular": np.any(valid_n & (sin3 < singular_tol), axis=(1, 2, 3)),
+        "elbow_singular": (valid4 & (sin3 < singular_tol)).reshape(8, n).any(0),
         "unreachable": ~any_valid,
     }
     flags = {k: v.reshape(batch) for k, v in flags.items()}
     reason = np.full(n, "", dtype=object)
     if not any_valid.all():
-        beyond = (outer < 0).all(axis=(1, 2, 3))
-        inside = (inner < 0).all(axis=(1, 2, 3))
-        either = ((outer < 0) | (inner < 0)).all(axis=(1, 2, 3))
+        beyond = (outer < 0).all(axis=(0, 1, 2))
+        inside = (inner < 0).all(axis=(0, 1, 2))
+        either = ((outer < 0) | (inner < 0)).all(axis=(0, 1, 2))
         none = ~any_valid
         reason[none] = _REASON_TOL
         reason[none & either] = _REASON_REACH
@@ -503,8 +527,12 @@ def ur(robot, pose, *, tool=None, q_ref=None, tol=1e-9, singular_tol=5e-7, pose_
         reason[none & beyond] = _REASON_OUTER
         shoulder_gap = np.maximum(-h2, 0.0) / (d4 + np.sqrt(x5 * x5 + y5 * y5))
         reason[none & (shoulder_gap > tol)] = _REASON_SHOULDER
-    return IKResult(solutions=solutions, valid=valid, position_error=position_error,
-                    rotation_error=rotation_error, flags=flags, reason=reason.reshape(batch))
+    valid = np.ascontiguousarray(valid.T).reshape(batch + (8,))
+    sol[~valid] = 0.0
+    return IKResult(solutions=sol, valid=valid,
+                    position_error=np.ascontiguousarray(position_error.T).reshape(batch + (8,)),
+                    rotation_error=np.ascontiguousarray(rotation_error.T).reshape(batch + (8,)),
+                    flags=flags, reason=reason.reshape(batch))
 
 
 def _rows_target(Q, T, rows):
