@@ -19,8 +19,14 @@ term. The route has four steps, each a small function of :mod:`dqlab.ik._ur_step
    :math:`\theta_4 = \theta_{234} - \theta_2 - \theta_3`
    (:func:`~dqlab.ik._ur_steps.elbow_angles`).
 
-Every candidate is checked by forward kinematics (:meth:`dqlab.robot.Robot.fk`), as the
-thesis does, but against a tolerance of 1e-9 rather than its 1e-3.
+A candidate is valid when it reproduces the pose to ``tol`` (1e-9 m and 1e-9 rad by
+default; the thesis filters by forward kinematics with ``np.allclose(..., atol=1e-3)``). Its
+distance to the pose comes from the solved equations (only a step that had to clip leaves
+one) or, with ``residuals="fk"``, from :meth:`dqlab.robot.Robot.fk` of every row.
+
+The frames are UR's standard-DH ones, base at the foot of joint 1 and the flange frame of
+the DH chain, the same as the controller's and as ``ur_analytic_ik``'s (whose
+``*_with_tcp(pose, X_6T)`` variants match ``tool=X_6T`` here), so results compare directly.
 
 .. rubric:: Solution order
 
@@ -631,10 +637,10 @@ def equivalent_solutions(q, limits=(-2 * np.pi, 2 * np.pi)):
 def closest_solution(result, q_ref, limits=(-2 * np.pi, 2 * np.pi)):
     r"""The valid solution nearest ``q_ref``, unwrapped to the equivalent nearest ``q_ref``.
 
-    The branch is chosen exactly as :meth:`IKResult.best` does (joint-wise distance modulo
-    :math:`2\pi`); then each joint is replaced by its :math:`2\pi`-equivalent within the
-    limits that is nearest ``q_ref`` (what a robot at ``q_ref`` should be sent, so that no
-    joint turns by more than half a turn when avoidable).
+    The branch is chosen exactly as :meth:`~dqlab.ik.result.IKResult.best` does (joint-wise
+    distance modulo :math:`2\pi`); then each joint is replaced by its :math:`2\pi`-equivalent
+    within the limits that is nearest ``q_ref`` (what a robot at ``q_ref`` should be sent, so
+    that no joint turns by more than half a turn when avoidable).
 
     Parameters
     ----------
@@ -649,7 +655,7 @@ def closest_solution(result, q_ref, limits=(-2 * np.pi, 2 * np.pi)):
     Raises
     ------
     ValueError
-        If some target has no valid solution (as :meth:`IKResult.best`).
+        If some target has no valid solution (as :meth:`~dqlab.ik.result.IKResult.best`).
 
     Examples
     --------
