@@ -209,7 +209,8 @@ def test_thesis_pose_is_singular_three_ways_and_has_one_solution(robot):
     The thesis prints four "combinations", all this one solution: t1 = 0 or 2 pi, t4 =
     -pi/2 or 3 pi/2, and t3 = +-2.98e-8 from acos(1 - 4.4e-16). That 3e-8 is not only the
     acos: at a stretched elbow a rounding of the position moves t3 by sqrt(eps) in any
-    formula (ours gives +-3.1e-8; both reproduce the pose to 1e-16). ur_analytic_ik
+    formula, so a correct solver may return anything within a few 1e-8 of t3 = 0 (ours
+    happens to return 0 here); all of them reproduce the pose to 1e-16. ur_analytic_ik
     returns no solution here.
     """
     T = robot.fk(THESIS_Q)

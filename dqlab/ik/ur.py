@@ -81,8 +81,8 @@ but:
    ``acos`` costs little more than the problem's own conditioning: near a straight or
    folded elbow a rounding of the position moves :math:`\theta_3` by
    :math:`\sqrt{\varepsilon}` whatever the formula -- the thesis's run prints
-   :math:`\theta_3 = \pm 2.98 \cdot 10^{-8}` at its test pose, and so does any correct
-   solver, give or take a factor; both reproduce the pose to :math:`10^{-16}`.)
+   :math:`\theta_3 = \pm 2.98 \cdot 10^{-8}` at its test pose, which reproduces the pose
+   to :math:`10^{-16}` just as :math:`\theta_3 = 0` does.)
 6. The program repairs ``acos`` arguments slightly outside :math:`[-1, 1]` by rounding them
    to an integer: any argument in :math:`(-1.5, 1.5)` passes, so unreachable poses give
    spurious "solutions" that only the 1e-3 forward-kinematics filter can reject (and
@@ -575,8 +575,8 @@ def distinct_solutions(result, atol=1e-9):
     >>> int(result.count), int(distinct_solutions(result, atol=1e-7).sum())
     (8, 1)
 
-    (At that pose the elbow is straight and :math:`\theta_3 = \pm 3 \cdot 10^{-8}` on the two
-    elbow branches: the rounding of the pose moves it by :math:`\sqrt{\varepsilon}`.)
+    (``atol=1e-7``: at that pose the elbow is straight, and a rounding of the pose moves
+    :math:`\theta_3` by up to :math:`\sqrt{\varepsilon}`.)
     """
     sol = result.solutions
     valid = result.valid
