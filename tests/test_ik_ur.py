@@ -392,6 +392,33 @@ def test_just_beyond_the_shoulder_cylinder(robot):
     assert result.position_error[result.valid].max() < 1e-9
 
 
+def test_just_beyond_the_outer_reach(robot):
+    """A stretched arm whose target moves 1e-6 m further out: that branch is lost, and its
+    residual is exactly the distance beyond the reach, in both residual modes."""
+    rng = np.random.default_rng(26)
+    n = 300
+    q = rng.uniform(-np.pi, np.pi, (n, 6))
+    q[:, 2] = 0.0
+    q[:, 4] = rng.uniform(0.5, 2.5, n)
+    keep = np.abs(shoulder_margin(q)) > 1e-2
+    q = q[keep]
+    frames = robot.fk(q, all_frames=True)
+    T = frames[:, -1].copy()
+    u = frames[:, 3, :3, 3] - frames[:, 1, :3, 3]        # shoulder -> wrist-1 point
+    u /= np.linalg.norm(u, axis=-1, keepdims=True)
+    beyond = T.copy()
+    beyond[:, :3, 3] += 1e-6 * u
+    for mode in ("equations", "fk"):
+        result = ur(robot, beyond, residuals=mode)
+        assert_reproduces(robot, result, beyond)
+        # rows of the generating shoulder and wrist branch: t1 and t5 as generated
+        same = ((np.abs(wrapped(ur(robot, T).solutions[..., 0] - q[:, None, 0])) < 1e-9)
+                & (np.abs(wrapped(ur(robot, T).solutions[..., 4] - q[:, None, 4])) < 1e-9))
+        assert same.sum(axis=-1).min() == 2                 # the two (equal) elbow rows
+        assert not result.valid[same].any()
+        np.testing.assert_allclose(result.position_error[same], 1e-6, rtol=1e-6)
+
+
 def test_far_and_near_targets_are_unreachable_with_reasons(robot):
     T = np.eye(4)
     T[:3, 3] = [2.0, 0.3, 0.4]                  # 2 m away: beyond every branch
@@ -516,6 +543,10 @@ def test_invalid_inputs_raise(robot):
         ur(ur3_mdh(), T)
     with pytest.raises(ValueError, match="residuals"):
         ur(robot, T, residuals="maybe")
+    with pytest.raises(ValueError, match="q_ref"):
+        ur(robot, T, q_ref=[0.0] * 5)
+    with pytest.raises(ValueError, match="q_ref"):
+        ur(robot, np.stack([T, T, T]), q_ref=np.zeros((2, 6)))
 
 
 # --------------------------------------------------------------------------------------
@@ -551,6 +582,15 @@ def test_tool_and_base(robot):
         result = ur(equipped, T, residuals=mode)
         assert recovery_error(result, q).max() < 1e-9
         assert_reproduces(equipped, result, T)
+    # a tool given to ur() replaces the robot's
+    X_6S = transform_from(matrix_from_axis_angle([0, 0, 1], 0.3), [0.0, 0.05, 0.1])
+    T2 = T @ np.linalg.inv(X_6T) @ X_6S
+    for mode in ("equations", "fk"):
+        result = ur(equipped, T2, tool=X_6S, residuals=mode)
+        assert recovery_error(result, q).max() < 1e-9
+        assert result.position_error[result.valid].max() < 1e-12
+    with pytest.raises(ValueError, match="tool"):
+        ur(equipped, T2, tool=2 * np.eye(4))
 
 
 def test_joint_offsets_are_honoured():

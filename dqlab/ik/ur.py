@@ -105,6 +105,7 @@ import math
 
 import numpy as np
 
+from .._checks import as_float_array
 from . import _ur_steps as steps
 from .result import IKResult
 
@@ -413,6 +414,13 @@ def ur(robot, pose, *, tool=None, q_ref=None, tol=1e-9, singular_tol=5e-7, pose_
     d1, a2, a3, d4, d5, d6 = (prm[k] for k in ("d1", "a2", "a3", "d4", "d5", "d6"))
     Q, T, q, p, z6, tool_used, robot_tool = _target(robot, pose, tool, pose_tol)
     batch = q.shape[:-1]
+    if q_ref is not None:
+        q_ref = as_float_array(q_ref, "q_ref", (6,))
+        try:
+            np.broadcast_shapes(q_ref.shape[:-1], batch)
+        except ValueError:
+            raise ValueError(f"q_ref of shape {q_ref.shape} does not broadcast against the "
+                             f"poses' leading shape {batch}") from None
     # Work with the batch axis last: (branch axes..., n), so that every operation runs over
     # long contiguous rows.
     n = math.prod(batch)
@@ -450,7 +458,6 @@ def ur(robot, pose, *, tool=None, q_ref=None, tol=1e-9, singular_tol=5e-7, pose_
         if q_ref is None:
             theta6_ref = np.full(n, offset6)
         else:
-            q_ref = np.asarray(q_ref, dtype=float)
             theta6_ref = np.broadcast_to(q_ref[..., 5], batch).reshape(n) + offset6
         theta6_ref = np.broadcast_to(theta6_ref, shape)
         full_sum = np.broadcast_to(2.0 * half_sum, shape)
