@@ -36,16 +36,19 @@ def as_float_array(x, name, trailing=None):
 def float_array(x, name, trailing):
     """Like :func:`as_float_array`, but a float64 ndarray of the right shape is returned as is.
 
-    Finiteness of such an array is *not* checked here: callers check their result (see
-    :func:`finite_or_raise`) or call :func:`check_finite` on batches.
+    ``trailing`` must be a tuple. Finiteness of such an array is *not* checked here: callers
+    check their result (see :func:`finite_or_raise`) or call :func:`check_finite` on batches.
 
     >>> float_array([0, 1, 0], "v", (3,))
     array([0., 1., 0.])
     """
-    if (type(x) is np.ndarray and x.dtype == np.float64 and x.ndim >= len(trailing)
-            and x.shape[x.ndim - len(trailing):] == tuple(trailing)):
+    if (type(x) is np.ndarray and x.dtype is _FLOAT64 and x.shape[-len(trailing):] == trailing
+            and x.ndim >= len(trailing)):
         return x
     return as_float_array(x, name, trailing)
+
+
+_FLOAT64 = np.dtype(np.float64)
 
 
 def check_finite(a, name):

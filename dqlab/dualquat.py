@@ -144,10 +144,12 @@ def dual_quaternion_product(A, B):
 
 def _dq_mul(a, b):
     """(a_r + eps a_d)(b_r + eps b_d) on components: a_r b_r + eps (a_r b_d + a_d b_r)."""
-    real = _mul(*a[:4], *b[:4])
-    d1 = _mul(*a[:4], *b[4:])
-    d2 = _mul(*a[4:], *b[:4])
-    return real + (d1[0] + d2[0], d1[1] + d2[1], d1[2] + d2[2], d1[3] + d2[3])
+    arw, arx, ary, arz, adw, adx, ady, adz = a
+    brw, brx, bry, brz, bdw, bdx, bdy, bdz = b
+    rw, rx, ry, rz = _mul(arw, arx, ary, arz, brw, brx, bry, brz)
+    d1w, d1x, d1y, d1z = _mul(arw, arx, ary, arz, bdw, bdx, bdy, bdz)
+    d2w, d2x, d2y, d2z = _mul(adw, adx, ady, adz, brw, brx, bry, brz)
+    return rw, rx, ry, rz, d1w + d2w, d1x + d2x, d1y + d2y, d1z + d2z
 
 
 def _product_kernel(A, B):

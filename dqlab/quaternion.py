@@ -58,6 +58,8 @@ def _unit_or_raise(parts, name, tol):
             n = np.sqrt(n2)[bad].flat[0]
             _raise_not_unit(name, n, tol)
         return
+    if abs(n2 - 1.0) <= tol:  # implies | |q| - 1 | <= tol / 2 (and catches NaN/inf below)
+        return
     if not n2 - n2 == 0.0:
         raise ValueError(f"{name} contains NaN or infinity")
     if abs(math.sqrt(n2) - 1.0) > tol:
