@@ -11,7 +11,9 @@ For each page generated from a notebook or a Markdown file of ``book/`` it check
 
 Run it after building the book (``jb build .``): it reads ``_build/html`` (or the folder in
 the environment variable ``DQLAB_BOOK_HTML``). Screenshots go to ``test-artifacts/browser/``.
-Without Chromium the check is skipped, except under ``CI=true`` where it fails.
+It drives the system Chromium (``/usr/bin/chromium``, or the one named by ``DQLAB_CHROMIUM``)
+and never downloads a browser. Without Chromium the check is skipped, except under
+``CI=true`` where it fails.
 """
 
 import base64
@@ -65,9 +67,13 @@ def _pages():
 
 
 def _chromium():
-    for candidate in (os.environ.get("DQLAB_CHROMIUM"), "/usr/bin/chromium",
-                      shutil.which("chromium"), shutil.which("chromium-browser"),
-                      shutil.which("google-chrome")):
+    """The Chromium to drive: ``DQLAB_CHROMIUM`` if set (and only it), else the system one."""
+    if os.environ.get("DQLAB_CHROMIUM"):
+        candidates = [os.environ["DQLAB_CHROMIUM"]]
+    else:
+        candidates = ["/usr/bin/chromium", shutil.which("chromium"),
+                      shutil.which("chromium-browser"), shutil.which("google-chrome")]
+    for candidate in candidates:
         if candidate and Path(candidate).exists():
             return candidate
     return None
@@ -75,7 +81,8 @@ def _chromium():
 
 def _unavailable(reason):
     if os.environ.get("CI", "").lower() == "true":
-        pytest.fail(f"{reason}; CI must run the browser check ({SKIP_MESSAGE})")
+        pytest.fail(f"{reason}, and CI=true requires the browser check: "
+                    f"install it (apt-get install chromium)")
     pytest.skip(SKIP_MESSAGE)
 
 

@@ -5,7 +5,7 @@ Add ``dqlab.viz.sphinxext`` to the book's Sphinx extensions (``_config.yml``:
 
 * while the book is built, it sets the environment variable ``DQLAB_VIZ_BOOK_ROOT`` to the
   book's source folder; notebooks executed by the build inherit it, and their 3D views
-  (:meth:`dqlab.viz.Scene.show`) then load the viewer script by a relative URL instead of
+  (:meth:`dqlab.viz.scene.Scene.show`) then load the viewer script by a relative URL instead of
   carrying a copy each;
 * at the end of an HTML build it copies the script (three.js and meshcat, about 0.85 MB)
   with its licence notice to ``_static/dqlab/`` of the built site.
