@@ -24,13 +24,20 @@ import json
 import os
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
-import meshcat
-import meshcat.animation
-import meshcat.geometry as g
 import numpy as np
 import umsgpack
+
+with warnings.catch_warnings():
+    # meshcat 0.3 imports its server, which uses an event-loop module pyzmq deprecates.
+    warnings.filterwarnings("ignore", message="zmq.eventloop.ioloop is deprecated",
+                            category=DeprecationWarning)
+    import meshcat
+    import meshcat.animation
+    import meshcat.geometry as g
+    import meshcat.visualizer
 
 __all__ = ["Scene", "SceneView", "LiveView", "live_server", "stop_live_server",
            "viewer_script_path"]
