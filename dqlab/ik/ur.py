@@ -114,6 +114,8 @@ __all__ = ["ur", "ur_parameters", "equivalent_solutions", "closest_solution",
 
 _HALF_SQRT2 = np.sqrt(0.5)
 _TWO_PI = 2.0 * np.pi
+_CHUNK = 1024                               # poses per block: temporaries of 64 kB at most
+_FLAGS = ("wrist_singular", "shoulder_singular", "elbow_singular", "unreachable")
 _EYE_BYTES = np.eye(4).tobytes()
 _SIGMA = np.array([[1.0], [-1.0]])        # wrist branch w = 0, 1, axis -2 of (s, w, n)
 _ELBOW = np.array([[[1.0]], [[-1.0]]])    # elbow branch e = 0, 1, axis -3 of (s, e, w, n)
@@ -411,21 +413,50 @@ def ur(robot, pose, *, tool=None, q_ref=None, tol=1e-9, singular_tol=5e-7, pose_
     if residuals not in ("fk", "equations"):
         raise ValueError(f"residuals must be 'fk' or 'equations', got {residuals!r}")
     prm = ur_parameters(robot)
-    d1, a2, a3, d4, d5, d6 = (prm[k] for k in ("d1", "a2", "a3", "d4", "d5", "d6"))
     Q, T, q, p, z6, tool_used, robot_tool = _target(robot, pose, tool, pose_tol)
     batch = q.shape[:-1]
+    n = math.prod(batch)
+    theta6_ref = None
     if q_ref is not None:
         q_ref = as_float_array(q_ref, "q_ref", (6,))
         try:
-            np.broadcast_shapes(q_ref.shape[:-1], batch)
+            theta6_ref = np.broadcast_to(q_ref[..., 5], batch).reshape(n)
         except ValueError:
             raise ValueError(f"q_ref of shape {q_ref.shape} does not broadcast against the "
                              f"poses' leading shape {batch}") from None
-    # Work with the batch axis last: (branch axes..., n), so that every operation runs over
-    # long contiguous rows.
-    n = math.prod(batch)
+    # The batch axis goes last, (branch axes..., n), so that every operation runs over long
+    # contiguous rows; big batches are cut into chunks whose temporaries stay small.
     q = np.ascontiguousarray(q.reshape(n, 4).T)
-    p5 = np.ascontiguousarray(steps.wrist_center(p, z6, d6).reshape(n, 3).T)
+    p5 = np.ascontiguousarray(steps.wrist_center(p, z6, prm["d6"]).reshape(n, 3).T)
+    Q = Q.reshape(n, 8)
+    T = None if T is None else T.reshape(n, 4, 4)
+    sol = np.empty((n, 8, 6))
+    position_error = np.empty((n, 8))
+    rotation_error = np.empty((n, 8))
+    valid = np.empty((n, 8), dtype=bool)
+    flags = {name: np.empty(n, dtype=bool) for name in _FLAGS}
+    reason = np.full(n, "", dtype=object)
+    for start in range(0, n, _CHUNK):
+        part = slice(start, min(start + _CHUNK, n))
+        _solve(robot, prm, q[:, part], p5[:, part], Q[part],
+               None if T is None else T[part], tool_used, robot_tool,
+               None if theta6_ref is None else theta6_ref[part], tol, singular_tol,
+               residuals, sol[part], position_error[part], rotation_error[part],
+               valid[part], {name: f[part] for name, f in flags.items()}, reason[part])
+    return IKResult(solutions=sol.reshape(batch + (8, 6)), valid=valid.reshape(batch + (8,)),
+                    position_error=position_error.reshape(batch + (8,)),
+                    rotation_error=rotation_error.reshape(batch + (8,)),
+                    flags={name: f.reshape(batch) for name, f in flags.items()},
+                    reason=reason.reshape(batch))
+
+
+def _solve(robot, prm, q, p5, Q, T, tool, robot_tool, theta6_ref, tol, singular_tol,
+           residuals, sol, position_error, rotation_error, valid, flags, reason):
+    """The steps for a chunk of n poses (batch axis last); results written into the
+    (n, ...) output slices ``sol``, ``position_error``, ``rotation_error``, ``valid``,
+    ``flags`` and ``reason``."""
+    d1, a2, a3, d4, d5, d6 = (prm[k] for k in ("d1", "a2", "a3", "d4", "d5", "d6"))
+    n = q.shape[1]
     x5, y5, z5 = p5
 
     # Step 1, theta1: arrays (2, n) over the shoulder branch s
@@ -454,15 +485,11 @@ def ur(robot, pose, *, tool=None, q_ref=None, tol=1e-9, singular_tol=5e-7, pose_
         shape = theta234.shape
         rep0 = np.broadcast_to(rep0, shape)
         rep = rep0 | np.broadcast_to(reppi, shape)
-        offset6 = prm["offsets"][5]
-        if q_ref is None:
-            theta6_ref = np.full(n, offset6)
-        else:
-            theta6_ref = np.broadcast_to(q_ref[..., 5], batch).reshape(n) + offset6
-        theta6_ref = np.broadcast_to(theta6_ref, shape)
+        ref = np.zeros(n) if theta6_ref is None else theta6_ref
+        ref = np.broadcast_to(ref + prm["offsets"][5], shape)
         full_sum = np.broadcast_to(2.0 * half_sum, shape)
         full_diff = 2.0 * half_diff
-        want = np.where(rep0, full_sum - theta6_ref, full_diff + theta6_ref)[rep]
+        want = np.where(rep0, full_sum - ref, full_diff + ref)[rep]
         got = steps.feasible_theta234(np.broadcast_to(Px, shape)[rep],
                                       np.broadcast_to(Py, shape)[rep], want, a2, a3, d5)
         theta234 = theta234.copy()
@@ -480,55 +507,53 @@ def ur(robot, pose, *, tool=None, q_ref=None, tol=1e-9, singular_tol=5e-7, pose_
     theta4 -= theta3
     theta4 = _shift(theta4)
 
-    out = np.empty((6, 2, 2, 2, n))
+    # the joint vectors, written through a (6, 2, 2, 2, n) view of the (n, 8, 6) output
+    st_n, st_k, st_j = sol.strides
+    out = np.lib.stride_tricks.as_strided(
+        sol, (6, 2, 2, 2, n), (st_j, 4 * st_k, 2 * st_k, st_k, st_n), writeable=True)
     out[0] = theta1[:, None, None, :]
     out[1] = theta2
     out[2] = theta3
     out[3] = theta4
     out[4] = theta5[:, None]
     out[5] = _shift(theta6)[:, None]                         # theta6 in [-2 pi, 2 pi]
-    out = out.reshape(6, 8, n)
     if any(prm["offsets"]):
-        out = steps.wrap_angle(out - np.array(prm["offsets"])[:, None, None])
-    sol = np.ascontiguousarray(out.transpose(2, 1, 0)).reshape(batch + (8, 6))
+        sol[...] = steps.wrap_angle(sol - np.array(prm["offsets"]))
 
-    # residuals and validity, arrays (8, n)
+    # residuals, arrays (8, n)
     if residuals == "fk":
-        position_error, rotation_error = _fk_residuals(
-            robot, sol, Q, T, tool_used, robot_tool)
-        position_error = position_error.reshape(n, 8).T
-        rotation_error = rotation_error.reshape(n, 8).T
+        pe, re = _fk_residuals(robot, sol, Q, T, tool, robot_tool)
+        pe, re = pe.T, re.T
     else:
         # distance lost by clipping: shoulder (normal to the arm plane) and elbow (in it)
         e1 = np.maximum(-h2, 0.0) / (d4 + np.sqrt(x5 * x5 + y5 * y5))          # (n,)
         r_out, r_in = abs(a2 + a3), abs(a2 - a3)
         rho = np.sqrt(X * X + Y * Y)
         e2 = np.maximum(np.maximum(rho - r_out, r_in - rho), 0.0)              # (2, 1, 2, n)
-        position_error = np.empty((2, 2, 2, n))
-        position_error[...] = np.sqrt(e1 * e1 + e2 * e2)
-        position_error = position_error.reshape(8, n)
-        rotation_error = np.zeros((8, n))
+        pe = np.empty((2, 2, 2, n))
+        pe[...] = np.sqrt(e1 * e1 + e2 * e2)
+        pe = pe.reshape(8, n)
+        re = np.zeros((8, n))
         if any_rep:
-            rows = np.broadcast_to(rep[:, None], (2, 2, 2, n)).reshape(8, n)
-            rows_n = np.ascontiguousarray(rows.T).reshape(batch + (8,))
-            pe, re = _fk_residuals(robot, sol[rows_n][:, None, :], None,
-                                   _rows_target(Q, T, rows_n), tool_used, robot_tool)
-            position_error.T[rows.T] = pe[:, 0]
-            rotation_error.T[rows.T] = re[:, 0]
-    valid = (position_error <= tol) & (rotation_error <= tol)               # (8, n)
+            rows = np.broadcast_to(rep[:, None], (2, 2, 2, n)).reshape(8, n).T   # (n, 8)
+            rows_pe, rows_re = _fk_residuals(robot, sol[rows][:, None, :], None,
+                                             _rows_target(Q, T, rows), tool, robot_tool)
+            pe.T[rows] = rows_pe[:, 0]
+            re.T[rows] = rows_re[:, 0]
+    ok = (pe <= tol) & (re <= tol)                            # (8, n)
+    position_error[...] = pe.T
+    rotation_error[...] = re.T
+    valid[...] = ok.T
+    sol[~valid] = 0.0
 
     # flags, over the valid rows
-    valid4 = valid.reshape(2, 2, 2, n)
+    ok4 = ok.reshape(2, 2, 2, n)
     sin5 = 2.0 * s5bar * c5bar                                # (2, 1, n) over (s, -)
-    any_valid = valid.any(axis=0)
-    flags = {
-        "wrist_singular": (valid4 & (sin5 < singular_tol)[:, None]).reshape(8, n).any(0),
-        "shoulder_singular": any_valid & (h < singular_tol * d4),
-        "elbow_singular": (valid4 & (sin3 < singular_tol)).reshape(8, n).any(0),
-        "unreachable": ~any_valid,
-    }
-    flags = {k: v.reshape(batch) for k, v in flags.items()}
-    reason = np.full(n, "", dtype=object)
+    any_valid = ok.any(axis=0)
+    flags["wrist_singular"][...] = (ok4 & (sin5 < singular_tol)[:, None]).reshape(8, n).any(0)
+    flags["shoulder_singular"][...] = any_valid & (h < singular_tol * d4)
+    flags["elbow_singular"][...] = (ok4 & (sin3 < singular_tol)).reshape(8, n).any(0)
+    flags["unreachable"][...] = ~any_valid
     if not any_valid.all():
         beyond = (outer < 0).all(axis=(0, 1, 2))
         inside = (inner < 0).all(axis=(0, 1, 2))
@@ -540,12 +565,6 @@ def ur(robot, pose, *, tool=None, q_ref=None, tol=1e-9, singular_tol=5e-7, pose_
         reason[none & beyond] = _REASON_OUTER
         shoulder_gap = np.maximum(-h2, 0.0) / (d4 + np.sqrt(x5 * x5 + y5 * y5))
         reason[none & (shoulder_gap > tol)] = _REASON_SHOULDER
-    valid = np.ascontiguousarray(valid.T).reshape(batch + (8,))
-    sol[~valid] = 0.0
-    return IKResult(solutions=sol, valid=valid,
-                    position_error=np.ascontiguousarray(position_error.T).reshape(batch + (8,)),
-                    rotation_error=np.ascontiguousarray(rotation_error.T).reshape(batch + (8,)),
-                    flags=flags, reason=reason.reshape(batch))
 
 
 def _rows_target(Q, T, rows):
