@@ -14,6 +14,7 @@ Python loop (timed on 2,000 elements). This is not a test; timings vary between 
 """
 
 import argparse
+import os
 import timeit
 
 import numpy as np
@@ -135,6 +136,9 @@ def main(quick=False):
         assert ok, f"dqlab and pytransform3d disagree on {name}"
 
     results = {}
+    if hasattr(os, "getloadavg"):
+        print(f"Load average at start: {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs "
+              "(timings grow with it; the ratios much less)\n")
     print(f"Single values: microseconds per call (best of {repeat} x {number})")
     print(f"{'operation':26s} {'dqlab':>8s} {'pyquaternion':>13s} {'pytransform3d':>14s}"
           f" {'pyq/dqlab':>10s} {'pt3d/dqlab':>11s}")

@@ -104,42 +104,37 @@ def _matrix(w, x, y, z):
             2.0 * (xz - wy), 2.0 * (yz + wx), 1.0 - 2.0 * (xx + yy))
 
 
-def _shepperd_row(k, r00, r01, r02, r10, r11, r12, r20, r21, r22):
-    # Row k of K = 4 q q^T written with the entries of R (active convention).
-    if k == 0:
-        return (1.0 + r00 + r11 + r22, r21 - r12, r02 - r20, r10 - r01)
-    if k == 1:
-        return (r21 - r12, 1.0 + r00 - r11 - r22, r01 + r10, r02 + r20)
-    if k == 2:
-        return (r02 - r20, r01 + r10, 1.0 - r00 + r11 - r22, r12 + r21)
-    return (r10 - r01, r02 + r20, r12 + r21, 1.0 - r00 - r11 + r22)
+# Positions of the rows of K = 4 q q^T in the tuple returned by _shepperd_terms.
+_K_ROWS = ((0, 4, 5, 6), (4, 1, 7, 8), (5, 7, 2, 9), (6, 8, 9, 3))
+
+
+def _shepperd_terms(r00, r01, r02, r10, r11, r12, r20, r21, r22):
+    # The ten distinct entries of K = 4 q q^T written with the entries of R (active
+    # convention): the diagonal 4w^2, 4x^2, 4y^2, 4z^2, then 4wx, 4wy, 4wz, 4xy, 4xz, 4yz.
+    tr = r00 + r11 + r22
+    return (1.0 + tr, 1.0 + r00 - r11 - r22, 1.0 - r00 + r11 - r22, 1.0 - r00 - r11 + r22,
+            r21 - r12, r02 - r20, r10 - r01, r01 + r10, r02 + r20, r12 + r21)
 
 
 def _from_matrix(r00, r01, r02, r10, r11, r12, r20, r21, r22):
-    # The diagonal of K holds 4w^2, 4x^2, 4y^2, 4z^2; the row k of the largest one, divided
-    # by 2 sqrt(K_kk), is q (Shepperd's method: always divide by the largest component).
-    # K_00 > K_11 <=> trace > r00, etc., so the largest of (trace, r00, r11, r22) decides.
-    R = (r00, r01, r02, r10, r11, r12, r20, r21, r22)
+    # Row k of K divided by 2 sqrt(K_kk) is q, for any k; Shepperd's method takes the row
+    # of the largest diagonal entry (it divides by the largest component of q).
+    K = _shepperd_terms(r00, r01, r02, r10, r11, r12, r20, r21, r22)
     if not isinstance(r00, np.ndarray):
-        tr = r00 + r11 + r22
-        if tr >= r00 and tr >= r11 and tr >= r22:
-            k = 0
-        elif r00 >= r11 and r00 >= r22:
-            k = 1
-        else:
-            k = 2 if r11 >= r22 else 3
-        row = _shepperd_row(k, *R)
-        s = 0.5 / math.sqrt(row[k])
-        if row[0] < 0.0:
+        k = 0
+        for j in (1, 2, 3):
+            if K[j] > K[k]:
+                k = j
+        w, x, y, z = (K[i] for i in _K_ROWS[k])
+        s = 0.5 / math.sqrt(K[k])
+        if w < 0.0:
             s = -s  # canonical sign: w >= 0
-        return (row[0] * s, row[1] * s, row[2] * s, row[3] * s)
-    row = _shepperd_row(0, *R)
-    best = row[0]
+        return (w * s, x * s, y * s, z * s)
+    best, row = K[0], [K[i] for i in _K_ROWS[0]]
     for k in (1, 2, 3):
-        other = _shepperd_row(k, *R)
-        larger = other[k] > best
-        best = np.where(larger, other[k], best)
-        row = [np.where(larger, other[j], row[j]) for j in range(4)]
+        larger = K[k] > best
+        best = np.where(larger, K[k], best)
+        row = [np.where(larger, K[i], r) for i, r in zip(_K_ROWS[k], row, strict=True)]
     s = 0.5 / np.sqrt(best)
     s = np.where(row[0] < 0.0, -s, s)
     return tuple(c * s for c in row)
