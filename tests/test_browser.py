@@ -6,8 +6,9 @@ For each page generated from a notebook or a Markdown file of ``book/`` it check
 * MathJax typeset the math: every math element holds an ``mjx-container``, none is a MathJax
   error, and no raw ``$$``, ``\\(`` or ``\\[`` is left in the text;
 * every ``<img>`` is loaded (``naturalWidth > 0``);
-* every 3D view (``iframe.dqlab-scene``) replayed all its commands and its WebGL canvas
-  shows something besides the background.
+* every 3D view (``iframe.dqlab-scene``) is small (it loads the viewer script the book
+  ships once), replayed all its commands, and its WebGL canvas shows something besides the
+  background.
 
 Run it after building the book (``jb build .``): it reads ``_build/html`` (or the folder in
 the environment variable ``DQLAB_BOOK_HTML``). Screenshots go to ``test-artifacts/browser/``.
@@ -45,6 +46,10 @@ CHROMIUM_ARGS = [
     "--disable-background-networking", "--disable-component-update", "--disable-sync",
     "--no-first-run", "--disable-quic",
 ]
+
+#: Largest document of one 3D view: the scene's commands, not the 0.85 MB viewer script,
+#: which the built book ships once in _static/dqlab/.
+MAX_VIEW_BYTES = 500_000
 
 #: Share of the canvas that must show coloured objects for a view to count as drawn (the
 #: UR3 alone covers several percent of a view; an empty scene 0).
@@ -184,6 +189,11 @@ def _check_scenes(page, name, problems):
     for k, view in enumerate(views):
         label = f"3D view {k + 1}"
         expected = int(view.get_attribute("data-dqlab-scene"))
+        size = len(view.get_attribute("srcdoc") or "")
+        if size > MAX_VIEW_BYTES:
+            problems.append(f"{label} carries the viewer script itself ({size // 1024} KB): "
+                            f"build with the Sphinx extension dqlab.viz.sphinxext, after "
+                            f"'jb clean --all' if the execution cache predates it")
         view.scroll_into_view_if_needed()
         frame = view.content_frame()
         try:
