@@ -98,9 +98,7 @@ def shoulder_angles(x5, y5, d4):
     \sin\theta_1 y_5` is the wrist centre's coordinate along :math:`x_1`. A solution exists
     only if :math:`x_5^2 + y_5^2 \ge d_4^2`; when the difference is negative it is clipped to
     zero here (the caller judges whether the clipped answer is good enough), and when it is
-    zero the two roots coincide (shoulder singularity). The cosine and sine of
-    :math:`\theta_1` are the two ``atan2`` arguments divided by their norm
-    :math:`\sqrt{(x_5^2 + y_5^2)(h^2 + d_4^2)}`.
+    zero the two roots coincide (shoulder singularity).
 
     Parameters
     ----------
@@ -126,15 +124,13 @@ def shoulder_angles(x5, y5, d4):
     >>> np.round(theta1.ravel(), 6), np.round(h, 12)
     (array([0.      , 2.424928]), array([0.3]))
     """
-    r2 = x5 * x5 + y5 * y5
-    h2 = r2 - d4 * d4
+    h2 = x5 * x5 + y5 * y5 - d4 * d4
     h = np.sqrt(np.maximum(h2, 0.0))
     hpm = _PLUS_MINUS[:, None] * h
     num_c = x5 * hpm - y5 * d4
     num_s = y5 * hpm + x5 * d4
     theta1 = np.arctan2(num_s + 0.0, num_c)    # + 0.0 turns -0.0 into 0.0: never -pi
-    norm = np.sqrt(np.maximum(r2 * (h * h + d4 * d4), 1e-300))
-    return theta1, num_c / norm, num_s / norm, h, h2
+    return theta1, np.cos(theta1), np.sin(theta1), h, h2
 
 
 def relative_rotation_coefficients(q, half1):

@@ -289,7 +289,8 @@ def ur(robot, pose, *, tool=None, q_ref=None, tol=1e-9, singular_tol=5e-7, pose_
     Solves :math:`X_{W0}\, X_{06}(q)\, X_{6T} = X` for the joint vector :math:`q` by the
     dual-quaternion route of the thesis (section 4.3), corrected (see the module's
     "Errata of the source"). A batch of poses is solved with array operations, without a
-    Python loop over the poses.
+    Python loop over the poses (a big batch goes through in blocks of 1024 poses, which keeps
+    the temporaries small and fast).
 
     Parameters
     ----------
@@ -508,9 +509,11 @@ def _solve(robot, prm, q, p5, Q, T, tool, robot_tool, theta6_ref, tol, singular_
     theta4 = _shift(theta4)
 
     # the joint vectors, written through a (6, 2, 2, 2, n) view of the (n, 8, 6) output
-    st_n, st_k, st_j = sol.strides
-    out = np.lib.stride_tricks.as_strided(
-        sol, (6, 2, 2, 2, n), (st_j, 4 * st_k, 2 * st_k, st_k, st_n), writeable=True)
+    out = sol.transpose(2, 1, 0).reshape(6, 2, 2, 2, n)      # a view: sol is C-ordered
+    if out.base is None:  # pragma: no cover -- reshape had to copy
+        st_n, st_k, st_j = sol.strides
+        out = np.lib.stride_tricks.as_strided(
+            sol, (6, 2, 2, 2, n), (st_j, 4 * st_k, 2 * st_k, st_k, st_n), writeable=True)
     out[0] = theta1[:, None, None, :]
     out[1] = theta2
     out[2] = theta3
@@ -526,14 +529,17 @@ def _solve(robot, prm, q, p5, Q, T, tool, robot_tool, theta6_ref, tol, singular_
         pe, re = pe.T, re.T
     else:
         # distance lost by clipping: shoulder (normal to the arm plane) and elbow (in it)
-        e1 = np.maximum(-h2, 0.0) / (d4 + np.sqrt(x5 * x5 + y5 * y5))          # (n,)
-        r_out, r_in = abs(a2 + a3), abs(a2 - a3)
-        rho = np.sqrt(X * X + Y * Y)
-        e2 = np.maximum(np.maximum(rho - r_out, r_in - rho), 0.0)              # (2, 1, 2, n)
-        pe = np.empty((2, 2, 2, n))
-        pe[...] = np.sqrt(e1 * e1 + e2 * e2)
-        pe = pe.reshape(8, n)
         re = np.zeros((8, n))
+        if h2.min() >= 0.0 and outer.min() >= 0.0 and inner.min() >= 0.0:
+            pe = np.zeros((8, n))                             # nothing was clipped
+        else:
+            e1 = np.maximum(-h2, 0.0) / (d4 + np.sqrt(x5 * x5 + y5 * y5))      # (n,)
+            r_out, r_in = abs(a2 + a3), abs(a2 - a3)
+            rho = np.sqrt(X * X + Y * Y)
+            e2 = np.maximum(np.maximum(rho - r_out, r_in - rho), 0.0)          # (2, 1, 2, n)
+            pe = np.empty((2, 2, 2, n))
+            pe[...] = np.sqrt(e1 * e1 + e2 * e2)
+            pe = pe.reshape(8, n)
         if any_rep:
             rows = np.broadcast_to(rep[:, None], (2, 2, 2, n)).reshape(8, n).T   # (n, 8)
             rows_pe, rows_re = _fk_residuals(robot, sol[rows][:, None, :], None,
@@ -544,15 +550,23 @@ def _solve(robot, prm, q, p5, Q, T, tool, robot_tool, theta6_ref, tol, singular_
     position_error[...] = pe.T
     rotation_error[...] = re.T
     valid[...] = ok.T
-    sol[~valid] = 0.0
+    if not ok.all():
+        sol[~valid] = 0.0
 
     # flags, over the valid rows
     ok4 = ok.reshape(2, 2, 2, n)
-    sin5 = 2.0 * s5bar * c5bar                                # (2, 1, n) over (s, -)
+    sin5 = 2.0 * s5bar * c5bar                                # (2, 1, n) over (s, w)
     any_valid = ok.any(axis=0)
-    flags["wrist_singular"][...] = (ok4 & (sin5 < singular_tol)[:, None]).reshape(8, n).any(0)
+    if sin5.min() < singular_tol:
+        flags["wrist_singular"][...] = (
+            ok4 & (sin5 < singular_tol)[:, None]).reshape(8, n).any(0)
+    else:
+        flags["wrist_singular"][...] = False
     flags["shoulder_singular"][...] = any_valid & (h < singular_tol * d4)
-    flags["elbow_singular"][...] = (ok4 & (sin3 < singular_tol)).reshape(8, n).any(0)
+    if sin3.min() < singular_tol:
+        flags["elbow_singular"][...] = (ok4 & (sin3 < singular_tol)).reshape(8, n).any(0)
+    else:
+        flags["elbow_singular"][...] = False
     flags["unreachable"][...] = ~any_valid
     if not any_valid.all():
         beyond = (outer < 0).all(axis=(0, 1, 2))
