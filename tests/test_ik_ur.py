@@ -606,11 +606,27 @@ def test_joint_offsets_are_honoured():
     assert recovery_error(result, q).max() < 1e-9
 
 
-@pytest.mark.parametrize("name", ["ur5", "ur10"])
+#: e-series DH values as Universal Robots publish them (the ones ur_analytic_ik uses)
+E_SERIES = {"ur3e": dict(d=(0.15185, 0, 0, 0.13105, 0.08535, 0.0921),
+                         a=(0, -0.24355, -0.2132, 0, 0, 0)),
+            "ur5e": dict(d=(0.1625, 0, 0, 0.1333, 0.0997, 0.0996),
+                         a=(0, -0.425, -0.3922, 0, 0, 0))}
+
+
+@pytest.mark.parametrize("name", ["ur5", "ur10", "ur3e", "ur5e"])
 def test_other_ur_models(name):
     import dqlab.models as models
 
-    robot = getattr(models, name)()
+    if name in E_SERIES:
+        alpha = (np.pi / 2, 0, 0, np.pi / 2, -np.pi / 2, 0)
+        dh = E_SERIES[name]
+        robot = Robot([Link(a=a, alpha=al, d=d)
+                       for a, al, d in zip(dh["a"], alpha, dh["d"], strict=True)])
+        X = getattr(uik, name).forward_kinematics(0.1, -1.0, 1.2, 0.3, 0.8, -0.5)
+        np.testing.assert_allclose(robot.fk([0.1, -1.0, 1.2, 0.3, 0.8, -0.5]), X,
+                                   atol=1e-12)
+    else:
+        robot = getattr(models, name)()
     rng = np.random.default_rng(23)
     q = rng.uniform(-np.pi, np.pi, (3000, 6))
     T = robot.fk(q)
