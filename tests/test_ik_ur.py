@@ -515,6 +515,24 @@ def test_dual_quaternion_input_matches_matrix_input(robot):
     assert recovery_error(c, q[0]) < 1e-10
 
 
+def test_rounded_pose_from_a_file(robot):
+    """The thesis's pose file holds rounded dual-quaternion coefficients: rejected by the
+    default check, solved (as the nearest rigid pose) with a loosened pose_tol."""
+    from dqlab.dualquat import dual_quaternion_from_transform
+
+    rng = np.random.default_rng(27)
+    q = rng.uniform(-np.pi, np.pi, (200, 6))
+    Q = np.round(dual_quaternion_from_transform(robot.fk(q)), 6)
+    with pytest.raises(ValueError, match="pose"):
+        ur(robot, Q)
+    for mode in ("equations", "fk"):
+        result = ur(robot, Q, pose_tol=1e-5, residuals=mode)
+        assert result.success.all()
+        assert result.position_error[result.valid].max() < 1e-12
+        err = recovery_error(result, q)       # the rounding moved the pose a little
+        assert np.median(err) < 1e-4 and err.max() < 1e-2
+
+
 def test_invalid_inputs_raise(robot):
     T = robot.fk(np.zeros(6))
     bad = T.copy()

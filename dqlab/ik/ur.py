@@ -117,6 +117,7 @@ _TWO_PI = 2.0 * np.pi
 _CHUNK = 1024                               # poses per block: temporaries of 64 kB at most
 _FLAGS = ("wrist_singular", "shoulder_singular", "elbow_singular", "unreachable")
 _EYE_BYTES = np.eye(4).tobytes()
+_RIGID_TOL = 1e-9                           # poses this close to rigid are used as given
 _SIGMA = np.array([[1.0], [-1.0]])        # wrist branch w = 0, 1, axis -2 of (s, w, n)
 _ELBOW = np.array([[[1.0]], [[-1.0]]])    # elbow branch e = 0, 1, axis -3 of (s, e, w, n)
 _UR_ALPHA = (np.pi / 2, 0.0, 0.0, np.pi / 2, -np.pi / 2, 0.0)
@@ -222,6 +223,13 @@ def _target(robot, pose, tool, pose_tol):
     else:
         raise ValueError("pose must have shape (..., 4, 4) (a transform) or (..., 8) (a unit "
                          f"dual quaternion), got shape {pose.shape}")
+    if pose_tol > _RIGID_TOL:
+        # a loosened check lets slightly non-rigid poses through (rounded numbers from a
+        # file): solve for the rigid pose of the normalised dual quaternion instead
+        from ..dualquat import dual_quaternion_normalize
+
+        Q = dual_quaternion_normalize(Q)
+        T = None
     base = robot.base
     robot_tool = robot.tool
     if tool is not None:
@@ -316,7 +324,10 @@ def ur(robot, pose, *, tool=None, q_ref=None, tol=1e-9, singular_tol=5e-7, pose_
         to about :math:`10^{-7}`), the conditioning of those angles; the default leaves a
         margin above that. :math:`\theta_5` itself is computed to full accuracy.
     pose_tol : float
-        Tolerance of the rigidity check of ``pose`` (and ``tool``).
+        Tolerance of the rigidity check of ``pose`` (and ``tool``). With a tolerance above
+        the default (for poses read from rounded numbers, as in the thesis's pose file),
+        each pose is replaced by the rigid pose of its normalised dual quaternion, which is
+        what the solutions and the residuals then refer to.
     residuals : {"equations", "fk"}
         How ``position_error`` and ``rotation_error`` are obtained (the ``valid`` mask is
         the same either way). ``"equations"`` (default, fast): every step solves its
