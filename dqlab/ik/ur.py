@@ -369,18 +369,18 @@ def ur(robot, pose, *, tool=None, q_ref=None, tol=1e-9, singular_tol=5e-7, pose_
     .. math::
 
         p_5 &= p - d_6 z_6, \qquad
-        \theta_1 = \operatorname{atan2}(y_5 h_\pm + x_5 d_4,\ x_5 h_\pm - y_5 d_4),\
+        \theta_1 = \operatorname{atan2}(y_5 h_\pm + x_5 d_4,\ x_5 h_\pm - y_5 d_4),\\
         L &= r_z(\theta_1)^* q_D, \qquad
         \theta_5 = 2 \operatorname{atan2}\big(\sigma\sqrt{L_x^2 + L_z^2},
-                                             \sqrt{L_w^2 + L_y^2}\big),\
+                                             \sqrt{L_w^2 + L_y^2}\big),\\
         \theta_{234} &= \operatorname{atan2}(-L_y, L_w) + \operatorname{atan2}(\sigma L_x,
                         -\sigma L_z), \quad
         \theta_6 = \operatorname{atan2}(-L_y, L_w) - \operatorname{atan2}(\sigma L_x,
-                        -\sigma L_z),\
-        (X, Y) &= (c_1 x_5 + s_1 y_5 - d_5 s_{234},\ z_5 - d_1 + d_5 c_{234}),\
+                        -\sigma L_z),\\
+        (X, Y) &= (c_1 x_5 + s_1 y_5 - d_5 s_{234},\ z_5 - d_1 + d_5 c_{234}),\\
         \theta_3 &= \operatorname{atan2}\big(\pm\sqrt{((a_2 + a_3)^2 - \rho^2)
                      (\rho^2 - (a_2 - a_3)^2)},\ \rho^2 - a_2^2 - a_3^2\big), \quad
-        \theta_2 = \operatorname{atan2}(Y k_1 - X k_2, X k_1 + Y k_2),\
+        \theta_2 = \operatorname{atan2}(Y k_1 - X k_2, X k_1 + Y k_2),\\
         \theta_4 &= \theta_{234} - \theta_2 - \theta_3 ,
 
     with :math:`\rho^2 = X^2 + Y^2`, :math:`k_1 = a_2 + a_3 c_3`, :math:`k_2 = a_3 s_3`.
