@@ -152,6 +152,32 @@ def _dq_mul(a, b):
     return rw, rx, ry, rz, d1w + d2w, d1x + d2x, d1y + d2y, d1z + d2z
 
 
+def _dq_mul_z_screw(a, c, s, h):
+    r"""``a`` times the screw about the z axis, on components (no checks).
+
+    The screw turns by :math:`\theta` about z and moves by :math:`2h` along it,
+    :math:`J = r + \varepsilon\, h k r` with :math:`r = c + s k`,
+    :math:`(c, s) = (\cos\frac\theta2, \sin\frac\theta2)`. As :math:`k` and :math:`r`
+    commute, :math:`a J = a_r r + \varepsilon\,(a_d r + h\, (a_r r)\, k)`: the same as
+    ``_dq_mul(a, (c, 0, 0, s, -h s, 0, 0, h c))`` without the products by zero.
+    """
+    arw, arx, ary, arz, adw, adx, ady, adz = a
+    # p r with r = c + s k is (c w - s z, c x + s y, c y - s x, c z + s w)
+    rw, rx, ry, rz = c * arw - s * arz, c * arx + s * ary, c * ary - s * arx, c * arz + s * arw
+    dw, dx, dy, dz = c * adw - s * adz, c * adx + s * ady, c * ady - s * adx, c * adz + s * adw
+    # p k is (-z, y, -x, w)
+    return rw, rx, ry, rz, dw - h * rz, dx + h * ry, dy - h * rx, dz + h * rw
+
+
+def _screw_parts(lx, ly, lz, mx, my, mz, c, s, h):
+    """The screw about the axis (l, m) on components (no checks); see
+    :func:`dual_quaternion_from_screw`. ``c, s`` are the cosine and sine of half the angle,
+    ``h`` half the displacement along the axis."""
+    hc = h * c
+    return (c, s * lx, s * ly, s * lz,
+            -h * s, s * mx + hc * lx, s * my + hc * ly, s * mz + hc * lz)
+
+
 def _product_kernel(A, B):
     return stack_components(_dq_mul(components(A), components(B)))
 
@@ -905,14 +931,12 @@ def dual_quaternion_from_screw(l, m, theta, d):
     mn = np.sqrt(np.sum(m * m, axis=-1))
     if np.any(np.abs(np.sum(l * m, axis=-1)) > 1e-9 * np.maximum(1.0, mn)):
         raise ValueError("m must be orthogonal to l (it is the moment c x l of the axis)")
-    c, s = np.cos(0.5 * theta), np.sin(0.5 * theta)
-    hd = 0.5 * d
     shape = np.broadcast_shapes(l.shape[:-1], m.shape[:-1], theta.shape, d.shape)
+    parts = _screw_parts(*np.moveaxis(l, -1, 0), *np.moveaxis(m, -1, 0),
+                         np.cos(0.5 * theta), np.sin(0.5 * theta), 0.5 * d)
     Q = np.empty(shape + (8,))
-    Q[..., 0] = c
-    Q[..., 1:4] = s[..., None] * l
-    Q[..., 4] = -hd * s
-    Q[..., 5:8] = s[..., None] * m + (hd * c)[..., None] * l
+    for k, part in enumerate(parts):
+        Q[..., k] = part
     return Q
 
 

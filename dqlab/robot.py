@@ -41,7 +41,8 @@ import math
 
 import numpy as np
 
-from ._checks import as_float_array
+from ._checks import as_float_array, batched, stack_components
+from .dualquat import _dq_mul, _dq_mul_z_screw, _screw_parts, dual_quaternion_from_transform
 
 __all__ = ["Link", "Robot", "REVOLUTE", "PRISMATIC"]
 
@@ -317,6 +318,9 @@ class Robot:
         self._M_template = M0
         self._has_prismatic = bool(self._prismatic_idx.size)
         self._screws = None  # zero-pose screw axes, computed on first use
+        self._screw_consts = None  # the same as floats for fk_dq_screw
+        # (theta_i offset, d_i offset, revolute?) as Python values for fk_dq
+        self._joint_constants = [(lk.theta_offset, lk.d, lk.is_revolute) for lk in self._links]
 
     # -- joint vectors -----------------------------------------------------------------------
     def check_joints(self, q, *, limits="prismatic"):
@@ -584,19 +588,29 @@ class Robot:
         r"""Forward kinematics as a unit dual quaternion, link by link.
 
         Each link is written as a product of three dual quaternions, the constant parts and
-        the joint's screw about its own z axis,
+        the joint's screw about its own z axis (a turn by :math:`\theta_i` and a shift by
+        :math:`d_i`, which commute),
 
         .. math::
 
            \hat Q_{i-1,i} = \hat L_i\; \hat J_i(q_i)\; \hat R_i, \qquad
-           \hat J_i = \left(\cos\tfrac{\theta_i}{2} + \sin\tfrac{\theta_i}{2}\,k\right)
-                      + \varepsilon\,\tfrac12\, d_i k
-                      \left(\cos\tfrac{\theta_i}{2} + \sin\tfrac{\theta_i}{2}\,k\right)
+           \hat J_i = r_i + \varepsilon\,\tfrac12\, d_i k\, r_i, \quad
+           r_i = \cos\tfrac{\theta_i}{2} + \sin\tfrac{\theta_i}{2}\,k,
 
-        and multiplied from the base to the tool,
+        that is :math:`\hat J_i = \bigl(\cos\tfrac{\theta_i}{2}, 0, 0,
+        \sin\tfrac{\theta_i}{2}\bigr) + \varepsilon\,\tfrac12\bigl(-d_i
+        \sin\tfrac{\theta_i}{2}, 0, 0, d_i \cos\tfrac{\theta_i}{2}\bigr)`, and multiplied
+        from the base to the tool,
         :math:`\hat Q_{WT} = \hat Q_{W0} \hat Q_{01} \cdots \hat Q_{n-1,n} \hat Q_{nT}`
         (thesis section 4.2, first construction). The constant factors of neighbouring
-        links, :math:`\hat R_i \hat L_{i+1}`, are multiplied once in advance.
+        links are multiplied once in advance, :math:`\hat K_0 = \hat Q_{W0} \hat L_1`,
+        :math:`\hat K_i = \hat R_i \hat L_{i+1}`, :math:`\hat K_n = \hat R_n \hat Q_{nT}`, so
+        that
+
+        .. math::
+
+           \hat Q_{WT} = \hat K_0\, \hat J_1 \hat K_1\, \hat J_2 \hat K_2 \cdots
+           \hat J_n \hat K_n .
 
         Parameters
         ----------
@@ -607,6 +621,11 @@ class Robot:
         ndarray, shape (..., 8)
             :math:`(q_r, q_d)` of the pose :math:`X_{WT}`. Its sign is that of the product
             (``-Q`` is the same pose).
+
+        Raises
+        ------
+        ValueError
+            See :meth:`check_joints`.
 
         Examples
         --------
@@ -619,32 +638,38 @@ class Robot:
         >>> np.allclose(dualquat.transform_from_dual_quaternion(Q), robot.fk(q))
         True
         """
-        from .dualquat import dual_quaternion_from_rotation_translation
-        from .dualquat import dual_quaternion_product as dq_mul
-        from .quaternion import quaternion_from_axis_angle
-
         q = self.check_joints(q)
-        theta, d = self._link_parameters(q)
-        Kq = self._constant_dual_quaternions()
-        r = quaternion_from_axis_angle(np.array([0.0, 0.0, 1.0]), theta)
-        t = np.zeros(q.shape + (3,))
-        t[..., 2] = d
-        Jq = dual_quaternion_from_rotation_translation(r, t)        # (..., n, 8)
-        # regrouped product: (Q_W0 L_1) J_1 (R_1 L_2) J_2 ... J_n (R_n Q_nT), with the
-        # constant neighbours premultiplied and every J_i (R_i L_{i+1}) in one call
-        M = dq_mul(Jq, Kq[1:])
-        Q = dq_mul(Kq[0], M[..., 0, :])
-        for i in range(1, self.n):
-            Q = dq_mul(Q, M[..., i, :])
+        if q.ndim == 1:
+            return np.array(self._fk_dq_parts(q.tolist()))
+        return batched(self._fk_dq_kernel, [(q, 1)], (8,))
+
+    def _fk_dq_kernel(self, q):
+        """:meth:`fk_dq` for a block of joint vectors, shape (N, n) to (N, 8)."""
+        return stack_components(self._fk_dq_parts(np.ascontiguousarray(q.T)))
+
+    def _fk_dq_parts(self, q):
+        """The product K_0 J_1 K_1 ... J_n K_n on components.
+
+        ``q`` holds the joint values one per joint: Python floats (one joint vector) or
+        arrays of shape (N,) (a batch). The products are those of validated unit dual
+        quaternions, so the unchecked component kernels of :mod:`dqlab.dualquat` serve.
+        """
+        cos, sin = (math.cos, math.sin) if type(q[0]) is float else (np.cos, np.sin)
+        K = self._constant_dual_quaternions()
+        Q = K[0]
+        for i, (theta0, d0, revolute) in enumerate(self._joint_constants):
+            if revolute:
+                half, h = 0.5 * (q[i] + theta0), 0.5 * d0
+            else:
+                half, h = 0.5 * theta0, 0.5 * (q[i] + d0)
+            Q = _dq_mul(_dq_mul_z_screw(Q, cos(half), sin(half), h), K[i + 1])
         return Q
 
     def _constant_dual_quaternions(self):
-        """The constant factors K_0 .. K_n of the chain as dual quaternions, (n + 1, 8)."""
-        from .dualquat import dual_quaternion_from_transform
-
+        """The constant factors K_0 .. K_n of the chain as dual quaternions (lists of 8 floats)."""
         cached = getattr(self, "_dq_consts", None)
         if cached is None or cached[0] is not self._K:
-            self._dq_consts = (self._K, dual_quaternion_from_transform(self._K))
+            self._dq_consts = (self._K, dual_quaternion_from_transform(self._K).tolist())
         return self._dq_consts[1]
 
     def zero_pose_screws(self):
@@ -680,7 +705,19 @@ class Robot:
         through :math:`p_i` with unit direction :math:`\omega_i` in the world frame. As a dual
         quaternion that motion is the rotation :math:`r_i = \cos\frac{q_i}{2} +
         \sin\frac{q_i}{2}\,\omega_i` followed by the translation :math:`p_i - r_i p_i r_i^*`
-        (a translation :math:`q_i \omega_i` for a prismatic joint). Then
+        (a translation :math:`q_i \omega_i` for a prismatic joint). In closed form, with the
+        moment :math:`\mathbf m_i = p_i \times \omega_i` of the axis (see
+        :func:`dqlab.dualquat.dual_quaternion_from_screw`),
+
+        .. math::
+
+           \hat S_i = \Bigl(\cos\tfrac{q_i}{2},\; \sin\tfrac{q_i}{2}\,\omega_i\Bigr)
+           + \varepsilon\,\Bigl(0,\; \sin\tfrac{q_i}{2}\,\mathbf m_i\Bigr)
+           \quad\text{(revolute)}, \qquad
+           \hat S_i = 1 + \varepsilon\,\Bigl(0,\; \tfrac{q_i}{2}\,\omega_i\Bigr)
+           \quad\text{(prismatic)}.
+
+        Then
 
         .. math::
 
@@ -710,25 +747,34 @@ class Robot:
         >>> tcp.round(5) + 0.0
         array([ 0.     , -0.39425,  0.69415])
         """
-        from .dualquat import (
-            dual_quaternion_from_rotation_translation,
-            dual_quaternion_from_transform,
-        )
-        from .dualquat import dual_quaternion_product as dq_mul
-        from .quaternion import quaternion_from_axis_angle, rotate_vector
-
         q = self.check_joints(q)
-        points, axes, X0 = self.zero_pose_screws()
-        Q = dual_quaternion_from_transform(X0)
-        rev = self._revolute
-        angle = np.where(rev, q, 0.0)                                # (..., n)
-        r = quaternion_from_axis_angle(axes, angle)                  # (..., n, 4)
-        moved = rotate_vector(r, np.broadcast_to(points, r.shape[:-1] + (3,)))
-        t = np.where(rev[:, None], points - moved, q[..., None] * axes)
-        S = dual_quaternion_from_rotation_translation(r, t)          # (..., n, 8)
+        if q.ndim == 1:
+            return np.array(self._fk_dq_screw_parts(q.tolist()))
+        return batched(self._fk_dq_screw_kernel, [(q, 1)], (8,))
+
+    def _fk_dq_screw_kernel(self, q):
+        """:meth:`fk_dq_screw` for a block of joint vectors, shape (N, n) to (N, 8)."""
+        return stack_components(self._fk_dq_screw_parts(np.ascontiguousarray(q.T)))
+
+    def _fk_dq_screw_parts(self, q):
+        """The product S_1 S_2 ... S_n Q_WT(0) on components (``q`` as in _fk_dq_parts)."""
+        cos, sin = (math.cos, math.sin) if type(q[0]) is float else (np.cos, np.sin)
+        lines, Q = self._screw_constants()
         for i in range(self.n - 1, -1, -1):
-            Q = dq_mul(S[..., i, :], Q)
-        return np.broadcast_to(Q, q.shape[:-1] + (8,)).copy()
+            if self._joint_constants[i][2]:
+                half, h = 0.5 * q[i], 0.0
+            else:
+                half, h = 0.0, 0.5 * q[i]
+            Q = _dq_mul(_screw_parts(*lines[i], cos(half), sin(half), h), Q)
+        return Q
+
+    def _screw_constants(self):
+        """Per joint the zero-pose axis (l, m = p x l) as 6 floats, and Q_WT(0) as 8."""
+        if self._screw_consts is None:
+            points, axes, X0 = self.zero_pose_screws()
+            lines = np.concatenate([axes, np.cross(points, axes)], axis=-1)
+            self._screw_consts = (lines.tolist(), dual_quaternion_from_transform(X0).tolist())
+        return self._screw_consts
 
     # -- differential kinematics ----------------------------------------------------------
     def jacobian(self, q):

@@ -240,6 +240,26 @@ def test_matrix_fk_equals_both_dual_quaternion_constructions(model):
     np.testing.assert_allclose(np.linalg.norm(Q_links[:, :4], axis=-1), 1.0, atol=1e-13)
 
 
+@pytest.mark.parametrize("model", [ur3, scara_rsm5])
+def test_dual_quaternion_fk_in_blocks_and_after_a_new_base_and_tool(model):
+    """More configurations than one block of the batch kernels, and the cached constant
+    factors follow a change of base and tool."""
+    rng = np.random.default_rng(7)
+    robot = model()
+    q = random_joints(robot, rng, 9000)
+    for method in (robot.fk_dq, robot.fk_dq_screw):
+        Q = method(q)
+        np.testing.assert_allclose(dualquat.transform_from_dual_quaternion(Q), robot.fk(q),
+                                   atol=1e-12)
+        np.testing.assert_allclose(Q[-3:], np.stack([method(row) for row in q[-3:]]),
+                                   atol=1e-15)
+    robot.base = random_transform(rng)
+    robot.tool = random_transform(rng)
+    for method in (robot.fk_dq, robot.fk_dq_screw):
+        X = dualquat.transform_from_dual_quaternion(method(q[:50]))
+        np.testing.assert_allclose(X, robot.fk(q[:50]), atol=1e-12)
+
+
 def test_zero_pose_screws_are_the_joint_axes_at_q_zero():
     robot = ur3()
     points, axes, X0 = robot.zero_pose_screws()
