@@ -806,7 +806,8 @@ class Robot:
         """The parameter table as text, in the robot's own convention.
 
         Angles are printed in degrees, lengths in metres. For modified DH the columns are
-        the course notes' :math:`\\sigma_i, \\alpha_{i-1}, a_{i-1}, \\theta_i, r_i`.
+        the course notes' :math:`\\sigma_i, \\alpha_{i-1}, a_{i-1}, \\theta_i, r_i`. The
+        title names the convention unless the robot's name already does.
 
         Returns
         -------
@@ -838,14 +839,22 @@ class Robot:
             rows.append((str(i), "R" if lk.is_revolute else "P", theta, d, _num(lk.a),
                          _num(math.degrees(lk.alpha)), lim))
         if self._convention == "dh":
-            title = f"{self.name or 'robot'} (standard DH, {self.n} joints)"
+            convention = "standard DH"
             header = ("i", "joint", "theta_i [deg]", "d_i [m]", "a_i [m]", "alpha_i [deg]",
                       "limits")
         else:
-            title = f"{self.name or 'robot'} (modified DH, {self.n} joints)"
+            convention = "modified DH"
             header = ("i", "sigma", "alpha_i-1 [deg]", "a_i-1 [m]", "theta_i [deg]",
                       "r_i [m]", "limits")
             rows = [(r[0], str(int(r[1] == "P")), r[5], r[4], r[2], r[3], r[6]) for r in rows]
+        name = self.name or "robot"
+        notes = [f"{self.n} joints"]
+        if convention.lower() not in name.lower():      # unless the name already says it
+            notes.insert(0, convention)
+        if name.endswith(")"):                          # no second pair of parentheses
+            title = ", ".join([name] + notes)
+        else:
+            title = f"{name} ({', '.join(notes)})"
         widths = [max(len(header[k]), *(len(r[k]) for r in rows)) for k in range(7)]
 
         def fmt(cells):

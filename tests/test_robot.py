@@ -131,11 +131,13 @@ def test_description_attributes():
 def test_dh_table_lists_every_link_in_its_convention():
     text = ur3_mdh().dh_table()
     assert "modified DH" in text and "alpha_i-1" in text
+    assert text.splitlines()[0] == "UR3 (report, modified DH), 6 joints"   # said once
     assert "q1 + 90" in text and "q6 - 90" in text and "-0.12" in text
     assert repr(ur3_mdh()) == text
     text = scara_rsm5().dh_table()
     assert "q3 + 0.18" in text and "[0, 0.15] m" in text
     assert "standard DH" in ur3().dh_table()
+    assert ur3().dh_table().splitlines()[0] == "UR3 (standard DH, 6 joints)"
     text = six_r().dh_table()
     assert "tool X_nT" in text
     robot = Robot([Link(1.0, 0.0, 0.0)], base=trans(0, 0, 1))
