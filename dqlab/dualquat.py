@@ -27,6 +27,7 @@ from ._checks import (
     pack,
     stack_components,
 )
+from ._wrapper import ArrayWrapper, array_of
 from .quaternion import (
     _from_matrix,
     _matrix,
@@ -1046,11 +1047,14 @@ def sclerp(Q0, Q1, t, *, tol=1e-9):
 # Class wrapper
 
 
-class DualQuaternion:
+class DualQuaternion(ArrayWrapper):
     """A dual quaternion, or a batch of them, for readable notebook code.
 
     A thin wrapper over the array functions of this module. ``.array`` is the ``(..., 8)``
-    float array, ``.real`` and ``.dual`` its two quaternion halves.
+    float array, ``.real`` and ``.dual`` its two quaternion halves, ``.shape`` its leading
+    (batch) shape. Indexing, ``len``, ``*`` (the product, or scaling by a number), ``+``,
+    ``-``, ``**`` and ``==`` work as for :class:`dqlab.quaternion.Quaternion` (both classes
+    share them).
 
     Parameters
     ----------
@@ -1067,13 +1071,8 @@ class DualQuaternion:
     DualQuaternion([1., 0., 0., 0., 0., 0., 0., 0.])
     """
 
-    __slots__ = ("array",)
-    __array_priority__ = 20
-
-    def __init__(self, Q):
-        if isinstance(Q, DualQuaternion):
-            Q = Q.array
-        self.array = as_float_array(Q, "Q", _D)
+    __slots__ = ()
+    _trailing, _name, _product = _D, "Q", staticmethod(dual_quaternion_product)
 
     @classmethod
     def identity(cls, shape=()):
@@ -1090,12 +1089,12 @@ class DualQuaternion:
     @classmethod
     def from_rotation_translation(cls, q, t):
         """See :func:`dual_quaternion_from_rotation_translation` (``q`` may be a Quaternion)."""
-        return cls(dual_quaternion_from_rotation_translation(_qarr(q), t))
+        return cls(dual_quaternion_from_rotation_translation(array_of(q), t))
 
     @classmethod
     def from_pair(cls, q, p):
         """See :func:`dual_quaternion_from_pair`."""
-        return cls(dual_quaternion_from_pair(_qarr(q), p))
+        return cls(dual_quaternion_from_pair(array_of(q), p))
 
     @classmethod
     def from_screw(cls, l, m, theta, d):
@@ -1111,57 +1110,6 @@ class DualQuaternion:
     def dual(self):
         """Dual part :math:`q_d`, shape (..., 4)."""
         return self.array[..., 4:]
-
-    @property
-    def shape(self):
-        """Leading (batch) shape: ``()`` for a single dual quaternion."""
-        return self.array.shape[:-1]
-
-    def __len__(self):
-        if not self.shape:
-            raise TypeError("a single DualQuaternion has no len()")
-        return self.shape[0]
-
-    def __getitem__(self, index):
-        return DualQuaternion(self.array[index])
-
-    def __array__(self, dtype=None, copy=None):
-        return self.array if dtype is None else self.array.astype(dtype)
-
-    def __mul__(self, other):
-        if isinstance(other, DualQuaternion):
-            return DualQuaternion(dual_quaternion_product(self.array, other.array))
-        if np.ndim(other) == 0:
-            return DualQuaternion(self.array * float(other))
-        return NotImplemented
-
-    def __rmul__(self, other):
-        if np.ndim(other) == 0:
-            return DualQuaternion(self.array * float(other))
-        return NotImplemented
-
-    def __add__(self, other):
-        if isinstance(other, DualQuaternion):
-            return DualQuaternion(self.array + other.array)
-        return NotImplemented
-
-    def __sub__(self, other):
-        if isinstance(other, DualQuaternion):
-            return DualQuaternion(self.array - other.array)
-        return NotImplemented
-
-    def __neg__(self):
-        return DualQuaternion(-self.array)
-
-    def __pow__(self, t):
-        return self.power(t)
-
-    def __eq__(self, other):
-        if isinstance(other, DualQuaternion):
-            return bool(np.array_equal(self.array, other.array))
-        return NotImplemented
-
-    __hash__ = None
 
     def conjugate(self):
         """See :func:`dual_quaternion_conjugate`."""
@@ -1235,12 +1183,7 @@ class DualQuaternion:
 
     def sclerp(self, other, t):
         """See :func:`sclerp`."""
-        other = other.array if isinstance(other, DualQuaternion) else other
-        return DualQuaternion(sclerp(self.array, other, t))
-
-    def __repr__(self):
-        body = np.array2string(self.array, separator=", ", prefix="DualQuaternion(")
-        return f"DualQuaternion({body})"
+        return DualQuaternion(sclerp(self.array, array_of(other), t))
 
     def __str__(self):
         if self.array.ndim != 1:
@@ -1249,6 +1192,3 @@ class DualQuaternion:
         return ("({:.6g} {:+.6g}i {:+.6g}j {:+.6g}k) + eps ({:.6g} {:+.6g}i {:+.6g}j {:+.6g}k)"
                 .format(*r))
 
-
-def _qarr(q):
-    return getattr(q, "array", q)

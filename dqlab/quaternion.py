@@ -23,6 +23,7 @@ from ._checks import (
     pack,
     stack_components,
 )
+from ._wrapper import ArrayWrapper, array_of
 
 __all__ = [
     "quaternion_product", "quaternion_conjugate", "quaternion_norm", "quaternion_inverse",
@@ -861,11 +862,14 @@ def pyquaternion_from_quaternion(q):
 # Class wrapper
 
 
-class Quaternion:
+class Quaternion(ArrayWrapper):
     """A quaternion, or a batch of them, for readable notebook code.
 
     A thin wrapper over the array functions of this module: every method calls one of
-    them, nothing is computed twice. ``.array`` is the ``(..., 4)`` float array.
+    them, nothing is computed twice. ``.array`` is the ``(..., 4)`` float array, ``.shape``
+    its leading (batch) shape. Indexing, ``len``, ``*`` (the product, or scaling by a
+    number), ``+``, ``-``, ``**`` and ``==`` work as for :class:`dqlab.dualquat.DualQuaternion`
+    (both classes share them).
 
     Parameters
     ----------
@@ -883,13 +887,8 @@ class Quaternion:
     Quaternion([1., 2., 3., 4.])
     """
 
-    __slots__ = ("array",)
-    __array_priority__ = 20
-
-    def __init__(self, q):
-        if isinstance(q, Quaternion):
-            q = q.array
-        self.array = as_float_array(q, "q", _Q)
+    __slots__ = ()
+    _trailing, _name, _product = _Q, "q", staticmethod(quaternion_product)
 
     # construction
     @classmethod
@@ -915,7 +914,7 @@ class Quaternion:
     @classmethod
     def exp(cls, q):
         """See :func:`quaternion_exp`."""
-        return cls(quaternion_exp(_arr(q)))
+        return cls(quaternion_exp(array_of(q)))
 
     # components
     @property
@@ -928,62 +927,11 @@ class Quaternion:
         """Vector part ``(x, y, z)``, shape (..., 3)."""
         return self.array[..., 1:]
 
-    @property
-    def shape(self):
-        """Leading (batch) shape: ``()`` for a single quaternion."""
-        return self.array.shape[:-1]
-
-    def __len__(self):
-        if not self.shape:
-            raise TypeError("a single Quaternion has no len()")
-        return self.shape[0]
-
-    def __getitem__(self, index):
-        return Quaternion(self.array[index])
-
-    def __array__(self, dtype=None, copy=None):
-        return self.array if dtype is None else self.array.astype(dtype)
-
-    # algebra
-    def __mul__(self, other):
-        if isinstance(other, Quaternion):
-            return Quaternion(quaternion_product(self.array, other.array))
-        if np.ndim(other) == 0:
-            return Quaternion(self.array * float(other))
-        return NotImplemented
-
-    def __rmul__(self, other):
-        if np.ndim(other) == 0:
-            return Quaternion(self.array * float(other))
-        return NotImplemented
-
+    # algebra (product, sums, scaling, ``**`` and ``==`` come from the shared wrapper)
     def __truediv__(self, other):
         if np.ndim(other) == 0:
             return Quaternion(self.array / float(other))
         return NotImplemented
-
-    def __add__(self, other):
-        if isinstance(other, Quaternion):
-            return Quaternion(self.array + other.array)
-        return NotImplemented
-
-    def __sub__(self, other):
-        if isinstance(other, Quaternion):
-            return Quaternion(self.array - other.array)
-        return NotImplemented
-
-    def __neg__(self):
-        return Quaternion(-self.array)
-
-    def __pow__(self, t):
-        return self.power(t)
-
-    def __eq__(self, other):
-        if isinstance(other, Quaternion):
-            return bool(np.array_equal(self.array, other.array))
-        return NotImplemented
-
-    __hash__ = None
 
     def conjugate(self):
         """See :func:`quaternion_conjugate`."""
@@ -1032,20 +980,16 @@ class Quaternion:
 
     def distance(self, other):
         """See :func:`quaternion_distance`."""
-        d = quaternion_distance(self.array, _arr(other))
+        d = quaternion_distance(self.array, array_of(other))
         return float(d) if d.ndim == 0 else d
 
     def slerp(self, other, t):
         """See :func:`slerp`."""
-        return Quaternion(slerp(self.array, _arr(other), t))
+        return Quaternion(slerp(self.array, array_of(other), t))
 
     def to_pyquaternion(self):
         """See :func:`pyquaternion_from_quaternion`."""
         return pyquaternion_from_quaternion(self.array)
-
-    def __repr__(self):
-        body = np.array2string(self.array, separator=", ", prefix="Quaternion(")
-        return f"Quaternion({body})"
 
     def __str__(self):
         if self.array.ndim != 1:
@@ -1053,6 +997,3 @@ class Quaternion:
         w, x, y, z = self.array.tolist()
         return f"{w:.6g} {x:+.6g}i {y:+.6g}j {z:+.6g}k"
 
-
-def _arr(x):
-    return x.array if isinstance(x, Quaternion) else x
