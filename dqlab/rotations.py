@@ -15,8 +15,10 @@ from ._checks import as_float_array, components
 __all__ = [
     "rot_x", "rot_y", "rot_z", "matrix_from_euler_zxz", "euler_zxz_from_matrix",
     "matrix_from_rpy", "rpy_from_matrix", "matrix_from_axis_angle", "axis_angle_from_matrix",
-    "rodrigues", "check_rotation_matrix", "skew",
+    "rodrigues", "check_rotation_matrix", "skew", "wrap_angle",
 ]
+
+_TWO_PI = 2.0 * np.pi
 
 
 def _elementary(theta, i, j):
@@ -326,13 +328,35 @@ def euler_zxz_from_matrix(R, *, tol=1e-9, singular_tol=1e-12):
     psi = np.where(singular, total, np.arctan2(zx, -zy))
     theta = np.where(singular, np.where(upper, 0.0, np.pi), np.arctan2(s, zz))
     phi = np.where(upper, total - psi, psi - total)
-    phi = np.where(singular, 0.0, _wrap(phi))
+    phi = np.where(singular, 0.0, wrap_angle(phi))
     return np.stack([psi, theta, phi], axis=-1)
 
 
-def _wrap(angle):
-    """Angles wrapped to (-pi, pi]."""
-    return np.pi - np.mod(np.pi - angle, 2.0 * np.pi)
+def wrap_angle(theta):
+    r"""Wrap angles to the interval :math:`(-\pi, \pi]`.
+
+    Parameters
+    ----------
+    theta : array_like, shape (...)
+        Angles in radians.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        ``theta - 2 pi k`` with the integer ``k`` that puts the result in (-pi, pi].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> wrap_angle([np.pi, -np.pi, 3 * np.pi / 2, 0.5])
+    array([ 3.14159265,  3.14159265, -1.57079633,  0.5       ])
+    """
+    theta = np.asarray(theta, dtype=float)
+    w = theta - _TWO_PI * np.round(theta * (1.0 / _TWO_PI))   # exact when |theta| < pi
+    outside = (w <= -np.pi) | (w > np.pi)     # -pi, or a rounding of theta / (2 pi)
+    if outside.any():
+        w = np.where(w > np.pi, w - _TWO_PI, np.where(w <= -np.pi, w + _TWO_PI, w))
+    return w
 
 
 def matrix_from_rpy(rpy):
@@ -429,7 +453,7 @@ def rpy_from_matrix(R, *, tol=1e-9, singular_tol=1e-12):
                      np.arctan2(-(R[..., 1, 2] + R[..., 0, 1]), R[..., 1, 1] - R[..., 0, 2]))
     yaw = np.where(singular, 0.0, np.arctan2(xy, xx))
     pitch = np.where(singular, np.where(up, np.pi / 2, -np.pi / 2), np.arctan2(-xz, c))
-    roll = _wrap(np.where(up, yaw - combo, combo - yaw))
+    roll = wrap_angle(np.where(up, yaw - combo, combo - yaw))
     return np.stack([roll, pitch, yaw], axis=-1)
 
 

@@ -23,34 +23,9 @@ quaternion of a turn by :math:`\theta` about the unit axis :math:`u`.
 
 import numpy as np
 
-_TWO_PI = 2.0 * np.pi
+from ..rotations import wrap_angle  # noqa: F401  (the steps' angle wrapping)
+
 _PLUS_MINUS = np.array([1.0, -1.0])
-
-
-def wrap_angle(theta):
-    r"""Wrap angles to the interval (-pi, pi].
-
-    Parameters
-    ----------
-    theta : array_like, shape (...)
-        Angles in radians.
-
-    Returns
-    -------
-    ndarray, shape (...)
-        ``theta - 2 pi k`` with the integer ``k`` that puts the result in (-pi, pi].
-
-    Examples
-    --------
-    >>> wrap_angle([np.pi, -np.pi, 3 * np.pi / 2, 0.5])
-    array([ 3.14159265,  3.14159265, -1.57079633,  0.5       ])
-    """
-    theta = np.asarray(theta, dtype=float)
-    w = theta - _TWO_PI * np.round(theta * (1.0 / _TWO_PI))   # exact when |theta| < pi
-    outside = (w <= -np.pi) | (w > np.pi)     # -pi, or a rounding of theta / (2 pi)
-    if outside.any():
-        w = np.where(w > np.pi, w - _TWO_PI, np.where(w <= -np.pi, w + _TWO_PI, w))
-    return w
 
 
 def wrist_center(p, z6, d6):

@@ -10,14 +10,10 @@ solutions: the arm faces the point or turns its back to it (base angle :math:`\v
 import numpy as np
 
 from .._checks import as_float_array
+from ..rotations import wrap_angle
 from .result import IKResult
 
 __all__ = ["desk_arm"]
-
-
-def _wrap(angle):
-    """Wrap angles to (-pi, pi]."""
-    return np.pi - np.mod(np.pi - angle, 2 * np.pi)
 
 
 def _arm_parameters(robot):
@@ -134,7 +130,7 @@ def desk_arm(robot, position, *, tol=1e-9):
             t3 = np.arctan2(sb, cb)
             t2 = np.arctan2(v[..., 0], u[..., branch]) - np.arctan2(l2 * sb, l1 + l2 * cb)
             sols.append(np.stack([theta1[..., branch], t2, t3], axis=-1))
-    solutions = _wrap(np.stack(sols, axis=-2))                      # (..., 4, 3)
+    solutions = wrap_angle(np.stack(sols, axis=-2))                 # (..., 4, 3)
     ok = np.repeat(reachable, 2, axis=-1)
     lo, hi = robot.limits.T
     ok &= np.all((solutions >= lo) & (solutions <= hi), axis=-1)

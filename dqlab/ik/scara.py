@@ -13,14 +13,11 @@ on either side), and :math:`q_3, q_4` follow.
 
 import numpy as np
 
+from ..rotations import wrap_angle
 from .numerical import _target_transforms, pose_errors
 from .result import IKResult
 
 __all__ = ["scara"]
-
-
-def _wrap(angle):
-    return np.pi - np.mod(np.pi - angle, 2 * np.pi)
 
 
 def _scara_structure(robot):
@@ -130,7 +127,7 @@ def scara(robot, pose, *, tol=1e-9, rotation_tol=None):
         t2 = np.arctan2(sign * s2, c2)
         t1 = np.arctan2(y, x) - np.arctan2(l2 * sign * s2, l1 + l2 * c2)
         t4 = psi - t1 - t2 - off[2]
-        q1, q2, q4 = _wrap(t1 - off[0]), _wrap(t2 - off[1]), _wrap(t4 - off[3])
+        q1, q2, q4 = wrap_angle(t1 - off[0]), wrap_angle(t2 - off[1]), wrap_angle(t4 - off[3])
         rows.append(np.stack([q1, q2, z - z0, q4], axis=-1))
     solutions = np.stack(rows, axis=-2)                                # (..., 2, 4)
     raw = solutions
