@@ -174,6 +174,21 @@ def _check_transform_like(T, name):
     return T.copy()
 
 
+def _transform_attribute(name, doc):
+    """A rigid transform of the chain (base or tool): read as a copy; assigning checks it
+    and recomputes the chain's constant parts."""
+    private = "_" + name
+
+    def get(self):
+        return getattr(self, private).copy()
+
+    def set_(self, value):
+        setattr(self, private, _check_transform_like(value, name))
+        self._prepare()
+
+    return property(get, set_, doc=doc)
+
+
 class Robot:
     r"""A serial kinematic chain with forward kinematics and Jacobian.
 
@@ -246,25 +261,10 @@ class Robot:
     def n(self):
         return len(self._links)
 
-    @property
-    def base(self):
-        """:math:`X_{W0}`, shape (4, 4) (a copy; assign a new transform to change it)."""
-        return self._base.copy()
-
-    @base.setter
-    def base(self, value):
-        self._base = _check_transform_like(value, "base")
-        self._prepare()
-
-    @property
-    def tool(self):
-        """:math:`X_{nT}`, shape (4, 4) (a copy; assign a new transform to change it)."""
-        return self._tool.copy()
-
-    @tool.setter
-    def tool(self, value):
-        self._tool = _check_transform_like(value, "tool")
-        self._prepare()
+    base = _transform_attribute(
+        "base", ":math:`X_{W0}`, shape (4, 4) (a copy; assign a new transform to change it).")
+    tool = _transform_attribute(
+        "tool", ":math:`X_{nT}`, shape (4, 4) (a copy; assign a new transform to change it).")
 
     @property
     def joint_types(self):
