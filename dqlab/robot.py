@@ -638,14 +638,7 @@ class Robot:
         >>> np.allclose(dualquat.transform_from_dual_quaternion(Q), robot.fk(q))
         True
         """
-        q = self.check_joints(q)
-        if q.ndim == 1:
-            return np.array(self._fk_dq_parts(q.tolist()))
-        return batched(self._fk_dq_kernel, [(q, 1)], (8,))
-
-    def _fk_dq_kernel(self, q):
-        """:meth:`fk_dq` for a block of joint vectors, shape (N, n) to (N, 8)."""
-        return stack_components(self._fk_dq_parts(np.ascontiguousarray(q.T)))
+        return _on_components(self._fk_dq_parts, self.check_joints(q))
 
     def _fk_dq_parts(self, q):
         """The product K_0 J_1 K_1 ... J_n K_n on components.
@@ -747,14 +740,7 @@ class Robot:
         >>> tcp.round(5) + 0.0
         array([ 0.     , -0.39425,  0.69415])
         """
-        q = self.check_joints(q)
-        if q.ndim == 1:
-            return np.array(self._fk_dq_screw_parts(q.tolist()))
-        return batched(self._fk_dq_screw_kernel, [(q, 1)], (8,))
-
-    def _fk_dq_screw_kernel(self, q):
-        """:meth:`fk_dq_screw` for a block of joint vectors, shape (N, n) to (N, 8)."""
-        return stack_components(self._fk_dq_screw_parts(np.ascontiguousarray(q.T)))
+        return _on_components(self._fk_dq_screw_parts, self.check_joints(q))
 
     def _fk_dq_screw_parts(self, q):
         """The product S_1 S_2 ... S_n Q_WT(0) on components (``q`` as in _fk_dq_parts)."""
@@ -870,6 +856,19 @@ class Robot:
 
     def __repr__(self):
         return self.dh_table()
+
+
+def _on_components(parts, q):
+    """Run a formula on joint values, ``parts(q_1, ..., q_n) -> 8 components``, for checked
+    joint vectors ``q`` of shape (..., n): with Python floats for one joint vector, and with
+    arrays of shape (N,) per joint for blocks of a batch. Returns shape (..., 8)."""
+    if q.ndim == 1:
+        return np.array(parts(q.tolist()))
+
+    def kernel(block):
+        return stack_components(parts(np.ascontiguousarray(block.T)))
+
+    return batched(kernel, [(q, 1)], (8,))
 
 
 def _num(x):
