@@ -705,7 +705,7 @@ def test_distinct_solutions(robot):
 
 
 def test_wrap_angle():
-    from dqlab.ik._ur_steps import wrap_angle
+    from dqlab.ik.ur_steps import wrap_angle
 
     x = np.array([-np.pi, np.pi, -3 * np.pi, 3 * np.pi, 0.0, -1e-300, 7.0])
     w = wrap_angle(x)
@@ -719,7 +719,7 @@ def test_wrap_angle():
 
 def _thesis_quantities(robot, q):
     """L = r_z(t1)^* q_D of the generating configurations (the thesis's M2 = N2 terms)."""
-    from dqlab.ik._ur_steps import relative_rotation_coefficients
+    from dqlab.ik.ur_steps import relative_rotation_coefficients
     from dqlab.quaternion import quaternion_from_matrix, quaternion_product
 
     T = robot.fk(q)

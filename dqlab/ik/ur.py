@@ -4,20 +4,20 @@ r"""Closed-form inverse kinematics of the Universal Robots arms, by dual quatern
 the structure) for one pose or a batch, following the route of the thesis (section 4.3):
 write the pose as the product of the joint dual quaternions :math:`Q_1 \cdots Q_6` and
 equate the products :math:`M_i = Q_i M_{i+1}` with :math:`N_{i+1} = Q_i^{-1} N_i` term by
-term. The route has four steps, each a small function of :mod:`dqlab.ik._ur_steps`:
+term. The route has four steps, each a small function of :mod:`dqlab.ik.ur_steps`:
 
 1. :math:`\theta_1` from the translation of :math:`M_5 = N_5`: the wrist centre
    :math:`p_5 = p_6 - d_6 z_6` satisfies :math:`\sin\theta_1 x_5 - \cos\theta_1 y_5 = d_4`,
    two roots when :math:`x_5^2 + y_5^2 \ge d_4^2`
-   (:func:`~dqlab.ik._ur_steps.shoulder_angles`);
+   (:func:`~dqlab.ik.ur_steps.shoulder_angles`);
 2. :math:`\theta_5` and the sum and difference :math:`\theta_{234} \pm \theta_6` from the
    rotation part of :math:`M_2 = N_2`, four quaternion coefficients read with ``atan2`` only
-   (:func:`~dqlab.ik._ur_steps.wrist_angles`);
+   (:func:`~dqlab.ik.ur_steps.wrist_angles`);
 3. the wrist-1 point from the translation of :math:`Q_2 Q_3 Q_4 Q_4^{-1}`
-   (:func:`~dqlab.ik._ur_steps.wrist1_point`);
+   (:func:`~dqlab.ik.ur_steps.wrist1_point`);
 4. the planar chain :math:`\theta_3, \theta_2` by the law of cosines and ``atan2``, then
    :math:`\theta_4 = \theta_{234} - \theta_2 - \theta_3`
-   (:func:`~dqlab.ik._ur_steps.elbow_angles`).
+   (:func:`~dqlab.ik.ur_steps.elbow_angles`).
 
 A candidate is valid when it reproduces the pose to ``tol`` (1e-9 m and 1e-9 rad by
 default; the thesis filters by forward kinematics with ``np.allclose(..., atol=1e-3)``). Its
@@ -106,7 +106,7 @@ import math
 import numpy as np
 
 from .._checks import as_float_array
-from . import _ur_steps as steps
+from . import ur_steps as steps
 from .result import IKResult
 
 __all__ = ["ur", "ur_parameters", "equivalent_solutions", "closest_solution",
