@@ -4,6 +4,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..rotations import wrap_angle
+
 
 @dataclass
 class IKResult:
@@ -56,7 +58,7 @@ class IKResult:
         if not np.all(self.success):
             raise ValueError("some targets have no valid solution; check result.reason")
         q_ref = np.asarray(q_ref, dtype=float)[..., None, :]
-        diff = np.angle(np.exp(1j * (self.solutions - q_ref)))
+        diff = wrap_angle(self.solutions - q_ref)
         dist = np.where(self.valid, np.linalg.norm(diff, axis=-1), np.inf)
         index = np.argmin(dist, axis=-1)
         return np.take_along_axis(self.solutions, index[..., None, None], axis=-2)[..., 0, :]
