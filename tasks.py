@@ -34,10 +34,10 @@ def say(message):
     print(f"\n==> {message}", flush=True)
 
 
-def run(*args, env=None):
+def run(*args):
     """Run a command from the repository root; stop the task if it fails."""
     print("$ " + " ".join(str(a) for a in args), flush=True)
-    env = dict(os.environ if env is None else env)
+    env = dict(os.environ)
     env["PATH"] = f"{BIN}{os.pathsep}{env.get('PATH', '')}"  # kernels start from the venv
     result = subprocess.run([str(a) for a in args], cwd=ROOT, env=env)
     if result.returncode != 0:

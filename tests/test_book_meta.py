@@ -10,12 +10,16 @@ ROOT = Path(__file__).resolve().parents[1]
 BOOK = ROOT / "book"
 
 
-def toc_files():
-    """The documents listed in _toc.yml (root and every `file:` entry), without suffix."""
+def toc_entries():
+    """The documents listed in _toc.yml (root and every `file:` entry), in order."""
     text = (ROOT / "_toc.yml").read_text()
     lines = [line for line in text.splitlines() if not line.lstrip().startswith("#")]
-    entries = re.findall(r"^\s*(?:root|-\s*file):\s*(\S+)\s*$", "\n".join(lines), re.M)
-    return {entry.removesuffix(".md").removesuffix(".ipynb") for entry in entries}
+    return re.findall(r"^\s*(?:root|-\s*file):\s*(\S+)\s*$", "\n".join(lines), re.M)
+
+
+def toc_files():
+    """The documents listed in _toc.yml, without suffix."""
+    return {entry.removesuffix(".md").removesuffix(".ipynb") for entry in toc_entries()}
 
 
 def book_documents():
@@ -34,9 +38,7 @@ def test_toc_lists_every_document_and_nothing_else():
 
 
 def test_toc_lists_each_document_once():
-    text = (ROOT / "_toc.yml").read_text()
-    lines = [line for line in text.splitlines() if not line.lstrip().startswith("#")]
-    entries = re.findall(r"^\s*(?:root|-\s*file):\s*(\S+)\s*$", "\n".join(lines), re.M)
+    entries = toc_entries()
     assert len(entries) == len(set(entries)), "a document is listed twice in _toc.yml"
 
 
