@@ -114,3 +114,305 @@ def test_mjcf_refuses_bad_arguments(kwargs, word):
 def test_mjcf_refuses_a_non_robot():
     with pytest.raises(TypeError, match="robot"):
         mjcf_from_robot("UR3")
+
+
+# -- simulation and controllers ---------------------------------------------------------------
+
+from types import SimpleNamespace  # noqa: E402
+
+from dqlab.sim import (  # noqa: E402
+    ArmSimulation,
+    ComputedTorque,
+    JointPD,
+    MujocoBackend,
+    check_trajectory,
+    track,
+)
+
+UR3_PD = JointPD(kp=[400, 400, 200, 50, 50, 50], kd=[40, 40, 20, 5, 5, 5])
+
+
+def smooth_trajectory(duration=2.0, dt=0.005):
+    """Every UR3 joint on a sine about a bent configuration (q, qd, qdd in closed form)."""
+    t = np.arange(0.0, duration + dt / 2, dt)
+    q0 = np.array([0.2, -1.3, 1.4, -1.6, -1.5, 0.3])
+    amp = np.array([0.6, 0.4, 0.5, 0.7, 0.5, 0.9])
+    w = 2 * np.pi / duration * np.array([1.0, 1.0, 1.0, 2.0, 2.0, 2.0])
+    phase = t[:, None] * w
+    return SimpleNamespace(t=t, q=q0 + amp * (1 - np.cos(phase)), qd=amp * w * np.sin(phase),
+                           qdd=amp * w**2 * np.cos(phase))
+
+
+@pytest.fixture(scope="module")
+def ur3_sim():
+    return ArmSimulation(models.ur3())
+
+
+def test_computed_torque_tracks_a_smooth_trajectory_and_pd_does_worse(ur3_sim):
+    move = smooth_trajectory()
+    ct = track(ur3_sim, move, ComputedTorque())
+    pd = track(ur3_sim, move, UR3_PD)
+    assert ct.t.shape == (2001,) and ct.q.shape == ct.torque.shape == (2001, 6)
+    # stated bounds: computed torque within 0.5 mrad per joint and 0.2 mm at the flange
+    assert ct.max_error.max() < 5e-4
+    assert ct.flange_error.max() < 2e-4
+    # PD sags under gravity and lags: at least ten times worse
+    assert pd.flange_error.max() > 10 * ct.flange_error.max()
+    assert pd.max_error.max() > 10 * ct.max_error.max()
+    np.testing.assert_allclose(ct.error, ct.q_desired - ct.q)
+
+
+def test_computed_torque_error_shrinks_with_the_time_step():
+    move = smooth_trajectory(duration=1.0)
+    errors = [track(ArmSimulation(models.ur3(), timestep=dt), move, ComputedTorque())
+              .max_error.max() for dt in (0.002, 0.001)]
+    assert errors[1] < 0.6 * errors[0]          # first order in the time step
+
+
+def test_gravity_compensation_helps_pd(ur3_sim):
+    move = smooth_trajectory(duration=6.0)           # slow: the error is mostly the sag
+    pd = track(ur3_sim, move, UR3_PD)
+    pdg = track(ur3_sim, move, JointPD(UR3_PD.kp, UR3_PD.kd, gravity_compensation=True))
+    assert pdg.flange_error.max() < 0.5 * pd.flange_error.max()
+    assert pdg.controller == "PD + gravity"
+
+
+def test_an_unknown_payload_spoils_computed_torque():
+    move = smooth_trajectory()
+    plant = ArmSimulation(models.ur3(), payload=2.0)
+    exact = track(plant, move, ComputedTorque())
+    blind = track(plant, move, ComputedTorque(model=ArmSimulation(models.ur3())))
+    assert blind.flange_error.max() > 5 * exact.flange_error.max()
+
+
+def test_inverse_dynamics_is_mass_matrix_times_acceleration_plus_bias(ur3_sim):
+    """tau = (M + h D) qdd + bias: the implicit step's damping term h D is part of the
+    discrete-time inverse dynamics."""
+    rng = np.random.default_rng(3)
+    h_D = ur3_sim.timestep * np.diag(ur3_sim.model.dof_damping)
+    for _ in range(20):
+        q, qd, qdd = rng.uniform(-2, 2, (3, 6))
+        M = ur3_sim.mass_matrix(q)
+        np.testing.assert_allclose(M, M.T, atol=1e-12)
+        assert np.linalg.eigvalsh(M).min() > 0
+        bias = ur3_sim.inverse_dynamics(q, qd, np.zeros(6))
+        np.testing.assert_allclose(ur3_sim.inverse_dynamics(q, qd, qdd),
+                                   (M + h_D) @ qdd + bias, atol=1e-9)
+
+
+def test_gravity_torque_is_the_gradient_of_the_potential_energy(ur3_sim):
+    """g(q) = dU/dq, U = sum of m_i g z_i over the links' centres of mass (by kinematics)."""
+    mujoco_ = pytest.importorskip("mujoco")
+    model, scratch = ur3_sim.model, mujoco_.MjData(ur3_sim.model)
+
+    def potential(q):
+        scratch.qpos[:] = q
+        mujoco_.mj_kinematics(model, scratch)
+        mujoco_.mj_comPos(model, scratch)
+        return 9.81 * float(model.body_mass @ scratch.xipos[:, 2])
+
+    q = np.array([0.3, -1.1, 0.9, -1.2, 0.7, 0.2])
+    h = 1e-6
+    grad = [(potential(q + h * e) - potential(q - h * e)) / (2 * h) for e in np.eye(6)]
+    np.testing.assert_allclose(ur3_sim.gravity_torque(q), grad, atol=1e-6)
+
+
+def test_gravity_is_held_exactly(ur3_sim):
+    q = np.array([0.0, -0.5, 0.5, -1.0, 0.5, 0.0])
+    ur3_sim.reset(q)
+    ur3_sim.step(ur3_sim.gravity_torque(q), steps=500)
+    assert np.abs(ur3_sim.q - q).max() < 1e-9
+
+
+@pytest.mark.parametrize("field, value, message", [
+    ("q", np.nan, "trajectory.q contains NaN"),
+    ("qd", np.inf, "trajectory.qd contains NaN or infinity"),
+    ("q", 7.0, "trajectory.q: joint 2 .* beyond its limits"),
+])
+def test_tracking_refuses_nan_and_out_of_limit_targets(ur3_sim, field, value, message):
+    move = smooth_trajectory(duration=0.5)
+    getattr(move, field)[10, 1] = value
+    time_before = ur3_sim.time
+    with pytest.raises(ValueError, match=message):
+        track(ur3_sim, move, ComputedTorque())
+    assert ur3_sim.time == time_before          # nothing was simulated
+
+
+def test_trajectory_checks_shapes_and_times():
+    robot = models.ur3()
+    move = smooth_trajectory(duration=0.5)
+    with pytest.raises(ValueError, match="no 'qdd'"):
+        check_trajectory(SimpleNamespace(t=move.t, q=move.q, qd=move.qd), robot)
+    with pytest.raises(ValueError, match=r"trajectory.qd must have shape \(101, 6\)"):
+        check_trajectory(SimpleNamespace(t=move.t, q=move.q, qd=move.qd[:, :5],
+                                         qdd=move.qdd), robot)
+    with pytest.raises(ValueError, match="increase"):
+        check_trajectory(SimpleNamespace(t=move.t[::-1], q=move.q, qd=move.qd,
+                                         qdd=move.qdd), robot)
+
+
+def test_simulation_refuses_bad_states_and_torques(ur3_sim):
+    with pytest.raises(ValueError, match="q contains NaN"):
+        ur3_sim.reset([0, np.nan, 0, 0, 0, 0])
+    with pytest.raises(ValueError, match="joint 3 = -7 is beyond"):
+        ur3_sim.reset([0, 0, -7, 0, 0, 0])
+    with pytest.raises(ValueError, match="torque contains NaN"):
+        ur3_sim.step([0, 0, np.nan, 0, 0, 0])
+    with pytest.raises(ValueError, match="payload"):
+        ur3_sim.payload = -1.0
+
+
+def test_payload_can_be_changed(ur3_sim):
+    q = np.array([0.0, -0.5, 0.5, -1.0, 0.5, 0.0])
+    g0 = ur3_sim.gravity_torque(q)
+    ur3_sim.payload = 3.0
+    try:
+        assert ur3_sim.payload == 3.0
+        # 3 kg at the flange: the shoulder holds 3 kg * g * the flange's horizontal reach
+        reach = np.linalg.norm(models.ur3().fk(q)[:2, 3] - [0.0, 0.0])
+        assert abs(ur3_sim.gravity_torque(q)[0] - g0[0]) < 1e-9     # vertical axis: none
+        assert ur3_sim.gravity_torque(q)[1] != pytest.approx(g0[1])
+        assert reach > 0
+    finally:
+        ur3_sim.payload = 0.0
+    assert ur3_sim.payload == 0.0
+
+
+def test_prismatic_robot_tracks_too():
+    scara = models.scara_rsm5()
+    sim = ArmSimulation(scara)
+    t = np.linspace(0.0, 1.0, 201)
+    s, sd, sdd = 3 * t**2 - 2 * t**3, 6 * t - 6 * t**2, 6 - 12 * t
+    q0, step = np.array([0.2, 0.5, 0.02, 0.0]), np.array([0.8, -0.6, 0.1, 1.0])
+    move = SimpleNamespace(t=t, q=q0 + s[:, None] * step, qd=sd[:, None] * step,
+                           qdd=sdd[:, None] * step)
+    result = track(sim, move, ComputedTorque())
+    assert result.max_error.max() < 2e-4
+    # the prismatic joint lifts the rest of the arm: its force includes their weight
+    assert result.torque[0, 2] > 9.0
+
+
+# -- the simulated arm behind the UR client's protocol ---------------------------------------
+
+from dqlab.sim import UR3_HOME  # noqa: E402
+from dqlab.sim.backend import pose_from_transform, transform_from_pose  # noqa: E402
+
+
+@pytest.fixture()
+def arm():
+    backend = MujocoBackend()
+    backend.connect(timeout=1.0)
+    yield backend
+    backend.close()
+
+
+def run_until_still(arm, settle=0.2):
+    while arm.is_moving:
+        state = arm.read_state()
+    for _ in range(int(round(settle / arm.period))):
+        state = arm.read_state()
+    return state
+
+
+def test_backend_starts_at_home_and_reports_the_state(arm):
+    state = arm.read_state()
+    assert state.time == pytest.approx(arm.period)
+    assert state.robot_mode == 7
+    np.testing.assert_allclose(state.q, UR3_HOME, atol=1e-6)
+    X = transform_from_pose(state.tcp_pose)
+    np.testing.assert_allclose(X, arm.sim.robot.fk(state.q), atol=1e-9)
+    assert arm.read_state().time == pytest.approx(2 * arm.period)
+
+
+def test_backend_movej_reaches_the_joints(arm):
+    target = np.array([0.4, -1.2, 1.3, -1.9, -1.2, 0.5])
+    arm.movej(target, a=1.4, v=1.05, t=0.0, r=0.0)
+    assert arm.is_moving
+    speeds = []
+    while arm.is_moving:
+        state = arm.read_state()
+        speeds.append(np.abs(state.qd).max())
+    assert np.abs(state.q - target).max() < 1e-3
+    assert max(speeds) < 1.05 * 1.01                   # the speed limit v, tracked
+    state = run_until_still(arm)
+    assert np.abs(state.q - target).max() < 1e-5
+
+
+def test_backend_movej_with_a_time(arm):
+    target = np.asarray(UR3_HOME) + 0.2
+    start = arm.read_state().time
+    arm.movej(target, a=1.0, v=1.0, t=1.5, r=0.0)
+    state = run_until_still(arm, settle=0.0)
+    assert state.time - start == pytest.approx(1.5, abs=2 * arm.period)
+
+
+def test_backend_movel_moves_the_tcp_on_a_line(arm):
+    X0 = arm.sim.robot.fk(arm.read_state().q)
+    X1 = X0.copy()
+    X1[:3, 3] += [0.05, 0.08, -0.1]
+    arm.movel(pose_from_transform(X1), a=1.2, v=0.1, t=0.0, r=0.0)
+    p0, p1 = X0[:3, 3], X1[:3, 3]
+    u = (p1 - p0) / np.linalg.norm(p1 - p0)
+    off_line = []
+    while arm.is_moving:
+        p = arm.read_state().tcp_pose[:3]
+        off_line.append(np.linalg.norm((p - p0) - np.dot(p - p0, u) * u))
+    assert max(off_line) < 5e-4                           # within half a millimetre
+    state = run_until_still(arm)
+    np.testing.assert_allclose(transform_from_pose(state.tcp_pose), X1, atol=1e-4)
+
+
+def test_backend_servoj_streams_and_stop_brings_the_arm_to_rest(arm):
+    q0 = np.asarray(UR3_HOME)
+    for k in range(1, 51):
+        arm.servoj(q0 + 0.004 * k, t=0.008, lookahead_time=0.1, gain=300)
+        state = arm.read_state()
+    assert np.abs(state.q - (q0 + 0.2)).max() < 0.02
+    arm.movej(q0 - 0.5, a=2.0, v=1.0, t=0.0, r=0.0)
+    for _ in range(40):
+        state = arm.read_state()
+    assert np.abs(state.qd).max() > 0.5
+    arm.stop(a=3.0)
+    state = run_until_still(arm)
+    assert np.abs(state.qd).max() < 1e-3
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda arm: arm.movej([0, np.nan, 0, 0, 0, 0]), "q contains NaN"),
+    (lambda arm: arm.movej([0, 0, 0, 7.0, 0, 0]), "joint 4 = 7 is beyond its limits"),
+    (lambda arm: arm.movej([0, 0, 0]), r"q must have shape \(6,\)"),
+    (lambda arm: arm.movej(UR3_HOME, a=0.0), "a must be"),
+    (lambda arm: arm.movej(UR3_HOME, v=np.inf), "v must be"),
+    (lambda arm: arm.movel([0.3, 0.1, np.nan, 0, 0, 0]), "pose contains NaN"),
+    (lambda arm: arm.movel([2.0, 0.0, 0.3, 0, 3.14, 0]), "reach"),
+    (lambda arm: arm.servoj([0, 0, 0, 0, 0, 9.0]), "joint 6 = 9 is beyond"),
+    (lambda arm: arm.servoj(UR3_HOME, gain=5000), "gain"),
+    (lambda arm: arm.stop(a=-1.0), "a must be"),
+])
+def test_backend_refuses_bad_targets_before_moving(arm, call, message):
+    q_before = arm.read_state().q
+    with pytest.raises(ValueError, match=message):
+        call(arm)
+    assert not arm.is_moving
+    np.testing.assert_allclose(arm.read_state().q, q_before, atol=1e-6)
+
+
+def test_backend_needs_a_connection():
+    backend = MujocoBackend()
+    with pytest.raises(RuntimeError, match="connect"):
+        backend.read_state()
+    with pytest.raises(ValueError, match="6 joints"):
+        MujocoBackend(models.scara_rsm5())
+    with pytest.raises(ValueError, match="clock"):
+        MujocoBackend(clock="cpu")
+
+
+def test_backend_wall_clock_keeps_up_with_time():
+    import time
+
+    backend = MujocoBackend(clock="wall")
+    backend.connect(timeout=1.0)
+    time.sleep(0.05)
+    state = backend.read_state()
+    backend.close()
+    assert 0.04 <= state.time <= 1.0

@@ -1,6 +1,31 @@
-"""Physics simulation of a dqlab robot with MuJoCo (the optional extra ``sim``)."""
+"""Physics simulation of a dqlab robot with MuJoCo (the optional extra ``sim``).
 
+- :func:`mjcf_from_robot` writes a MuJoCo model of any :class:`~dqlab.robot.Robot`
+  (standard or modified DH, base and tool); its flange site's pose is ``robot.fk(q)``.
+- :class:`ArmSimulation` loads it and steps it under joint torques; :class:`JointPD` and
+  :class:`ComputedTorque` compute those torques; :func:`track` runs one of them along a
+  joint trajectory and returns a :class:`TrackingResult` of arrays.
+- :class:`MujocoBackend` is the simulated arm behind the UR client: ``movej``, ``movel``,
+  ``servoj`` and ``stop`` executed in physics.
+
+Generating the model needs only numpy; simulating it needs ``mujoco``
+(``pip install 'dqlab[sim]'``).
+"""
+
+from .backend import UR3_HOME, MujocoBackend, trapezoid_duration
 from .mjcf import UR3_BASE_MASS, UR3_LINK_MASSES, UR3_PAYLOAD, link_placements, mjcf_from_robot
+from .simulation import (
+    ArmSimulation,
+    ComputedTorque,
+    JointPD,
+    TrackingResult,
+    check_trajectory,
+    require_mujoco,
+    track,
+)
 
-__all__ = ["mjcf_from_robot", "link_placements", "UR3_LINK_MASSES", "UR3_PAYLOAD",
-           "UR3_BASE_MASS"]
+__all__ = [
+    "mjcf_from_robot", "link_placements", "UR3_LINK_MASSES", "UR3_PAYLOAD", "UR3_BASE_MASS",
+    "ArmSimulation", "JointPD", "ComputedTorque", "TrackingResult", "track",
+    "check_trajectory", "require_mujoco", "MujocoBackend", "UR3_HOME", "trapezoid_duration",
+]

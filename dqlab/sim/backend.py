@@ -1,0 +1,424 @@
+r"""The simulated UR3 as a back end of the UR client: URScript's moves executed in physics.
+
+:class:`MujocoBackend` has the methods of the client's ``Backend`` protocol
+(:mod:`dqlab.ur.client`): ``connect``, ``close``, ``read_state``, ``movej``, ``movel``,
+``servoj`` and ``stop``. A move call plans a joint reference and returns at once; the
+simulated controller (computed torque by default) tracks it while the simulation runs. The
+simulation advances when the state is read: by one controller period (8 ms, the 125 Hz of
+the UR3's CB3 controller) per :meth:`MujocoBackend.read_state` with the default simulated
+clock, or up to the wall-clock time since :meth:`~MujocoBackend.connect` with
+``clock="wall"``.
+
+The references are URScript's:
+
+- ``movej(q, a, v, t)``: every joint moves from the current target to ``q`` with one
+  trapezoidal speed law, scaled so that all joints start and stop together; the joint that
+  moves most accelerates at ``a`` (rad/s^2) up to ``v`` (rad/s). With ``t > 0`` the move
+  lasts ``t`` seconds instead (a third of it accelerating, a third braking).
+- ``movel(pose, a, v, t)``: the TCP moves on a straight line while its orientation turns
+  by SLERP, with the same speed law on the distance (m/s, m/s^2); the joints follow by the
+  closed-form inverse kinematics, keeping the branch of the start.
+- ``servoj(q, t)``: the target moves linearly to ``q`` in ``t`` seconds (one streaming
+  step).
+- ``stop(a)``: the reference decelerates at ``a`` to rest.
+
+Every target is checked before anything moves: a NaN, an infinity, a wrong shape or a joint
+beyond the robot's limits raises ``ValueError``.
+"""
+
+import math
+import time as _time
+
+import numpy as np
+
+from ..models import ur3
+from ..quaternion import matrix_from_quaternion, quaternion_from_matrix, slerp
+from ..transforms import transform_from
+from .simulation import ArmSimulation, ComputedTorque, _reference, _vector
+
+__all__ = ["MujocoBackend", "UR3_HOME", "trapezoid_duration"]
+
+#: A comfortable start: upper arm up, forearm forward, wrist 2 down.
+UR3_HOME = (0.0, -math.pi / 2, math.pi / 2, -math.pi / 2, -math.pi / 2, 0.0)
+
+ROBOT_MODE_RUNNING = 7
+
+
+def _positive(value, name, *, allow_zero=False):
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number, got {value!r}") from None
+    ok = value >= 0 if allow_zero else value > 0
+    if not (math.isfinite(value) and ok):
+        kind = ">= 0" if allow_zero else "> 0"
+        raise ValueError(f"{name} must be a finite number {kind}, got {value!r}")
+    return value
+
+
+def trapezoid_duration(distance, v, a):
+    r"""Duration of a rest-to-rest move over ``distance`` with speed limit ``v`` and
+    acceleration ``a`` (a triangle when the cruise speed is not reached).
+
+    .. math::
+
+       T = \begin{cases} d/v + v/a & d \ge v^2/a \\ 2\sqrt{d/a} & \text{otherwise}
+       \end{cases}
+
+    Examples
+    --------
+    >>> trapezoid_duration(1.0, v=1.0, a=2.0)          # 0.5 s up, 0.5 s cruise, 0.5 s down
+    1.5
+    >>> trapezoid_duration(0.25, v=1.0, a=1.0)         # a triangle: 0.5 s up, 0.5 s down
+    1.0
+    """
+    if distance >= v * v / a:
+        return distance / v + v / a
+    return 2.0 * math.sqrt(distance / a)
+
+
+def _trapezoid_law(times, duration, ramp):
+    """Normalised rest-to-rest law s(t) in [0, 1] and its derivatives, with acceleration
+    phases of length ``ramp`` (<= duration / 2) at both ends."""
+    t = np.clip(times, 0.0, duration)
+    v = 1.0 / (duration - ramp)             # cruise speed that covers 1 in ``duration``
+    a = v / ramp
+    s = np.where(t < ramp, 0.5 * a * t**2,
+                 np.where(t <= duration - ramp, 0.5 * a * ramp**2 + v * (t - ramp),
+                          1.0 - 0.5 * a * (duration - t) ** 2))
+    sd = np.where(t < ramp, a * t, np.where(t <= duration - ramp, v, a * (duration - t)))
+    sdd = np.where(t < ramp, a, np.where(t <= duration - ramp, 0.0, -a))
+    inside = (times >= 0) & (times <= duration)
+    return s, np.where(inside, sd, 0.0), np.where(inside, sdd, 0.0)
+
+
+def _law(distance, a, v, t):
+    """(duration, ramp) of URScript's speed law for ``distance`` with ``a``, ``v`` or ``t``."""
+    if t > 0:
+        return t, t / 3.0
+    if distance == 0:
+        return 0.0, 0.0
+    duration = trapezoid_duration(distance, v, a)
+    ramp = min(v / a, duration / 2)
+    return duration, ramp
+
+
+class _Motion:
+    """A joint reference on a grid of times, sampled by cubic Hermite interpolation."""
+
+    def __init__(self, t, q, qd, qdd, end=None):
+        self.t, self.q, self.qd, self.qdd = t, q, qd, qdd
+        self.end = t[-1] if end is None else end     # when the move is over
+
+    @classmethod
+    def hold(cls, t0, q):
+        q = np.asarray(q, dtype=float)
+        zero = np.zeros((2, q.size))
+        return cls(np.array([t0, t0 + 1.0]), np.array([q, q]), zero, zero, end=t0)
+
+    def sample(self, time, velocity_lag=0.0):
+        """Reference position, velocity (``velocity_lag`` seconds earlier, as in
+        :func:`~dqlab.sim.track`) and acceleration at ``time``."""
+        if time >= self.t[-1]:                   # over: hold the last position, at rest
+            zero = np.zeros(self.q.shape[1])
+            return self.q[-1], zero, zero
+        q, qd, qdd = _reference(self.t, self.q, self.qd, self.qdd, np.array([time]),
+                                velocity_lag)
+        return q[0], qd[0], qdd[0]
+
+
+class MujocoBackend:
+    r"""A simulated UR arm in MuJoCo behind the UR client's back-end protocol.
+
+    Parameters
+    ----------
+    robot : Robot, optional
+        A six-joint arm (default :func:`dqlab.models.ur3`).
+    q_home : array_like, shape (6,), optional
+        Where the arm stands after :meth:`connect` (default :data:`UR3_HOME`).
+    controller : optional
+        The joint controller (default :class:`~dqlab.sim.ComputedTorque`).
+    period : float, optional
+        Simulated seconds per :meth:`read_state` with ``clock="sim"`` (default 0.008 s).
+    clock : {"sim", "wall"}, optional
+        ``"sim"``: each state read advances the simulation by ``period`` (deterministic,
+        as fast as the computer allows). ``"wall"``: the simulation keeps up with the wall
+        clock since :meth:`connect`.
+    **model_options
+        Passed to :class:`~dqlab.sim.ArmSimulation` (``payload``, ``timestep``...).
+
+    Attributes
+    ----------
+    sim : ArmSimulation
+    name : str
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> arm = MujocoBackend()
+    >>> arm.connect(timeout=1.0)
+    >>> target = np.array([0.3, -1.2, 1.2, -1.5, -1.5, 0.4])
+    >>> arm.movej(target, a=1.4, v=1.05, t=0.0, r=0.0)
+    >>> while arm.is_moving:
+    ...     state = arm.read_state()
+    >>> state.robot_mode
+    7
+    >>> bool(np.abs(state.q - target).max() < 1e-3)
+    True
+    >>> arm.close()
+    """
+
+    def __init__(self, robot=None, *, q_home=UR3_HOME, controller=None, period=0.008,
+                 clock="sim", **model_options):
+        robot = ur3() if robot is None else robot
+        if robot.n != 6:
+            raise ValueError(f"robot must have 6 joints like a UR arm, it has {robot.n}")
+        if clock not in ("sim", "wall"):
+            raise ValueError(f"clock must be 'sim' or 'wall', got {clock!r}")
+        self.name = f"MuJoCo simulation of the {robot.name or 'arm'}"
+        self.sim = ArmSimulation(robot, **model_options)
+        self.controller = ComputedTorque() if controller is None else controller
+        self.period = _positive(period, "period")
+        self.clock = clock
+        self.q_home = self.sim.check_target(q_home, "q_home")
+        self._connected = False
+        self._motion = None
+        self._wall_start = None
+
+    # -- connection ---------------------------------------------------------------------------
+    def connect(self, timeout=1.0):
+        """Start the simulation with the arm at rest at ``q_home`` (time 0)."""
+        _positive(timeout, "timeout")
+        self.sim.reset(self.q_home)
+        self._motion = _Motion.hold(0.0, self.q_home)
+        self._connected = True
+        self._wall_start = _time.monotonic()
+
+    def close(self):
+        """Stop simulating (a later :meth:`connect` starts again from ``q_home``)."""
+        self._connected = False
+
+    def _require_connected(self):
+        if not self._connected:
+            raise RuntimeError("the simulated arm is not connected; call connect() first")
+
+    # -- running -----------------------------------------------------------------------------
+    def advance(self, duration):
+        """Run the simulation for ``duration`` seconds under the controller."""
+        self._require_connected()
+        sim = self.sim
+        steps = int(round(_positive(duration, "duration", allow_zero=True) / sim.timestep))
+        motion, controller = self._motion, self.controller
+        lag = sim.timestep / 2
+        for _ in range(steps):
+            q_d, qd_d, qdd_d = motion.sample(sim.time, lag)
+            sim.step(controller.torque(sim, q_d, qd_d, qdd_d))
+
+    @property
+    def is_moving(self):
+        """True while the reference of the last move is still running."""
+        return self._connected and self.sim.time < self._motion.end
+
+    def read_state(self):
+        """Advance the simulation (see ``clock``) and report the state.
+
+        Returns
+        -------
+        URState
+            time (s), q and qd (6,), tcp_pose (6,) as ``[x, y, z, rx, ry, rz]``,
+            robot_mode 7 (running).
+        """
+        self._require_connected()
+        if self.clock == "sim":
+            self.advance(self.period)
+        else:
+            self.advance(max(0.0, _time.monotonic() - self._wall_start - self.sim.time))
+        return _state(self.sim.time, self.sim.q, self.sim.qd, self.sim.flange_pose())
+
+    # -- moves -------------------------------------------------------------------------------
+    def _start(self, motion):
+        self._motion = motion
+
+    def _current_target(self):
+        """Where the reference is now (a new move starts there)."""
+        q, _, _ = self._motion.sample(self.sim.time)
+        return q
+
+    def _grid(self, duration):
+        step = self.sim.timestep * 4
+        count = max(int(math.ceil(duration / step)), 1)
+        return np.linspace(0.0, duration, count + 1)
+
+    def movej(self, q, *, a=1.4, v=1.05, t=0.0, r=0.0):
+        """Start a move in joint space to ``q`` (rad) with URScript's ``movej`` speed law.
+
+        ``r`` (blend radius) is accepted and checked; moves are not blended.
+
+        Raises
+        ------
+        ValueError
+            For a target with NaN or infinity, the wrong shape or a joint beyond its limits,
+            or a non-positive ``a`` or ``v``, negative ``t`` or ``r``.
+        """
+        self._require_connected()
+        target = self.sim.check_target(q, "q")
+        a, v = _positive(a, "a"), _positive(v, "v")
+        t, r = _positive(t, "t", allow_zero=True), _positive(r, "r", allow_zero=True)
+        start = self._current_target()
+        delta = target - start
+        duration, ramp = _law(float(np.abs(delta).max()), a, v, t)
+        t0 = self.sim.time
+        if duration == 0:
+            self._start(_Motion.hold(t0, target))
+            return
+        grid = self._grid(duration)
+        s, sd, sdd = _trapezoid_law(grid, duration, ramp)
+        self._start(_Motion(t0 + grid, start + s[:, None] * delta, sd[:, None] * delta,
+                            sdd[:, None] * delta))
+
+    def movel(self, pose, *, a=1.2, v=0.25, t=0.0, r=0.0):
+        """Start a straight-line move of the TCP to the UR pose vector ``pose``.
+
+        The position moves on a line and the orientation by SLERP, both with one speed law
+        on the line's length (m/s and m/s^2; on the rotation angle in rad/s and rad/s^2 for
+        a pure rotation). The joints follow the closed-form inverse kinematics
+        (:func:`dqlab.ik.ur`), on the branch of the start.
+
+        Raises
+        ------
+        ValueError
+            For a pose with NaN or infinity or the wrong shape, a pose out of reach, a path
+            that leaves the joint limits or would switch branches (a singularity on the way),
+            or bad ``a``, ``v``, ``t``, ``r``.
+        """
+        from ..ik import closest_solution
+        from ..ik import ur as ur_ik
+        from ..ik.result import IKResult
+
+        self._require_connected()
+        pose = _vector(pose, 6, "pose")
+        a, v = _positive(a, "a"), _positive(v, "v")
+        t, r = _positive(t, "t", allow_zero=True), _positive(r, "r", allow_zero=True)
+        robot = self.sim.robot
+        q_start = self._current_target()
+        X_start = robot.fk(q_start)
+        X_goal = transform_from_pose(pose)
+        p0, p1 = X_start[:3, 3], X_goal[:3, 3]
+        r0, r1 = quaternion_from_matrix(X_start[:3, :3]), quaternion_from_matrix(X_goal[:3, :3])
+        if np.dot(r0, r1) < 0:
+            r1 = -r1
+        length = float(np.linalg.norm(p1 - p0))
+        angle = 2.0 * math.acos(min(1.0, abs(float(np.dot(r0, r1)))))
+        duration, ramp = _law(length if length > 1e-9 else angle, a, v, t)
+        t0 = self.sim.time
+        if duration == 0:
+            self._start(_Motion.hold(t0, q_start))
+            return
+        grid = self._grid(duration)
+        s, _, _ = _trapezoid_law(grid, duration, ramp)
+        R = matrix_from_quaternion(slerp(r0, r1, s))
+        X = transform_from(R, p0 + s[:, None] * (p1 - p0))
+        result = ur_ik(robot, X)
+        if not result.success.all():
+            k = int(np.argmin(result.success))
+            raise ValueError(f"pose: the line leaves the reach at {X[k, :3, 3].round(4)} m "
+                             f"({result.reason[k]})")
+        limits = robot.limits
+        q_path = np.empty((grid.size, 6))
+        q_prev = q_start
+        for k in range(grid.size):
+            row = IKResult(result.solutions[k], result.valid[k], result.position_error[k],
+                           result.rotation_error[k])
+            q_prev = closest_solution(row, q_prev, limits)
+            q_path[k] = q_prev
+        jump = np.abs(np.diff(q_path, axis=0)).max()
+        if jump > 0.5:
+            raise ValueError("pose: the line crosses a singularity (a joint would jump by "
+                             f"{jump:.3g} rad between two samples)")
+        self.sim.check_target(q_path[-1], "pose (its joint solution)")
+        qd = np.gradient(q_path, grid, axis=0)
+        qdd = np.gradient(qd, grid, axis=0)
+        qd[[0, -1]] = 0.0
+        self._start(_Motion(t0 + grid, q_path, qd, qdd))
+
+    def servoj(self, q, *, t=0.008, lookahead_time=0.1, gain=300):
+        """One streaming step: the target moves linearly to ``q`` in ``t`` seconds.
+
+        ``lookahead_time`` (0.03-0.2 s) and ``gain`` (100-2000) are checked as URScript does;
+        the tracking itself is this back end's controller.
+
+        Raises
+        ------
+        ValueError
+            For a bad target (as :meth:`movej`), ``t <= 0``, or ``lookahead_time`` or
+            ``gain`` out of range.
+        """
+        self._require_connected()
+        target = self.sim.check_target(q, "q")
+        t = _positive(t, "t")
+        lookahead_time = _positive(lookahead_time, "lookahead_time")
+        gain = _positive(gain, "gain")
+        if not 0.03 <= lookahead_time <= 0.2:
+            raise ValueError(f"lookahead_time must be in [0.03, 0.2] s, got {lookahead_time}")
+        if not 100 <= gain <= 2000:
+            raise ValueError(f"gain must be in [100, 2000], got {gain}")
+        start = self._current_target()
+        t0 = self.sim.time
+        rate = (target - start) / t
+        # a line to the target at the constant rate, then a hold (the rate drops to 0 within
+        # one simulation step)
+        qd = np.array([rate, rate, np.zeros(6)])
+        self._start(_Motion(np.array([t0, t0 + t, t0 + t + self.sim.timestep]),
+                            np.array([start, target, target]), qd, np.zeros((3, 6))))
+
+    def stop(self, a=2.0):
+        """Bring the reference to rest with deceleration ``a`` (rad/s^2) on the fastest joint.
+
+        Raises
+        ------
+        ValueError
+            If ``a`` is not a positive number.
+        """
+        self._require_connected()
+        a = _positive(a, "a")
+        t0 = self.sim.time
+        q0, qd0, _ = self._motion.sample(t0)
+        fastest = float(np.abs(qd0).max())
+        if fastest == 0:
+            self._start(_Motion.hold(t0, q0))
+            return
+        duration = fastest / a
+        grid = self._grid(duration)
+        tau = grid[:, None]
+        decel = qd0 / duration
+        q = q0 + qd0 * tau - 0.5 * decel * tau**2
+        qd = qd0 - decel * tau
+        qdd = np.broadcast_to(-decel, q.shape).copy()
+        self._start(_Motion(t0 + grid, q, qd, qdd))
+
+
+def transform_from_pose(pose):
+    """A 4x4 transform from a UR pose vector ``[x, y, z, rx, ry, rz]``."""
+    from ..rotations import matrix_from_axis_angle
+
+    pose = np.asarray(pose, dtype=float)
+    angle = float(np.linalg.norm(pose[3:]))
+    axis = pose[3:] / angle if angle > 0 else np.array([1.0, 0.0, 0.0])
+    return transform_from(matrix_from_axis_angle(axis, angle), pose[:3])
+
+
+def pose_from_transform(X):
+    """The UR pose vector ``[x, y, z, rx, ry, rz]`` of a 4x4 transform."""
+    from ..rotations import axis_angle_from_matrix
+
+    axis, angle = axis_angle_from_matrix(X[:3, :3])
+    return np.concatenate([X[:3, 3], np.asarray(axis) * angle])
+
+
+def _state(time, q, qd, X_WT):
+    try:
+        from ..ur.client import URState
+    except ImportError:                                     # pragma: no cover
+        from types import SimpleNamespace as URState
+    return URState(time=time, q=q, qd=qd, tcp_pose=pose_from_transform(X_WT),
+                   robot_mode=ROBOT_MODE_RUNNING)
