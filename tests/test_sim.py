@@ -295,7 +295,7 @@ def test_prismatic_robot_tracks_too():
 # -- the simulated arm behind the UR client's protocol ---------------------------------------
 
 from dqlab.sim import UR3_HOME  # noqa: E402
-from dqlab.sim.backend import pose_from_transform, transform_from_pose  # noqa: E402
+from dqlab.ur import pose_from_transform, transform_from_pose  # noqa: E402
 
 
 @pytest.fixture()

@@ -34,14 +34,13 @@ import numpy as np
 from ..models import ur3
 from ..quaternion import matrix_from_quaternion, quaternion_from_matrix, slerp
 from ..transforms import transform_from
-from .simulation import ArmSimulation, ComputedTorque, _reference, _vector
+from ..ur import ROBOT_MODE_RUNNING, URState, check_pose, pose_from_transform, transform_from_pose
+from .simulation import ArmSimulation, ComputedTorque, _reference
 
 __all__ = ["MujocoBackend", "UR3_HOME", "trapezoid_duration"]
 
 #: A comfortable start: upper arm up, forearm forward, wrist 2 down.
 UR3_HOME = (0.0, -math.pi / 2, math.pi / 2, -math.pi / 2, -math.pi / 2, 0.0)
-
-ROBOT_MODE_RUNNING = 7
 
 
 def _positive(value, name, *, allow_zero=False):
@@ -296,7 +295,9 @@ class MujocoBackend:
         from ..ik.result import IKResult
 
         self._require_connected()
-        pose = _vector(pose, 6, "pose")
+        pose = check_pose(pose, "pose")
+        if pose.shape != (6,):
+            raise ValueError(f"pose must be one UR pose vector of shape (6,), got {pose.shape}")
         a, v = _positive(a, "a"), _positive(v, "v")
         t, r = _positive(t, "t", allow_zero=True), _positive(r, "r", allow_zero=True)
         robot = self.sim.robot
@@ -397,28 +398,6 @@ class MujocoBackend:
         self._start(_Motion(t0 + grid, q, qd, qdd))
 
 
-def transform_from_pose(pose):
-    """A 4x4 transform from a UR pose vector ``[x, y, z, rx, ry, rz]``."""
-    from ..rotations import matrix_from_axis_angle
-
-    pose = np.asarray(pose, dtype=float)
-    angle = float(np.linalg.norm(pose[3:]))
-    axis = pose[3:] / angle if angle > 0 else np.array([1.0, 0.0, 0.0])
-    return transform_from(matrix_from_axis_angle(axis, angle), pose[:3])
-
-
-def pose_from_transform(X):
-    """The UR pose vector ``[x, y, z, rx, ry, rz]`` of a 4x4 transform."""
-    from ..rotations import axis_angle_from_matrix
-
-    axis, angle = axis_angle_from_matrix(X[:3, :3])
-    return np.concatenate([X[:3, 3], np.asarray(axis) * angle])
-
-
 def _state(time, q, qd, X_WT):
-    try:
-        from ..ur.client import URState
-    except ImportError:                                     # pragma: no cover
-        from types import SimpleNamespace as URState
     return URState(time=time, q=q, qd=qd, tcp_pose=pose_from_transform(X_WT),
                    robot_mode=ROBOT_MODE_RUNNING)
