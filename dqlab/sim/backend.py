@@ -115,15 +115,16 @@ class _Motion:
         zero = np.zeros((2, q.size))
         return cls(np.array([t0, t0 + 1.0]), np.array([q, q]), zero, zero, end=t0)
 
-    def sample(self, time, velocity_lag=0.0):
-        """Reference position, velocity (``velocity_lag`` seconds earlier, as in
-        :func:`~dqlab.sim.track`) and acceleration at ``time``."""
-        if time >= self.t[-1]:                   # over: hold the last position, at rest
-            zero = np.zeros(self.q.shape[1])
-            return self.q[-1], zero, zero
-        q, qd, qdd = _reference(self.t, self.q, self.qd, self.qdd, np.array([time]),
-                                velocity_lag)
-        return q[0], qd[0], qdd[0]
+    def sample(self, times, velocity_lag=0.0):
+        """Reference positions, velocities (``velocity_lag`` seconds earlier, as in
+        :func:`~dqlab.sim.track`) and accelerations at ``times`` (shape (k,) -> (k, 6)
+        each). After the last sample the reference holds the last position at rest."""
+        times = np.asarray(times, dtype=float)
+        q, qd, qdd = _reference(self.t, self.q, self.qd, self.qdd, times, velocity_lag)
+        over = times >= self.t[-1]
+        qd[over] = 0.0
+        qdd[over] = 0.0
+        return q, qd, qdd
 
 
 class MujocoBackend:
@@ -207,11 +208,11 @@ class MujocoBackend:
         self._require_connected()
         sim = self.sim
         steps = int(round(_positive(duration, "duration", allow_zero=True) / sim.timestep))
-        motion, controller = self._motion, self.controller
-        lag = sim.timestep / 2
-        for _ in range(steps):
-            q_d, qd_d, qdd_d = motion.sample(sim.time, lag)
-            sim.step(controller.torque(sim, q_d, qd_d, qdd_d))
+        controller = self.controller
+        times = sim.time + sim.timestep * np.arange(steps)
+        q_d, qd_d, qdd_d = self._motion.sample(times, sim.timestep / 2)
+        for k in range(steps):
+            sim.step(controller.torque(sim, q_d[k], qd_d[k], qdd_d[k]))
 
     @property
     def is_moving(self):
@@ -240,8 +241,8 @@ class MujocoBackend:
 
     def _current_target(self):
         """Where the reference is now (a new move starts there)."""
-        q, _, _ = self._motion.sample(self.sim.time)
-        return q
+        q, _, _ = self._motion.sample([self.sim.time])
+        return q[0]
 
     def _grid(self, duration):
         step = self.sim.timestep * 4
@@ -383,7 +384,7 @@ class MujocoBackend:
         self._require_connected()
         a = _positive(a, "a")
         t0 = self.sim.time
-        q0, qd0, _ = self._motion.sample(t0)
+        q0, qd0, _ = (x[0] for x in self._motion.sample([t0]))
         fastest = float(np.abs(qd0).max())
         if fastest == 0:
             self._start(_Motion.hold(t0, q0))
