@@ -12,7 +12,7 @@ Generating the model needs only numpy; simulating it needs ``mujoco``
 (``pip install 'dqlab[sim]'``).
 """
 
-from .backend import UR3_HOME, MujocoBackend, trapezoid_duration
+from .backend import UR3_HOME, MujocoBackend
 from .mjcf import UR3_BASE_MASS, UR3_LINK_MASSES, UR3_PAYLOAD, link_placements, mjcf_from_robot
 from .simulation import (
     ArmSimulation,
@@ -27,5 +27,5 @@ from .simulation import (
 __all__ = [
     "mjcf_from_robot", "link_placements", "UR3_LINK_MASSES", "UR3_PAYLOAD", "UR3_BASE_MASS",
     "ArmSimulation", "JointPD", "ComputedTorque", "TrackingResult", "track",
-    "check_trajectory", "require_mujoco", "MujocoBackend", "UR3_HOME", "trapezoid_duration",
+    "check_trajectory", "require_mujoco", "MujocoBackend", "UR3_HOME",
 ]

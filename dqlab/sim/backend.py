@@ -14,10 +14,12 @@ The references are URScript's:
 - ``movej(q, a, v, t)``: every joint moves from the current target to ``q`` with one
   trapezoidal speed law, scaled so that all joints start and stop together; the joint that
   moves most accelerates at ``a`` (rad/s^2) up to ``v`` (rad/s). With ``t > 0`` the move
-  lasts ``t`` seconds instead (a third of it accelerating, a third braking).
+  lasts ``t`` seconds instead (a third of it accelerating, a third braking). This is
+  :func:`dqlab.trajectory.joint_trajectory` with the trapezoidal law.
 - ``movel(pose, a, v, t)``: the TCP moves on a straight line while its orientation turns
-  by SLERP, with the same speed law on the distance (m/s, m/s^2); the joints follow by the
-  closed-form inverse kinematics, keeping the branch of the start.
+  by SLERP (:func:`dqlab.trajectory.line_slerp`), with the same speed law on the distance
+  (m/s, m/s^2); the joints follow by the closed-form inverse kinematics with branch
+  tracking (:func:`dqlab.trajectory.follow_path_ur`), from the branch of the start.
 - ``servoj(q, t)``: the target moves linearly to ``q`` in ``t`` seconds (one streaming
   step).
 - ``stop(a)``: the reference decelerates at ``a`` to rest.
@@ -32,12 +34,12 @@ import time as _time
 import numpy as np
 
 from ..models import ur3
-from ..quaternion import matrix_from_quaternion, quaternion_from_matrix, slerp
-from ..transforms import transform_from
+from ..quaternion import quaternion_distance, quaternion_from_matrix
+from ..trajectory import follow_path_ur, joint_trajectory, line_slerp, trapezoidal
 from ..ur import ROBOT_MODE_RUNNING, URState, check_pose, pose_from_transform, transform_from_pose
 from .simulation import ArmSimulation, ComputedTorque, _reference
 
-__all__ = ["MujocoBackend", "UR3_HOME", "trapezoid_duration"]
+__all__ = ["MujocoBackend", "UR3_HOME"]
 
 #: A comfortable start: upper arm up, forearm forward, wrist 2 down.
 UR3_HOME = (0.0, -math.pi / 2, math.pi / 2, -math.pi / 2, -math.pi / 2, 0.0)
@@ -53,53 +55,6 @@ def _positive(value, name, *, allow_zero=False):
         kind = ">= 0" if allow_zero else "> 0"
         raise ValueError(f"{name} must be a finite number {kind}, got {value!r}")
     return value
-
-
-def trapezoid_duration(distance, v, a):
-    r"""Duration of a rest-to-rest move over ``distance`` with speed limit ``v`` and
-    acceleration ``a`` (a triangle when the cruise speed is not reached).
-
-    .. math::
-
-       T = \begin{cases} d/v + v/a & d \ge v^2/a \\ 2\sqrt{d/a} & \text{otherwise}
-       \end{cases}
-
-    Examples
-    --------
-    >>> trapezoid_duration(1.0, v=1.0, a=2.0)          # 0.5 s up, 0.5 s cruise, 0.5 s down
-    1.5
-    >>> trapezoid_duration(0.25, v=1.0, a=1.0)         # a triangle: 0.5 s up, 0.5 s down
-    1.0
-    """
-    if distance >= v * v / a:
-        return distance / v + v / a
-    return 2.0 * math.sqrt(distance / a)
-
-
-def _trapezoid_law(times, duration, ramp):
-    """Normalised rest-to-rest law s(t) in [0, 1] and its derivatives, with acceleration
-    phases of length ``ramp`` (<= duration / 2) at both ends."""
-    t = np.clip(times, 0.0, duration)
-    v = 1.0 / (duration - ramp)             # cruise speed that covers 1 in ``duration``
-    a = v / ramp
-    s = np.where(t < ramp, 0.5 * a * t**2,
-                 np.where(t <= duration - ramp, 0.5 * a * ramp**2 + v * (t - ramp),
-                          1.0 - 0.5 * a * (duration - t) ** 2))
-    sd = np.where(t < ramp, a * t, np.where(t <= duration - ramp, v, a * (duration - t)))
-    sdd = np.where(t < ramp, a, np.where(t <= duration - ramp, 0.0, -a))
-    inside = (times >= 0) & (times <= duration)
-    return s, np.where(inside, sd, 0.0), np.where(inside, sdd, 0.0)
-
-
-def _law(distance, a, v, t):
-    """(duration, ramp) of URScript's speed law for ``distance`` with ``a``, ``v`` or ``t``."""
-    if t > 0:
-        return t, t / 3.0
-    if distance == 0:
-        return 0.0, 0.0
-    duration = trapezoid_duration(distance, v, a)
-    ramp = min(v / a, duration / 2)
-    return duration, ramp
 
 
 class _Motion:
@@ -244,9 +199,13 @@ class MujocoBackend:
         q, _, _ = self._motion.sample([self.sim.time])
         return q[0]
 
+    @property
+    def _dt(self):
+        """Sampling period of the planned references (four simulation steps)."""
+        return 4 * self.sim.timestep
+
     def _grid(self, duration):
-        step = self.sim.timestep * 4
-        count = max(int(math.ceil(duration / step)), 1)
+        count = max(int(math.ceil(duration / self._dt)), 1)
         return np.linspace(0.0, duration, count + 1)
 
     def movej(self, q, *, a=1.4, v=1.05, t=0.0, r=0.0):
@@ -265,16 +224,17 @@ class MujocoBackend:
         a, v = _positive(a, "a"), _positive(v, "v")
         t, r = _positive(t, "t", allow_zero=True), _positive(r, "r", allow_zero=True)
         start = self._current_target()
-        delta = target - start
-        duration, ramp = _law(float(np.abs(delta).max()), a, v, t)
         t0 = self.sim.time
-        if duration == 0:
+        if np.array_equal(start, target):
             self._start(_Motion.hold(t0, target))
             return
-        grid = self._grid(duration)
-        s, sd, sdd = _trapezoid_law(grid, duration, ramp)
-        self._start(_Motion(t0 + grid, start + s[:, None] * delta, sd[:, None] * delta,
-                            sdd[:, None] * delta))
+        if t > 0:                  # URScript: with a time, a and v are not used
+            move = joint_trajectory(start, target, duration=t, law="trapezoidal",
+                                    dt=self._dt)
+        else:
+            move = joint_trajectory(start, target, v_max=v, a_max=a, law="trapezoidal",
+                                    dt=self._dt)
+        self._start(_Motion(t0 + move.t, move.q, move.qd, move.qdd))
 
     def movel(self, pose, *, a=1.2, v=0.25, t=0.0, r=0.0):
         """Start a straight-line move of the TCP to the UR pose vector ``pose``.
@@ -291,10 +251,6 @@ class MujocoBackend:
             that leaves the joint limits or would switch branches (a singularity on the way),
             or bad ``a``, ``v``, ``t``, ``r``.
         """
-        from ..ik import closest_solution
-        from ..ik import ur as ur_ik
-        from ..ik.result import IKResult
-
         self._require_connected()
         pose = check_pose(pose, "pose")
         if pose.shape != (6,):
@@ -303,45 +259,28 @@ class MujocoBackend:
         t, r = _positive(t, "t", allow_zero=True), _positive(r, "r", allow_zero=True)
         robot = self.sim.robot
         q_start = self._current_target()
-        X_start = robot.fk(q_start)
-        X_goal = transform_from_pose(pose)
-        p0, p1 = X_start[:3, 3], X_goal[:3, 3]
-        r0, r1 = quaternion_from_matrix(X_start[:3, :3]), quaternion_from_matrix(X_goal[:3, :3])
-        if np.dot(r0, r1) < 0:
-            r1 = -r1
-        length = float(np.linalg.norm(p1 - p0))
-        angle = 2.0 * math.acos(min(1.0, abs(float(np.dot(r0, r1)))))
-        duration, ramp = _law(length if length > 1e-9 else angle, a, v, t)
         t0 = self.sim.time
-        if duration == 0:
+        X_start, X_goal = robot.fk(q_start), transform_from_pose(pose)
+        length = float(np.linalg.norm(X_goal[:3, 3] - X_start[:3, 3]))
+        angle = quaternion_distance(quaternion_from_matrix(X_start[:3, :3]),
+                                    quaternion_from_matrix(X_goal[:3, :3]))
+        distance = length if length > 1e-9 else float(angle)
+        if distance == 0:
             self._start(_Motion.hold(t0, q_start))
             return
-        grid = self._grid(duration)
-        s, _, _ = _trapezoid_law(grid, duration, ramp)
-        R = matrix_from_quaternion(slerp(r0, r1, s))
-        X = transform_from(R, p0 + s[:, None] * (p1 - p0))
-        result = ur_ik(robot, X)
-        if not result.success.all():
-            k = int(np.argmin(result.success))
-            raise ValueError(f"pose: the line leaves the reach at {X[k, :3, 3].round(4)} m "
-                             f"({result.reason[k]})")
-        limits = robot.limits
-        q_path = np.empty((grid.size, 6))
-        q_prev = q_start
-        for k in range(grid.size):
-            row = IKResult(result.solutions[k], result.valid[k], result.position_error[k],
-                           result.rotation_error[k])
-            q_prev = closest_solution(row, q_prev, limits)
-            q_path[k] = q_prev
-        jump = np.abs(np.diff(q_path, axis=0)).max()
-        if jump > 0.5:
-            raise ValueError("pose: the line crosses a singularity (a joint would jump by "
-                             f"{jump:.3g} rad between two samples)")
-        self.sim.check_target(q_path[-1], "pose (its joint solution)")
-        qd = np.gradient(q_path, grid, axis=0)
-        qdd = np.gradient(qd, grid, axis=0)
-        qd[[0, -1]] = 0.0
-        self._start(_Motion(t0 + grid, q_path, qd, qdd))
+        if t > 0:
+            law = trapezoidal(1.0, duration=t)
+        else:                      # the limits on the line, for the normalised law s: 0 -> 1
+            law = trapezoidal(1.0, v_max=v / distance, a_max=a / distance)
+        path = line_slerp(X_start, X_goal, law=law, dt=self._dt)
+        try:
+            move, report = follow_path_ur(robot, path, q_start=q_start)
+        except ValueError as exc:
+            raise ValueError(f"pose: {exc}") from None
+        if report.switches:
+            raise ValueError(f"pose: the line crosses a singularity or needs a jump "
+                             f"({report.switches[0]})")
+        self._start(_Motion(t0 + move.t, move.q, move.qd, move.qdd))
 
     def servoj(self, q, *, t=0.008, lookahead_time=0.1, gain=300):
         """One streaming step: the target moves linearly to ``q`` in ``t`` seconds.
