@@ -443,3 +443,25 @@ def test_computed_torque_tracks_the_reports_circle():
     radius = np.linalg.norm((p - [0.0, -0.3, 0.3])[:, [0, 2]], axis=1)
     assert np.abs(radius - 0.1).max() < 2e-6
     assert np.abs(p[:, 1] + 0.3).max() < 2e-6
+
+
+def test_a_payload_picked_during_the_run_is_felt_while_carried(ur3_sim):
+    move = smooth_trajectory(duration=2.0)
+    carried = np.where((move.t >= 0.5) & (move.t < 1.5), 2.0, 0.0)
+    blind = ComputedTorque(model=ArmSimulation(models.ur3()))
+    result = track(ur3_sim, move, blind, payload=carried)
+    error = result.flange_error
+    before = error[result.t < 0.5].max()
+    during = error[(result.t > 0.6) & (result.t < 1.5)].max()
+    assert during > 20 * before
+    assert ur3_sim.payload == 0.0                        # restored after the run
+    with pytest.raises(ValueError, match="payload must hold 401 finite masses"):
+        track(ur3_sim, move, blind, payload=carried[:-1])
+
+
+def test_frames_for_playback(ur3_sim):
+    result = track(ur3_sim, smooth_trajectory(duration=1.0), ComputedTorque())
+    times, q = result.frames(fps=20)
+    assert times.shape == (21,) and q.shape == (21, 6)
+    np.testing.assert_allclose(times, np.arange(21) / 20, atol=1e-9)
+    np.testing.assert_array_equal(q[-1], result.q[-1])

@@ -199,7 +199,9 @@ class ArmSimulation:
         mass = max(mass, 1e-9)
         self.model.body_mass[self._payload_body] = mass
         self.model.body_inertia[self._payload_body] = 0.4 * mass * self._payload_radius ** 2
-        self._mj.mj_setConst(self.model, self.data)
+        # recompute the model's derived constants on the scratch data (mj_setConst moves the
+        # data it is given to the reference configuration)
+        self._mj.mj_setConst(self.model, self._scratch)
 
     # -- dynamics ----------------------------------------------------------------------------
     def step(self, torque, steps=1):
@@ -376,6 +378,23 @@ class TrackingResult:
         """Largest absolute joint error per joint, shape (n,)."""
         return np.abs(self.error).max(axis=0)
 
+    def frames(self, fps=25.0):
+        """Samples for playing the run back at ``fps`` frames per second.
+
+        Returns
+        -------
+        times : ndarray, shape (k,)
+        q : ndarray, shape (k, n)
+            The joint positions reached at those times, for
+            :meth:`dqlab.viz.Scene.animate` (``scene.animate(q, times=times)``).
+        """
+        if not (math.isfinite(fps) and fps > 0):
+            raise ValueError(f"fps must be a positive number, got {fps!r}")
+        wanted = np.arange(self.t[0], self.t[-1] + 1e-12, 1.0 / fps)
+        index = np.searchsorted(self.t, wanted - 1e-9)      # the first step at or after
+        index = np.unique(np.clip(index, 0, self.t.size - 1))
+        return self.t[index], self.q[index]
+
 
 def check_trajectory(trajectory, robot):
     """Validate a joint trajectory for ``robot``: arrays ``t`` (N,) and ``q``, ``qd``, ``qdd``
@@ -451,7 +470,7 @@ def _reference(t, q, qd, qdd, times, velocity_lag=0.0):
     return q_ref, qd_ref, qdd_ref
 
 
-def track(sim, trajectory, controller, *, start_from_trajectory=True):
+def track(sim, trajectory, controller, *, start_from_trajectory=True, payload=None):
     r"""Run ``controller`` along a joint trajectory in the simulation.
 
     The controller computes the torques once per simulation step from the state and the
@@ -476,6 +495,11 @@ def track(sim, trajectory, controller, *, start_from_trajectory=True):
     start_from_trajectory : bool, optional
         Reset the arm to the first sample (position and velocity) before the run (default);
         otherwise start from the simulation's current state.
+    payload : array_like, shape (N,), optional
+        The mass (kg) the arm really carries at each sample of the trajectory, held until
+        the next sample (an object picked and placed). The controller is not told: a
+        :class:`ComputedTorque` keeps its own model. Default: the simulation's payload
+        throughout. The simulation's payload is restored after the run.
 
     Returns
     -------
@@ -507,6 +531,12 @@ def track(sim, trajectory, controller, *, start_from_trajectory=True):
     True
     """
     t, q, qd, qdd = check_trajectory(trajectory, sim.robot)
+    masses = None
+    if payload is not None:
+        masses = np.asarray(payload, dtype=float)
+        if masses.shape != t.shape or not np.isfinite(masses).all() or (masses < 0).any():
+            raise ValueError(f"payload must hold {t.size} finite masses >= 0 (one per "
+                             f"trajectory sample), got shape {masses.shape}")
     if start_from_trajectory:
         sim.reset(q[0], qd[0], time=t[0])
     dt = sim.timestep
@@ -519,13 +549,22 @@ def track(sim, trajectory, controller, *, start_from_trajectory=True):
     qd_out = np.empty((steps + 1, n))
     tau_out = np.empty((steps + 1, n))
     data = sim.data
+    if masses is not None:
+        saved_payload = sim.payload
+        sample = np.clip(np.searchsorted(t, times - sim.time + t[0] + 1e-12, side="right") - 1,
+                         0, t.size - 1)
+        carried = masses[sample]
     for k in range(steps + 1):
+        if masses is not None and (k == 0 or carried[k] != carried[k - 1]):
+            sim.payload = carried[k]
         q_out[k] = data.qpos
         qd_out[k] = data.qvel
         tau = controller.torque(sim, q_ref[k], qd_ref[k], qdd_ref[k])
         tau_out[k] = tau
         if k < steps:
             sim.step(tau)
+    if masses is not None:
+        sim.payload = saved_payload
     X = sim.robot.fk(q_out)
     X_ref = sim.robot.fk(q_ref)
     flange_error = np.linalg.norm(X[:, :3, 3] - X_ref[:, :3, 3], axis=-1)
