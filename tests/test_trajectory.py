@@ -1,0 +1,643 @@
+"""Tests of dqlab.trajectory: time laws, joint trajectories, Cartesian paths, path following.
+
+Oracles: the closed forms of the laws (end values, peaks, switch times of the UR3 report),
+finite differences of the sampled arrays, scipy (quadrature, the clamped cubic spline),
+pytransform3d (ScLERP), the robot's forward kinematics and ur_analytic_ik (UR3 IK).
+"""
+
+import contextlib
+import os
+import sys
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from dqlab import quaternion_conjugate, quaternion_product, rot_x, rot_y, rot_z, transform_from
+from dqlab.ik import ur
+from dqlab.models import ur3
+from dqlab.trajectory import (
+    CartesianPath,
+    TimeLaw,
+    Trajectory,
+    circle_three_phase,
+    cubic,
+    follow_path_numerical,
+    follow_path_ur,
+    joint_trajectory,
+    joint_velocities,
+    line_slerp,
+    quintic,
+    screw_path,
+    three_phase,
+    time_grid,
+    track_branches,
+    trapezoidal,
+    ur_singularity_margins,
+    via_points,
+)
+
+#: the circle of chapter 11: centre, fixed tool orientation (tool z along -y), start
+CENTER = np.array([0.0, -0.3, 0.3])
+R_WT = rot_x(np.pi / 2)
+R, V, DT = 0.1, 0.05, 0.005
+
+
+@pytest.fixture(scope="module")
+def robot():
+    return ur3()
+
+
+@pytest.fixture(scope="module")
+def circle():
+    return circle_three_phase(CENTER, R, V, DT, orientation=R_WT)
+
+
+def central_difference(y, t):
+    return np.gradient(y, t, axis=0)
+
+
+# --------------------------------------------------------------------------------------
+# time laws
+
+
+@pytest.mark.parametrize("T, D", [(2.0, 1.0), (0.5, -3.0), (7.0, 0.25)])
+def test_cubic_and_quintic_closed_forms(T, D):
+    for law, v_peak, a_peak in ((cubic(T, D), 1.5, 6.0), (quintic(T, D), 1.875, 10 / np.sqrt(3))):
+        s, sd, sdd = law(np.array([0.0, T / 2, T]))
+        assert s.tolist() == pytest.approx([0.0, D / 2, D], abs=1e-14)
+        assert sd[[0, 2]].tolist() == [0.0, 0.0]
+        assert law.peak_speed == pytest.approx(v_peak * abs(D) / T, rel=1e-12)
+        assert abs(sd[1]) == pytest.approx(v_peak * abs(D) / T, rel=1e-12)
+        assert law.peak_acceleration == pytest.approx(a_peak * abs(D) / T**2, rel=1e-9)
+    assert quintic(T, D).acceleration(np.array([0.0, T])).tolist() == [0.0, 0.0]
+    assert quintic(T, D).jerk(0.0) == pytest.approx(60 * D / T**3, rel=1e-12)
+    assert cubic(T, D).jerk(T / 3) == pytest.approx(-12 * D / T**3, rel=1e-12)
+
+
+def test_trapezoid_accelerating_for_a_third_peaks_at_1_5_delta_over_T():
+    law = trapezoidal(0.9, duration=3.0)
+    assert law.peak_speed == pytest.approx(1.5 * 0.9 / 3.0, rel=1e-14)
+    assert law.switch_times.tolist() == pytest.approx([1.0, 2.0], rel=1e-14)
+    assert law.peak_acceleration == pytest.approx(0.45 / 1.0, rel=1e-14)
+
+
+@settings(max_examples=60, deadline=None)
+@given(D=st.floats(1e-3, 10), v=st.floats(0.05, 5), a=st.floats(0.05, 20),
+       sign=st.sampled_from([-1.0, 1.0]))
+def test_trapezoid_within_limits_is_the_shortest(D, v, a, sign):
+    law = trapezoidal(sign * D, v_max=v, a_max=a)
+    assert law.peak_speed <= v * (1 + 1e-12)
+    assert law.peak_acceleration <= a * (1 + 1e-12)
+    assert law.distance == pytest.approx(sign * D, rel=1e-12)
+    # shortest time: cruise at v_max when reachable, else the triangle
+    T = D / v + v / a if D > v * v / a else 2 * np.sqrt(D / a)
+    assert law.duration == pytest.approx(T, rel=1e-12)
+    # and the profile reaches the binding limit
+    assert law.peak_acceleration == pytest.approx(a, rel=1e-12)
+
+
+@pytest.mark.parametrize("kwargs", [dict(duration=2.0, a_max=2.5), dict(duration=2.0, v_max=0.7),
+                                    dict(duration=2.0, v_max=5.0),
+                                    dict(duration=2.0, accel_fraction=0.5),
+                                    dict(duration=2.0, a_max=1.0)])
+def test_trapezoid_from_a_duration_ends_on_time(kwargs):
+    law = trapezoidal(1.0, **kwargs)
+    assert law.duration == pytest.approx(2.0, rel=1e-14)
+    assert law.distance == pytest.approx(1.0, rel=1e-12)
+    if "a_max" in kwargs:
+        assert law.peak_acceleration == pytest.approx(kwargs["a_max"], rel=1e-9)
+    if "v_max" in kwargs:
+        assert law.peak_speed <= kwargs["v_max"] * (1 + 1e-12)
+
+
+def test_three_phase_matches_the_report():
+    law = three_phase(2 * np.pi * R, V)
+    t1, t2 = law.switch_times
+    assert t1 == pytest.approx(np.pi * R / V, rel=1e-14)
+    assert t2 == pytest.approx(3 * np.pi * R / (2 * V), rel=1e-14)
+    assert law.duration == pytest.approx(3.5 * np.pi * R / V, rel=1e-14)
+    a = law.acceleration(np.array([t1 / 2, (t1 + t2) / 2, (t2 + law.duration) / 2]))
+    assert a.tolist() == pytest.approx([V**2 / (np.pi * R), 0.0, -V**2 / (2 * np.pi * R)],
+                                       rel=1e-12)
+    s = law.position(np.array([t1, t2, law.duration]))
+    assert s.tolist() == pytest.approx([np.pi * R / 2, np.pi * R, 2 * np.pi * R], rel=1e-13)
+    assert law.peak_speed == pytest.approx(V, rel=1e-14)
+
+
+LAWS = [cubic(1.3, 2.0), quintic(0.7, -1.0), trapezoidal(1.0, v_max=0.5, a_max=1.0),
+        trapezoidal(0.1, v_max=0.5, a_max=1.0), three_phase(2.0, 0.4, (0.1, 0.6, 0.3)),
+        three_phase(1.0, 1.0, (0.5, 0.0, 0.5))]
+
+
+@pytest.mark.parametrize("law", LAWS, ids=lambda law: law.name)
+def test_position_and_speed_are_continuous_at_the_switches(law):
+    for tk in law.breaks:
+        eps = 1e-9 * max(law.duration, 1.0)
+        before, after = law(tk - eps), law(tk + eps)
+        assert after[0] == pytest.approx(before[0], abs=1e-8)
+        assert after[1] == pytest.approx(before[1], abs=1e-8)
+
+
+@pytest.mark.parametrize("law", LAWS, ids=lambda law: law.name)
+def test_integral_of_speed_is_the_distance(law):
+    from scipy.integrate import quad
+
+    integral, _ = quad(law.speed, 0.0, law.duration, points=law.breaks[1:-1], epsabs=1e-13)
+    assert integral == pytest.approx(law.distance, rel=1e-10, abs=1e-12)
+
+
+@pytest.mark.parametrize("law", LAWS, ids=lambda law: law.name)
+def test_derivatives_agree_with_finite_differences(law):
+    t = np.linspace(0, law.duration, 20001)
+    s, sd, sdd = law(t)
+    inner = slice(2, -2)
+    assert np.allclose(central_difference(s, t)[inner], sd[inner], atol=1e-6 * law.peak_speed
+                       + 1e-3 * law.peak_speed * (len(law.breaks) > 2))
+    # the acceleration away from its jumps
+    far = np.min(np.abs(t[:, None] - law.breaks[None, :]), axis=1) > 1e-3 * law.duration
+    assert np.allclose(central_difference(sd, t)[far], sdd[far],
+                       atol=1e-6 * law.peak_acceleration)
+
+
+def test_laws_hold_before_and_after_and_broadcast():
+    law = quintic(2.0, 3.0)
+    s, sd, sdd = law(np.array([[-1.0, 0.5], [2.0, 5.0]]))
+    assert s.shape == (2, 2)
+    assert s[0, 0] == 0.0 and s[1, 1] == 3.0 and sd[1, 1] == 0.0 and sdd[0, 0] == 0.0
+    assert float(law.position(0.5)) == s[0, 1]
+
+
+def test_time_grid():
+    assert time_grid(3.5 * np.pi * R / V, DT, endpoint=False).size == 4399
+    t = time_grid(1.0, 0.3)
+    assert t.tolist() == pytest.approx([0.0, 0.3, 0.6, 0.9, 1.0])
+    t = time_grid(1.0, 0.25)
+    assert t.size == 5 and t[-1] == 1.0
+    assert time_grid(0.0, 0.1).tolist() == [0.0]
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda: cubic(-1.0), "duration"),
+    (lambda: quintic(0.0), "duration"),
+    (lambda: cubic(1.0, np.nan), "distance"),
+    (lambda: trapezoidal(1.0, duration=1.0, a_max=3.0), "a_max"),
+    (lambda: trapezoidal(1.0, duration=1.0, v_max=1.0), "v_max"),
+    (lambda: trapezoidal(1.0, v_max=1.0), "give v_max and a_max"),
+    (lambda: trapezoidal(0.0, v_max=1.0, a_max=1.0), "distance"),
+    (lambda: trapezoidal(1.0, v_max=-1.0, a_max=1.0), "v_max"),
+    (lambda: trapezoidal(1.0, duration=1.0, accel_fraction=0.6), "accel_fraction"),
+    (lambda: trapezoidal(1.0, duration=1.0, a_max=10.0, v_max=1.0), "v_max"),
+    (lambda: three_phase(1.0, 1.0, (0.5, 0.6, 0.1)), "sum to 1"),
+    (lambda: three_phase(1.0, 1.0, (0.0, 0.5, 0.5)), "fractions"),
+    (lambda: three_phase(1.0, 0.0), "speed"),
+    (lambda: time_grid(1.0, 0.0), "dt"),
+    (lambda: time_grid(1.0, -0.1), "dt"),
+    (lambda: time_grid(-1.0, 0.1), "duration"),
+    (lambda: TimeLaw(np.array([0.0, 1.0, 1.0]), np.zeros((2, 6))), "increase"),
+    (lambda: quintic(1.0).sample(np.nan), "dt"),
+])
+def test_time_law_errors(call, match):
+    with pytest.raises(ValueError, match=match):
+        call()
+
+
+def test_time_law_type_errors():
+    with pytest.raises(TypeError, match="duration"):
+        cubic("1 s")
+
+
+# --------------------------------------------------------------------------------------
+# joint trajectories and the Trajectory type
+
+
+@pytest.mark.parametrize("law", ["trapezoidal", "cubic", "quintic"])
+def test_joint_trajectory_synchronises_and_respects_limits(law):
+    q_a = np.array([0.0, -1.0, 1.0, 0.5, -0.2, 0.0])
+    q_b = np.array([1.5, -2.0, 0.2, 0.5, 1.0, -3.0])
+    v_max = np.array([1.0, 1.0, 1.0, 2.0, 2.0, 2.0])
+    a_max = np.array([2.0, 2.0, 2.0, 4.0, 4.0, 4.0])
+    traj = joint_trajectory(q_a, q_b, v_max=v_max, a_max=a_max, law=law, dt=0.001)
+    assert np.array_equal(traj.q[0], q_a)
+    assert np.allclose(traj.q[-1], q_b, atol=1e-12)
+    assert np.all(traj.qd[[0, -1]] == 0)
+    peak_v = np.abs(traj.qd).max(axis=0)
+    peak_a = np.abs(traj.qdd).max(axis=0)
+    assert np.all(peak_v <= v_max * (1 + 1e-9)) and np.all(peak_a <= a_max * (1 + 1e-9))
+    # one joint is at a limit (the duration is the shortest)
+    assert np.max(np.maximum(peak_v / v_max, peak_a / a_max)) == pytest.approx(1.0, abs=2e-3)
+    # synchronised: every moving joint is a scaled copy of one law
+    scale = (traj.q - q_a) / np.where(q_b == q_a, 1.0, q_b - q_a)
+    moving = q_b != q_a
+    assert np.allclose(scale[:, moving], scale[:, [0]], atol=1e-12)
+    assert np.all(traj.q[:, ~moving] == q_a[~moving])
+    # speeds are the derivative of the positions
+    assert np.allclose(central_difference(traj.q, traj.t)[1:-1], traj.qd[1:-1],
+                       atol=2e-3 * v_max.max())
+
+
+def test_joint_trajectory_with_a_duration_and_errors():
+    traj = joint_trajectory([0, 0], [1.0, 2.0], duration=2.0, law="trapezoidal", dt=0.01)
+    assert traj.duration == 2.0
+    assert np.abs(traj.qd).max(axis=0) == pytest.approx([0.75, 1.5], rel=1e-9)
+    hold = joint_trajectory([0.5, 0.5], [0.5, 0.5], duration=1.0)
+    assert np.all(hold.q == 0.5) and np.all(hold.qd == 0)
+    with pytest.raises(ValueError, match="too short for a_max"):
+        joint_trajectory([0, 0], [1, 1], duration=1.0, a_max=1.0)
+    with pytest.raises(ValueError, match="q_start equals q_goal"):
+        joint_trajectory([0, 0], [0, 0], v_max=1.0)
+    with pytest.raises(ValueError, match="law"):
+        joint_trajectory([0, 0], [1, 1], duration=1.0, law="septic")
+    with pytest.raises(ValueError, match="dt"):
+        joint_trajectory([0, 0], [1, 1], duration=1.0, dt=0.0)
+    with pytest.raises(ValueError, match="q_goal"):
+        joint_trajectory([0, 0], [1, np.nan], duration=1.0)
+    with pytest.raises(ValueError, match="same shape"):
+        joint_trajectory([0, 0], [1, 1, 1], duration=1.0)
+    with pytest.raises(ValueError, match="v_max"):
+        joint_trajectory([0, 0], [1, 1], v_max=[1.0, 2.0, 3.0])
+    with pytest.raises(ValueError, match="needs v_max and a_max"):
+        joint_trajectory([0, 0], [1, 1], v_max=1.0, law="trapezoidal")
+
+
+def test_via_points_spline_against_scipy():
+    from scipy.interpolate import CubicSpline
+
+    rng = np.random.default_rng(12)
+    times = np.array([0.0, 0.8, 1.5, 2.9, 3.4])
+    Q = rng.uniform(-2, 2, (5, 3))
+    traj = via_points(Q, times, dt=0.01)
+    spline = CubicSpline(times, Q, bc_type="clamped")
+    assert np.allclose(traj.q, spline(traj.t), atol=1e-12)
+    assert np.allclose(traj.qd, spline(traj.t, 1), atol=1e-11)
+    assert np.allclose(traj.qdd, spline(traj.t, 2), atol=1e-10)
+    for k, tk in enumerate(times):          # every knot is on the grid, reached exactly
+        i = int(np.argmin(np.abs(traj.t - tk)))
+        assert traj.t[i] == pytest.approx(tk, abs=1e-12)
+        assert np.allclose(traj.q[i], Q[k], atol=1e-12)
+
+
+def test_via_points_stop_rests_at_every_point():
+    times = np.array([1.0, 2.0, 4.0])
+    traj = via_points([[0.0, 1.0], [1.0, 1.0], [-1.0, 0.0]], times, dt=0.1, method="stop")
+    assert traj.t[0] == 1.0 and traj.t[-1] == 4.0
+    for tk in times:
+        i = int(np.argmin(np.abs(traj.t - tk)))
+        assert np.all(np.abs(traj.qd[i]) < 1e-12) and np.all(np.abs(traj.qdd[i]) < 1e-12)
+    with pytest.raises(ValueError, match="times"):
+        via_points([[0.0], [1.0]], [0.0, 0.0])
+    with pytest.raises(ValueError, match="method"):
+        via_points([[0.0], [1.0]], [0.0, 1.0], method="bezier")
+    with pytest.raises(ValueError, match="q_points"):
+        via_points([[0.0]], [0.0])
+
+
+def test_trajectory_validation():
+    z = np.zeros((3, 2))
+    with pytest.raises(ValueError, match="qd must have the shape of q"):
+        Trajectory(t=[0, 1, 2], q=z, qd=np.zeros((3, 3)), qdd=z)
+    with pytest.raises(ValueError, match="q must have shape"):
+        Trajectory(t=[0, 1], q=z, qd=z, qdd=z)
+    with pytest.raises(ValueError, match="qdd contains NaN"):
+        Trajectory(t=[0, 1, 2], q=z, qd=z, qdd=np.full((3, 2), np.nan))
+    with pytest.raises(ValueError, match="increase strictly"):
+        Trajectory(t=[0, 2, 1], q=z, qd=z, qdd=z)
+    with pytest.raises(ValueError, match="poses"):
+        Trajectory(t=[0, 1, 2], q=z, qd=z, qdd=z, poses=np.zeros((2, 4, 4)))
+    traj = Trajectory(t=[0, 1, 2], q=z, qd=z, qdd=z)
+    with pytest.raises(ValueError):
+        traj.q[0, 0] = 1.0                      # read-only
+
+
+def test_csv_round_trip(tmp_path, robot, circle):
+    rng = np.random.default_rng(3)
+    traj = Trajectory(t=np.cumsum(rng.uniform(0.001, 0.01, 50)), q=rng.normal(size=(50, 6)),
+                      qd=rng.normal(size=(50, 6)), qdd=rng.normal(size=(50, 6)))
+    path = tmp_path / "a.csv"
+    traj.save_csv(path)
+    back = Trajectory.load_csv(path)
+    for name in ("t", "q", "qd", "qdd"):
+        assert np.array_equal(getattr(back, name), getattr(traj, name)), name
+    assert back.poses is None
+    with_poses, _ = follow_path_ur(robot, circle_three_phase(CENTER, R, V, 0.1,
+                                                             orientation=R_WT), branch=2)
+    with_poses.save_csv(path)
+    header = path.read_text().splitlines()[0]
+    assert header.startswith("t [s],q1 [rad]") and header.endswith("x [m],y [m],z [m],qw,qx,qy,qz")
+    back = Trajectory.load_csv(path)
+    assert np.array_equal(back.q, with_poses.q)
+    assert np.allclose(back.poses, with_poses.poses, atol=1e-15)
+
+
+def insert_line(text, index, line):
+    lines = text.split("\n")
+    return "\n".join(lines[:index] + [line] + lines[index:])
+
+
+@pytest.mark.parametrize("damage, line, match", [
+    (lambda text: text[: text.rindex(",")], 4, "expected 19 values, got 18"),
+    (lambda text: insert_line(text, 2, "0.1,oops" + ",0" * 17), 3, "not a number"),
+    (lambda text: "", 1, "empty file"),
+    (lambda text: "time,q1\n" + text.split("\n", 1)[1], 1, "header"),
+    (lambda text: text + "0.0" + ",0" * 18 + "\n", 5, "does not increase"),
+    (lambda text: insert_line(text, 2, ""), 3, "empty line"),
+    (lambda text: text + "9.0" + ",nan" * 18 + "\n", 5, "NaN"),
+    (lambda text: text.split("\n", 1)[0] + "\n", 2, "no data rows"),
+])
+def test_csv_errors_name_the_file_and_line(tmp_path, damage, line, match):
+    traj = joint_trajectory(np.zeros(6), np.ones(6), duration=1.0, dt=0.5)
+    path = tmp_path / "move.csv"
+    traj.save_csv(path)
+    path.write_text(damage(path.read_text()))
+    with pytest.raises(ValueError, match=match) as info:
+        Trajectory.load_csv(path)
+    assert str(info.value).startswith(f"{path}, line {line}:")
+
+
+# --------------------------------------------------------------------------------------
+# Cartesian paths
+
+
+def test_circle_has_the_reports_numbers(circle):
+    assert len(circle) == 4399
+    speed = circle.speed
+    assert speed.max() <= V + 1e-12
+    assert speed.max() == pytest.approx(V, abs=1e-12)
+    assert f"{speed.max():.4f}" == "0.0500"
+    assert np.allclose(speed, circle.sd, atol=1e-15)
+    assert np.allclose(np.diff(circle.t), DT)
+    assert circle.t[-1] < 3.5 * np.pi * R / V <= circle.t[-1] + DT
+    d = circle.position - CENTER
+    assert np.allclose(np.linalg.norm(d, axis=1), R, atol=1e-15)
+    assert np.all(d[:, 1] == 0)                             # in the (X, Z) plane
+    assert np.allclose(circle.position[0], CENTER + [0, 0, R], atol=1e-15)
+    assert circle.s[-1] <= 2 * np.pi * R and circle.s[-1] == pytest.approx(2 * np.pi * R,
+                                                                          abs=1e-7)
+
+
+def test_circle_derivatives_agree_with_finite_differences(circle):
+    t = circle.t
+    inner = slice(1, -1)
+    jumps = np.min(np.abs(t[:, None] - circle.law.switch_times[None, :]), axis=1) < 2 * DT
+    fd = central_difference(circle.position, t)
+    assert np.allclose(fd[inner][~jumps[inner]], circle.velocity[inner][~jumps[inner]],
+                       rtol=0, atol=DT**2 * V**3 / R**2)
+    assert np.allclose(fd[inner], circle.velocity[inner], atol=DT * V**2 / (np.pi * R))
+    acc = central_difference(circle.velocity, t)
+    assert np.allclose(acc[inner][~jumps[inner]], circle.acceleration[inner][~jumps[inner]],
+                       atol=1e-6)
+    # centripetal part: the normal acceleration is sd^2 / R
+    normal = -(circle.position - CENTER) / R
+    assert np.allclose(np.sum(circle.acceleration * normal, axis=1), circle.sd**2 / R,
+                       atol=1e-15)
+
+
+@pytest.mark.parametrize("plane, axes", [("xy", (0, 1, 2)), ("yz", (1, 2, 0))])
+def test_circle_in_other_planes(plane, axes):
+    path = circle_three_phase([0.1, 0.2, 0.3], 0.05, 0.1, 0.01, plane=plane)
+    i, j, k = axes
+    assert np.all(path.position[:, k] == [0.1, 0.2, 0.3][k])
+    assert path.position[0, j] == pytest.approx([0.1, 0.2, 0.3][j] + 0.05)
+    assert path.velocity[1, i] < 0
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda: circle_three_phase([0, 0], 0.1, 0.05), "center"),
+    (lambda: circle_three_phase([0, 0, np.nan], 0.1, 0.05), "center"),
+    (lambda: circle_three_phase([0, 0, 0], -0.1, 0.05), "radius"),
+    (lambda: circle_three_phase([0, 0, 0], 0.1, 0.0), "speed"),
+    (lambda: circle_three_phase([0, 0, 0], 0.1, 0.05, dt=0), "dt"),
+    (lambda: circle_three_phase([0, 0, 0], 0.1, 0.05, plane="xx"), "plane"),
+    (lambda: circle_three_phase([0, 0, 0], 0.1, 0.05, orientation=np.eye(2)), "rotation"),
+    (lambda: line_slerp(np.eye(4), np.eye(4)), "duration"),
+    (lambda: line_slerp(np.eye(4), np.eye(4), law=quintic(1.0, 2.0)), "from 0 to 1"),
+    (lambda: screw_path(np.eye(4), 2 * np.eye(4), duration=1.0), "X_B"),
+])
+def test_path_errors(call, match):
+    with pytest.raises(ValueError, match=match):
+        call()
+
+
+def angular_velocity_from_quaternions(q, t):
+    """omega = 2 q_dot q^* (world frame), by central differences."""
+    qd = central_difference(q, t)
+    return 2 * quaternion_product(qd, quaternion_conjugate(q))[:, 1:]
+
+
+X_A = transform_from(rot_z(0.3) @ rot_x(-0.4), [0.3, -0.2, 0.25])
+X_B = transform_from(rot_y(1.2) @ rot_z(-0.8), [-0.1, -0.35, 0.4])
+
+
+@pytest.mark.parametrize("make", [line_slerp, screw_path])
+def test_line_and_screw_paths_end_and_derivatives(make):
+    path = make(X_A, X_B, duration=2.0, dt=0.001)
+    assert np.allclose(path.poses[0], X_A, atol=1e-12)
+    assert np.allclose(path.poses[-1], X_B, atol=1e-12)
+    t = path.t
+    inner = slice(1, -1)
+    assert np.allclose(central_difference(path.position, t)[inner], path.velocity[inner],
+                       atol=1e-5)
+    assert np.allclose(central_difference(path.velocity, t)[inner],
+                       path.acceleration[inner], atol=1e-4)
+    q = path.orientation * np.sign(path.orientation @ path.orientation[0])[:, None]
+    assert np.allclose(angular_velocity_from_quaternions(q, t)[inner],
+                       path.angular_velocity[inner], atol=1e-5)
+
+
+def test_line_is_straight_and_screw_is_not():
+    line = line_slerp(X_A, X_B, duration=1.0, dt=0.01)
+    screw = screw_path(X_A, X_B, duration=1.0, dt=0.01)
+    chord = X_B[:3, 3] - X_A[:3, 3]
+
+    def off(p):
+        return np.linalg.norm(np.cross(p - X_A[:3, 3], chord / np.linalg.norm(chord)), axis=1)
+
+    assert off(line.position).max() < 1e-15
+    assert off(screw.position).max() > 0.02
+    # same orientations (both rotate about the same axis at the same rate)
+    assert np.allclose(np.abs(np.sum(line.orientation * screw.orientation, axis=1)), 1.0,
+                       atol=1e-12)
+    # for a pure translation the two coincide
+    X_C = transform_from(X_A[:3, :3], [0.0, 0.1, 0.5])
+    assert np.allclose(line_slerp(X_A, X_C, duration=1.0, dt=0.1).position,
+                       screw_path(X_A, X_C, duration=1.0, dt=0.1).position, atol=1e-15)
+
+
+def test_screw_path_against_pytransform3d():
+    pt = pytest.importorskip("pytransform3d.transformations")
+    path = screw_path(X_A, X_B, law=quintic(1.0), dt=0.05)
+    dq_a = pt.dual_quaternion_from_transform(X_A)
+    dq_b = pt.dual_quaternion_from_transform(X_B)
+    for s, X in zip(path.s, path.poses, strict=True):
+        theirs = pt.transform_from_dual_quaternion(pt.dual_quaternion_sclerp(dq_a, dq_b, s))
+        assert np.allclose(X, theirs, atol=1e-12)
+
+
+def test_cartesian_path_validation():
+    with pytest.raises(ValueError, match="velocity"):
+        CartesianPath(t=[0, 1], position=np.zeros((2, 3)), velocity=np.zeros((3, 3)),
+                      acceleration=np.zeros((2, 3)))
+    path = CartesianPath(t=[0, 1], position=np.zeros((2, 3)), velocity=np.zeros((2, 3)),
+                         acceleration=np.zeros((2, 3)))
+    with pytest.raises(ValueError, match="no orientation"):
+        _ = path.poses
+
+
+# --------------------------------------------------------------------------------------
+# following
+
+
+@contextlib.contextmanager
+def quiet_stdout():
+    """ur_analytic_ik prints to C stdout for each candidate its FK filter rejects."""
+    sys.stdout.flush()
+    fd = os.dup(1)
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, 1)
+    try:
+        yield
+    finally:
+        os.dup2(fd, 1)
+        os.close(devnull)
+        os.close(fd)
+
+
+@pytest.fixture(scope="module")
+def followed(robot, circle):
+    return follow_path_ur(robot, circle, branch=("left", "down", "noflip"))
+
+
+def test_closed_form_following_reproduces_every_pose(robot, circle, followed):
+    traj, report = followed
+    X = robot.fk(traj.q)
+    assert np.abs(X[:, :3, 3] - circle.position).max() <= 1e-9
+    assert np.abs(X[:, :3, :3] - R_WT).max() <= 1e-9
+    assert report.position_error.max() <= 1e-9
+    assert report.switches == [] and np.all(report.branch == 2)
+
+
+def test_closed_form_following_never_jumps_more_than_the_path_step(followed):
+    traj, report = followed
+    step = np.abs(np.diff(traj.q, axis=0))
+    speed = np.maximum(np.abs(traj.qd[:-1]), np.abs(traj.qd[1:]))
+    assert np.all(step <= speed * np.diff(traj.t)[:, None] * 1.01 + 1e-12)
+    assert report.max_step.max() < 2e-3
+
+
+def test_joint_speeds_agree_with_the_derivative_of_q(circle, followed):
+    traj, _ = followed
+    error = np.abs(central_difference(traj.q, traj.t) - traj.qd).max(axis=1)
+    # O(dt^2) away from the switches of the law, O(dt * jump of s_ddot) next to them
+    near = np.min(np.abs(traj.t[:, None] - circle.law.switch_times[None, :]), axis=1) < 2 * DT
+    assert error[1:-1][~near[1:-1]].max() < 1e-6
+    assert error[1:-1].max() < 1e-4
+    assert np.allclose(traj.qdd, central_difference(traj.qd, traj.t))
+
+
+def test_closed_form_following_is_one_of_ur_analytic_iks_solutions(robot, circle, followed):
+    uaik = pytest.importorskip("ur_analytic_ik")
+    traj, _ = followed
+    for k in range(0, len(circle), 200):
+        with quiet_stdout():
+            theirs = np.array(uaik.ur3.inverse_kinematics(circle.poses[k]))
+        diff = np.abs(np.angle(np.exp(1j * (theirs - traj.q[k]))))
+        assert diff.max(axis=1).min() < 1e-9, k
+
+
+def test_chapter_circle_margins(followed):
+    _, report = followed
+    m = {k: v.min() for k, v in report.margins.items()}
+    assert m["wrist"] > 0.5 and m["elbow"] > 0.5 and m["reach"] > 0.05 and m["shoulder"] > 0.1
+
+
+def test_margins_against_forward_kinematics(robot):
+    q = np.random.default_rng(5).uniform(-np.pi, np.pi, (200, 6))
+    m = ur_singularity_margins(robot, q)
+    frames = robot.fk(q, all_frames=True)
+    shoulder, wrist1, wrist_centre = frames[:, 1, :3, 3], frames[:, 3, :3, 3], frames[:, 5, :3, 3]
+    reach = 0.24365 + 0.21325 - np.linalg.norm(wrist1 - shoulder, axis=1)
+    assert np.allclose(m["reach"], reach, atol=1e-14)
+    assert np.allclose(m["shoulder"], np.hypot(*wrist_centre[:, :2].T) - 0.11235, atol=1e-14)
+    assert np.allclose(m["wrist"], np.abs(np.sin(q[:, 4])))
+
+
+def test_tracking_unwraps_through_pi(robot):
+    q_path = np.linspace([3.0, -1.0, 1.2, -1.5, 1.0, 3.0], [3.6, -1.2, 1.0, -1.3, 1.2, 3.9], 200)
+    q, rows, switches = track_branches(ur(robot, robot.fk(q_path)), q_start=q_path[0])
+    assert np.allclose(q, q_path, atol=1e-9) and switches == []
+
+
+def test_tracking_through_the_wrist_singularity_switches_rows_continuously(robot):
+    q_path = np.linspace([0.4, -1.3, 1.4, -1.2, 0.25, 0.3], [0.5, -1.2, 1.3, -1.0, -0.25, 0.6],
+                         101)[np.r_[0:50, 51:101]]              # theta5 = 0 is skipped
+    res = ur(robot, robot.fk(q_path))
+    q, rows, switches = track_branches(res, q_start=q_path[0])
+    assert np.allclose(q, q_path, atol=1e-8)
+    assert [s.kind for s in switches] == ["singularity"]
+    assert switches[0].index == 50 and rows[49] % 2 == 0 and rows[50] % 2 == 1
+
+
+def test_tracking_reports_a_jump(robot):
+    q1 = np.array([0.4, -1.3, 1.4, -1.2, 1.0, 0.3])
+    q2 = np.array([0.4, -1.3, 1.4, -1.2, 1.0, 2.3])           # joint 6 turns by 2 rad
+    q_path = np.r_[np.linspace(q1, q1 + 0.01, 5), np.linspace(q2, q2 + 0.01, 5)]
+    _, _, switches = track_branches(ur(robot, robot.fk(q_path)), q_start=q1)
+    assert [(s.index, s.kind) for s in switches] == [(5, "jump")]
+    assert switches[0].step == pytest.approx(2.0 - 0.01, abs=1e-9)
+
+
+def test_following_errors(robot, circle):
+    with pytest.raises(ValueError, match="no orientation"):
+        follow_path_ur(robot, circle_three_phase(CENTER, R, V, 0.5))
+    with pytest.raises(ValueError, match="point 0 .* no IK solution"):
+        follow_path_ur(robot, circle_three_phase([1.0, 0, 0], R, V, 0.5, orientation=R_WT))
+    with pytest.raises(ValueError, match="branch"):
+        follow_path_ur(robot, circle, branch=9)
+    with pytest.raises(ValueError, match="branch"):
+        follow_path_ur(robot, circle, branch=("left", "sideways", "noflip"))
+    with pytest.raises(TypeError, match="CartesianPath"):
+        follow_path_ur(robot, circle.poses)
+    with pytest.raises(ValueError, match="max_step"):
+        follow_path_ur(robot, circle, max_step=0)
+    with pytest.raises(ValueError, match="q"):
+        follow_path_ur(robot, circle, q_start=[0, 0, np.nan, 0, 0, 0])
+    with pytest.raises(ValueError, match="not reached"):
+        follow_path_numerical(robot, circle_three_phase([1.0, 0, 0], R, V, 0.5), np.zeros(6))
+
+
+def test_numerical_following_like_the_report(robot, followed):
+    traj_cf, _ = followed
+    path = circle_three_phase(CENTER, R, V, 0.05)
+    traj, report = follow_path_numerical(robot, path, traj_cf.q[0])
+    assert np.abs(robot.fk(traj.q)[:, :3, 3] - path.position).max() <= 1e-10
+    assert report.position_error.max() <= 1e-10
+    # J_v q_dot reproduces the tool velocity, and q_dot agrees with the derivative of q to
+    # the order of the path step
+    J_v = robot.jacobian(traj.q)[:, :3, :]
+    assert np.allclose((J_v @ traj.qd[..., None])[..., 0], path.velocity, atol=1e-12)
+    fd = central_difference(traj.q, traj.t)
+    assert np.abs(fd - traj.qd)[1:-1].max() < 0.05 * np.abs(traj.qd).max()
+
+
+def test_joint_velocities():
+    rng = np.random.default_rng(8)
+    J = rng.normal(size=(10, 6, 6))
+    x = rng.normal(size=(10, 6))
+    assert np.allclose(joint_velocities(J, x), np.linalg.solve(J, x[..., None])[..., 0])
+    Jv = J[:, :3]
+    assert np.allclose(joint_velocities(Jv, x[:, :3]),
+                       (np.linalg.pinv(Jv) @ x[:, :3, None])[..., 0])
+    lam = 0.1
+    U, S, Vt = np.linalg.svd(Jv)
+    dls = np.einsum("bji,bj,bj->bi", Vt[:, :3], S / (S**2 + lam**2),
+                    np.einsum("bji,bj->bi", U, x[:, :3]))
+    assert np.allclose(joint_velocities(Jv, x[:, :3], damping=lam), dls)
+    singular = np.array([[1.0, 0.0], [0.0, 0.0]])
+    assert np.allclose(joint_velocities(singular, [1.0, 1.0]), [1.0, 0.0])
+    bound = joint_velocities(np.diag([1.0, 1e-9]), [0.0, 1.0], damping=lam)
+    assert np.linalg.norm(bound) <= 1 / (2 * lam)
+    with pytest.raises(ValueError, match="twist"):
+        joint_velocities(J, x[:, :3])
+    with pytest.raises(ValueError, match="damping"):
+        joint_velocities(J, x, damping=-1.0)
