@@ -8,8 +8,9 @@ sent, in three steps (chapter 12):
 1. :func:`joint_targets` -- every point to a joint target by :func:`dqlab.ik.desk_arm`,
    always on the same branch (the arm facing the point, elbow up, by default); a point that
    is out of reach or whose solution breaks a joint limit is refused with the step's index;
-2. :func:`plan_pick_place` -- rest-to-rest segments between consecutive targets with a
-   quintic time law, a dwell where the cup switches, and the object carried by the cup
+2. :func:`plan_pick_place` -- rest-to-rest segments between consecutive targets with the
+   quintic time law of :func:`dqlab.trajectory.joint_trajectory` (chapter 10), a dwell
+   where the cup switches, and the object carried by the cup
    while the suction is on; the result is checked once more (finite, within limits);
 3. :func:`animate_pick_place` -- a :class:`dqlab.viz.Scene` animation of the arm, the cup
    and the object.
@@ -27,10 +28,10 @@ import numpy as np
 
 from . import ik
 from ._checks import as_float_array
+from .trajectory import Trajectory, joint_trajectory
 
 __all__ = ["PickPlaceTask", "PickPlacePlan", "task_from_lab", "joint_targets",
-           "cup_poses", "plan_pick_place", "animate_pick_place", "BRANCH_NAMES",
-           "rest_to_rest"]
+           "cup_poses", "plan_pick_place", "animate_pick_place", "BRANCH_NAMES"]
 
 #: The rows of :func:`dqlab.ik.desk_arm`'s solutions, by name.
 BRANCH_NAMES = ("facing, elbow up", "facing, elbow down", "turned away, elbow up",
@@ -243,59 +244,6 @@ def cup_poses(robot, q):
     return X
 
 
-# -- the time law: the one place where a segment's timing is chosen ---------------------------
-
-
-def rest_to_rest(q_start, q_goal, *, v_max, a_max, dt):
-    r"""A synchronised rest-to-rest quintic segment, as short as the limits allow.
-
-    .. math::
-
-       q(t) = q_A + s(t/T)\,\Delta q,\quad s(\tau) = 10\tau^3 - 15\tau^4 + 6\tau^5,\quad
-       T = \max\Bigl(\tfrac{15}{8}\max_i\tfrac{|\Delta q_i|}{v_{max}},\;
-       \sqrt{\tfrac{10}{\sqrt3}\max_i\tfrac{|\Delta q_i|}{a_{max}}}\Bigr),
-
-    since the quintic's peak speed is :math:`\tfrac{15}{8}\Delta q/T` and its peak
-    acceleration :math:`\tfrac{10}{\sqrt3}\Delta q/T^2`. :math:`s` stays in [0, 1], so
-    every sample lies on the segment between the two targets: within any box of joint
-    limits that holds both.
-
-    Parameters
-    ----------
-    q_start, q_goal : ndarray, shape (n,)
-    v_max, a_max : float
-        Joint speed (rad/s) and acceleration (rad/s^2) limits, the same for every joint.
-    dt : float
-        Sampling period; the last instant is :math:`T` itself.
-
-    Returns
-    -------
-    t : ndarray, shape (N,)
-        From 0 to T.
-    q, qd, qdd : ndarray, shape (N, n)
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> t, q, qd, qdd = rest_to_rest(np.zeros(2), np.array([1.0, -0.5]), v_max=1.0,
-    ...                              a_max=10.0, dt=0.1)
-    >>> round(float(t[-1]), 6)                 # T = 15/8 s: joint 1 peaks at v_max
-    1.875
-    >>> bool(np.abs(qd).max() <= 1.0), bool(np.all((q[:, 0] >= 0) & (q[:, 0] <= 1)))
-    (True, True)
-    """
-    delta = q_goal - q_start
-    span = float(np.abs(delta).max(initial=0.0))
-    T = max(15.0 / 8.0 * span / v_max, math.sqrt(10.0 / math.sqrt(3.0) * span / a_max))
-    steps = max(1, math.ceil(T / dt - 1e-9))
-    t = np.linspace(0.0, T, steps + 1)
-    tau = t / T
-    s = tau**3 * (10.0 - 15.0 * tau + 6.0 * tau**2)
-    sd = 30.0 * tau**2 * (1.0 - tau) ** 2 / T
-    sdd = 60.0 * tau * (1.0 - tau) * (1.0 - 2.0 * tau) / T**2
-    return (t, q_start + s[:, None] * delta, sd[:, None] * delta, sdd[:, None] * delta)
-
-
 # -- the plan ---------------------------------------------------------------------------------
 
 
@@ -307,10 +255,9 @@ class PickPlacePlan:
     ----------
     targets : ndarray, shape (K, 4)
         The joint target of every step (:func:`joint_targets`).
-    t : ndarray, shape (N,)
-        Instants, seconds, strictly increasing from 0.
-    q, qd, qdd : ndarray, shape (N, 4)
-        Chain angles and wrist angle, their speeds and accelerations.
+    trajectory : dqlab.trajectory.Trajectory
+        Instants ``t`` (N,), seconds from 0, and the chain and wrist angles ``q``, their
+        speeds ``qd`` and accelerations ``qdd``, (N, 4) each.
     step : ndarray of int, shape (N,)
         The step being moved to (or dwelt at) at each instant.
     suction : ndarray of bool, shape (N,)
@@ -324,15 +271,32 @@ class PickPlacePlan:
     """
 
     targets: np.ndarray
-    t: np.ndarray
-    q: np.ndarray
-    qd: np.ndarray
-    qdd: np.ndarray
+    trajectory: Trajectory
     step: np.ndarray
     suction: np.ndarray
     cup: np.ndarray
     object: np.ndarray
     grasps: tuple
+
+    @property
+    def t(self):
+        """Instants, seconds, shape (N,)."""
+        return self.trajectory.t
+
+    @property
+    def q(self):
+        """Chain and wrist angles, shape (N, 4)."""
+        return self.trajectory.q
+
+    @property
+    def qd(self):
+        """Joint speeds, shape (N, 4)."""
+        return self.trajectory.qd
+
+    @property
+    def qdd(self):
+        """Joint accelerations, shape (N, 4)."""
+        return self.trajectory.qdd
 
     @property
     def duration(self):
@@ -346,7 +310,10 @@ def plan_pick_place(robot, task, *, object_pose=None, branch=0,
     r"""Joint targets, a timed trajectory and the object's motion for a pick-and-place task.
 
     The arm starts at the first step's target (the lab initialises its arm there). For each
-    following step it moves to the step's target by :func:`rest_to_rest`, then, if the
+    following step it moves to the step's target along a straight line of joint space with
+    the quintic law, as fast as ``v_max`` and ``a_max`` allow
+    (:func:`dqlab.trajectory.joint_trajectory`; the law stays within [0, 1], so every
+    sample lies between two targets that are within the joint limits), then, if the
     cup's state changes there, waits ``dwell`` seconds while it switches. When the suction
     comes on, the object is attached if the cup touches it (within ``grasp_tol`` of its
     frame's origin, the centre of its top face); it then moves rigidly with the cup,
@@ -413,15 +380,19 @@ def plan_pick_place(robot, task, *, object_pose=None, branch=0,
     state = bool(task.suction[0])
     for k in range(1, len(task)):
         if np.any(targets[k] != targets[k - 1]):
-            t, q, qd, qdd = rest_to_rest(targets[k - 1], targets[k], v_max=v_max,
-                                         a_max=a_max, dt=dt)
-            ts.append(now + t[1:])
-            qs.append(q[1:])
-            qds.append(qd[1:])
-            qdds.append(qdd[1:])
-            steps.append(np.full(len(t) - 1, k))
-            states.append(np.full(len(t) - 1, state))
-            now += t[-1]
+            segment = joint_trajectory(targets[k - 1], targets[k], v_max=v_max,
+                                       a_max=a_max, law="quintic", dt=dt)
+            # the law's rounding may overshoot its end by an ulp: keep every sample in the
+            # box spanned by the two targets (and so within the joint limits)
+            low = np.minimum(targets[k - 1], targets[k])
+            high = np.maximum(targets[k - 1], targets[k])
+            ts.append(now + segment.t[1:])
+            qs.append(np.clip(segment.q[1:], low, high))
+            qds.append(segment.qd[1:])
+            qdds.append(segment.qdd[1:])
+            steps.append(np.full(len(segment) - 1, k))
+            states.append(np.full(len(segment) - 1, state))
+            now += segment.duration
         if bool(task.suction[k]) != state or k == len(task) - 1:
             state = bool(task.suction[k])
             hold = max(dwell, dt)
@@ -433,10 +404,9 @@ def plan_pick_place(robot, task, *, object_pose=None, branch=0,
             steps.append(np.full(count, k))
             states.append(np.full(count, state))
             now += hold
-    t = np.concatenate(ts)
-    q = np.concatenate(qs)
-    qd = np.concatenate(qds)
-    qdd = np.concatenate(qdds)
+    trajectory = Trajectory(t=np.concatenate(ts), q=np.concatenate(qs),
+                            qd=np.concatenate(qds), qdd=np.concatenate(qdds))
+    t, q = trajectory.t, trajectory.q
     step = np.concatenate(steps)
     suction = np.concatenate(states)
     _check_samples(robot, q, wrist_limits)
@@ -473,7 +443,7 @@ def plan_pick_place(robot, task, *, object_pose=None, branch=0,
         obj[i] = X_WO
     if X_CO is not None:
         grasps.append((pick_step, None))
-    return PickPlacePlan(targets=targets, t=t, q=q, qd=qd, qdd=qdd, step=step,
+    return PickPlacePlan(targets=targets, trajectory=trajectory, step=step,
                          suction=suction, cup=cup, object=obj, grasps=tuple(grasps))
 
 

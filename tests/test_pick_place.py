@@ -85,17 +85,16 @@ def test_plan_respects_the_speed_and_acceleration_limits(arm):
     assert np.allclose(dq[inside], plan.qd[inside], atol=2e-3)
 
 
-def test_rest_to_rest_matches_the_quintic_closed_form():
-    q_a, q_b = np.array([0.2, -1.0]), np.array([1.2, 0.5])
-    t, q, qd, qdd = pp.rest_to_rest(q_a, q_b, v_max=1.0, a_max=50.0, dt=0.001)
-    T = 15 / 8 * 1.5                              # joint 2 moves 1.5 rad at 1 rad/s peak
-    assert np.isclose(t[-1], T)
-    tau = t / T
-    s = 10 * tau**3 - 15 * tau**4 + 6 * tau**5
-    assert np.allclose(q, q_a + s[:, None] * (q_b - q_a), atol=1e-14)
-    assert np.isclose(np.abs(qd[:, 1]).max(), 1.0, atol=1e-6)
-    assert np.allclose(np.gradient(q, t, axis=0)[1:-1], qd[1:-1], atol=1e-5)
-    assert np.allclose(np.gradient(qd, t, axis=0)[1:-1], qdd[1:-1], atol=1e-4)
+def test_segments_are_the_chapter_10_quintic_motions(arm, plan):
+    from dqlab.trajectory import joint_trajectory
+
+    first = plan.step == 1
+    segment = joint_trajectory(plan.targets[0], plan.targets[1], v_max=1.0, a_max=4.0,
+                               law="quintic", dt=0.02)
+    assert np.allclose(plan.q[first], segment.q[1:], atol=1e-15)
+    assert np.allclose(plan.t[first], segment.t[1:], atol=1e-15)
+    # joint 1 (the base) turns pi/2 and sets the pace at v_max = 1 rad/s: T = 15/8 pi/2
+    assert np.isclose(segment.duration, 15 / 8 * np.pi / 2)
 
 
 def test_object_moves_with_the_cup_while_sucking(plan):
