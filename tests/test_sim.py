@@ -465,3 +465,23 @@ def test_frames_for_playback(ur3_sim):
     assert times.shape == (21,) and q.shape == (21, 6)
     np.testing.assert_allclose(times, np.arange(21) / 20, atol=1e-9)
     np.testing.assert_array_equal(q[-1], result.q[-1])
+
+
+# -- the same chain as URDF, read by an independent library ------------------------------------
+
+@pytest.mark.parametrize("name", ROBOTS)
+def test_urdf_flange_equals_robot_fk_in_pytransform3d(name):
+    """pytransform3d's URDF reader composes the generated joints to robot.fk."""
+    urdf = pytest.importorskip("pytransform3d.urdf")
+    from dqlab.sim import urdf_from_robot
+
+    robot = ROBOTS[name]()
+    tm = urdf.UrdfTransformManager()
+    tm.load_urdf(urdf_from_robot(robot))
+    Q = random_joints(robot, 200, seed=5)
+    worst = 0.0
+    for q, X in zip(Q, robot.fk(Q), strict=True):
+        for i, value in enumerate(q, start=1):
+            tm.set_joint(f"joint{i}", value)
+        worst = max(worst, np.abs(tm.get_transform("flange", "world") - X).max())
+    assert worst <= 1e-9

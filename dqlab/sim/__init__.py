@@ -2,6 +2,7 @@
 
 - :func:`mjcf_from_robot` writes a MuJoCo model of any :class:`~dqlab.robot.Robot`
   (standard or modified DH, base and tool); its flange site's pose is ``robot.fk(q)``.
+- :func:`urdf_from_robot` writes the same chain as URDF, for simulators that read it.
 - :class:`ArmSimulation` loads it and steps it under joint torques; :class:`JointPD` and
   :class:`ComputedTorque` compute those torques; :func:`track` runs one of them along a
   joint trajectory and returns a :class:`TrackingResult` of arrays.
@@ -13,7 +14,14 @@ Generating the model needs only numpy; simulating it needs ``mujoco``
 """
 
 from .backend import UR3_HOME, MujocoBackend
-from .mjcf import UR3_BASE_MASS, UR3_LINK_MASSES, UR3_PAYLOAD, link_placements, mjcf_from_robot
+from .mjcf import (
+    UR3_BASE_MASS,
+    UR3_LINK_MASSES,
+    UR3_PAYLOAD,
+    default_masses,
+    link_placements,
+    mjcf_from_robot,
+)
 from .simulation import (
     ArmSimulation,
     ComputedTorque,
@@ -23,9 +31,11 @@ from .simulation import (
     require_mujoco,
     track,
 )
+from .urdf import urdf_from_robot
 
 __all__ = [
-    "mjcf_from_robot", "link_placements", "UR3_LINK_MASSES", "UR3_PAYLOAD", "UR3_BASE_MASS",
+    "mjcf_from_robot", "urdf_from_robot", "link_placements", "default_masses",
+    "UR3_LINK_MASSES", "UR3_PAYLOAD", "UR3_BASE_MASS",
     "ArmSimulation", "JointPD", "ComputedTorque", "TrackingResult", "track",
     "check_trajectory", "require_mujoco", "MujocoBackend", "UR3_HOME",
 ]

@@ -41,7 +41,8 @@ import numpy as np
 from ..quaternion import quaternion_from_matrix
 from ..robot import Robot
 
-__all__ = ["mjcf_from_robot", "UR3_LINK_MASSES", "UR3_PAYLOAD", "UR3_BASE_MASS"]
+__all__ = ["mjcf_from_robot", "link_placements", "default_masses", "UR3_LINK_MASSES",
+           "UR3_PAYLOAD", "UR3_BASE_MASS"]
 
 #: Masses of the UR3's six moving links in kg, from Universal Robots' table of dynamic
 #: parameters (the ``ur_dh`` reference). Their sum, 8.63 kg, plus the base housing and the
@@ -178,6 +179,38 @@ def _segments(points, eps=1e-12):
     return out
 
 
+def _is_ur3(robot):
+    return robot.n == 6 and robot.name.upper().startswith("UR3")
+
+
+def _link_paths(placements, X_BnT, corners):
+    """The drawn path of body i: its origin -> its corner R_i -> the next body's origin."""
+    n = len(placements)
+    paths = []
+    for i in range(n):
+        nxt = placements[i + 1] if i + 1 < n else X_BnT
+        paths.append(_segments([np.zeros(3), corners[i + 1][:3, 3], nxt[:3, 3]]))
+    return paths
+
+
+def default_masses(robot):
+    """Link masses in kg when none are given: :data:`UR3_LINK_MASSES` for a six-joint robot
+    whose name starts with "UR3", otherwise 0.5 kg per link plus 4 kg per metre of the
+    link's drawn path (from its joint to the next).
+
+    Examples
+    --------
+    >>> from dqlab.models import desk_arm
+    >>> default_masses(desk_arm()).round(3)
+    array([0.768, 1.076, 1.148])
+    """
+    if _is_ur3(robot):
+        return np.array(UR3_LINK_MASSES)
+    placements, X_BnT, corners = link_placements(robot)
+    return np.array([0.5 + 4.0 * sum(float(np.linalg.norm(b - a)) for a, b in path)
+                     for path in _link_paths(placements, X_BnT, corners)])
+
+
 def mjcf_from_robot(robot, *, masses=None, payload=0.0, radius=None, damping=0.1,
                     armature=0.01, timestep=0.001, integrator="implicitfast", gravity=9.81,
                     base_mass=None, name=None):
@@ -197,8 +230,7 @@ def mjcf_from_robot(robot, *, masses=None, payload=0.0, radius=None, damping=0.1
     robot : Robot
         Standard or modified DH, with its base and tool.
     masses : array_like, shape (n,), optional
-        Link masses in kg. Default: :data:`UR3_LINK_MASSES` for a six-joint robot whose name
-        starts with "UR3", otherwise 0.5 kg per link plus 4 kg per metre of drawn link.
+        Link masses in kg. Default: :func:`default_masses` (UR's values for the UR3).
     payload : float, optional
         Mass in kg of a sphere at the TCP (0 by default; the UR3 is rated for 3 kg).
     radius : float, optional
@@ -248,25 +280,15 @@ def mjcf_from_robot(robot, *, masses=None, payload=0.0, radius=None, damping=0.1
     placements, X_BnT, corners = link_placements(robot)
     n = robot.n
     links = robot.links
-    # The drawn path of body i: origin -> its corner R_i -> the next body's origin.
-    paths = []
-    for i in range(n):
-        nxt = placements[i + 1] if i + 1 < n else X_BnT
-        points = [np.zeros(3), corners[i + 1][:3, 3], nxt[:3, 3]]
-        paths.append(_segments(points))
+    paths = _link_paths(placements, X_BnT, corners)
     base_path = _segments([np.zeros(3), placements[0][:3, 3]])
     total_length = sum(np.linalg.norm(b - a) for path in paths for a, b in path)
     total_length += sum(np.linalg.norm(b - a) for a, b in base_path)
-    is_ur3 = n == 6 and robot.name.upper().startswith("UR3")
+    is_ur3 = _is_ur3(robot)
     if radius is None:
         radius = min(max(0.05 * total_length, 0.01), 0.05)
     radius = _positive(radius, "radius")
-    if masses is None:
-        if is_ur3:
-            masses = UR3_LINK_MASSES
-        else:
-            masses = [0.5 + 4.0 * sum(np.linalg.norm(b - a) for a, b in path)
-                      for path in paths]
+    masses = default_masses(robot) if masses is None else masses
     masses = _per_joint(masses, n, "masses", positive=True)
     damping = _per_joint(damping, n, "damping", positive=False)
     armature = _per_joint(armature, n, "armature", positive=False)
