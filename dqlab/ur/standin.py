@@ -35,6 +35,7 @@ import socket
 import struct
 import subprocess
 import sys
+import tempfile
 import time
 
 import numpy as np
@@ -182,6 +183,8 @@ class ControllerStandIn:
         self.start_timeout = float(start_timeout)
         self.secondary_port = self.rtde_port = None
         self._proc = None
+        self._log_file = None
+        self._log_text = ""
 
     @property
     def running(self):
@@ -203,13 +206,19 @@ class ControllerStandIn:
         env["PYTHONPATH"] = os.pathsep.join([root] + [p for p in env.get(
             "PYTHONPATH", "").split(os.pathsep) if p])
         code = "import sys; from dqlab.ur.standin import _serve; _serve(sys.argv[1])"
+        self._log_file = tempfile.TemporaryFile()
+        self._log_text = ""
         self._proc = subprocess.Popen(
             [sys.executable, "-c", code, json.dumps(self._config)], stdin=subprocess.PIPE,
-            stdout=subprocess.PIPE, env=env)
+            stdout=subprocess.PIPE, stderr=self._log_file, env=env)
         try:
             line = self._read_ready()
             _, sec, rt = line.split()
             self.secondary_port, self.rtde_port = int(sec), int(rt)
+        except Exception as exc:
+            self.stop()
+            raise RuntimeError(f"the stand-in did not start ({exc}); its log:\n"
+                               f"{self._log_text}") from exc
         except BaseException:
             self.stop()
             raise
@@ -225,9 +234,7 @@ class ControllerStandIn:
             sel.close()
         line = self._proc.stdout.readline().decode()
         if not line.startswith("READY"):
-            code = self._proc.wait(5)
-            raise RuntimeError(f"the stand-in failed to start (exit code {code}); see its "
-                               "error output above")
+            raise RuntimeError(f"exit code {self._proc.wait(5)}")
         return line
 
     def stop(self, timeout=5.0):
@@ -251,6 +258,17 @@ class ControllerStandIn:
             for pipe in (proc.stdin, proc.stdout):
                 if pipe is not None:
                     pipe.close()
+            self._log_text = self.log()
+            self._log_file.close()
+            self._log_file = None
+
+    def log(self):
+        """What the stand-in reported (refused programs, dropped clients), as text."""
+        if self._log_file is None:
+            return self._log_text
+        self._log_file.flush()
+        self._log_file.seek(0)
+        return self._log_file.read().decode("utf-8", errors="replace")
 
     def __enter__(self):
         return self.start()
