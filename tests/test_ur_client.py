@@ -1,0 +1,222 @@
+"""URClient and the in-process kinematic arm: motions, waiting, and checks before sending."""
+
+import numpy as np
+import pytest
+
+import dqlab
+from dqlab.ur import HOME, KinematicBackend, StepClock, URClient, URState
+from dqlab.ur.client import ROBOT_MODE_RUNNING, _trapezoid, trapezoid_duration
+from dqlab.ur.script import UnsafeTargetError
+
+
+class RecordingBackend:
+    """A back end that records what reaches it (and reports a fixed state)."""
+
+    name = "recording"
+
+    def __init__(self, q=HOME, mode=ROBOT_MODE_RUNNING):
+        self.calls = []
+        self.q = np.array(q, dtype=float)
+        self.mode = mode
+
+    def connect(self, timeout):
+        self.calls.append(("connect", timeout))
+
+    def close(self):
+        self.calls.append(("close",))
+
+    def read_state(self):
+        pose = dqlab.ur.pose_from_transform(dqlab.models.ur3().fk(self.q))
+        return URState(0.0, self.q.copy(), np.zeros(6), pose, self.mode)
+
+    def movej(self, q, *, a, v, t, r):
+        self.calls.append(("movej", q))
+
+    def movel(self, pose, *, a, v, t, r):
+        self.calls.append(("movel", pose))
+
+    def servoj(self, q, *, t, lookahead_time, gain):
+        self.calls.append(("servoj", q))
+
+    def stop(self, a):
+        self.calls.append(("stop", a))
+
+
+def _client(q0=HOME, dt=0.01):
+    return URClient(KinematicBackend(q0=q0, clock=StepClock(dt)), poll_interval=0)
+
+
+def test_backends_satisfy_the_protocol():
+    for backend in (KinematicBackend(), RecordingBackend()):
+        for name in ("name", "connect", "close", "read_state", "movej", "movel", "servoj",
+                     "stop"):
+            assert hasattr(backend, name)
+
+
+def test_trapezoid_law():
+    assert trapezoid_duration(1.0, 2.0, 1.0) == pytest.approx(1.5)
+    assert trapezoid_duration(0.1, 1.0, 1.0) == pytest.approx(2 * np.sqrt(0.1))
+    D, a, v = 1.0, 2.0, 1.0
+    T = trapezoid_duration(D, a, v)
+    ts = np.linspace(0, T, 2001)
+    s = np.array([_trapezoid(t, D, a, v)[0] for t in ts])
+    sd = np.array([_trapezoid(t, D, a, v)[1] for t in ts])
+    assert s[0] == 0 and s[-1] == 1 and np.all(np.diff(s) >= 0)
+    assert np.max(sd) * D == pytest.approx(v)
+    np.testing.assert_allclose(np.gradient(s, ts), sd, atol=2e-3)
+
+
+def test_movej_reaches_the_target_exactly_and_follows_the_time_law():
+    target = np.array([0.5, -1.2, 0.8, -1.5, -1.0, 0.3])
+    with _client() as ur:
+        start = ur.read_state()
+        final = ur.movej(target, a=1.4, v=1.05)
+        np.testing.assert_array_equal(final.q, target)
+        np.testing.assert_array_equal(final.qd, np.zeros(6))
+        duration = trapezoid_duration(np.max(np.abs(target - HOME)), 1.4, 1.05)
+        assert duration <= final.time - start.time <= duration + 0.05
+        np.testing.assert_allclose(ur.actual_tcp_pose(), dqlab.ur.pose_from_transform(
+            dqlab.models.ur3().fk(target)), atol=1e-15)
+
+
+def test_movej_with_time_and_halfway_state():
+    target = np.add(HOME, [0.4, 0, 0, 0, 0, -0.2])
+    backend = KinematicBackend(clock=StepClock(0.05))
+    with URClient(backend, poll_interval=0) as ur:
+        ur.movej(target, t=2.0, wait=False)
+        states = [ur.read_state() for _ in range(50)]
+    times = np.array([s.time for s in states])
+    q1 = np.array([s.q[0] for s in states])
+    # synchronised: joint 6 moves by -1/2 of joint 1 all along
+    np.testing.assert_allclose([s.q[5] for s in states], -0.5 * q1, atol=1e-15)
+    assert q1[np.argmin(np.abs(times - 1.0 - times[0]))] == pytest.approx(0.2, abs=0.03)
+    assert q1[-1] == pytest.approx(0.4)
+
+
+def test_movel_moves_the_tcp_on_a_line():
+    with _client(dt=0.02) as ur:
+        p0 = ur.actual_tcp_pose()
+        goal = ur.actual_tcp_pose().copy()
+        goal[:3] += [0.05, -0.03, -0.1]
+        final = ur.movel(goal, v=0.1)
+        np.testing.assert_allclose(final.tcp_pose, goal, atol=1e-9)
+        # and in between, the TCP stayed on the segment
+        backend = KinematicBackend(clock=StepClock(0.02))
+        backend.connect()
+        backend.movel(goal, a=1.2, v=0.1, t=0.0, r=0.0)
+        for _ in range(40):
+            p = backend.read_state().tcp_pose[:3]
+            d = p - p0[:3]
+            u = (goal[:3] - p0[:3]) / np.linalg.norm(goal[:3] - p0[:3])
+            assert np.linalg.norm(d - (d @ u) * u) < 1e-9
+
+
+def test_servoj_stream_tracks_a_trajectory():
+    t = np.linspace(0.0, 1.0, 51)
+    q = HOME + np.outer(0.5 * (1 - np.cos(np.pi * t)), [0.3, 0.2, -0.2, 0.1, 0.0, 0.4])
+
+    class Traj:
+        pass
+
+    traj = Traj()
+    traj.t, traj.q = t, q
+    with _client(dt=0.005) as ur:
+        log = ur.servoj_stream(traj)
+    np.testing.assert_array_equal(log[-1].q, q[-1])
+    sent_at = np.array([s.time for s in log[1:-1]]) - log[0].time
+    assert np.all(sent_at >= t[:-1] - 1e-12)
+    assert np.all(sent_at <= t[:-1] + 0.0101)
+
+
+def test_servoj_stream_refuses_a_start_away_from_the_arm():
+    class Traj:
+        t = np.array([0.0, 0.1])
+        q = np.array([np.add(HOME, 0.1), np.add(HOME, 0.1)])
+
+    with _client() as ur, pytest.raises(UnsafeTargetError, match="movej to q\\[0\\] first"):
+        ur.servoj_stream(Traj())
+
+
+@pytest.mark.parametrize("call, words", [
+    (lambda ur: ur.movej([0, 0, 0, 0, 0, np.nan]), "joint 6 is nan"),
+    (lambda ur: ur.movej([7.0, -1.5, 0, -1.5, 0, 0]), "joint 1 = 7 rad is outside"),
+    (lambda ur: ur.movej(np.add(HOME, [0, 0, 3.5, 0, 0, 0])), "would jump by 3.5 rad"),
+    (lambda ur: ur.movej(HOME, v=5.0), "v = 5.0 refused"),
+    (lambda ur: ur.movel([0.0, 0.0, 1.0, 0, 0, 0]), "out of the UR3's reach"),
+    (lambda ur: ur.movel([0.2, -0.2, np.inf, 0, 3.1, 0]), "contains NaN or infinity"),
+])
+def test_unsafe_targets_never_reach_the_backend(call, words):
+    backend = RecordingBackend()
+    with URClient(backend) as ur:
+        with pytest.raises(UnsafeTargetError) as info:
+            call(ur)
+    assert words in str(info.value)
+    assert [c[0] for c in backend.calls] == ["connect", "close"]
+
+
+def test_movel_refuses_the_long_way_round_forced_by_a_joint_limit():
+    # joint 1 at 6.0 rad, near its +2 pi limit; the target needs joint 1 at 6.8 = 0.517 + 2 pi,
+    # beyond the limit, so the only solution within limits turns joint 1 back by 5.5 rad
+    q_now = np.array([6.0, -1.0, 1.2, -1.5, 1.2, 0.0])
+    q_goal = q_now + [0.8, 0, 0, 0, 0, 0]
+    pose = dqlab.ur.pose_from_transform(dqlab.models.ur3().fk(q_goal))
+    backend = RecordingBackend(q_now)
+    with URClient(backend) as ur, pytest.raises(UnsafeTargetError,
+                                                match=r"joint 1 would jump by 5\.48"):
+        ur.movel(pose)
+    assert "movel" not in [c[0] for c in backend.calls]
+
+
+def test_not_running_robot_is_refused():
+    with URClient(RecordingBackend(mode=5)) as ur, pytest.raises(RuntimeError,
+                                                                 match="robot mode is 5"):
+        ur.movej(HOME)
+
+
+def test_timeout_says_how_far_the_arm_is():
+    class StuckBackend(RecordingBackend):
+        pass
+
+    with URClient(StuckBackend(), poll_interval=0.001) as ur:
+        with pytest.raises(TimeoutError, match=r"joint 1 is 0.1 rad away"):
+            ur.movej(np.add(HOME, [0.1, 0, 0, 0, 0, 0]), timeout=0.05)
+
+
+def test_client_outside_with_block_and_close_is_idempotent():
+    backend = RecordingBackend()
+    ur = URClient(backend)
+    with pytest.raises(RuntimeError, match="not connected"):
+        ur.actual_q()
+    with ur:
+        np.testing.assert_array_equal(ur.actual_q(), HOME)
+    ur.close()
+    assert [c[0] for c in backend.calls] == ["connect", "close"]
+
+
+def test_stop_holds_the_arm():
+    with _client(dt=0.05) as ur:
+        ur.movej(np.add(HOME, [1.0, 0, 0, 0, 0, 0]), wait=False)
+        for _ in range(10):
+            ur.read_state()
+        ur.stop()
+        a, b = ur.read_state(), ur.read_state()
+    np.testing.assert_array_equal(a.q, b.q)
+    assert 0 < a.q[0] < 1.0
+
+
+def test_kinematic_backend_refuses_out_of_limit_targets_itself():
+    backend = KinematicBackend(clock=StepClock(0.01))
+    backend.connect()
+    with pytest.raises(ValueError, match="outside its limits"):
+        backend.movej([9.0, 0, 0, 0, 0, 0], a=1.0, v=1.0, t=0, r=0)
+    with pytest.raises(ValueError, match="speedup must be positive"):
+        KinematicBackend(speedup=0)
+
+
+def test_rtde_backend_without_ur_rtde_names_the_extra(monkeypatch):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "rtde_receive", None)   # as if ur_rtde were absent
+    monkeypatch.setitem(sys.modules, "rtde_control", None)
+    with pytest.raises(ImportError, match=r"extra 'robot' \(pip install 'dqlab\[robot\]'\)"):
+        dqlab.ur.RTDEBackend("127.0.0.1")
