@@ -485,3 +485,26 @@ def test_urdf_flange_equals_robot_fk_in_pytransform3d(name):
             tm.set_joint(f"joint{i}", value)
         worst = max(worst, np.abs(tm.get_transform("flange", "world") - X).max())
     assert worst <= 1e-9
+
+
+# -- the same program drives the simulated arm through URClient -------------------------------
+
+def test_urclient_moves_the_simulated_arm():
+    from dqlab.trajectory import joint_trajectory
+    from dqlab.ur import UnsafeTargetError, URClient
+
+    target = np.array([0.4, -1.2, 1.3, -1.9, -1.2, 0.5])
+    with URClient(MujocoBackend(), poll_interval=0) as ur:
+        state = ur.movej(target, a=1.4, v=1.05)
+        assert np.abs(state.q - target).max() <= ur.tol       # the reached joints
+        assert state.time > 1.0                              # it took simulated time
+        pose = state.tcp_pose.copy()
+        pose[2] -= 0.1
+        state = ur.movel(pose, a=1.2, v=0.1)
+        assert np.abs(state.tcp_pose[:3] - pose[:3]).max() <= ur.tol
+        move = joint_trajectory(state.q, state.q + 0.3, duration=2.0, dt=0.008)
+        log = ur.servoj_stream(move)
+        assert np.abs(log[-1].q - move.q[-1]).max() <= ur.tol
+        with pytest.raises(UnsafeTargetError):
+            ur.movej([0, 0, 0, np.nan, 0, 0])
+        assert np.abs(ur.read_state().q - move.q[-1]).max() <= ur.tol     # nothing moved
