@@ -478,7 +478,7 @@ def test_urdf_flange_equals_robot_fk_in_pytransform3d(name):
     robot = ROBOTS[name]()
     tm = urdf.UrdfTransformManager()
     tm.load_urdf(urdf_from_robot(robot))
-    Q = random_joints(robot, 200, seed=5)
+    Q = random_joints(robot, 100, seed=5)
     worst = 0.0
     for q, X in zip(Q, robot.fk(Q), strict=True):
         for i, value in enumerate(q, start=1):
@@ -508,3 +508,23 @@ def test_urclient_moves_the_simulated_arm():
         with pytest.raises(UnsafeTargetError):
             ur.movej([0, 0, 0, np.nan, 0, 0])
         assert np.abs(ur.read_state().q - move.q[-1]).max() <= ur.tol     # nothing moved
+
+
+def test_tcp_positions_are_robot_fk(ur3_sim):
+    result = track(ur3_sim, smooth_trajectory(duration=0.5), ComputedTorque())
+    np.testing.assert_allclose(result.tcp, models.ur3().fk(result.q)[:, :3, 3], atol=1e-12)
+    np.testing.assert_allclose(result.tcp_desired,
+                               models.ur3().fk(result.q_desired)[:, :3, 3], atol=1e-12)
+
+
+def test_a_prismatic_joint_driven_to_the_end_of_its_stroke():
+    """The SCARA's z axis goes down to 0, its lower limit: the run completes (a hair of
+    overshoot in the simulation is no error) and ends there."""
+    scara = models.scara_rsm5()
+    t = np.linspace(0.0, 1.0, 201)
+    s, sd, sdd = 3 * t**2 - 2 * t**3, 6 * t - 6 * t**2, 6 - 12 * t
+    q0, step = np.array([0.2, 0.5, 0.1, 0.0]), np.array([0.0, 0.0, -0.1, 0.0])
+    move = SimpleNamespace(t=t, q=q0 + s[:, None] * step, qd=sd[:, None] * step,
+                           qdd=sdd[:, None] * step)
+    result = track(ArmSimulation(scara), move, JointPD(kp=2000.0, kd=20.0))
+    assert abs(result.q[-1, 2]) < 2e-3

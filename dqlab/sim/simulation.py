@@ -177,6 +177,20 @@ class ArmSimulation:
                              f"[{self._lo[j]:.6g}, {self._hi[j]:.6g}]")
         return q
 
+    def flange_positions(self, q):
+        """Positions of the flange site (the TCP) in the world for joint vectors ``q``
+        (N, n), shape (N, 3), by MuJoCo's forward kinematics (equal to ``robot.fk``; no
+        limit check, so a sample a hair beyond a prismatic joint's travel is fine).
+        """
+        q = np.asarray(q, dtype=float)
+        scratch = self._scratch
+        out = np.empty((len(q), 3))
+        for k, q_k in enumerate(q):
+            scratch.qpos[:] = q_k
+            self._mj.mj_kinematics(self.model, scratch)
+            out[k] = scratch.site_xpos[self._flange]
+        return out
+
     def flange_pose(self):
         """:math:`X_{WT}`, the pose of the flange site (the TCP) in the world, shape (4, 4)."""
         X = np.eye(4)
@@ -352,9 +366,10 @@ class TrackingResult:
         Motor torques applied from each time on (N m, or N for a prismatic joint).
     q_desired, qd_desired : ndarray, shape (N, n)
         The reference at the same times.
+    tcp, tcp_desired : ndarray, shape (N, 3)
+        The TCP (flange site) positions reached and those of the reference, m.
     flange_error : ndarray, shape (N,)
-        Distance in m between the TCP reached and the TCP of the reference,
-        :math:`\\lVert p(q) - p(q_d) \\rVert`.
+        Distance in m between the two, :math:`\\lVert p(q) - p(q_d) \\rVert`.
     controller : str
         Which controller ran.
     """
@@ -365,6 +380,8 @@ class TrackingResult:
     torque: np.ndarray
     q_desired: np.ndarray
     qd_desired: np.ndarray
+    tcp: np.ndarray
+    tcp_desired: np.ndarray
     flange_error: np.ndarray
     controller: str
 
@@ -565,9 +582,10 @@ def track(sim, trajectory, controller, *, start_from_trajectory=True, payload=No
             sim.step(tau)
     if masses is not None:
         sim.payload = saved_payload
-    X = sim.robot.fk(q_out)
-    X_ref = sim.robot.fk(q_ref)
-    flange_error = np.linalg.norm(X[:, :3, 3] - X_ref[:, :3, 3], axis=-1)
+    # (after mj_step, MuJoCo's site positions still belong to the state before the step:
+    # both are recomputed from the joints)
+    tcp, tcp_desired = sim.flange_positions(q_out), sim.flange_positions(q_ref)
     return TrackingResult(t=times, q=q_out, qd=qd_out, torque=tau_out, q_desired=q_ref,
-                          qd_desired=qd_ref, flange_error=flange_error,
+                          qd_desired=qd_ref, tcp=tcp, tcp_desired=tcp_desired,
+                          flange_error=np.linalg.norm(tcp - tcp_desired, axis=-1),
                           controller=getattr(controller, "name", type(controller).__name__))
