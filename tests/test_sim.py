@@ -528,3 +528,12 @@ def test_a_prismatic_joint_driven_to_the_end_of_its_stroke():
                            qdd=sdd[:, None] * step)
     result = track(ArmSimulation(scara), move, JointPD(kp=2000.0, kd=20.0))
     assert abs(result.q[-1, 2]) < 2e-3
+
+
+def test_pd_gravity_compensation_from_the_controllers_own_model():
+    move = smooth_trajectory(duration=8.0)          # slow: the error is mostly the sag
+    plant = ArmSimulation(models.ur3(), payload=2.0)
+    informed = track(plant, move, JointPD(UR3_PD.kp, UR3_PD.kd, gravity_compensation=True))
+    blind = track(plant, move, JointPD(UR3_PD.kp, UR3_PD.kd, gravity_compensation=True,
+                                       model=ArmSimulation(models.ur3())))
+    assert blind.flange_error.max() > 2 * informed.flange_error.max()

@@ -285,6 +285,9 @@ class JointPD:
         Damping per joint, N m s/rad.
     gravity_compensation : bool, optional
         Add the model's gravity torques.
+    model : ArmSimulation, optional
+        The controller's own model for the gravity torques (for instance without the
+        payload the arm really carries). Default: the simulated arm itself.
 
     Examples
     --------
@@ -297,6 +300,7 @@ class JointPD:
     kp: object
     kd: object
     gravity_compensation: bool = False
+    model: object = field(default=None, repr=False, compare=False)
 
     @property
     def name(self):
@@ -309,7 +313,7 @@ class JointPD:
         q = sim.data.qpos
         tau = kp * (q_d - q) + kd * (qd_d - sim.data.qvel)
         if self.gravity_compensation:
-            tau = tau + sim.gravity_torque(q)
+            tau = tau + (self.model or sim).gravity_torque(q)
         return tau
 
 
