@@ -37,24 +37,14 @@ from ..models import ur3
 from ..quaternion import quaternion_distance, quaternion_from_matrix
 from ..trajectory import follow_path_ur, joint_trajectory, line_slerp, trapezoidal
 from ..ur import ROBOT_MODE_RUNNING, URState, check_pose, pose_from_transform, transform_from_pose
-from .simulation import ArmSimulation, ComputedTorque, _reference
+from ._checks import number
+from .simulation import ArmSimulation, ComputedTorque, sample_reference
 
 __all__ = ["MujocoBackend", "UR3_HOME"]
 
-#: A comfortable start: upper arm up, forearm forward, wrist 2 down.
+#: Where the simulated arm starts, away from the singularities: upper arm up, forearm
+#: horizontal, wrist bent.
 UR3_HOME = (0.0, -math.pi / 2, math.pi / 2, -math.pi / 2, -math.pi / 2, 0.0)
-
-
-def _positive(value, name, *, allow_zero=False):
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
-    ok = value >= 0 if allow_zero else value > 0
-    if not (math.isfinite(value) and ok):
-        kind = ">= 0" if allow_zero else "> 0"
-        raise ValueError(f"{name} must be a finite number {kind}, got {value!r}")
-    return value
 
 
 class _Motion:
@@ -75,7 +65,8 @@ class _Motion:
         :func:`~dqlab.sim.track`) and accelerations at ``times`` (shape (k,) -> (k, 6)
         each). After the last sample the reference holds the last position at rest."""
         times = np.asarray(times, dtype=float)
-        q, qd, qdd = _reference(self.t, self.q, self.qd, self.qdd, times, velocity_lag)
+        q, qd, qdd = sample_reference(self.t, self.q, self.qd, self.qdd, times,
+                                      velocity_lag=velocity_lag)
         over = times >= self.t[-1]
         qd[over] = 0.0
         qdd[over] = 0.0
@@ -133,7 +124,7 @@ class MujocoBackend:
         self.name = f"MuJoCo simulation of the {robot.name or 'arm'}"
         self.sim = ArmSimulation(robot, **model_options)
         self.controller = ComputedTorque() if controller is None else controller
-        self.period = _positive(period, "period")
+        self.period = number(period, "period")
         self.clock = clock
         self.q_home = self.sim.check_target(q_home, "q_home")
         self._connected = False
@@ -143,7 +134,7 @@ class MujocoBackend:
     # -- connection ---------------------------------------------------------------------------
     def connect(self, timeout=1.0):
         """Start the simulation with the arm at rest at ``q_home`` (time 0)."""
-        _positive(timeout, "timeout")
+        number(timeout, "timeout")
         self.sim.reset(self.q_home)
         self._motion = _Motion.hold(0.0, self.q_home)
         self._connected = True
@@ -162,7 +153,7 @@ class MujocoBackend:
         """Run the simulation for ``duration`` seconds under the controller."""
         self._require_connected()
         sim = self.sim
-        steps = int(round(_positive(duration, "duration", allow_zero=True) / sim.timestep))
+        steps = int(round(number(duration, "duration", strict=False) / sim.timestep))
         controller = self.controller
         times = sim.time + sim.timestep * np.arange(steps)
         q_d, qd_d, qdd_d = self._motion.sample(times, sim.timestep / 2)
@@ -221,8 +212,8 @@ class MujocoBackend:
         """
         self._require_connected()
         target = self.sim.check_target(q, "q")
-        a, v = _positive(a, "a"), _positive(v, "v")
-        t, r = _positive(t, "t", allow_zero=True), _positive(r, "r", allow_zero=True)
+        a, v = number(a, "a"), number(v, "v")
+        t, r = number(t, "t", strict=False), number(r, "r", strict=False)
         start = self._current_target()
         t0 = self.sim.time
         if np.array_equal(start, target):
@@ -255,8 +246,8 @@ class MujocoBackend:
         pose = check_pose(pose, "pose")
         if pose.shape != (6,):
             raise ValueError(f"pose must be one UR pose vector of shape (6,), got {pose.shape}")
-        a, v = _positive(a, "a"), _positive(v, "v")
-        t, r = _positive(t, "t", allow_zero=True), _positive(r, "r", allow_zero=True)
+        a, v = number(a, "a"), number(v, "v")
+        t, r = number(t, "t", strict=False), number(r, "r", strict=False)
         robot = self.sim.robot
         q_start = self._current_target()
         t0 = self.sim.time
@@ -296,9 +287,9 @@ class MujocoBackend:
         """
         self._require_connected()
         target = self.sim.check_target(q, "q")
-        t = _positive(t, "t")
-        lookahead_time = _positive(lookahead_time, "lookahead_time")
-        gain = _positive(gain, "gain")
+        t = number(t, "t")
+        lookahead_time = number(lookahead_time, "lookahead_time")
+        gain = number(gain, "gain")
         if not 0.03 <= lookahead_time <= 0.2:
             raise ValueError(f"lookahead_time must be in [0.03, 0.2] s, got {lookahead_time}")
         if not 100 <= gain <= 2000:
@@ -321,7 +312,7 @@ class MujocoBackend:
             If ``a`` is not a positive number.
         """
         self._require_connected()
-        a = _positive(a, "a")
+        a = number(a, "a")
         t0 = self.sim.time
         q0, qd0, _ = (x[0] for x in self._motion.sample([t0]))
         fastest = float(np.abs(qd0).max())

@@ -40,6 +40,7 @@ import numpy as np
 
 from ..quaternion import quaternion_from_matrix
 from ..robot import Robot
+from ._checks import number, per_joint
 
 __all__ = ["mjcf_from_robot", "link_placements", "default_masses", "UR3_LINK_MASSES",
            "UR3_PAYLOAD", "UR3_BASE_MASS"]
@@ -136,38 +137,6 @@ def _pos_quat(X):
     """MJCF ``pos`` and ``quat`` (MuJoCo's order is also w, x, y, z) of a 4x4 transform."""
     quat = quaternion_from_matrix(X[:3, :3])
     return f'pos="{_vec(X[:3, 3])}" quat="{_vec(quat)}"'
-
-
-def _positive(value, name):
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
-    if not (math.isfinite(value) and value > 0):
-        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    return value
-
-
-def _nonnegative(value, name):
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
-    if not (math.isfinite(value) and value >= 0):
-        raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
-    return value
-
-
-def _per_joint(value, n, name, *, positive):
-    arr = np.broadcast_to(np.asarray(value, dtype=float), (n,)) if np.ndim(value) == 0 \
-        else np.asarray(value, dtype=float)
-    if arr.shape != (n,):
-        raise ValueError(f"{name} must be one number or {n} numbers, got shape {arr.shape}")
-    bad = (arr <= 0) if positive else (arr < 0)
-    if not np.isfinite(arr).all() or bad.any():
-        kind = "positive" if positive else ">= 0"
-        raise ValueError(f"{name} must be finite and {kind}, got {arr.tolist()}")
-    return arr
 
 
 def _segments(points, eps=1e-12):
@@ -287,17 +256,17 @@ def mjcf_from_robot(robot, *, masses=None, payload=0.0, radius=None, damping=0.1
     is_ur3 = _is_ur3(robot)
     if radius is None:
         radius = min(max(0.05 * total_length, 0.01), 0.05)
-    radius = _positive(radius, "radius")
+    radius = number(radius, "radius")
     masses = default_masses(robot) if masses is None else masses
-    masses = _per_joint(masses, n, "masses", positive=True)
-    damping = _per_joint(damping, n, "damping", positive=False)
-    armature = _per_joint(armature, n, "armature", positive=False)
-    payload = _nonnegative(payload, "payload")
-    timestep = _positive(timestep, "timestep")
-    gravity = _nonnegative(gravity, "gravity")
+    masses = per_joint(masses, n, "masses", positive=True)
+    damping = per_joint(damping, n, "damping", positive=False)
+    armature = per_joint(armature, n, "armature", positive=False)
+    payload = number(payload, "payload", strict=False)
+    timestep = number(timestep, "timestep")
+    gravity = number(gravity, "gravity", strict=False)
     if base_mass is None:
         base_mass = UR3_BASE_MASS if is_ur3 else 1.0
-    base_mass = _positive(base_mass, "base_mass")
+    base_mass = number(base_mass, "base_mass")
     if integrator not in ("implicitfast", "implicit", "RK4", "Euler"):
         raise ValueError("integrator must be 'implicitfast', 'implicit', 'RK4' or 'Euler', "
                          f"got {integrator!r}")

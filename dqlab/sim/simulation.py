@@ -32,10 +32,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ._checks import number, vector
 from .mjcf import mjcf_from_robot
 
 __all__ = ["ArmSimulation", "JointPD", "ComputedTorque", "TrackingResult", "track",
-           "check_trajectory", "require_mujoco"]
+           "check_trajectory", "sample_reference", "require_mujoco"]
 
 
 def require_mujoco():
@@ -57,21 +58,6 @@ def require_mujoco():
         raise ImportError("dqlab.sim needs MuJoCo to simulate: install the extra with "
                           "pip install 'dqlab[sim]' (or pip install mujoco)") from None
     return mujoco
-
-
-def _vector(value, n, name):
-    """``value`` as a finite float array of shape (n,) (a number is repeated)."""
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be numbers, got {value!r}") from None
-    if arr.ndim == 0:
-        arr = np.full(n, float(arr))
-    if arr.shape != (n,):
-        raise ValueError(f"{name} must have shape ({n},), got shape {arr.shape}")
-    if not np.isfinite(arr).all():
-        raise ValueError(f"{name} contains NaN or infinity")
-    return arr
 
 
 class ArmSimulation:
@@ -159,7 +145,7 @@ class ArmSimulation:
             outside the robot's joint limits.
         """
         q = self.check_target(q, "q")
-        qd = np.zeros(self.n) if qd is None else _vector(qd, self.n, "qd")
+        qd = np.zeros(self.n) if qd is None else vector(qd, self.n, "qd")
         self._mj.mj_resetData(self.model, self.data)
         self.data.qpos[:] = q
         self.data.qvel[:] = qd
@@ -169,7 +155,7 @@ class ArmSimulation:
     def check_target(self, q, name="q"):
         """``q`` as a float array of shape (n,), or a ValueError naming ``name``: wrong
         shape, NaN or infinity, or a joint beyond its limits."""
-        q = _vector(q, self.n, name)
+        q = vector(q, self.n, name)
         bad = np.flatnonzero((q < self._lo) | (q > self._hi))
         if bad.size:
             j = bad[0]
@@ -207,10 +193,7 @@ class ArmSimulation:
 
     @payload.setter
     def payload(self, mass):
-        mass = float(mass)
-        if not (math.isfinite(mass) and mass >= 0):
-            raise ValueError(f"payload must be a finite mass >= 0 in kg, got {mass!r}")
-        mass = max(mass, 1e-9)
+        mass = max(number(mass, "payload", strict=False), 1e-9)
         self.model.body_mass[self._payload_body] = mass
         self.model.body_inertia[self._payload_body] = 0.4 * mass * self._payload_radius ** 2
         # recompute the model's derived constants on the scratch data (mj_setConst moves the
@@ -226,7 +209,7 @@ class ArmSimulation:
         ValueError
             If ``torque`` has the wrong shape or holds NaN or infinity.
         """
-        self.data.ctrl[:] = _vector(torque, self.n, "torque")
+        self.data.ctrl[:] = vector(torque, self.n, "torque")
         for _ in range(int(steps)):
             self._mj.mj_step(self.model, self.data)
 
@@ -308,8 +291,8 @@ class JointPD:
 
     def torque(self, sim, q_d, qd_d, qdd_d):
         """Motor torques for the reference ``(q_d, qd_d, qdd_d)``, shape (n,)."""
-        kp = _vector(self.kp, sim.n, "kp")
-        kd = _vector(self.kd, sim.n, "kd")
+        kp = vector(self.kp, sim.n, "kp")
+        kd = vector(self.kd, sim.n, "kd")
         q = sim.data.qpos
         tau = kp * (q_d - q) + kd * (qd_d - sim.data.qvel)
         if self.gravity_compensation:
@@ -349,8 +332,8 @@ class ComputedTorque:
 
     def torque(self, sim, q_d, qd_d, qdd_d):
         """Motor torques for the reference ``(q_d, qd_d, qdd_d)``, shape (n,)."""
-        kp = _vector(self.kp, sim.n, "kp")
-        kd = _vector(self.kd, sim.n, "kd")
+        kp = vector(self.kp, sim.n, "kp")
+        kd = vector(self.kd, sim.n, "kd")
         q, qd = sim.data.qpos, sim.data.qvel
         qdd_cmd = qdd_d + kd * (qd_d - qd) + kp * (q_d - q)
         return (self.model or sim).inverse_dynamics(q, qd, qdd_cmd)
@@ -469,10 +452,38 @@ def check_trajectory(trajectory, robot):
     return t, arrays["q"], arrays["qd"], arrays["qdd"]
 
 
-def _reference(t, q, qd, qdd, times, velocity_lag=0.0):
-    """The reference at ``times``: q by cubic Hermite interpolation (with qd as slopes),
-    qd and qdd linearly; held constant after the last sample. The velocity is taken
-    ``velocity_lag`` seconds earlier (see :func:`track`)."""
+def sample_reference(t, q, qd, qdd, times, *, velocity_lag=0.0):
+    r"""A sampled joint reference at other ``times``.
+
+    Positions by cubic Hermite interpolation with the velocities as slopes (exact for a
+    cubic between samples), velocities and accelerations linearly; before the first and
+    after the last sample the end values are held. The velocity is taken ``velocity_lag``
+    seconds earlier (see :func:`track`).
+
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Increasing sample times, s.
+    q, qd, qdd : array_like, shape (N, n)
+    times : array_like, shape (k,)
+    velocity_lag : float, optional
+
+    Returns
+    -------
+    q, qd, qdd : ndarray, shape (k, n)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.array([0.0, 1.0])
+    >>> q, qd, qdd = sample_reference(t, [[0.0], [1.0]], [[0.0], [0.0]], [[6.0], [-6.0]],
+    ...                               [0.5])
+    >>> q, qd, qdd                              # the cubic 3 t^2 - 2 t^3 at t = 0.5
+    (array([[0.5]]), array([[0.]]), array([[0.]]))
+    """
+    t = np.asarray(t, dtype=float)
+    q, qd, qdd = (np.asarray(x, dtype=float) for x in (q, qd, qdd))
+    times = np.asarray(times, dtype=float)
 
     def locate(times):
         times = np.clip(times, t[0], t[-1])
@@ -563,8 +574,8 @@ def track(sim, trajectory, controller, *, start_from_trajectory=True, payload=No
     dt = sim.timestep
     steps = int(math.floor((t[-1] - t[0]) / dt + 1e-9))
     times = sim.time + dt * np.arange(steps + 1)
-    q_ref, qd_ref, qdd_ref = _reference(t, q, qd, qdd, times - sim.time + t[0],
-                                        velocity_lag=dt / 2)
+    q_ref, qd_ref, qdd_ref = sample_reference(t, q, qd, qdd, times - sim.time + t[0],
+                                              velocity_lag=dt / 2)
     n = sim.n
     q_out = np.empty((steps + 1, n))
     qd_out = np.empty((steps + 1, n))
