@@ -39,7 +39,7 @@ from dqlab.trajectory import (
 )
 
 #: the circle of chapter 11: centre, fixed tool orientation (tool z along -y), start
-CENTER = np.array([0.0, -0.3, 0.3])
+CENTER = np.array([0.0, -0.35, 0.25])
 R_WT = rot_x(np.pi / 2)
 R, V, DT = 0.1, 0.05, 0.005
 
