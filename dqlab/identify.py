@@ -158,27 +158,41 @@ class Identification:
         return [(label, float(v), float(np.sqrt(max(s, 0.0))))
                 for label, v, s in zip(self.identifiable, values, var, strict=True)]
 
-    def summary(self, *, scale=None, unit=""):
+    def summary(self, *, scale=1.0, unit=""):
         """A text table of the estimates, their standard errors and the held parameters.
 
         Parameters
         ----------
-        scale : dict of str to float, optional
-            Factor applied per parameter name for printing (e.g. 1000 for metres to mm).
+        scale : float or dict of str to float, optional
+            Factor applied for printing (e.g. 1000 for metres to mm): one number for every
+            parameter and for ``sigma``, or one per parameter name (``sigma`` unscaled).
         unit : str, optional
             Printed after the header.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> fit = fit_linear(np.column_stack([np.ones(4), np.arange(4.0)]),
+        ...                  [1.0, 2.1, 2.9, 4.0], names=["b", "m"])
+        >>> print(fit.summary())
+        parameter          estimate    std error
+        b                      1.03       0.0794
+        m                      0.98       0.0424
+        rank 2 of 2, condition number 3.01, residual sigma 0.0949
         """
-        scale = scale or {}
+        per_name = scale if isinstance(scale, dict) else dict.fromkeys(self.names, scale)
+        sigma_scale = 1.0 if isinstance(scale, dict) else scale
         se = self.standard_errors
         lines = [f"{'parameter':12s} {'estimate':>14s} {'std error':>12s}  {unit}".rstrip()]
         for k, name in enumerate(self.names):
-            f = scale.get(name, 1.0)
+            f = per_name.get(name, 1.0)
             if self.estimated[k]:
                 lines.append(f"{name:12s} {self.estimate[k] * f:14.6g} {se[k] * f:12.3g}")
             else:
                 lines.append(f"{name:12s} {self.estimate[k] * f:14.6g} {'held':>12s}")
         lines.append(f"rank {self.rank} of {len(self.names)}, condition number "
-                     f"{self.condition_number:.3g}, residual sigma {self.sigma:.3g}")
+                     f"{self.condition_number:.3g}, residual sigma "
+                     f"{self.sigma * sigma_scale:.3g}")
         if self.unidentifiable:
             lines.append("not identifiable: " + ", ".join(self.unidentifiable))
         return "\n".join(lines)

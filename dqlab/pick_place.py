@@ -461,7 +461,7 @@ def _check_samples(robot, q, wrist_limits):
 
 
 def animate_pick_place(scene, robot, plan, *, size=(0.06, 0.04, 0.004), name="robot",
-                       object_color=0x2E86C1, loop=True):
+                       object_color=0x2E86C1, stride=1, loop=True):
     """Animate a plan in a :class:`dqlab.viz.Scene`: the arm, its cup, the object, pads.
 
     Draws the arm (:meth:`~dqlab.viz.Scene.add_robot`) and plays ``plan.q`` on it; a cup
@@ -479,6 +479,9 @@ def animate_pick_place(scene, robot, plan, *, size=(0.06, 0.04, 0.004), name="ro
     name : str, optional
         The robot's name in the scene.
     object_color : int, optional
+    stride : int, optional
+        Animate every ``stride``-th sample (and the last): a lighter view for the book; the
+        viewer interpolates between the kept samples.
     loop : bool, optional
         Repeat the animation.
     """
@@ -486,9 +489,14 @@ def animate_pick_place(scene, robot, plan, *, size=(0.06, 0.04, 0.004), name="ro
 
     from .viz.scene import PATH_COLOR
 
+    if not (isinstance(stride, int) and stride >= 1):
+        raise ValueError(f"stride must be an integer >= 1, got {stride!r}")
+    keep = np.unique(np.append(np.arange(0, len(plan.t), stride), len(plan.t) - 1))
+    t, q, suction = plan.t[keep], plan.q[keep], plan.suction[keep]
+    cup, obj = plan.cup[keep], plan.object[keep]
     lx, ly, lz = (float(v) for v in size)
-    scene.add_robot(robot, plan.q[0, :3], name=name)
-    scene.animate(plan.q[:, :3], name=name, times=plan.t, loop=loop)
+    scene.add_robot(robot, q[0, :3], name=name)
+    scene.animate(q[:, :3], name=name, times=t, loop=loop)
     scene.add_path(plan.cup[:, :3, 3], name="cup_path", color=PATH_COLOR)
 
     def material(color):
@@ -503,19 +511,17 @@ def animate_pick_place(scene, robot, plan, *, size=(0.06, 0.04, 0.004), name="ro
         node.set_object(g.Cylinder(0.012, 0.008), material(color))
         node.set_transform(turn)
     hidden = np.diag([1e-6, 1e-6, 1e-6, 1.0]) @ turn              # shrunk to nothing
-    sucking = plan.suction[:, None, None]
-    scene.animate_transforms("cup", plan.cup, times=plan.t, loop=loop)
-    scene.animate_transforms("cup/on", np.where(sucking, turn, hidden), times=plan.t,
-                             loop=loop)
-    scene.animate_transforms("cup/off", np.where(sucking, hidden, turn), times=plan.t,
-                             loop=loop)
+    sucking = suction[:, None, None]
+    scene.animate_transforms("cup", cup, times=t, loop=loop)
+    scene.animate_transforms("cup/on", np.where(sucking, turn, hidden), times=t, loop=loop)
+    scene.animate_transforms("cup/off", np.where(sucking, hidden, turn), times=t, loop=loop)
 
     # the object: a box whose frame is the centre of its top face
     box = np.eye(4)
     box[2, 3] = -lz / 2
     scene.vis["object"]["box"].set_object(g.Box([lx, ly, lz]), material(object_color))
     scene.vis["object"]["box"].set_transform(box)
-    scene.animate_transforms("object", plan.object, times=plan.t, loop=loop)
+    scene.animate_transforms("object", obj, times=t, loop=loop)
 
     # pads under the object where it starts and where it is left
     for label, X in (("start", plan.object[0]), ("end", plan.object[-1])):
