@@ -99,6 +99,16 @@ class Identification:
     converged : bool
     robot : Robot or None
         For :func:`calibrate`: the chain with the estimated parameters.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> A = np.array([[1.0, 0.0, 1.0], [1.0, 1.0, 1.0], [1.0, 2.0, 1.0], [1.0, 3.0, 1.0]])
+    >>> fit = fit_linear(A, [0.1, 1.0, 2.1, 2.9], names=["b", "m", "b2"])
+    >>> fit.held, fit.unidentifiable
+    (('b2',), ('b - b2',))
+    >>> [(label, round(value, 6)) for label, value, _ in fit.combinations()]
+    [('b + b2', 0.1), ('m', 0.95)]
     """
 
     names: tuple

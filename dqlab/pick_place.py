@@ -5,14 +5,14 @@ point, then switch the suction cup on (1) or off (0); ``q3`` turns the cup about
 vertical. This module turns such a list into a timed joint trajectory that a robot may be
 sent, in three steps (chapter 12):
 
-1. :func:`joint_targets` -- every point to a joint target by :func:`dqlab.ik.desk_arm`,
+1. :func:`joint_targets` -- every point to a joint target by :func:`dqlab.ik.arm3.desk_arm`,
    always on the same branch (the arm facing the point, elbow up, by default); a point that
    is out of reach or whose solution breaks a joint limit is refused with the step's index;
 2. :func:`plan_pick_place` -- rest-to-rest segments between consecutive targets with the
-   quintic time law of :func:`dqlab.trajectory.joint_trajectory` (chapter 10), a dwell
+   quintic time law of ``dqlab.trajectory.joint_trajectory`` (chapter 10), a dwell
    where the cup switches, and the object carried by the cup
    while the suction is on; the result is checked once more (finite, within limits);
-3. :func:`animate_pick_place` -- a :class:`dqlab.viz.Scene` animation of the arm, the cup
+3. :func:`animate_pick_place` -- a :class:`dqlab.viz.scene.Scene` animation of the arm, the cup
    and the object.
 
 A target is four numbers: the chain angles :math:`(\theta_1, \theta_2, \theta_3)` of
@@ -33,7 +33,7 @@ from .trajectory import Trajectory, joint_trajectory
 __all__ = ["PickPlaceTask", "PickPlacePlan", "task_from_lab", "joint_targets",
            "cup_poses", "plan_pick_place", "animate_pick_place", "BRANCH_NAMES"]
 
-#: The rows of :func:`dqlab.ik.desk_arm`'s solutions, by name.
+#: The rows of :func:`dqlab.ik.arm3.desk_arm`'s solutions, by name.
 BRANCH_NAMES = ("facing, elbow up", "facing, elbow down", "turned away, elbow up",
                 "turned away, elbow down")
 
@@ -126,7 +126,7 @@ def _check_wrist_limits(wrist_limits):
 def joint_targets(robot, task, *, branch=0, wrist_limits=(-math.pi, math.pi), tol=1e-9):
     r"""Joint targets of every step of a task, on one branch of the closed-form solution.
 
-    Each position goes through :func:`dqlab.ik.desk_arm`; the target is the row ``branch``
+    Each position goes through :func:`dqlab.ik.arm3.desk_arm`; the target is the row ``branch``
     of its solutions (``0``: facing the point with the elbow up, see
     :data:`BRANCH_NAMES`), followed by the step's wrist angle. Keeping one branch keeps
     the arm in one posture for the whole task, so that no segment flips the elbow or
@@ -312,7 +312,7 @@ def plan_pick_place(robot, task, *, object_pose=None, branch=0,
     The arm starts at the first step's target (the lab initialises its arm there). For each
     following step it moves to the step's target along a straight line of joint space with
     the quintic law, as fast as ``v_max`` and ``a_max`` allow
-    (:func:`dqlab.trajectory.joint_trajectory`; the law stays within [0, 1], so every
+    (``dqlab.trajectory.joint_trajectory``; the law stays within [0, 1], so every
     sample lies between two targets that are within the joint limits), then, if the
     cup's state changes there, waits ``dwell`` seconds while it switches. When the suction
     comes on, the object is attached if the cup touches it (within ``grasp_tol`` of its
@@ -462,9 +462,9 @@ def _check_samples(robot, q, wrist_limits):
 
 def animate_pick_place(scene, robot, plan, *, size=(0.06, 0.04, 0.004), name="robot",
                        object_color=0x2E86C1, stride=1, loop=True):
-    """Animate a plan in a :class:`dqlab.viz.Scene`: the arm, its cup, the object, pads.
+    """Animate a plan in a :class:`dqlab.viz.scene.Scene`: the arm, its cup, the object, pads.
 
-    Draws the arm (:meth:`~dqlab.viz.Scene.add_robot`) and plays ``plan.q`` on it; a cup
+    Draws the arm (:meth:`~dqlab.viz.scene.Scene.add_robot`) and plays ``plan.q`` on it; a cup
     (a short cylinder, red while sucking) follows ``plan.cup``; the object, a box of
     ``size`` whose top face is at its frame, follows ``plan.object``; a grey pad supports
     the object where it starts and where it is left; the cup's path is drawn in orange.
@@ -484,6 +484,17 @@ def animate_pick_place(scene, robot, plan, *, size=(0.06, 0.04, 0.004), name="ro
         viewer interpolates between the kept samples.
     loop : bool, optional
         Repeat the animation.
+
+    Examples
+    --------
+    >>> from dqlab import viz
+    >>> from dqlab.models import desk_arm
+    >>> task = task_from_lab([[0, 170, 80, 0, 0], [0, 170, 30, 1, 0], [0, -170, 35, 0, 180]])
+    >>> scene = viz.Scene(grid_size=0.8, grid_step=0.05)
+    >>> animate_pick_place(scene, desk_arm(), plan_pick_place(desk_arm(), task), stride=2)
+    >>> paths = {c.get("path", "") for c in scene.commands()}
+    >>> {"/meshcat/cup/on", "/meshcat/object/box", "/meshcat/pads/start"} <= paths
+    True
     """
     import meshcat.geometry as g
 
