@@ -9,7 +9,7 @@ sent, in three steps (chapter 12):
    always on the same branch (the arm facing the point, elbow up, by default); a point that
    is out of reach or whose solution breaks a joint limit is refused with the step's index;
 2. :func:`plan_pick_place` -- rest-to-rest segments between consecutive targets with the
-   quintic time law of ``dqlab.trajectory.joint_trajectory`` (chapter 10), a dwell
+   quintic time law of :func:`dqlab.trajectory.joint.joint_trajectory` (chapter 10), a dwell
    where the cup switches, and the object carried by the cup
    while the suction is on; the result is checked once more (finite, within limits);
 3. :func:`animate_pick_place` -- a :class:`dqlab.viz.scene.Scene` animation of the arm, the cup
@@ -255,7 +255,7 @@ class PickPlacePlan:
     ----------
     targets : ndarray, shape (K, 4)
         The joint target of every step (:func:`joint_targets`).
-    trajectory : dqlab.trajectory.Trajectory
+    trajectory : dqlab.trajectory.joint.Trajectory
         Instants ``t`` (N,), seconds from 0, and the chain and wrist angles ``q``, their
         speeds ``qd`` and accelerations ``qdd``, (N, 4) each.
     step : ndarray of int, shape (N,)
@@ -312,7 +312,7 @@ def plan_pick_place(robot, task, *, object_pose=None, branch=0,
     The arm starts at the first step's target (the lab initialises its arm there). For each
     following step it moves to the step's target along a straight line of joint space with
     the quintic law, as fast as ``v_max`` and ``a_max`` allow
-    (``dqlab.trajectory.joint_trajectory``; the law stays within [0, 1], so every
+    (:func:`dqlab.trajectory.joint.joint_trajectory`; the law stays within [0, 1], so every
     sample lies between two targets that are within the joint limits), then, if the
     cup's state changes there, waits ``dwell`` seconds while it switches. When the suction
     comes on, the object is attached if the cup touches it (within ``grasp_tol`` of its

@@ -39,7 +39,7 @@ from dqlab.trajectory import (
 )
 
 #: the circle of chapter 11: centre, fixed tool orientation (tool z along -y), start
-CENTER = np.array([0.0, -0.3, 0.3])
+CENTER = np.array([0.0, -0.35, 0.25])
 R_WT = rot_x(np.pi / 2)
 R, V, DT = 0.1, 0.05, 0.005
 
@@ -344,6 +344,7 @@ def insert_line(text, index, line):
     (lambda text: insert_line(text, 2, ""), 3, "empty line"),
     (lambda text: text + "9.0" + ",nan" * 18 + "\n", 5, "NaN"),
     (lambda text: text.split("\n", 1)[0] + "\n", 2, "no data rows"),
+    (lambda text: text[:-2], 4, "truncated"),
 ])
 def test_csv_errors_name_the_file_and_line(tmp_path, damage, line, match):
     traj = joint_trajectory(np.zeros(6), np.ones(6), duration=1.0, dt=0.5)

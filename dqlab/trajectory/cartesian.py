@@ -316,11 +316,11 @@ def circle_three_phase(center, radius, speed, dt=0.005, plane="xz", *,
     Examples
     --------
     >>> import numpy as np
-    >>> path = circle_three_phase([0.0, -0.3, 0.3], 0.1, 0.05)
+    >>> path = circle_three_phase([0.0, -0.35, 0.25], 0.1, 0.05)
     >>> len(path), round(float(path.speed.max()), 4)
     (4399, 0.05)
     >>> path.position[0]
-    array([ 0. , -0.3,  0.4])
+    array([ 0.  , -0.35,  0.35])
     """
     c = as_float_array(center, "center", (3,))
     if c.shape != (3,):

@@ -395,7 +395,7 @@ def follow_path_ur(robot, path, *, q_start=None, branch=None, max_step=0.1, damp
     >>> from dqlab import rot_x
     >>> from dqlab.trajectory import circle_three_phase
     >>> robot = ur3()
-    >>> path = circle_three_phase([0.0, -0.3, 0.3], 0.1, 0.05, dt=0.05,
+    >>> path = circle_three_phase([0.0, -0.35, 0.25], 0.1, 0.05, dt=0.05,
     ...                           orientation=rot_x(np.pi / 2))
     >>> traj, report = follow_path_ur(robot, path, branch=("right", "up", "noflip"))
     >>> len(traj), len(report.switches), bool(report.position_error.max() < 1e-9)
@@ -472,9 +472,9 @@ def follow_path_numerical(robot, path, q_start, *, damping=0.0, tol=1e-10, max_i
     >>> import numpy as np
     >>> from dqlab.models import ur3
     >>> from dqlab.trajectory import circle_three_phase
-    >>> path = circle_three_phase([0.0, -0.3, 0.3], 0.1, 0.05, dt=0.5)
+    >>> path = circle_three_phase([0.0, -0.35, 0.25], 0.1, 0.05, dt=0.5)
     >>> traj, report = follow_path_numerical(ur3(), path,
-    ...                                      [-1.2, -1.9, -1.4, -1.4, 1.6, 0.0])
+    ...                                      [-1.1, -1.9, -1.9, 0.6, 1.1, 3.1])
     >>> len(traj), bool(report.position_error.max() <= 1e-10)
     (44, True)
     """

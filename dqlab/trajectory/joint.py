@@ -150,9 +150,9 @@ class Trajectory:
         ------
         ValueError
             Naming the file and the line: an empty file, a header that is not the one
-            :meth:`save_csv` writes, a row with the wrong number of values (for example a
-            truncated last line), a value that is not a finite number, instants that do not
-            increase.
+            :meth:`save_csv` writes, a row with the wrong number of values, a value that is
+            not a finite number, instants that do not increase, or a last line without its
+            line end (a truncated file, even if the cut fell inside the last number).
 
         Examples
         --------
@@ -167,7 +167,8 @@ class Trajectory:
         """
         path = Path(path)
         with open(path, encoding="utf-8") as f:
-            lines = f.read().splitlines()
+            text = f.read()
+        lines = text.splitlines()
         if not lines or not lines[0].strip():
             raise ValueError(f"{path}, line 1: empty file, expected the header line")
         header = [c.strip() for c in lines[0].split(",")]
@@ -203,6 +204,9 @@ class Trajectory:
             rows.append(values)
         if not rows:
             raise ValueError(f"{path}, line 2: no data rows after the header")
+        if not text.endswith("\n"):
+            raise ValueError(f"{path}, line {len(lines)}: the last line has no line end: the "
+                             f"file is truncated (its last value may be cut)")
         table = np.array(rows)
         poses = None
         if with_poses:
