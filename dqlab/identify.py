@@ -5,7 +5,7 @@ Two problems, one result type (:class:`Identification`):
 - **Linear** (:func:`fit_linear`, :func:`identify_desk_arm`). When the measured quantity is
   linear in the unknown lengths for known joint angles, :math:`b = A(q)\,\ell`, stacking the
   equations of all poses gives an ordinary least-squares problem, solved by
-  :func:`numpy.linalg.lstsq`. The desktop arm of the lab report is such a case.
+  ``numpy.linalg.lstsq``. The desktop arm of the lab report is such a case.
 - **Nonlinear** (:func:`calibrate`). The flange position of a chain depends on its
   Denavit--Hartenberg parameters through sines and cosines; Gauss--Newton with
   Levenberg--Marquardt damping solves it, with the identification Jacobian
@@ -380,7 +380,7 @@ def fit_linear(A, b, *, names=None, reference=None, rank_tol=1e-8, max_condition
     singular values of :math:`A_s` give the number :math:`r` of identifiable combinations.
     The columns are then taken in order and a column is kept when it is not a combination
     of the columns kept before it; the others are *held* at ``reference``. The kept
-    parameters are estimated with :func:`numpy.linalg.lstsq`, and
+    parameters are estimated with ``numpy.linalg.lstsq``, and
 
     .. math::
 

@@ -516,10 +516,10 @@ def animate_pick_place(scene, robot, plan, *, size=(0.06, 0.04, 0.004), name="ro
     # the cup: a cylinder (three.js cylinders run along y) just above the cup point
     turn = np.eye(4)
     turn[:3, :3] = [[1, 0, 0], [0, 0, -1], [0, 1, 0]]              # y -> -z (upwards)
-    turn[:3, 3] = [0.0, 0.0, -0.006]
+    turn[:3, 3] = [0.0, 0.0, -0.01]
     for state, color in (("off", 0x555555), ("on", 0xC0392B)):
         node = scene.vis["cup"][state]
-        node.set_object(g.Cylinder(0.012, 0.008), material(color))
+        node.set_object(g.Cylinder(0.02, 0.012), material(color))
         node.set_transform(turn)
     hidden = np.diag([1e-6, 1e-6, 1e-6, 1.0]) @ turn              # shrunk to nothing
     sucking = suction[:, None, None]
