@@ -33,6 +33,7 @@ import numpy as np
 from ._checks import as_float_array
 from .quaternion import quaternion_from_matrix
 from .robot import Link, Robot
+from .transforms import check_transform
 
 __all__ = [
     "Identification", "IllConditionedWarning", "fit_linear", "DESK_ARM_PARAMETERS",
@@ -782,7 +783,7 @@ def calibrate(robot, q, measured, *, measure="position", fixed=(), rotation_scal
         Measured TCP positions (``measure="position"``) or poses (``"pose"``) in the world
         frame, metres.
     measure : {"position", "pose"}, optional
-    fixed : sequence of str, optional
+    fixed : str or sequence of str, optional
         Parameter names to hold at their nominal values (known by construction).
     rotation_scale : float, optional
         Metres per radian: weight of the orientation residuals for ``measure="pose"``.
@@ -801,8 +802,9 @@ def calibrate(robot, q, measured, *, measure="position", fixed=(), rotation_scal
     Raises
     ------
     ValueError
-        On mismatched shapes, NaN, unknown names in ``fixed``, or too few measurements
-        (fewer equations than free parameters, or no more than the identifiable ones).
+        On mismatched shapes, NaN, measured poses that are not rigid transforms, unknown
+        names in ``fixed``, or too few measurements (fewer equations than free
+        parameters, or no more than the identifiable ones).
 
     Warns
     -----
@@ -842,6 +844,9 @@ def calibrate(robot, q, measured, *, measure="position", fixed=(), rotation_scal
         if measured.shape != (m, 4, 4):
             raise ValueError(f"measured poses must have shape ({m}, 4, 4) to match q, "
                              f"got shape {measured.shape}")
+        measured = check_transform(measured, tol=1e-6, name="measured")
+    if isinstance(fixed, str):
+        fixed = (fixed,)
     names = dh_parameter_names(robot)
     unknown = [f for f in fixed if f not in names]
     if unknown:
