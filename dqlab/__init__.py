@@ -119,7 +119,7 @@ __all__ = [
 # that ``import dqlab`` stays light.
 _SUBMODULES = {
     "complex", "rotations", "quaternion", "transforms", "dualquat", "robot", "models",
-    "jacobian", "ik", "trajectory", "identify", "viz", "ur", "sim",
+    "jacobian", "ik", "trajectory", "identify", "pick_place", "viz", "ur", "sim",
 }
 
 

@@ -5,7 +5,7 @@ Two problems, one result type (:class:`Identification`):
 - **Linear** (:func:`fit_linear`, :func:`identify_desk_arm`). When the measured quantity is
   linear in the unknown lengths for known joint angles, :math:`b = A(q)\,\ell`, stacking the
   equations of all poses gives an ordinary least-squares problem, solved by
-  :func:`numpy.linalg.lstsq`. The desktop arm of the lab report is such a case.
+  ``numpy.linalg.lstsq``. The desktop arm of the lab report is such a case.
 - **Nonlinear** (:func:`calibrate`). The flange position of a chain depends on its
   Denavit--Hartenberg parameters through sines and cosines; Gauss--Newton with
   Levenberg--Marquardt damping solves it, with the identification Jacobian
@@ -33,6 +33,7 @@ import numpy as np
 from ._checks import as_float_array
 from .quaternion import quaternion_from_matrix
 from .robot import Link, Robot
+from .transforms import check_transform
 
 __all__ = [
     "Identification", "IllConditionedWarning", "fit_linear", "DESK_ARM_PARAMETERS",
@@ -99,6 +100,16 @@ class Identification:
     converged : bool
     robot : Robot or None
         For :func:`calibrate`: the chain with the estimated parameters.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> A = np.array([[1.0, 0.0, 1.0], [1.0, 1.0, 1.0], [1.0, 2.0, 1.0], [1.0, 3.0, 1.0]])
+    >>> fit = fit_linear(A, [0.1, 1.0, 2.1, 2.9], names=["b", "m", "b2"])
+    >>> fit.held, fit.unidentifiable
+    (('b2',), ('b - b2',))
+    >>> [(label, round(value, 6)) for label, value, _ in fit.combinations()]
+    [('b + b2', 0.1), ('m', 0.95)]
     """
 
     names: tuple
@@ -158,27 +169,41 @@ class Identification:
         return [(label, float(v), float(np.sqrt(max(s, 0.0))))
                 for label, v, s in zip(self.identifiable, values, var, strict=True)]
 
-    def summary(self, *, scale=None, unit=""):
+    def summary(self, *, scale=1.0, unit=""):
         """A text table of the estimates, their standard errors and the held parameters.
 
         Parameters
         ----------
-        scale : dict of str to float, optional
-            Factor applied per parameter name for printing (e.g. 1000 for metres to mm).
+        scale : float or dict of str to float, optional
+            Factor applied for printing (e.g. 1000 for metres to mm): one number for every
+            parameter and for ``sigma``, or one per parameter name (``sigma`` unscaled).
         unit : str, optional
             Printed after the header.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> fit = fit_linear(np.column_stack([np.ones(4), np.arange(4.0)]),
+        ...                  [1.0, 2.1, 2.9, 4.0], names=["b", "m"])
+        >>> print(fit.summary())
+        parameter          estimate    std error
+        b                      1.03       0.0794
+        m                      0.98       0.0424
+        rank 2 of 2, condition number 3.01, residual sigma 0.0949
         """
-        scale = scale or {}
+        per_name = scale if isinstance(scale, dict) else dict.fromkeys(self.names, scale)
+        sigma_scale = 1.0 if isinstance(scale, dict) else scale
         se = self.standard_errors
         lines = [f"{'parameter':12s} {'estimate':>14s} {'std error':>12s}  {unit}".rstrip()]
         for k, name in enumerate(self.names):
-            f = scale.get(name, 1.0)
+            f = per_name.get(name, 1.0)
             if self.estimated[k]:
                 lines.append(f"{name:12s} {self.estimate[k] * f:14.6g} {se[k] * f:12.3g}")
             else:
                 lines.append(f"{name:12s} {self.estimate[k] * f:14.6g} {'held':>12s}")
         lines.append(f"rank {self.rank} of {len(self.names)}, condition number "
-                     f"{self.condition_number:.3g}, residual sigma {self.sigma:.3g}")
+                     f"{self.condition_number:.3g}, residual sigma "
+                     f"{self.sigma * sigma_scale:.3g}")
         if self.unidentifiable:
             lines.append("not identifiable: " + ", ".join(self.unidentifiable))
         return "\n".join(lines)
@@ -356,7 +381,7 @@ def fit_linear(A, b, *, names=None, reference=None, rank_tol=1e-8, max_condition
     singular values of :math:`A_s` give the number :math:`r` of identifiable combinations.
     The columns are then taken in order and a column is kept when it is not a combination
     of the columns kept before it; the others are *held* at ``reference``. The kept
-    parameters are estimated with :func:`numpy.linalg.lstsq`, and
+    parameters are estimated with ``numpy.linalg.lstsq``, and
 
     .. math::
 
@@ -758,7 +783,7 @@ def calibrate(robot, q, measured, *, measure="position", fixed=(), rotation_scal
         Measured TCP positions (``measure="position"``) or poses (``"pose"``) in the world
         frame, metres.
     measure : {"position", "pose"}, optional
-    fixed : sequence of str, optional
+    fixed : str or sequence of str, optional
         Parameter names to hold at their nominal values (known by construction).
     rotation_scale : float, optional
         Metres per radian: weight of the orientation residuals for ``measure="pose"``.
@@ -777,8 +802,9 @@ def calibrate(robot, q, measured, *, measure="position", fixed=(), rotation_scal
     Raises
     ------
     ValueError
-        On mismatched shapes, NaN, unknown names in ``fixed``, or too few measurements
-        (fewer equations than free parameters, or no more than the identifiable ones).
+        On mismatched shapes, NaN, measured poses that are not rigid transforms, unknown
+        names in ``fixed``, or too few measurements (fewer equations than free
+        parameters, or no more than the identifiable ones).
 
     Warns
     -----
@@ -818,6 +844,9 @@ def calibrate(robot, q, measured, *, measure="position", fixed=(), rotation_scal
         if measured.shape != (m, 4, 4):
             raise ValueError(f"measured poses must have shape ({m}, 4, 4) to match q, "
                              f"got shape {measured.shape}")
+        measured = check_transform(measured, tol=1e-6, name="measured")
+    if isinstance(fixed, str):
+        fixed = (fixed,)
     names = dh_parameter_names(robot)
     unknown = [f for f in fixed if f not in names]
     if unknown:

@@ -5,14 +5,14 @@ point, then switch the suction cup on (1) or off (0); ``q3`` turns the cup about
 vertical. This module turns such a list into a timed joint trajectory that a robot may be
 sent, in three steps (chapter 12):
 
-1. :func:`joint_targets` -- every point to a joint target by :func:`dqlab.ik.desk_arm`,
+1. :func:`joint_targets` -- every point to a joint target by :func:`dqlab.ik.arm3.desk_arm`,
    always on the same branch (the arm facing the point, elbow up, by default); a point that
    is out of reach or whose solution breaks a joint limit is refused with the step's index;
 2. :func:`plan_pick_place` -- rest-to-rest segments between consecutive targets with the
-   quintic time law of :func:`dqlab.trajectory.joint_trajectory` (chapter 10), a dwell
+   quintic time law of :func:`dqlab.trajectory.joint.joint_trajectory` (chapter 10), a dwell
    where the cup switches, and the object carried by the cup
    while the suction is on; the result is checked once more (finite, within limits);
-3. :func:`animate_pick_place` -- a :class:`dqlab.viz.Scene` animation of the arm, the cup
+3. :func:`animate_pick_place` -- a :class:`dqlab.viz.scene.Scene` animation of the arm, the cup
    and the object.
 
 A target is four numbers: the chain angles :math:`(\theta_1, \theta_2, \theta_3)` of
@@ -33,7 +33,7 @@ from .trajectory import Trajectory, joint_trajectory
 __all__ = ["PickPlaceTask", "PickPlacePlan", "task_from_lab", "joint_targets",
            "cup_poses", "plan_pick_place", "animate_pick_place", "BRANCH_NAMES"]
 
-#: The rows of :func:`dqlab.ik.desk_arm`'s solutions, by name.
+#: The rows of :func:`dqlab.ik.arm3.desk_arm`'s solutions, by name.
 BRANCH_NAMES = ("facing, elbow up", "facing, elbow down", "turned away, elbow up",
                 "turned away, elbow down")
 
@@ -126,7 +126,7 @@ def _check_wrist_limits(wrist_limits):
 def joint_targets(robot, task, *, branch=0, wrist_limits=(-math.pi, math.pi), tol=1e-9):
     r"""Joint targets of every step of a task, on one branch of the closed-form solution.
 
-    Each position goes through :func:`dqlab.ik.desk_arm`; the target is the row ``branch``
+    Each position goes through :func:`dqlab.ik.arm3.desk_arm`; the target is the row ``branch``
     of its solutions (``0``: facing the point with the elbow up, see
     :data:`BRANCH_NAMES`), followed by the step's wrist angle. Keeping one branch keeps
     the arm in one posture for the whole task, so that no segment flips the elbow or
@@ -255,7 +255,7 @@ class PickPlacePlan:
     ----------
     targets : ndarray, shape (K, 4)
         The joint target of every step (:func:`joint_targets`).
-    trajectory : dqlab.trajectory.Trajectory
+    trajectory : dqlab.trajectory.joint.Trajectory
         Instants ``t`` (N,), seconds from 0, and the chain and wrist angles ``q``, their
         speeds ``qd`` and accelerations ``qdd``, (N, 4) each.
     step : ndarray of int, shape (N,)
@@ -312,7 +312,7 @@ def plan_pick_place(robot, task, *, object_pose=None, branch=0,
     The arm starts at the first step's target (the lab initialises its arm there). For each
     following step it moves to the step's target along a straight line of joint space with
     the quintic law, as fast as ``v_max`` and ``a_max`` allow
-    (:func:`dqlab.trajectory.joint_trajectory`; the law stays within [0, 1], so every
+    (:func:`dqlab.trajectory.joint.joint_trajectory`; the law stays within [0, 1], so every
     sample lies between two targets that are within the joint limits), then, if the
     cup's state changes there, waits ``dwell`` seconds while it switches. When the suction
     comes on, the object is attached if the cup touches it (within ``grasp_tol`` of its
@@ -461,10 +461,10 @@ def _check_samples(robot, q, wrist_limits):
 
 
 def animate_pick_place(scene, robot, plan, *, size=(0.06, 0.04, 0.004), name="robot",
-                       object_color=0x2E86C1, loop=True):
-    """Animate a plan in a :class:`dqlab.viz.Scene`: the arm, its cup, the object, pads.
+                       object_color=0x2E86C1, stride=1, loop=True):
+    """Animate a plan in a :class:`dqlab.viz.scene.Scene`: the arm, its cup, the object, pads.
 
-    Draws the arm (:meth:`~dqlab.viz.Scene.add_robot`) and plays ``plan.q`` on it; a cup
+    Draws the arm (:meth:`~dqlab.viz.scene.Scene.add_robot`) and plays ``plan.q`` on it; a cup
     (a short cylinder, red while sucking) follows ``plan.cup``; the object, a box of
     ``size`` whose top face is at its frame, follows ``plan.object``; a grey pad supports
     the object where it starts and where it is left; the cup's path is drawn in orange.
@@ -479,16 +479,35 @@ def animate_pick_place(scene, robot, plan, *, size=(0.06, 0.04, 0.004), name="ro
     name : str, optional
         The robot's name in the scene.
     object_color : int, optional
+    stride : int, optional
+        Animate every ``stride``-th sample (and the last): a lighter view for the book; the
+        viewer interpolates between the kept samples.
     loop : bool, optional
         Repeat the animation.
+
+    Examples
+    --------
+    >>> from dqlab import viz
+    >>> from dqlab.models import desk_arm
+    >>> task = task_from_lab([[0, 170, 80, 0, 0], [0, 170, 30, 1, 0], [0, -170, 35, 0, 180]])
+    >>> scene = viz.Scene(grid_size=0.8, grid_step=0.05)
+    >>> animate_pick_place(scene, desk_arm(), plan_pick_place(desk_arm(), task), stride=2)
+    >>> paths = {c.get("path", "") for c in scene.commands()}
+    >>> {"/meshcat/cup/on", "/meshcat/object/box", "/meshcat/pads/start"} <= paths
+    True
     """
     import meshcat.geometry as g
 
     from .viz.scene import PATH_COLOR
 
+    if not (isinstance(stride, int) and stride >= 1):
+        raise ValueError(f"stride must be an integer >= 1, got {stride!r}")
+    keep = np.unique(np.append(np.arange(0, len(plan.t), stride), len(plan.t) - 1))
+    t, q, suction = plan.t[keep], plan.q[keep], plan.suction[keep]
+    cup, obj = plan.cup[keep], plan.object[keep]
     lx, ly, lz = (float(v) for v in size)
-    scene.add_robot(robot, plan.q[0, :3], name=name)
-    scene.animate(plan.q[:, :3], name=name, times=plan.t, loop=loop)
+    scene.add_robot(robot, q[0, :3], name=name)
+    scene.animate(q[:, :3], name=name, times=t, loop=loop)
     scene.add_path(plan.cup[:, :3, 3], name="cup_path", color=PATH_COLOR)
 
     def material(color):
@@ -497,25 +516,23 @@ def animate_pick_place(scene, robot, plan, *, size=(0.06, 0.04, 0.004), name="ro
     # the cup: a cylinder (three.js cylinders run along y) just above the cup point
     turn = np.eye(4)
     turn[:3, :3] = [[1, 0, 0], [0, 0, -1], [0, 1, 0]]              # y -> -z (upwards)
-    turn[:3, 3] = [0.0, 0.0, -0.006]
+    turn[:3, 3] = [0.0, 0.0, -0.01]
     for state, color in (("off", 0x555555), ("on", 0xC0392B)):
         node = scene.vis["cup"][state]
-        node.set_object(g.Cylinder(0.012, 0.008), material(color))
+        node.set_object(g.Cylinder(0.02, 0.012), material(color))
         node.set_transform(turn)
     hidden = np.diag([1e-6, 1e-6, 1e-6, 1.0]) @ turn              # shrunk to nothing
-    sucking = plan.suction[:, None, None]
-    scene.animate_transforms("cup", plan.cup, times=plan.t, loop=loop)
-    scene.animate_transforms("cup/on", np.where(sucking, turn, hidden), times=plan.t,
-                             loop=loop)
-    scene.animate_transforms("cup/off", np.where(sucking, hidden, turn), times=plan.t,
-                             loop=loop)
+    sucking = suction[:, None, None]
+    scene.animate_transforms("cup", cup, times=t, loop=loop)
+    scene.animate_transforms("cup/on", np.where(sucking, turn, hidden), times=t, loop=loop)
+    scene.animate_transforms("cup/off", np.where(sucking, hidden, turn), times=t, loop=loop)
 
     # the object: a box whose frame is the centre of its top face
     box = np.eye(4)
     box[2, 3] = -lz / 2
     scene.vis["object"]["box"].set_object(g.Box([lx, ly, lz]), material(object_color))
     scene.vis["object"]["box"].set_transform(box)
-    scene.animate_transforms("object", plan.object, times=plan.t, loop=loop)
+    scene.animate_transforms("object", obj, times=t, loop=loop)
 
     # pads under the object where it starts and where it is left
     for label, X in (("start", plan.object[0]), ("end", plan.object[-1])):

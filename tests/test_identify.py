@@ -4,6 +4,8 @@ import warnings
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from dqlab import identify as idf
 from dqlab.models import desk_arm, desk_arm_joints_from_lab, ur3, ur3_mdh
@@ -411,6 +413,39 @@ def test_calibrate_rejects_bad_input():
         idf.calibrate(robot, q, p, fixed=("d7",))
     with pytest.raises(ValueError, match="measure must be"):
         idf.calibrate(robot, q, p, measure="orientation")
+    sheared = robot.fk(q)
+    sheared[:, 0, 1] += 0.1
+    with pytest.raises(ValueError, match="measured"):
+        idf.calibrate(robot, q, sheared, measure="pose")
+
+
+def test_fixed_accepts_a_single_name():
+    robot = ur3()
+    q = np.random.default_rng(22).uniform(-3, 3, size=(12, 6))
+    fit = idf.calibrate(robot, q, robot.fk(q)[:, :3, 3], fixed="d1")
+    assert fit.held[0] == "d1" and not fit.estimated[1]
+
+
+@settings(max_examples=30)
+@given(st.integers(min_value=0, max_value=2**32 - 1))
+def test_fit_linear_recovers_any_exact_solution(seed):
+    rng = np.random.default_rng(seed)
+    A = rng.normal(size=(12, 4)) * rng.uniform(0.1, 10.0, size=4)
+    x = rng.normal(size=4)
+    fit = idf.fit_linear(A, A @ x)
+    assert np.allclose(fit.estimate, x, rtol=1e-9, atol=1e-9)
+    assert fit.rank == 4 and np.abs(fit.residuals).max() < 1e-9
+
+
+@settings(max_examples=30)
+@given(st.lists(st.floats(min_value=0.01, max_value=0.3), min_size=5, max_size=5),
+       st.integers(min_value=0, max_value=2**32 - 1))
+def test_desk_arm_identification_recovers_any_lengths(lengths, seed):
+    lengths = np.array(lengths)
+    q_lab = random_lab_angles(np.random.default_rng(seed), 6)
+    fit = idf.identify_desk_arm(q_lab, lab_positions(q_lab, lengths))
+    want = [lengths[0] - lengths[4], lengths[1], lengths[2], lengths[3]]
+    assert np.allclose([v for _, v, _ in fit.combinations()], want, atol=1e-9)
 
 
 def test_poses_that_barely_differ_are_reported_as_ill_conditioned():

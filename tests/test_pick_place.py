@@ -193,3 +193,8 @@ def test_animation_records_the_arm_the_cup_and_the_object(arm, plan):
     assert any(p.endswith("/pads/start") for p in paths)
     animation = [c for c in scene.commands() if c["type"] == "set_animation"]
     assert len(animation) == 1
+    light = viz.Scene()
+    pp.animate_pick_place(light, arm, plan, stride=4)
+    assert len(light.html(bundle="none")) < len(scene.html(bundle="none"))
+    with pytest.raises(ValueError, match="stride must be"):
+        pp.animate_pick_place(viz.Scene(), arm, plan, stride=0)
