@@ -75,7 +75,7 @@ class URState:
 class Backend(typing.Protocol):
     """What :class:`URClient` needs from a controller connection.
 
-    Motion calls *start* a move and return at once; the client polls :meth:`read_state`.
+    Motion calls *start* a move and return at once; the client polls ``read_state``.
     Units and argument names are URScript's: joint targets in rad, poses as UR pose vectors,
     ``a`` acceleration (rad/s^2 or m/s^2), ``v`` speed (rad/s or m/s), ``t`` time (s),
     ``r`` blend radius (m).
