@@ -4,7 +4,7 @@
 end implements; :class:`URClient` checks every target and drives any back end:
 
 - :class:`KinematicBackend` -- an arm in this process that follows the commands' time laws
-  (no physics; the MuJoCo arm of :mod:`dqlab.sim` adds them);
+  (no physics; the MuJoCo arm of ``dqlab.sim`` adds them);
 - :class:`SecondaryInterfaceBackend` -- a real controller, URSim, or the stand-in of
   :mod:`dqlab.ur.standin`: URScript text to the secondary interface (port 30002), state
   from the RTDE stream (port 30004);
@@ -37,7 +37,7 @@ from .script import SafetyLimits, UnsafeTargetError, check_joint_targets
 
 __all__ = ["URState", "Backend", "ROBOT_MODE_RUNNING", "HOME", "URClient",
            "KinematicBackend", "StepClock", "SecondaryInterfaceBackend", "RTDEBackend",
-           "trapezoid_duration"]
+           "closest_joints", "trapezoid_duration"]
 
 #: The thesis's home joints (arm straight up), rad.
 HOME = np.array([0.0, -np.pi / 2, 0.0, -np.pi / 2, 0.0, 0.0])
@@ -75,7 +75,7 @@ class URState:
 class Backend(typing.Protocol):
     """What :class:`URClient` needs from a controller connection.
 
-    Motion calls *start* a move and return at once; the client polls :meth:`read_state`.
+    Motion calls *start* a move and return at once; the client polls ``read_state``.
     Units and argument names are URScript's: joint targets in rad, poses as UR pose vectors,
     ``a`` acceleration (rad/s^2 or m/s^2), ``v`` speed (rad/s or m/s), ``t`` time (s),
     ``r`` blend radius (m).
@@ -115,7 +115,7 @@ class URClient:
     ----------
     backend : Backend
         :class:`KinematicBackend`, :class:`SecondaryInterfaceBackend`, :class:`RTDEBackend`,
-        or the MuJoCo back end of :mod:`dqlab.sim`.
+        or the MuJoCo back end of ``dqlab.sim``.
     robot : dqlab.robot.Robot, optional
         The arm's model, for inverse kinematics and reach (default
         :func:`dqlab.models.ur3`).
@@ -269,23 +269,17 @@ class URClient:
     def closest_joints(self, pose, q_ref):
         """The inverse-kinematics solution of a UR pose closest to ``q_ref``.
 
-        Uses :func:`dqlab.ik.ur` and :func:`dqlab.ik.closest_solution` (each joint the
-        :math:`2\\pi`-equivalent nearest ``q_ref`` within the joint limits).
+        See :func:`closest_joints`.
 
         Raises
         ------
         UnsafeTargetError
             If the pose has no solution.
         """
-        from .. import ik
-
-        result = ik.ur(self.robot, transform_from_pose(pose))
-        if not bool(result.success):
-            raise UnsafeTargetError(f"target {script.urscript_pose(pose)} is out of reach: "
-                                    f"{result.reason}")
-        lim = np.where(np.isfinite(self.limits.joint_limits), self.limits.joint_limits,
-                       np.sign(self.limits.joint_limits) * 2 * np.pi)
-        return closest_solution(result, q_ref, limits=lim)
+        try:
+            return closest_joints(self.robot, pose, q_ref, self.limits.joint_limits)
+        except ValueError as exc:
+            raise UnsafeTargetError(str(exc)) from None
 
     def servoj_stream(self, trajectory, *, lookahead_time=0.1, gain=300, start_tol=1e-3,
                       timeout=None):
@@ -299,7 +293,7 @@ class URClient:
         Parameters
         ----------
         trajectory : object with arrays ``t`` (N,) and ``q`` (N, 6)
-            E.g. a :class:`dqlab.trajectory.Trajectory`.
+            E.g. a ``dqlab.trajectory.Trajectory``.
         lookahead_time, gain : float
             Of every ``servoj``.
         start_tol : float
@@ -383,6 +377,53 @@ class URClient:
 
 # --------------------------------------------------------------------------------------
 # The in-process kinematic arm
+
+
+def closest_joints(robot, pose, q_ref, joint_limits):
+    r"""The inverse-kinematics solution of a UR pose closest to the joints ``q_ref``.
+
+    Solves with :func:`dqlab.ik.ur.ur`, then takes :func:`dqlab.ik.ur.closest_solution`:
+    the branch nearest ``q_ref`` (joint-wise, modulo :math:`2\pi`), each joint replaced by
+    its :math:`2\pi`-equivalent nearest ``q_ref`` within the joint limits (an unlimited
+    joint is searched within :math:`\pm 2\pi`).
+
+    Parameters
+    ----------
+    robot : dqlab.robot.Robot
+    pose : array_like, shape (6,)
+        UR pose vector of the TCP in the base frame.
+    q_ref : array_like, shape (6,)
+    joint_limits : array_like, shape (6, 2)
+
+    Returns
+    -------
+    ndarray, shape (6,)
+
+    Raises
+    ------
+    ValueError
+        If the pose has no solution (out of reach).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dqlab.models import ur3
+    >>> from dqlab.ur.script import UR3_JOINT_LIMITS
+    >>> robot = ur3()
+    >>> q = np.array([0.4, -1.3, 1.1, -1.2, -1.4, 0.6])
+    >>> pose = pose_from_transform(robot.fk(q))
+    >>> closest_joints(robot, pose, q + 0.1, UR3_JOINT_LIMITS).round(12) + 0.0
+    array([ 0.4, -1.3,  1.1, -1.2, -1.4,  0.6])
+    """
+    from .. import ik
+
+    result = ik.ur(robot, transform_from_pose(pose))
+    if not bool(result.success):
+        raise ValueError(f"target {script.urscript_pose(pose)} is out of reach: "
+                         f"{result.reason}")
+    lim = np.asarray(joint_limits, dtype=float)
+    lim = np.where(np.isfinite(lim), lim, np.sign(lim) * 2 * np.pi)
+    return closest_solution(result, q_ref, limits=lim)
 
 
 def trapezoid_duration(distance, a, v):
@@ -535,14 +576,7 @@ class _Kinematics:
         return pose_from_transform(self.robot.fk(q))
 
     def closest(self, pose, q_ref):
-        from .. import ik
-
-        result = ik.ur(self.robot, transform_from_pose(pose))
-        if not bool(result.success):
-            raise ValueError(f"pose {script.urscript_pose(pose)} is out of reach")
-        lim = np.where(np.isfinite(self.limits), self.limits,
-                       np.sign(self.limits) * 2 * np.pi)
-        return closest_solution(result, q_ref, limits=lim)
+        return closest_joints(self.robot, pose, q_ref, self.limits)
 
 
 class StepClock:

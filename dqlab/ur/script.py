@@ -3,16 +3,18 @@ r"""URScript generation with safety checks: ``movej``, ``movel``, ``servoj`` and
 URScript is the language of the UR controller; a client sends it as text. This module writes
 the commands with URScript's argument names and units:
 
-=========================  ==================================================================
-``movej(q, a, v, t, r)``   move in joint space to ``q`` [rad]; the leading joint accelerates
-                           at ``a`` [rad/s^2] up to ``v`` [rad/s]; ``t`` [s] (if > 0) sets
-                           the duration instead; ``r`` [m] is a blend radius
-``movel(pose, a, v, t, r)`` move the TCP on a straight line to ``p[x, y, z, rx, ry, rz]``
-                           [m, rad]; ``a`` [m/s^2], ``v`` [m/s]
-``servoj(q, t=..., lookahead_time=..., gain=...)``  track ``q`` for ``t`` [s] (blocking);
-                           ``lookahead_time`` in [0.03, 0.2] s smooths, ``gain`` in
-                           [100, 2000] stiffens
-=========================  ==================================================================
+``movej(q, a, v, t, r)``
+    Move in joint space to ``q`` [rad]; the leading joint accelerates at ``a`` [rad/s^2] up
+    to ``v`` [rad/s]; ``t`` [s] (if > 0) sets the duration instead; ``r`` [m] is a blend
+    radius.
+``movel(pose, a, v, t, r)``
+    Move the TCP on a straight line to ``p[x, y, z, rx, ry, rz]`` [m, rad]; ``a`` [m/s^2],
+    ``v`` [m/s].
+``servoj(q, t, lookahead_time, gain)``
+    Track ``q`` for ``t`` [s] (blocking); ``lookahead_time`` in [0.03, 0.2] s smooths,
+    ``gain`` in [100, 2000] stiffens.
+``stopj(a)``
+    Decelerate the joints to rest at ``a`` [rad/s^2].
 
 **Safety.** No text is produced for a target that is NaN or infinite, a joint outside the
 robot's limits, a speed or acceleration above the stated limits (:class:`SafetyLimits`), a
@@ -429,7 +431,7 @@ def program_from_trajectory(trajectory, *, name="dqlab_trajectory", a=1.4, v=1.0
     Parameters
     ----------
     trajectory : object with arrays ``t`` (N,) and ``q`` (N, 6)
-        For example a :class:`dqlab.trajectory.Trajectory` (its ``qd`` and ``qdd`` are not
+        For example a ``dqlab.trajectory.Trajectory`` (its ``qd`` and ``qdd`` are not
         needed), or any object with those two attributes. Times in s, strictly increasing;
         joints in rad.
     name : str

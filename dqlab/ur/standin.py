@@ -7,10 +7,11 @@ controller's protocols for the client code of :mod:`dqlab.ur.client` to run unch
 - a **script sink** in place of the secondary interface (port 30002 on a robot): it reads
   URScript text, a single line or a ``def name(): ... end`` program; it understands
   ``movej``, ``movel``, ``servoj`` and ``stopj`` with positional or keyword arguments and
-  ``p[...]`` poses, and runs them one after the other on a :class:`~dqlab.ur.client.
-  KinematicBackend` arm (a new program replaces the running one, as on a controller). A
-  program with anything else in it, or with a target the arm's safety checks refuse, is
-  refused as a whole (a message on the process's standard error) and nothing moves. It
+  ``p[...]`` poses, and runs them one after the other on a
+  :class:`~dqlab.ur.client.KinematicBackend` arm (a new program replaces the running one, as
+  on a controller). A program with anything else in it, or with a target the arm's safety
+  checks refuse, is refused as a whole (a message in :meth:`ControllerStandIn.log`) and
+  nothing moves. It
   sends nothing back (a real controller sends binary state messages, which clients
   discard).
 - **RTDE output** (port 30004 on a robot; see :mod:`dqlab.ur.rtde`): protocol version
