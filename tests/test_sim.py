@@ -428,8 +428,9 @@ def test_computed_torque_tracks_the_reports_circle():
     from dqlab.trajectory import Trajectory, circle_three_phase, follow_path_ur
 
     robot = models.ur3()
-    path = circle_three_phase([0.0, -0.3, 0.3], 0.1, 0.05, orientation=rot_x(np.pi / 2))
-    circle, report = follow_path_ur(robot, path, branch=("right", "up", "noflip"))
+    center = np.array([0.0, -0.35, 0.25])              # chapter 11's circle
+    path = circle_three_phase(center, 0.1, 0.05, orientation=rot_x(np.pi / 2))
+    circle, report = follow_path_ur(robot, path, branch=("left", "down", "noflip"))
     assert isinstance(circle, Trajectory) and len(circle) == 4399 and not report.switches
     sim = ArmSimulation(robot)
     ct = track(sim, circle, ComputedTorque())
@@ -440,9 +441,9 @@ def test_computed_torque_tracks_the_reports_circle():
     assert pd.flange_error.max() > 0.01
     # the TCP reached in the simulation lies on the circle (radius 0.1 m about the centre)
     p = robot.fk(ct.q)[:, :3, 3]
-    radius = np.linalg.norm((p - [0.0, -0.3, 0.3])[:, [0, 2]], axis=1)
+    radius = np.linalg.norm((p - center)[:, [0, 2]], axis=1)
     assert np.abs(radius - 0.1).max() < 2e-6
-    assert np.abs(p[:, 1] + 0.3).max() < 2e-6
+    assert np.abs(p[:, 1] - center[1]).max() < 2e-6
 
 
 def test_a_payload_picked_during_the_run_is_felt_while_carried(ur3_sim):
