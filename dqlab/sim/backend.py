@@ -15,11 +15,11 @@ The references are URScript's:
   trapezoidal speed law, scaled so that all joints start and stop together; the joint that
   moves most accelerates at ``a`` (rad/s^2) up to ``v`` (rad/s). With ``t > 0`` the move
   lasts ``t`` seconds instead (a third of it accelerating, a third braking). This is
-  :func:`dqlab.trajectory.joint_trajectory` with the trapezoidal law.
+  :func:`dqlab.trajectory.joint.joint_trajectory` with the trapezoidal law.
 - ``movel(pose, a, v, t)``: the TCP moves on a straight line while its orientation turns
-  by SLERP (:func:`dqlab.trajectory.line_slerp`), with the same speed law on the distance
+  by SLERP (:func:`dqlab.trajectory.cartesian.line_slerp`), with the same speed law on the distance
   (m/s, m/s^2); the joints follow by the closed-form inverse kinematics with branch
-  tracking (:func:`dqlab.trajectory.follow_path_ur`), from the branch of the start.
+  tracking (:func:`dqlab.trajectory.follow.follow_path_ur`), from the branch of the start.
 - ``servoj(q, t)``: the target moves linearly to ``q`` in ``t`` seconds (one streaming
   step).
 - ``stop(a)``: the reference decelerates at ``a`` to rest.
@@ -62,7 +62,7 @@ class _Motion:
 
     def sample(self, times, velocity_lag=0.0):
         """Reference positions, velocities (``velocity_lag`` seconds earlier, as in
-        :func:`~dqlab.sim.track`) and accelerations at ``times`` (shape (k,) -> (k, 6)
+        :func:`~dqlab.sim.simulation.track`) and accelerations at ``times`` (shape (k,) -> (k, 6)
         each). After the last sample the reference holds the last position at rest."""
         times = np.asarray(times, dtype=float)
         q, qd, qdd = sample_reference(self.t, self.q, self.qd, self.qdd, times,
@@ -83,7 +83,7 @@ class MujocoBackend:
     q_home : array_like, shape (6,), optional
         Where the arm stands after :meth:`connect` (default :data:`UR3_HOME`).
     controller : optional
-        The joint controller (default :class:`~dqlab.sim.ComputedTorque`).
+        The joint controller (default :class:`~dqlab.sim.simulation.ComputedTorque`).
     period : float, optional
         Simulated seconds per :meth:`read_state` with ``clock="sim"`` (default 0.008 s).
     clock : {"sim", "wall"}, optional
@@ -91,7 +91,7 @@ class MujocoBackend:
         as fast as the computer allows). ``"wall"``: the simulation keeps up with the wall
         clock since :meth:`connect`.
     **model_options
-        Passed to :class:`~dqlab.sim.ArmSimulation` (``payload``, ``timestep``...).
+        Passed to :class:`~dqlab.sim.simulation.ArmSimulation` (``payload``, ``timestep``...).
 
     Attributes
     ----------
@@ -232,8 +232,9 @@ class MujocoBackend:
 
         The position moves on a line and the orientation by SLERP, both with one speed law
         on the line's length (m/s and m/s^2; on the rotation angle in rad/s and rad/s^2 for
-        a pure rotation). The joints follow the closed-form inverse kinematics
-        (:func:`dqlab.ik.ur`), on the branch of the start.
+        a pure rotation): :func:`dqlab.trajectory.cartesian.line_slerp` with the trapezoidal
+        law. The joints follow the closed-form inverse kinematics with branch tracking
+        (:func:`dqlab.trajectory.follow.follow_path_ur`), from the branch of the start.
 
         Raises
         ------

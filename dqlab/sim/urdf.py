@@ -34,7 +34,7 @@ def urdf_from_robot(robot, *, masses=None, name=None):
     robot : Robot
         Standard or modified DH, with its base and tool.
     masses : array_like, shape (n,), optional
-        Link masses in kg (default as in :func:`~dqlab.sim.mjcf_from_robot`); each link's
+        Link masses in kg (default as in :func:`~dqlab.sim.mjcf.mjcf_from_robot`); each link's
         inertia is lumped at its origin as that of a 5 cm solid sphere.
     name : str, optional
         The robot's name in the file (default: the robot's).
