@@ -235,7 +235,7 @@ def mjcf_from_robot(robot, *, masses=None, payload=0.0, radius=None, damping=0.1
 
     See Also
     --------
-    ArmSimulation : loads the model and steps it.
+    dqlab.sim.simulation.ArmSimulation : loads the model and steps it.
 
     Examples
     --------
