@@ -124,9 +124,11 @@ def link_placements(robot):
 
 
 def _num(x):
-    """A float as MJCF text: shortest repr that reads back exactly, no ``-0``."""
+    """A float as MJCF text: the shortest repr that reads back exactly; rounding noise of
+    the constant products below 1e-15 (for instance 5e-18 m left by a quarter turn) is
+    written as 0."""
     x = float(x)
-    return "0" if x == 0.0 else repr(x)
+    return "0" if abs(x) < 1e-15 else repr(x)
 
 
 def _vec(v):
