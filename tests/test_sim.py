@@ -538,3 +538,38 @@ def test_pd_gravity_compensation_from_the_controllers_own_model():
     blind = track(plant, move, JointPD(UR3_PD.kp, UR3_PD.kd, gravity_compensation=True,
                                        model=ArmSimulation(models.ur3())))
     assert blind.flange_error.max() > 2 * informed.flange_error.max()
+
+
+# -- any chain: a property test ---------------------------------------------------------------
+
+from hypothesis import given  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+from dqlab.robot import Link, Robot  # noqa: E402
+
+_length = st.floats(-0.5, 0.5, allow_nan=False)
+_angle = st.floats(-np.pi, np.pi, allow_nan=False)
+_link = st.tuples(_length, _angle, _length, _angle, st.sampled_from(["revolute", "prismatic"]))
+
+
+@given(links=st.lists(_link, min_size=1, max_size=7),
+       convention=st.sampled_from(["dh", "mdh"]),
+       seed=st.integers(0, 2**31 - 1))
+def test_any_chain_generates_a_model_with_its_forward_kinematics(links, convention, seed):
+    rng = np.random.default_rng(seed)
+    chain = [Link(a, alpha, d, theta_offset=theta, joint=kind,
+                  limits=(0.0, 0.3) if kind == "prismatic" else None)
+             for a, alpha, d, theta, kind in links]
+    base = transform_from(matrix_from_axis_angle(rng.normal(size=3), rng.uniform(0, 3)),
+                          rng.normal(size=3))
+    tool = transform_from(matrix_from_axis_angle(rng.normal(size=3), rng.uniform(0, 3)),
+                          rng.normal(scale=0.1, size=3))
+    robot = Robot(chain, convention=convention, base=base, tool=tool)
+    model = mujoco.MjModel.from_xml_string(mjcf_from_robot(robot))
+    data = mujoco.MjData(model)
+    lo, hi = np.nan_to_num(robot.limits.T, posinf=np.pi, neginf=-np.pi)
+    Q = rng.uniform(lo, hi, size=(20, robot.n))
+    for q, X in zip(Q, robot.fk(Q), strict=True):
+        data.qpos[:] = q
+        mujoco.mj_kinematics(model, data)
+        np.testing.assert_allclose(site_pose(model, data), X, atol=1e-9)
