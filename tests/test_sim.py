@@ -573,3 +573,16 @@ def test_any_chain_generates_a_model_with_its_forward_kinematics(links, conventi
         data.qpos[:] = q
         mujoco.mj_kinematics(model, data)
         np.testing.assert_allclose(site_pose(model, data), X, atol=1e-9)
+
+
+def test_without_mujoco_the_message_says_how_to_install_it(monkeypatch):
+    import sys
+
+    from dqlab.sim import require_mujoco
+
+    monkeypatch.setitem(sys.modules, "mujoco", None)       # as if it were not installed
+    with pytest.raises(ImportError, match=r"pip install 'dqlab\[sim\]'"):
+        ArmSimulation(models.ur3())
+    with pytest.raises(ImportError, match="MuJoCo"):
+        require_mujoco()
+    assert "<mujoco" in mjcf_from_robot(models.ur3())        # generating needs no MuJoCo
