@@ -586,3 +586,13 @@ def test_without_mujoco_the_message_says_how_to_install_it(monkeypatch):
     with pytest.raises(ImportError, match="MuJoCo"):
         require_mujoco()
     assert "<mujoco" in mjcf_from_robot(models.ur3())        # generating needs no MuJoCo
+
+
+def test_a_link_of_a_micrometre_is_not_drawn_but_kept_in_the_kinematics():
+    """Found by the property test: MuJoCo refuses a capsule between points 1e-7 m apart."""
+    robot = Robot([Link(0.0, 0.0, 0.0), Link(0.0, 0.0, 1e-7)], convention="dh")
+    model = mujoco.MjModel.from_xml_string(mjcf_from_robot(robot))
+    data = mujoco.MjData(model)
+    data.qpos[:] = [0.3, -0.2]
+    mujoco.mj_kinematics(model, data)
+    np.testing.assert_allclose(site_pose(model, data), robot.fk([0.3, -0.2]), atol=1e-15)

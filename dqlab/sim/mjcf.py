@@ -141,8 +141,9 @@ def _pos_quat(X):
     return f'pos="{_vec(X[:3, 3])}" quat="{_vec(quat)}"'
 
 
-def _segments(points, eps=1e-12):
-    """Consecutive pairs of distinct points along a polyline."""
+def _segments(points, eps=1e-4):
+    """Consecutive pairs of points along a polyline, without the pieces shorter than
+    ``eps`` metres (too short to draw; MuJoCo refuses a capsule of a few micrometres)."""
     out = []
     for a, b in zip(points[:-1], points[1:], strict=True):
         if np.linalg.norm(b - a) > eps:
