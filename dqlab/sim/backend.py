@@ -202,7 +202,9 @@ class MujocoBackend:
     def movej(self, q, *, a=1.4, v=1.05, t=0.0, r=0.0):
         """Start a move in joint space to ``q`` (rad) with URScript's ``movej`` speed law.
 
-        ``r`` (blend radius) is accepted and checked; moves are not blended.
+        ``r`` (blend radius) is accepted and checked; moves are not blended. A move
+        started while another is running starts where the reference is, from rest (the
+        client waits for each move to end, so this only happens on purpose).
 
         Raises
         ------
