@@ -261,6 +261,29 @@ def test_joint_trajectory_with_a_duration_and_errors():
         joint_trajectory([0, 0], [1, 1], v_max=1.0, law="trapezoidal")
 
 
+@pytest.mark.parametrize("j_max", [1e6, 100.0, 30.0])
+def test_synchronised_trapezoid_against_ruckig(j_max):
+    """Ruckig's time-optimal jerk-limited motion tends to the synchronised trapezoid: its
+    duration is the trapezoid's plus a_max / j_max when the acceleration limit is reached."""
+    ruckig = pytest.importorskip("ruckig")
+    v_max = np.radians([180, 180, 180, 360, 360, 360])
+    a_max = np.array([6.0, 6.0, 6.0, 12.0, 12.0, 12.0])
+    q_a = np.array([0.0, -1.57, 1.2, -1.2, -1.57, 0.0])
+    q_b = np.array([2.4, -1.0, 0.4, -2.2, -1.0, 2.5])
+    ours = joint_trajectory(q_a, q_b, v_max=v_max, a_max=a_max, law="trapezoidal", dt=0.001)
+    request = ruckig.InputParameter(6)
+    request.current_position, request.target_position = list(q_a), list(q_b)
+    request.max_velocity, request.max_acceleration = list(v_max), list(a_max)
+    request.max_jerk = [j_max] * 6
+    motion = ruckig.Trajectory(6)
+    assert ruckig.Ruckig(6).calculate(request, motion) == ruckig.Result.Working
+    assert motion.duration == pytest.approx(ours.duration + 6.0 / j_max, rel=1e-9)
+    if j_max >= 1e6:          # and the pacing joint moves the same (the others need not:
+        # Ruckig times every joint to end together but shapes each profile on its own)
+        theirs = np.array([motion.at_time(t)[0] for t in ours.t])
+        assert np.abs(theirs[:, 0] - ours.q[:, 0]).max() < 1e-4
+
+
 def test_via_points_spline_against_scipy():
     from scipy.interpolate import CubicSpline
 
@@ -642,3 +665,46 @@ def test_joint_velocities():
         joint_velocities(J, x[:, :3])
     with pytest.raises(ValueError, match="damping"):
         joint_velocities(J, x, damping=-1.0)
+
+
+@settings(max_examples=40, deadline=None)
+@given(f1=st.floats(0.05, 0.9), f2=st.floats(0.0, 0.9), D=st.floats(0.01, 5.0),
+       V=st.floats(0.01, 2.0))
+def test_three_phase_with_any_fractions(f1, f2, D, V):
+    if f1 + f2 > 0.95:
+        f2 = 0.95 - f1
+    f = (f1, f2, 1.0 - f1 - f2)
+    law = three_phase(D, V, f)
+    assert law.duration == pytest.approx((2 * f[0] + f[1] + 2 * f[2]) * D / V, rel=1e-12)
+    assert law.peak_speed == pytest.approx(V, rel=1e-12)
+    assert law.distance == pytest.approx(D, rel=1e-12)
+    s = law.position(law.breaks)
+    assert s[0] == 0.0 and s[-1] == pytest.approx(D, rel=1e-12)
+    assert s[1] == pytest.approx(f[0] * D, rel=1e-12)
+
+
+def pose_path(robot, q_path, dt=0.01):
+    """A CartesianPath through the forward kinematics of a joint path (speeds unused)."""
+    from dqlab import quaternion_from_matrix
+
+    X = robot.fk(q_path)
+    n = len(q_path)
+    return CartesianPath(t=np.arange(n) * dt, position=X[:, :3, 3], velocity=np.zeros((n, 3)),
+                         acceleration=np.zeros((n, 3)),
+                         orientation=quaternion_from_matrix(X[:, :3, :3]),
+                         angular_velocity=np.zeros((n, 3)))
+
+
+def test_tracking_starts_at_the_equivalent_nearest_q_start(robot):
+    q_path = np.linspace([0.4, -1.3, 1.4, -1.2, 1.0, -2.5], [0.5, -1.2, 1.3, -1.0, 1.2, -2.2],
+                         30)
+    q_start = q_path[0] + [0, 0, 0, 0, 0, 2 * np.pi]          # joint 6 one turn further
+    traj, report = follow_path_ur(robot, pose_path(robot, q_path), q_start=q_start)
+    assert np.allclose(traj.q, q_path + [0, 0, 0, 0, 0, 2 * np.pi], atol=1e-9)
+    assert report.switches == []
+
+
+def test_following_refuses_to_leave_the_joint_limits(robot):
+    q_path = np.linspace([0.4, -1.3, 1.4, -1.2, 1.0, 6.1], [0.4, -1.3, 1.4, -1.2, 1.0, 6.5], 30)
+    with pytest.raises(ValueError, match="joint 6 .* limits|limits: joint 6"):
+        follow_path_ur(robot, pose_path(robot, q_path), q_start=q_path[0])

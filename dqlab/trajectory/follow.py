@@ -141,7 +141,7 @@ class BranchSwitch:
     time : float
         Its instant, seconds.
     from_row, to_row : int
-        Rows of :data:`dqlab.ik.SOLUTION_ORDER` before and after (equal for a jump that no
+        Rows of :data:`dqlab.ik.ur.SOLUTION_ORDER` before and after (equal for a jump that no
         row avoids).
     step : float
         Largest joint change from the previous point, radians.
@@ -246,7 +246,7 @@ def track_branches(result, *, q_start=None, branch=None, max_step=0.1, t=None):
         Where the arm starts: picks the starting row (nearest modulo :math:`2\pi`) and the
         equivalents of the first point.
     branch : int or tuple of str, optional
-        Starting row, ``4 s + 2 e + w`` or a label of :data:`dqlab.ik.SOLUTION_ORDER`
+        Starting row, ``4 s + 2 e + w`` or a label of :data:`dqlab.ik.ur.SOLUTION_ORDER`
         (default: the row nearest ``q_start``, else the first valid row).
     max_step : float
         Largest joint change between consecutive points that counts as continuous (rad).
@@ -360,7 +360,7 @@ def follow_path_ur(robot, path, *, q_start=None, branch=None, max_step=0.1, damp
     robot : Robot
         A UR-family arm (standard DH).
     path : CartesianPath
-        With an orientation (see :meth:`CartesianPath.with_orientation`).
+        With an orientation (see :meth:`dqlab.trajectory.cartesian.CartesianPath.with_orientation`).
     q_start : array_like, shape (6,), optional
         The configuration the arm starts from; the first point is the equivalent of the
         chosen row nearest it.

@@ -278,7 +278,9 @@ def _three_segments(t_acc, t_cruise, t_dec, v, name, sign=1.0):
     rows.append([s2, v, -0.5 * d, 0, 0, 0])
     lengths.append(t_dec)
     breaks = np.concatenate([[0.0], np.cumsum(lengths)])
-    return TimeLaw(breaks, sign * np.array(rows), name)
+    keep = np.diff(breaks) > 0.0          # a cruise too short to move the sum is dropped
+    return TimeLaw(np.concatenate([[0.0], breaks[1:][keep]]), sign * np.array(rows)[keep],
+                   name)
 
 
 def trapezoidal(distance=1.0, *, v_max=None, a_max=None, duration=None, accel_fraction=None):
