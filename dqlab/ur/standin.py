@@ -446,7 +446,7 @@ def _serve(config_json):
                         conn, _ = key.fileobj.accept()
                     except BlockingIOError:
                         continue
-                    conn.setblocking(True)
+                    conn.settimeout(2.0)      # a client that stops reading is dropped
                     conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
                     if kind == "secondary":
                         texts[conn] = ""
