@@ -612,7 +612,8 @@ class KinematicBackend:
     ``movel`` moves the TCP on a straight line with the same law on the distance (joints by
     inverse kinematics, branch tracked from the current joints); ``servoj`` moves at
     constant speed to its target in ``t``; ``stop`` halts at once. A new command replaces
-    the one running (as a new program does on a controller); :meth:`run` queues several.
+    the one running (as a new program does on a controller) and starts from where the arm is,
+    at rest (speeds are not blended); :meth:`run` queues several.
     Blend radii ``r`` are accepted and ignored. Targets are checked with the same safety
     checks as the client (:func:`dqlab.ur.script.check_joint_targets`).
 
