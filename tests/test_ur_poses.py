@@ -2,6 +2,8 @@
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 from pyquaternion import Quaternion as PyQuaternion
 from scipy.spatial.transform import Rotation
 
@@ -165,3 +167,23 @@ def test_non_unit_quaternion_and_non_rigid_transform_are_refused():
     T[0, 0] = 1.1
     with pytest.raises(ValueError):
         P.pose_from_transform(T)
+
+
+@given(st.lists(st.floats(-1, 1), min_size=4, max_size=4).filter(
+           lambda v: np.linalg.norm(v) > 1e-3),
+       st.lists(st.floats(-1, 1), min_size=3, max_size=3),
+       st.sampled_from([0.0, 1e-14, 1e-9, 1e-4]))
+def test_property_pose_round_trip_including_near_half_turns(quat, position, squash):
+    q = np.array(quat) / np.linalg.norm(quat)
+    q[0] *= squash if squash else 1.0            # squash w: angles near pi
+    q /= np.linalg.norm(q)
+    T = np.eye(4)
+    T[:3, :3] = dqlab.matrix_from_quaternion(q)
+    T[:3, 3] = position
+    p = P.pose_from_transform(T)
+    assert np.linalg.norm(p[3:]) <= np.pi + 1e-12
+    np.testing.assert_allclose(P.transform_from_pose(p), T, atol=1e-14)
+    # pyquaternion's view of the same rotation
+    pq = PyQuaternion(matrix=T[:3, :3])
+    np.testing.assert_allclose(P.matrix_from_rotation_vector(pq.axis * pq.angle),
+                               T[:3, :3], atol=1e-12)

@@ -80,6 +80,8 @@ def test_wrist_3_is_unlimited_on_the_ur3_but_not_for_a_model_with_limits():
     limits = S.SafetyLimits.for_robot(dqlab.models.ur3())
     with pytest.raises(UnsafeTargetError, match="joint 6 = 20 rad is outside"):
         S.movej([0, 0, 0, 0, 0, 20.0], limits=limits)
+    with pytest.raises(ValueError, match="joint 6 = 20 rad is outside"):       # robot.limits
+        S.movej([0, 0, 0, 0, 0, 20.0], limits=dqlab.models.ur3().limits)
 
 
 @pytest.mark.parametrize("kwargs, words", [

@@ -104,6 +104,40 @@ def test_rtde_handshake_versions_and_recipes(standin):
         assert s.recv(16) == R.pack(R.CONTROL_PACKAGE_START, b"\x00")   # no recipe yet
 
 
+def test_rtde_pause_stops_the_data_packages(standin):
+    with socket.create_connection((standin.host, standin.rtde_port), timeout=5) as s:
+        buf = R.PacketBuffer()
+
+        def packages(seconds):
+            """Every package received during the next ``seconds``."""
+            deadline = time.monotonic() + seconds
+            got = []
+            while (remaining := deadline - time.monotonic()) > 0:
+                s.settimeout(remaining)
+                try:
+                    data = s.recv(65536)
+                except socket.timeout:
+                    break
+                assert data, "the stand-in closed the connection"
+                got += buf.feed(data)
+            return got
+
+        s.sendall(R.pack(R.REQUEST_PROTOCOL_VERSION, struct.pack(">H", 2)))
+        s.sendall(R.pack(R.CONTROL_PACKAGE_SETUP_OUTPUTS,
+                         struct.pack(">d", 100.0) + b"timestamp,actual_q"))
+        s.sendall(R.pack(R.CONTROL_PACKAGE_START))
+        got = packages(0.3)
+        assert got[:3] == [(ord("V"), b"\x01"), (ord("O"), b"\x01DOUBLE,VECTOR6D"),
+                           (ord("S"), b"\x01")]
+        data = [body for ptype, body in got if ptype == R.DATA_PACKAGE]
+        assert 10 <= len(data) <= 40 and all(len(b) == 1 + 7 * 8 for b in data)
+        s.sendall(R.pack(R.CONTROL_PACKAGE_PAUSE))
+        got = packages(0.2)
+        paused_at = [ptype for ptype, _ in got].index(ord("P"))
+        assert got[paused_at] == (ord("P"), b"\x01")
+        assert packages(0.2) == []                   # nothing after the pause
+
+
 def test_standin_listens_on_loopback_only(standin):
     conns = psutil.Process(standin.pid).net_connections(kind="inet")
     listening = [c for c in conns if c.status == psutil.CONN_LISTEN]
@@ -187,6 +221,14 @@ def test_ur_rtde_receive_interface_reads_the_standin():
             np.testing.assert_allclose(rx.getActualQ(), target, atol=1e-12)
             np.testing.assert_allclose(rx.getActualTCPPose(), dqlab.ur.pose_from_transform(
                 dqlab.models.ur3().fk(target)), atol=1e-12)
+            # ur_rtde's default recipe (every output) connects too
+            rx_all = rtde_receive.RTDEReceiveInterface("127.0.0.1", 125.0)
+            try:
+                time.sleep(0.05)
+                np.testing.assert_allclose(rx_all.getActualQ(), target, atol=1e-12)
+                assert rx_all.getActualCurrent() == [0.0] * 6      # served as zeros
+            finally:
+                rx_all.disconnect()
             # and dqlab's own ur_rtde back end, read-only against the stand-in
             with URClient(dqlab.ur.RTDEBackend("127.0.0.1", frequency=125.0,
                                                control=False)) as ur:

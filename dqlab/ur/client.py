@@ -33,7 +33,7 @@ from .poses import (
     transform_from_pose,
 )
 from .rtde import STATE_VARIABLES, RTDEReader
-from .script import SafetyLimits, UnsafeTargetError, check_joint_targets
+from .script import UnsafeTargetError, as_safety_limits, check_joint_targets
 
 __all__ = ["URState", "Backend", "ROBOT_MODE_RUNNING", "HOME", "URClient",
            "KinematicBackend", "StepClock", "SecondaryInterfaceBackend", "RTDEBackend",
@@ -119,8 +119,8 @@ class URClient:
     robot : dqlab.robot.Robot, optional
         The arm's model, for inverse kinematics and reach (default
         :func:`dqlab.models.ur3`).
-    limits : SafetyLimits, optional
-        Default: the UR3's (:class:`~dqlab.ur.script.SafetyLimits`).
+    limits : SafetyLimits or array_like of shape (6, 2), optional
+        Default: the UR3's (see :func:`~dqlab.ur.script.as_safety_limits`).
     tol : float
         A joint target is reached when every joint is within ``tol`` rad of it and every
         joint speed below ``tol`` rad/s (a pose: ``tol`` m and rad).
@@ -146,7 +146,7 @@ class URClient:
 
         self.backend = backend
         self.robot = ur3() if robot is None else robot
-        self.limits = SafetyLimits() if limits is None else limits
+        self.limits = as_safety_limits(limits)
         self.tol = float(tol)
         self.poll_interval = float(poll_interval)
         self.connect_timeout = float(connect_timeout)
@@ -612,7 +612,8 @@ class KinematicBackend:
     ``movel`` moves the TCP on a straight line with the same law on the distance (joints by
     inverse kinematics, branch tracked from the current joints); ``servoj`` moves at
     constant speed to its target in ``t``; ``stop`` halts at once. A new command replaces
-    the one running (as a new program does on a controller); :meth:`run` queues several.
+    the one running (as a new program does on a controller) and starts from where the arm is,
+    at rest (speeds are not blended); :meth:`run` queues several.
     Blend radii ``r`` are accepted and ignored. Targets are checked with the same safety
     checks as the client (:func:`dqlab.ur.script.check_joint_targets`).
 
@@ -627,8 +628,8 @@ class KinematicBackend:
     clock : callable, optional
         Returns the simulated time in seconds (e.g. :class:`StepClock`); replaces the real
         clock and ``speedup``.
-    limits : SafetyLimits, optional
-        Default: the UR3's.
+    limits : SafetyLimits or array_like of shape (6, 2), optional
+        Default: the UR3's (see :func:`~dqlab.ur.script.as_safety_limits`).
     """
 
     name = "kinematic"
@@ -637,7 +638,7 @@ class KinematicBackend:
         from ..models import ur3
 
         self.robot = ur3() if robot is None else robot
-        self.limits = SafetyLimits() if limits is None else limits
+        self.limits = as_safety_limits(limits)
         q0 = HOME if q0 is None else q0
         self._q0 = check_joint_targets(q0, limits=self.limits, command="q0")
         if not speedup > 0:

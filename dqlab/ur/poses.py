@@ -154,7 +154,8 @@ def rotation_vector_from_quaternion(q, *, tol=1e-9, half_turn_tol=1e-12):
     w, u = q[..., 0], q[..., 1:]
     s = np.sqrt(np.sum(u * u, axis=-1))
     theta = 2.0 * np.arctan2(s, w)
-    factor = np.where(s > 0.0, theta / np.where(s > 0.0, s, 1.0), 2.0 / np.where(w > 0, w, 1.0))
+    some = s > 0.0
+    factor = np.where(some, theta / np.where(some, s, 1.0), 2.0 / np.where(some, 1.0, w))
     r = u * factor[..., None]
     # the half turn: point the axis into the upper half-space, keeping the rotation exact
     n = u / np.where(s > 0.0, s, 1.0)[..., None]

@@ -130,6 +130,13 @@ class RTDEReader:
     frequency : float
         Output frequency requested, Hz (125 on a CB3, up to 500 on an e-Series).
 
+    Notes
+    -----
+    The controller keeps sending at ``frequency`` whether or not the packages are read; a
+    reader idle for long fills the socket's buffers, and a controller may then drop the
+    connection (the stand-in does after 2 s of back-pressure). Read regularly, or close and
+    reconnect.
+
     Attributes
     ----------
     controller_version : tuple of int

@@ -36,8 +36,8 @@ from .poses import check_pose, transform_from_pose
 
 __all__ = [
     "UR3_JOINT_LIMITS", "UR3_MAX_JOINT_SPEED", "SafetyLimits", "UnsafeTargetError",
-    "check_joint_targets", "movej", "movel", "servoj", "stopj", "program_from_trajectory",
-    "urscript_list", "urscript_pose",
+    "as_safety_limits", "check_joint_targets", "movej", "movel", "servoj", "stopj",
+    "program_from_trajectory", "urscript_list", "urscript_pose",
 ]
 
 #: UR3 joint ranges, rad: +-360 degrees on joints 1-5; wrist 3 turns without limit.
@@ -110,6 +110,23 @@ class SafetyLimits:
         return replace(cls(), joint_limits=np.asarray(robot.limits, dtype=float), **overrides)
 
 
+def as_safety_limits(limits):
+    """``limits`` as :class:`SafetyLimits`: ``None`` (the UR3's), a ``SafetyLimits``, or joint
+    limits of shape (n, 2) such as ``robot.limits`` (other limits the UR3's defaults).
+
+    Examples
+    --------
+    >>> from dqlab.models import ur3
+    >>> as_safety_limits(ur3().limits).joint_limits[5]
+    array([-6.28318531,  6.28318531])
+    """
+    if limits is None:
+        return SafetyLimits()
+    if isinstance(limits, SafetyLimits):
+        return limits
+    return SafetyLimits(joint_limits=np.asarray(limits, dtype=float))
+
+
 def _fmt(x):
     return repr(float(x) + 0.0)  # + 0.0: no "-0.0"
 
@@ -161,8 +178,9 @@ def check_joint_targets(q, *, limits=None, q_from=None, command="movej", times=N
     ----------
     q : array_like, shape (6,) or (N, 6)
         Joint targets, rad.
-    limits : SafetyLimits, optional
-        Default: the UR3's (:class:`SafetyLimits`).
+    limits : SafetyLimits or array_like of shape (6, 2), optional
+        Default: the UR3's (:class:`SafetyLimits`); joint limits alone (e.g. ``robot.limits``)
+        replace only the joint ranges.
     q_from : array_like, shape (6,), optional
         Where the arm is before the first target.
     command : str
@@ -189,7 +207,7 @@ def check_joint_targets(q, *, limits=None, q_from=None, command="movej", times=N
     ...
     dqlab.ur.script.UnsafeTargetError: movej target: joint 1 = 7 rad is outside its limits ...
     """
-    limits = SafetyLimits() if limits is None else limits
+    limits = as_safety_limits(limits)
     n = len(limits.joint_limits)
     try:
         arr = np.asarray(q, dtype=float)
@@ -274,8 +292,8 @@ def movej(q, a=1.4, v=1.05, t=0.0, r=0.0, *, limits=None, q_from=None):
         Duration, s (0: set by ``a`` and ``v``).
     r : float
         Blend radius, m.
-    limits : SafetyLimits, optional
-        Default: the UR3's.
+    limits : SafetyLimits or array_like of shape (6, 2), optional
+        Default: the UR3's (see :func:`as_safety_limits`).
     q_from : array_like, shape (6,), optional
         The arm's joints before the move (enables the joint-jump check, and the speed check
         of a move with a given ``t``).
@@ -301,7 +319,7 @@ def movej(q, a=1.4, v=1.05, t=0.0, r=0.0, *, limits=None, q_from=None):
     ...
     dqlab.ur.script.UnsafeTargetError: movej target: joint 6 is nan, not a finite number
     """
-    limits = SafetyLimits() if limits is None else limits
+    limits = as_safety_limits(limits)
     a = _scalar(a, "a", "movej", lo=0.0, hi=limits.max_joint_acceleration, lo_open=True)
     v = _scalar(v, "v", "movej", lo=0.0, hi=float(np.min(limits.max_joint_speed)),
                 lo_open=True)
@@ -325,7 +343,7 @@ def movel(pose, a=1.2, v=0.25, t=0.0, r=0.0, *, limits=None, robot=None):
         TCP acceleration (m/s^2, default 1.2) and speed (m/s, default 0.25).
     t, r : float
         Duration (s) and blend radius (m).
-    limits : SafetyLimits, optional
+    limits : SafetyLimits or array_like of shape (6, 2), optional
     robot : dqlab.robot.Robot, optional
         The arm whose reach is checked (default :func:`dqlab.models.ur3`): a pose without an
         inverse-kinematics solution is refused. (Only the end of the line is checked; the
@@ -346,7 +364,7 @@ def movel(pose, a=1.2, v=0.25, t=0.0, r=0.0, *, limits=None, robot=None):
     """
     from .. import ik, models
 
-    limits = SafetyLimits() if limits is None else limits
+    limits = as_safety_limits(limits)
     a = _scalar(a, "a", "movel", lo=0.0, hi=limits.max_tcp_acceleration, lo_open=True)
     v = _scalar(v, "v", "movel", lo=0.0, hi=limits.max_tcp_speed, lo_open=True)
     t = _scalar(t, "t", "movel")
@@ -378,7 +396,7 @@ def servoj(q, t=0.008, lookahead_time=0.1, gain=300, *, limits=None, q_from=None
         In [0.03, 0.2] s.
     gain : float
         In [100, 2000].
-    limits : SafetyLimits, optional
+    limits : SafetyLimits or array_like of shape (6, 2), optional
     q_from : array_like, shape (6,), optional
         The previous sample: enables the joint-jump and joint-speed checks.
 
@@ -440,7 +458,7 @@ def program_from_trajectory(trajectory, *, name="dqlab_trajectory", a=1.4, v=1.0
         Acceleration and speed of the approach ``movej``.
     lookahead_time, gain : float
         Of every ``servoj``.
-    limits : SafetyLimits, optional
+    limits : SafetyLimits or array_like of shape (6, 2), optional
     q_from : array_like, shape (6,), optional
         The arm's joints now (checks the approach for a joint jump).
 

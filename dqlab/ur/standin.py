@@ -18,9 +18,11 @@ controller's protocols for the client code of :mod:`dqlab.ur.client` to run unch
   negotiation (versions 1 and 2), the controller version (reported as 5.11.0.0 by default),
   output recipe set-up, start and pause, and data packages at the requested frequency (at
   most 500 Hz). It serves ``timestamp``, ``actual_q``, ``actual_qd``, ``actual_TCP_pose``,
-  ``robot_mode`` and a few more (:data:`SERVED_VARIABLES`, some constant: the arm has no
-  currents or I/O); any other name is answered ``NOT_FOUND`` and that recipe cannot be
-  started. Input recipes are answered ``NOT_FOUND`` (nothing can be written).
+  ``robot_mode`` and a few more from its arm (:data:`SERVED_VARIABLES`), and, as zeros, the
+  electrical, force, I/O, payload and register outputs that ``ur_rtde``'s default recipe
+  asks for (:data:`ZERO_VARIABLES`); any other name is answered ``NOT_FOUND`` and that
+  recipe cannot be started. Input recipes are answered ``NOT_FOUND`` (nothing can be
+  written, so ``ur_rtde``'s control interface does not work with it).
 
 Time in the stand-in runs ``speedup`` times faster than real time, so a notebook does not
 wait for a 3-second move. The process stops when the stand-in is stopped or its parent
@@ -44,22 +46,20 @@ import numpy as np
 from . import rtde
 from .client import HOME, KinematicBackend, SecondaryInterfaceBackend
 
-__all__ = ["ControllerStandIn", "SERVED_VARIABLES", "parse_urscript"]
+__all__ = ["ControllerStandIn", "SERVED_VARIABLES", "ZERO_VARIABLES", "parse_urscript"]
 
 LOOPBACK = "127.0.0.1"
 
-#: RTDE outputs the stand-in serves: name -> (RTDE type, value from the arm's URState)
+#: RTDE outputs the stand-in serves with the arm's state: name -> (RTDE type, value from the
+#: arm's URState)
 SERVED_VARIABLES = {
     "timestamp": ("DOUBLE", lambda s: s.time),
     "actual_q": ("VECTOR6D", lambda s: s.q),
     "actual_qd": ("VECTOR6D", lambda s: s.qd),
     "target_q": ("VECTOR6D", lambda s: s.q),
     "target_qd": ("VECTOR6D", lambda s: s.qd),
-    "target_qdd": ("VECTOR6D", lambda s: np.zeros(6)),
     "actual_TCP_pose": ("VECTOR6D", lambda s: s.tcp_pose),
     "target_TCP_pose": ("VECTOR6D", lambda s: s.tcp_pose),
-    "actual_TCP_speed": ("VECTOR6D", lambda s: np.zeros(6)),
-    "target_TCP_speed": ("VECTOR6D", lambda s: np.zeros(6)),
     "robot_mode": ("INT32", lambda s: s.robot_mode),
     "joint_mode": ("VECTOR6INT32", lambda s: [253] * 6),    # 253: joint running
     "safety_mode": ("INT32", lambda s: 1),                  # 1: normal
@@ -68,8 +68,40 @@ SERVED_VARIABLES = {
     "runtime_state": ("UINT32", lambda s: 2 if np.any(s.qd != 0) else 1),  # playing/stopped
     "speed_scaling": ("DOUBLE", lambda s: 1.0),
     "target_speed_fraction": ("DOUBLE", lambda s: 1.0),
-    "actual_execution_time": ("DOUBLE", lambda s: 0.0),
 }
+
+#: RTDE outputs served as zeros: the stand-in's arm has no accelerations, currents, torques,
+#: forces, temperatures, voltages, I/O, payload or registers. (They are served so that
+#: ``ur_rtde``'s receive interface with its default recipe can connect; do not read them.)
+ZERO_VARIABLES = {
+    **dict.fromkeys(["target_qdd", "target_current", "target_moment", "actual_current",
+                     "joint_control_output", "actual_TCP_speed", "target_TCP_speed",
+                     "actual_TCP_force", "joint_temperatures", "actual_joint_voltage",
+                     "ft_raw_wrench", "payload_inertia"], "VECTOR6D"),
+    **dict.fromkeys(["actual_tool_accelerometer", "payload_cog"], "VECTOR3D"),
+    **dict.fromkeys(["actual_execution_time", "actual_momentum", "actual_main_voltage",
+                     "actual_robot_voltage", "actual_robot_current", "payload",
+                     "standard_analog_input0", "standard_analog_input1",
+                     "standard_analog_output0", "standard_analog_output1"], "DOUBLE"),
+    **dict.fromkeys(["actual_digital_input_bits", "actual_digital_output_bits"], "UINT64"),
+    **dict.fromkeys(["output_bit_registers0_to_31", "output_bit_registers32_to_63"],
+                    "UINT32"),
+    **{f"output_int_register_{k}": "INT32" for k in range(48)},
+    **{f"output_double_register_{k}": "DOUBLE" for k in range(48)},
+}
+_ZEROS = {"VECTOR6D": [0.0] * 6, "VECTOR3D": [0.0] * 3, "DOUBLE": 0.0, "UINT64": 0,
+          "UINT32": 0, "INT32": 0}
+
+
+def _output(name):
+    """(RTDE type, value function) of an output variable, or None if not served."""
+    if name in SERVED_VARIABLES:
+        return SERVED_VARIABLES[name]
+    if name in ZERO_VARIABLES:
+        rtype = ZERO_VARIABLES[name]
+        return rtype, lambda s: _ZEROS[rtype]
+    return None
+
 
 _SIGNATURES = {
     "movej": ("q", "a", "v", "t", "r"),
@@ -318,10 +350,10 @@ class _RTDEConnection:
                 if freq > 0:
                     self.period = 1.0 / min(freq, 500.0)
             names = body.decode().rstrip(",").split(",")   # ur_rtde ends the list with ","
-            types = [SERVED_VARIABLES[n][0] if n in SERVED_VARIABLES else "NOT_FOUND"
-                     for n in names]
+            outputs = [_output(n) for n in names]
+            types = [o[0] if o else "NOT_FOUND" for o in outputs]
             found = "NOT_FOUND" not in types
-            self.recipe = (names, rtde.recipe_struct(types)) if found else None
+            self.recipe = ([o[1] for o in outputs], rtde.recipe_struct(types)) if found else None
             text = ",".join(types).encode()
             reply = (bytes([1 if found else 0]) + text) if self.version >= 2 else text
         elif ptype == rtde.CONTROL_PACKAGE_SETUP_INPUTS:
@@ -339,10 +371,10 @@ class _RTDEConnection:
             self.sock.sendall(rtde.pack(ptype, reply))
 
     def data_package(self, state):
-        names, st = self.recipe
+        getters, st = self.recipe
         flat = []
-        for n in names:
-            value = SERVED_VARIABLES[n][1](state)
+        for get in getters:
+            value = get(state)
             flat.extend(np.ravel(value).tolist() if np.ndim(value) else [value])
         head = bytes([1]) if self.version >= 2 else b""
         return rtde.pack(rtde.DATA_PACKAGE, head + st.pack(*flat))
@@ -414,7 +446,7 @@ def _serve(config_json):
                         conn, _ = key.fileobj.accept()
                     except BlockingIOError:
                         continue
-                    conn.setblocking(True)
+                    conn.settimeout(2.0)      # a client that stops reading is dropped
                     conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
                     if kind == "secondary":
                         texts[conn] = ""
