@@ -1,5 +1,7 @@
 """Input validation shared by every module: shapes, finiteness, clear ``ValueError`` s."""
 
+import math
+
 import numpy as np
 
 
@@ -146,3 +148,76 @@ def batched(kernel, inputs, out_trailing, chunk=CHUNK):
         for start in range(0, n, chunk):
             out[start:start + chunk] = kernel(*(f[start:start + chunk] for f in flat))
     return out.reshape(shape + tuple(out_trailing))
+
+
+# --- Checks on components (see dqlab._kernels) ------------------------------------------
+
+
+def unit_quaternion_or_raise(parts, name, tol, subject=None):
+    """Raise unless the quaternion given by its components has norm 1 within ``tol``.
+
+    ``parts`` are four floats or four arrays; ``name`` is the argument, ``subject`` what the
+    message says is not unit (default ``name``, e.g. "the real part of Q").
+
+    >>> unit_quaternion_or_raise((0.0, 0.0, 0.0, 1.0), "q", 1e-9)
+    >>> unit_quaternion_or_raise((0.0, 0.0, 0.0, 0.0), "Q", 1e-9, "the real part of Q")
+    Traceback (most recent call last):
+    ...
+    ValueError: the real part of Q is the zero quaternion, which is not a rotation
+    """
+    w, x, y, z = parts
+    n2 = w * w + x * x + y * y + z * z
+    if isinstance(n2, np.ndarray):
+        if not np.isfinite(n2).all():
+            raise ValueError(f"{name} contains NaN or infinity")
+        bad = np.abs(np.sqrt(n2) - 1.0) > tol
+        if bad.any():
+            _raise_not_unit(subject or name, np.sqrt(n2)[bad].flat[0], tol)
+        return
+    if abs(n2 - 1.0) <= tol:  # implies | |q| - 1 | <= tol / 2 (and catches NaN/inf below)
+        return
+    if not n2 - n2 == 0.0:
+        raise ValueError(f"{name} contains NaN or infinity")
+    if abs(math.sqrt(n2) - 1.0) > tol:
+        _raise_not_unit(subject or name, math.sqrt(n2), tol)
+
+
+def _raise_not_unit(subject, n, tol):
+    if n == 0.0:
+        raise ValueError(f"{subject} is the zero quaternion, which is not a rotation")
+    raise ValueError(
+        f"{subject} must be a unit quaternion (norm 1 within {tol:g}), got norm {n:.12g}; "
+        "normalise it with quaternion_normalize first")
+
+
+def unit_dual_quaternion_or_raise(parts, name, tol):
+    """Raise unless :math:`|q_r| = 1` and :math:`\\langle q_r, q_d\\rangle = 0` within ``tol``.
+
+    >>> unit_dual_quaternion_or_raise((1.0, 0, 0, 0, 0, 0.5, 0, 0), "Q", 1e-9)
+    """
+    rw, rx, ry, rz, dw, dx, dy, dz = parts
+    unit_quaternion_or_raise((rw, rx, ry, rz), name, tol, f"the real part of {name}")
+    dot = rw * dw + rx * dx + ry * dy + rz * dz
+    bad = np.max(np.abs(dot)) if isinstance(dot, np.ndarray) else abs(dot)
+    if not bad - bad == 0.0:
+        raise ValueError(f"{name} contains NaN or infinity")
+    if not bad <= tol:
+        raise ValueError(
+            f"{name} must be a unit dual quaternion: <q_r, q_d> = {bad:.3g} should be 0 "
+            f"(tolerance {tol:g}); normalise it with dual_quaternion_normalize first")
+
+
+def rotation_or_raise(name, err, det, tol):
+    """Raise unless ``err`` (largest entry of :math:`|R^T R - I|`, see
+    :func:`dqlab._kernels.orthonormality`) is within ``tol`` and ``det`` is positive.
+
+    >>> rotation_or_raise("R", 0.0, -1.0, 1e-9)
+    Traceback (most recent call last):
+    ...
+    ValueError: R is a reflection (determinant -1), not a rotation
+    """
+    if not err <= tol:
+        raise ValueError(
+            f"{name} is not orthonormal: |R^T R - I| reaches {err:.3g} (tolerance {tol:g})")
+    if not det > 0.0:
+        raise ValueError(f"{name} is a reflection (determinant -1), not a rotation")

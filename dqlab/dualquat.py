@@ -25,18 +25,23 @@ from ._checks import (
     components,
     float_array,
     pack,
+    rotation_or_raise,
     stack_components,
+    unit_dual_quaternion_or_raise,
+    unit_quaternion_or_raise,
+)
+from ._kernels import (
+    dual_quaternion_mul,
+    matrix_entries_from_quaternion,
+    orthonormality,
+    quaternion_from_matrix_entries,
+    quaternion_mul,
+    quaternion_rotate,
+    screw_entries,
+    translation_from_dual_quaternion_entries,
 )
 from ._wrapper import ArrayWrapper, array_of
-from .quaternion import (
-    _from_matrix,
-    _matrix,
-    _mul,
-    _rot,
-    _unit_or_raise,
-    quaternion_product,
-)
-from .rotations import _orthonormality, _raise_not_rotation
+from .quaternion import quaternion_product
 from .transforms import check_transform
 
 __all__ = [
@@ -61,27 +66,6 @@ def _in(x, name, trailing=_D):
     if a.ndim > len(trailing):
         check_finite(a, name)
     return a
-
-
-def _dq_unit_or_raise(parts, name, tol):
-    """Raise unless |q_r| = 1 and <q_r, q_d> = 0 within ``tol``."""
-    rw, rx, ry, rz, dw, dx, dy, dz = parts
-    try:
-        _unit_or_raise((rw, rx, ry, rz), name, tol)
-    except ValueError as exc:
-        msg = str(exc).replace(f"{name} must be a unit quaternion",
-                               f"the real part of {name} must be a unit quaternion")
-        msg = msg.replace(f"{name} is the zero quaternion",
-                          f"the real part of {name} is the zero quaternion")
-        raise ValueError(msg) from None
-    dot = rw * dw + rx * dx + ry * dy + rz * dz
-    bad = np.max(np.abs(dot)) if isinstance(dot, np.ndarray) else abs(dot)
-    if not bad - bad == 0.0:
-        raise ValueError(f"{name} contains NaN or infinity")
-    if not bad <= tol:
-        raise ValueError(
-            f"{name} must be a unit dual quaternion: <q_r, q_d> = {bad:.3g} should be 0 "
-            f"(tolerance {tol:g}); normalise it with dual_quaternion_normalize first")
 
 
 # --------------------------------------------------------------------------------------
@@ -137,50 +121,14 @@ def dual_quaternion_product(A, B):
     A = _in(A, "A")
     B = _in(B, "B")
     if A.ndim == 1 and B.ndim == 1:
-        return pack(_dq_mul(A.tolist(), B.tolist()), (A, "A", _D), (B, "B", _D))
+        return pack(dual_quaternion_mul(A.tolist(), B.tolist()), (A, "A", _D), (B, "B", _D))
     check_finite(A, "A")
     check_finite(B, "B")
     return batched(_product_kernel, [(A, 1), (B, 1)], _D)
 
 
-def _dq_mul(a, b):
-    """(a_r + eps a_d)(b_r + eps b_d) on components: a_r b_r + eps (a_r b_d + a_d b_r)."""
-    arw, arx, ary, arz, adw, adx, ady, adz = a
-    brw, brx, bry, brz, bdw, bdx, bdy, bdz = b
-    rw, rx, ry, rz = _mul(arw, arx, ary, arz, brw, brx, bry, brz)
-    d1w, d1x, d1y, d1z = _mul(arw, arx, ary, arz, bdw, bdx, bdy, bdz)
-    d2w, d2x, d2y, d2z = _mul(adw, adx, ady, adz, brw, brx, bry, brz)
-    return rw, rx, ry, rz, d1w + d2w, d1x + d2x, d1y + d2y, d1z + d2z
-
-
-def _dq_mul_z_screw(a, c, s, h):
-    r"""``a`` times the screw about the z axis, on components (no checks).
-
-    The screw turns by :math:`\theta` about z and moves by :math:`2h` along it,
-    :math:`J = r + \varepsilon\, h k r` with :math:`r = c + s k`,
-    :math:`(c, s) = (\cos\frac\theta2, \sin\frac\theta2)`. As :math:`k` and :math:`r`
-    commute, :math:`a J = a_r r + \varepsilon\,(a_d r + h\, (a_r r)\, k)`: the same as
-    ``_dq_mul(a, (c, 0, 0, s, -h s, 0, 0, h c))`` without the products by zero.
-    """
-    arw, arx, ary, arz, adw, adx, ady, adz = a
-    # p r with r = c + s k is (c w - s z, c x + s y, c y - s x, c z + s w)
-    rw, rx, ry, rz = c * arw - s * arz, c * arx + s * ary, c * ary - s * arx, c * arz + s * arw
-    dw, dx, dy, dz = c * adw - s * adz, c * adx + s * ady, c * ady - s * adx, c * adz + s * adw
-    # p k is (-z, y, -x, w)
-    return rw, rx, ry, rz, dw - h * rz, dx + h * ry, dy - h * rx, dz + h * rw
-
-
-def _screw_parts(lx, ly, lz, mx, my, mz, c, s, h):
-    """The screw about the axis (l, m) on components (no checks); see
-    :func:`dual_quaternion_from_screw`. ``c, s`` are the cosine and sine of half the angle,
-    ``h`` half the displacement along the axis."""
-    hc = h * c
-    return (c, s * lx, s * ly, s * lz,
-            -h * s, s * mx + hc * lx, s * my + hc * ly, s * mz + hc * lz)
-
-
 def _product_kernel(A, B):
-    return stack_components(_dq_mul(components(A), components(B)))
+    return stack_components(dual_quaternion_mul(components(A), components(B)))
 
 
 def dual_quaternion_conjugate(Q):
@@ -337,7 +285,7 @@ def check_unit_dual_quaternion(Q, tol=1e-9, name="Q"):
     ValueError: Q must be a unit dual quaternion: <q_r, q_d> = 1 should be 0 ...
     """
     Q = as_float_array(Q, name, _D)
-    _dq_unit_or_raise(components(Q), name, tol)
+    unit_dual_quaternion_or_raise(components(Q), name, tol)
     return Q
 
 
@@ -457,9 +405,9 @@ def dual_quaternion_from_rotation_translation(q, t, *, tol=1e-9):
         check_finite(q, "q")
         check_finite(t, "t")
     qc = components(q)
-    _unit_or_raise(qc, "q", tol)
+    unit_quaternion_or_raise(qc, "q", tol)
     tx, ty, tz = components(t)
-    d = _mul(0.0, 0.5 * tx, 0.5 * ty, 0.5 * tz, *qc)
+    d = quaternion_mul(0.0, 0.5 * tx, 0.5 * ty, 0.5 * tz, *qc)
     return pack(tuple(qc) + d, (t, "t", _V))
 
 
@@ -490,10 +438,8 @@ def rotation_translation_from_dual_quaternion(Q, *, tol=1e-9):
     """
     Q = _in(Q, "Q")
     c = components(Q)
-    _dq_unit_or_raise(c, "Q", tol)
-    rw, rx, ry, rz = c[:4]
-    t = _mul(*c[4:], rw, -rx, -ry, -rz)[1:]
-    return Q[..., :4].copy(), stack_components([2.0 * t[0], 2.0 * t[1], 2.0 * t[2]])
+    unit_dual_quaternion_or_raise(c, "Q", tol)
+    return Q[..., :4].copy(), stack_components(translation_from_dual_quaternion_entries(*c))
 
 
 def dual_quaternion_from_transform(T, *, tol=1e-9):
@@ -530,13 +476,13 @@ def dual_quaternion_from_transform(T, *, tol=1e-9):
     T = float_array(T, "T", (4, 4))
     if T.ndim == 2:
         a, b, c, d = T.tolist()
-        err, det = _orthonormality(a, b, c)  # NaN or inf in R fail this test too
+        err, det = orthonormality(a, b, c)  # NaN or inf in R fail this test too
         t = a[3] + b[3] + c[3]
         if not (err <= tol and det > 0.0 and t - t == 0.0 and d == [0.0, 0.0, 0.0, 1.0]):
             check_transform(T, tol)  # raises with the right message
             raise ValueError("T contains NaN or infinity")
-        qr = _from_matrix(a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2])
-        qd = _mul(0.0, 0.5 * a[3], 0.5 * b[3], 0.5 * c[3], *qr)
+        qr = quaternion_from_matrix_entries(a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2])
+        qd = quaternion_mul(0.0, 0.5 * a[3], 0.5 * b[3], 0.5 * c[3], *qr)
         return np.array(qr + qd)
     check_finite(T, "T")
 
@@ -545,11 +491,11 @@ def dual_quaternion_from_transform(T, *, tol=1e-9):
         if not ((e[12] == 0.0).all() and (e[13] == 0.0).all() and (e[14] == 0.0).all()
                 and (e[15] == 1.0).all()):
             check_transform(T, tol)  # raises with the right message
-        err, det = _orthonormality(e[0:3], e[4:7], e[8:11])
+        err, det = orthonormality(e[0:3], e[4:7], e[8:11])
         if not (err <= tol and det > 0.0):
-            _raise_not_rotation("the rotation block of T", err, det, tol)
-        qr = _from_matrix(e[0], e[1], e[2], e[4], e[5], e[6], e[8], e[9], e[10])
-        qd = _mul(0.0, 0.5 * e[3], 0.5 * e[7], 0.5 * e[11], *qr)
+            rotation_or_raise("the rotation block of T", err, det, tol)
+        qr = quaternion_from_matrix_entries(e[0], e[1], e[2], e[4], e[5], e[6], e[8], e[9], e[10])
+        qd = quaternion_mul(0.0, 0.5 * e[3], 0.5 * e[7], 0.5 * e[11], *qr)
         return stack_components(qr + qd)
 
     return batched(kernel, [(T, 2)], _D)
@@ -594,13 +540,11 @@ def transform_from_dual_quaternion(Q, *, tol=1e-9):
 
 def _transform_parts(c, tol):
     """The 16 entries of the 4x4 of a unit dual quaternion given by its components."""
-    _dq_unit_or_raise(c, "Q", tol)
-    rw, rx, ry, rz = c[:4]
-    _, tx, ty, tz = _mul(*c[4:], rw, -rx, -ry, -rz)
-    m = _matrix(rw, rx, ry, rz)
-    z = 0.0 * rw
-    return (m[0:3] + (2.0 * tx,) + m[3:6] + (2.0 * ty,) + m[6:9] + (2.0 * tz,)
-            + (z, z, z, z + 1.0))
+    unit_dual_quaternion_or_raise(c, "Q", tol)
+    tx, ty, tz = translation_from_dual_quaternion_entries(*c)
+    m = matrix_entries_from_quaternion(*c[:4])
+    z = 0.0 * c[0]
+    return (m[0:3] + (tx,) + m[3:6] + (ty,) + m[6:9] + (tz,) + (z, z, z, z + 1.0))
 
 
 def dual_quaternion_apply(Q, points, *, tol=1e-9):
@@ -645,11 +589,10 @@ def dual_quaternion_apply(Q, points, *, tol=1e-9):
 
 def _apply_parts(c, p, tol):
     """R p + t on components, with (0, t) = 2 q_d q_r^*."""
-    _dq_unit_or_raise(c, "Q", tol)
-    rw, rx, ry, rz = c[:4]
-    _, tx, ty, tz = _mul(*c[4:], rw, -rx, -ry, -rz)
-    x, y, z = _rot(rw, rx, ry, rz, *p)
-    return x + 2.0 * tx, y + 2.0 * ty, z + 2.0 * tz
+    unit_dual_quaternion_or_raise(c, "Q", tol)
+    tx, ty, tz = translation_from_dual_quaternion_entries(*c)
+    x, y, z = quaternion_rotate(*c[:4], *p)
+    return x + tx, y + ty, z + tz
 
 
 def dual_quaternion_apply_vector(Q, vectors, *, tol=1e-9):
@@ -680,8 +623,8 @@ def dual_quaternion_apply_vector(Q, vectors, *, tol=1e-9):
         check_finite(Q, "Q")
         check_finite(v, "vectors")
     c = components(Q)
-    _dq_unit_or_raise(c, "Q", tol)
-    return pack(_rot(*c[:4], *components(v)), (v, "vectors", _V))
+    unit_dual_quaternion_or_raise(c, "Q", tol)
+    return pack(quaternion_rotate(*c[:4], *components(v)), (v, "vectors", _V))
 
 
 def dual_quaternion_apply_line(Q, direction, moment, *, tol=1e-9):
@@ -714,7 +657,7 @@ def dual_quaternion_apply_line(Q, direction, moment, *, tol=1e-9):
     >>> dual_quaternion_apply_line(Q, [0, 0, 1], [0, 0, 0])   # z axis moved to y = 1
     (array([0., 0., 1.]), array([1., 0., 0.]))
     """
-    q, t = rotation_translation_from_dual_quaternion(Q, tol=tol)
+    t = rotation_translation_from_dual_quaternion(Q, tol=tol)[1]
     l2 = dual_quaternion_apply_vector(Q, direction, tol=tol)
     m2 = dual_quaternion_apply_vector(Q, moment, tol=tol) + np.cross(t, l2)
     return l2, m2
@@ -933,7 +876,7 @@ def dual_quaternion_from_screw(l, m, theta, d):
     if np.any(np.abs(np.sum(l * m, axis=-1)) > 1e-9 * np.maximum(1.0, mn)):
         raise ValueError("m must be orthogonal to l (it is the moment c x l of the axis)")
     shape = np.broadcast_shapes(l.shape[:-1], m.shape[:-1], theta.shape, d.shape)
-    parts = _screw_parts(*np.moveaxis(l, -1, 0), *np.moveaxis(m, -1, 0),
+    parts = screw_entries(*np.moveaxis(l, -1, 0), *np.moveaxis(m, -1, 0),
                          np.cos(0.5 * theta), np.sin(0.5 * theta), 0.5 * d)
     Q = np.empty(shape + (8,))
     for k, part in enumerate(parts):

@@ -10,7 +10,6 @@ leading axes. pyquaternion uses the same order; scipy's ``(x, y, z, w)`` does no
 Array functions do the work; :class:`Quaternion` is a thin wrapper for notebooks.
 """
 
-import math
 
 import numpy as np
 
@@ -21,7 +20,16 @@ from ._checks import (
     components,
     float_array,
     pack,
+    rotation_or_raise,
     stack_components,
+    unit_quaternion_or_raise,
+)
+from ._kernels import (
+    matrix_entries_from_quaternion,
+    orthonormality,
+    quaternion_from_matrix_entries,
+    quaternion_mul,
+    quaternion_rotate,
 )
 from ._wrapper import ArrayWrapper, array_of
 
@@ -45,100 +53,6 @@ _M = (3, 3)
 
 def _in(x, name, trailing=_Q):
     return float_array(x, name, trailing)
-
-
-def _unit_or_raise(parts, name, tol):
-    """Raise unless the quaternion given by its components has norm 1 within ``tol``."""
-    w, x, y, z = parts
-    n2 = w * w + x * x + y * y + z * z
-    if isinstance(n2, np.ndarray):
-        if not np.isfinite(n2).all():
-            raise ValueError(f"{name} contains NaN or infinity")
-        bad = np.abs(np.sqrt(n2) - 1.0) > tol
-        if bad.any():
-            n = np.sqrt(n2)[bad].flat[0]
-            _raise_not_unit(name, n, tol)
-        return
-    if abs(n2 - 1.0) <= tol:  # implies | |q| - 1 | <= tol / 2 (and catches NaN/inf below)
-        return
-    if not n2 - n2 == 0.0:
-        raise ValueError(f"{name} contains NaN or infinity")
-    if abs(math.sqrt(n2) - 1.0) > tol:
-        _raise_not_unit(name, math.sqrt(n2), tol)
-
-
-def _raise_not_unit(name, n, tol):
-    if n == 0.0:
-        raise ValueError(f"{name} is the zero quaternion, which is not a rotation")
-    raise ValueError(
-        f"{name} must be a unit quaternion (norm 1 within {tol:g}), got norm {n:.12g}; "
-        "normalise it with quaternion_normalize first")
-
-
-# --------------------------------------------------------------------------------------
-# Component formulas (floats or arrays)
-
-
-def _mul(aw, ax, ay, az, bw, bx, by, bz):
-    return (aw * bw - ax * bx - ay * by - az * bz,
-            aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw)
-
-
-def _rot(w, x, y, z, vx, vy, vz):
-    # p' = p + w t + u x t with t = 2 u x p, u = (x, y, z): q p q* expanded for |q| = 1
-    tx = 2.0 * (y * vz - z * vy)
-    ty = 2.0 * (z * vx - x * vz)
-    tz = 2.0 * (x * vy - y * vx)
-    return (vx + w * tx + (y * tz - z * ty),
-            vy + w * ty + (z * tx - x * tz),
-            vz + w * tz + (x * ty - y * tx))
-
-
-def _matrix(w, x, y, z):
-    xx, yy, zz = x * x, y * y, z * z
-    xy, xz, yz = x * y, x * z, y * z
-    wx, wy, wz = w * x, w * y, w * z
-    return (1.0 - 2.0 * (yy + zz), 2.0 * (xy - wz), 2.0 * (xz + wy),
-            2.0 * (xy + wz), 1.0 - 2.0 * (xx + zz), 2.0 * (yz - wx),
-            2.0 * (xz - wy), 2.0 * (yz + wx), 1.0 - 2.0 * (xx + yy))
-
-
-# Positions of the rows of K = 4 q q^T in the tuple returned by _shepperd_terms.
-_K_ROWS = ((0, 4, 5, 6), (4, 1, 7, 8), (5, 7, 2, 9), (6, 8, 9, 3))
-
-
-def _shepperd_terms(r00, r01, r02, r10, r11, r12, r20, r21, r22):
-    # The ten distinct entries of K = 4 q q^T written with the entries of R (active
-    # convention): the diagonal 4w^2, 4x^2, 4y^2, 4z^2, then 4wx, 4wy, 4wz, 4xy, 4xz, 4yz.
-    tr = r00 + r11 + r22
-    return (1.0 + tr, 1.0 + r00 - r11 - r22, 1.0 - r00 + r11 - r22, 1.0 - r00 - r11 + r22,
-            r21 - r12, r02 - r20, r10 - r01, r01 + r10, r02 + r20, r12 + r21)
-
-
-def _from_matrix(r00, r01, r02, r10, r11, r12, r20, r21, r22):
-    # Row k of K divided by 2 sqrt(K_kk) is q, for any k; Shepperd's method takes the row
-    # of the largest diagonal entry (it divides by the largest component of q).
-    K = _shepperd_terms(r00, r01, r02, r10, r11, r12, r20, r21, r22)
-    if not isinstance(r00, np.ndarray):
-        k = 0
-        for j in (1, 2, 3):
-            if K[j] > K[k]:
-                k = j
-        w, x, y, z = (K[i] for i in _K_ROWS[k])
-        s = 0.5 / math.sqrt(K[k])
-        if w < 0.0:
-            s = -s  # canonical sign: w >= 0
-        return (w * s, x * s, y * s, z * s)
-    best, row = K[0], [K[i] for i in _K_ROWS[0]]
-    for k in (1, 2, 3):
-        larger = K[k] > best
-        best = np.where(larger, K[k], best)
-        row = [np.where(larger, K[i], r) for i, r in zip(_K_ROWS[k], row, strict=True)]
-    s = 0.5 / np.sqrt(best)
-    s = np.where(row[0] < 0.0, -s, s)
-    return tuple(c * s for c in row)
 
 
 # --------------------------------------------------------------------------------------
@@ -194,14 +108,14 @@ def quaternion_product(a, b):
     a = _in(a, "a")
     b = _in(b, "b")
     if a.ndim == 1 and b.ndim == 1:
-        return pack(_mul(*a.tolist(), *b.tolist()), (a, "a", _Q), (b, "b", _Q))
+        return pack(quaternion_mul(*a.tolist(), *b.tolist()), (a, "a", _Q), (b, "b", _Q))
     check_finite(a, "a")
     check_finite(b, "b")
     return batched(_product_kernel, [(a, 1), (b, 1)], _Q)
 
 
 def _product_kernel(a, b):
-    return stack_components(_mul(*components(a), *components(b)))
+    return stack_components(quaternion_mul(*components(a), *components(b)))
 
 
 def quaternion_conjugate(q):
@@ -338,7 +252,7 @@ def check_unit_quaternion(q, tol=1e-9, name="q"):
     ValueError: q must be a unit quaternion (norm 1 within 1e-09), got norm 1.41421356237; ...
     """
     q = as_float_array(q, name, _Q)
-    _unit_or_raise(components(q), name, tol)
+    unit_quaternion_or_raise(components(q), name, tol)
     return q
 
 
@@ -383,15 +297,15 @@ def rotate_vector(q, v, *, tol=1e-9):
     v = _in(v, "v", _V)
     if q.ndim == 1 and v.ndim == 1:
         qc = q.tolist()
-        _unit_or_raise(qc, "q", tol)
-        return pack(_rot(*qc, *v.tolist()), (v, "v", _V))
+        unit_quaternion_or_raise(qc, "q", tol)
+        return pack(quaternion_rotate(*qc, *v.tolist()), (v, "v", _V))
     check_finite(q, "q")
     check_finite(v, "v")
 
     def kernel(q, v):
         qc = components(q)
-        _unit_or_raise(qc, "q", tol)
-        return stack_components(_rot(*qc, *components(v)))
+        unit_quaternion_or_raise(qc, "q", tol)
+        return stack_components(quaternion_rotate(*qc, *components(v)))
 
     return batched(kernel, [(q, 1), (v, 1)], _V)
 
@@ -529,24 +443,22 @@ def quaternion_from_matrix(R, *, tol=1e-9):
     >>> quaternion_from_matrix(R)
     array([0., 0., 0., 1.])
     """
-    from .rotations import _orthonormality, _raise_not_rotation
-
     R = float_array(R, "R", _M)
     if R.ndim == 2:
         a, b, c = R.tolist()
-        err, det = _orthonormality(a, b, c)
+        err, det = orthonormality(a, b, c)
         if not (err <= tol and det > 0.0):  # also catches NaN
             check_finite(R, "R")
-            _raise_not_rotation("R", err, det, tol)
-        return np.array(_from_matrix(*a, *b, *c))
+            rotation_or_raise("R", err, det, tol)
+        return np.array(quaternion_from_matrix_entries(*a, *b, *c))
     check_finite(R, "R")
 
     def kernel(R):
         e = components(R.reshape(-1, 9))
-        err, det = _orthonormality(e[0:3], e[3:6], e[6:9])
+        err, det = orthonormality(e[0:3], e[3:6], e[6:9])
         if not (err <= tol and det > 0.0):
-            _raise_not_rotation("R", err, det, tol)
-        return stack_components(_from_matrix(*e))
+            rotation_or_raise("R", err, det, tol)
+        return stack_components(quaternion_from_matrix_entries(*e))
 
     return batched(kernel, [(R, 2)], _Q)
 
@@ -585,14 +497,14 @@ def matrix_from_quaternion(q, *, tol=1e-9):
     q = _in(q, "q")
     if q.ndim == 1:
         qc = q.tolist()
-        _unit_or_raise(qc, "q", tol)
-        return np.array(_matrix(*qc)).reshape(3, 3)
+        unit_quaternion_or_raise(qc, "q", tol)
+        return np.array(matrix_entries_from_quaternion(*qc)).reshape(3, 3)
     check_finite(q, "q")
 
     def kernel(q):
         qc = components(q)
-        _unit_or_raise(qc, "q", tol)
-        return stack_components(_matrix(*qc))
+        unit_quaternion_or_raise(qc, "q", tol)
+        return stack_components(matrix_entries_from_quaternion(*qc))
 
     m = batched(kernel, [(q, 1)], (9,))
     return m.reshape(m.shape[:-1] + (3, 3))

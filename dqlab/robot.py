@@ -42,7 +42,8 @@ import math
 import numpy as np
 
 from ._checks import as_float_array, batched, stack_components
-from .dualquat import _dq_mul, _dq_mul_z_screw, _screw_parts, dual_quaternion_from_transform
+from ._kernels import dual_quaternion_mul, dual_quaternion_mul_z_screw, screw_entries
+from .dualquat import dual_quaternion_from_transform
 
 __all__ = ["Link", "Robot", "REVOLUTE", "PRISMATIC"]
 
@@ -645,7 +646,7 @@ class Robot:
 
         ``q`` holds the joint values one per joint: Python floats (one joint vector) or
         arrays of shape (N,) (a batch). The products are those of validated unit dual
-        quaternions, so the unchecked component kernels of :mod:`dqlab.dualquat` serve.
+        quaternions, so the unchecked component kernels of :mod:`dqlab._kernels` serve.
         """
         cos, sin = (math.cos, math.sin) if type(q[0]) is float else (np.cos, np.sin)
         K = self._constant_dual_quaternions()
@@ -655,7 +656,8 @@ class Robot:
                 half, h = 0.5 * (q[i] + theta0), 0.5 * d0
             else:
                 half, h = 0.5 * theta0, 0.5 * (q[i] + d0)
-            Q = _dq_mul(_dq_mul_z_screw(Q, cos(half), sin(half), h), K[i + 1])
+            Q = dual_quaternion_mul_z_screw(Q, cos(half), sin(half), h)
+            Q = dual_quaternion_mul(Q, K[i + 1])
         return Q
 
     def _constant_dual_quaternions(self):
@@ -751,7 +753,7 @@ class Robot:
                 half, h = 0.5 * q[i], 0.0
             else:
                 half, h = 0.0, 0.5 * q[i]
-            Q = _dq_mul(_screw_parts(*lines[i], cos(half), sin(half), h), Q)
+            Q = dual_quaternion_mul(screw_entries(*lines[i], cos(half), sin(half), h), Q)
         return Q
 
     def _screw_constants(self):

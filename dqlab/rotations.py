@@ -10,7 +10,8 @@ Every function takes array-likes and broadcasts over leading axes.
 
 import numpy as np
 
-from ._checks import as_float_array, components
+from ._checks import as_float_array, components, rotation_or_raise
+from ._kernels import orthonormality
 
 __all__ = [
     "rot_x", "rot_y", "rot_z", "matrix_from_euler_zxz", "euler_zxz_from_matrix",
@@ -150,36 +151,6 @@ def skew(v):
     return S
 
 
-def _orthonormality(a, b, c):
-    """Largest entry of |R^T R - I| and det R, R given by its rows ``a, b, c``.
-
-    The entries are floats (one matrix) or arrays (a batch: the largest error over the batch
-    and the smallest determinant are returned).
-    """
-    a0, a1, a2 = a[0], a[1], a[2]
-    b0, b1, b2 = b[0], b[1], b[2]
-    c0, c1, c2 = c[0], c[1], c[2]
-    errs = (abs(a0 * a0 + b0 * b0 + c0 * c0 - 1.0),
-            abs(a1 * a1 + b1 * b1 + c1 * c1 - 1.0),
-            abs(a2 * a2 + b2 * b2 + c2 * c2 - 1.0),
-            abs(a0 * a1 + b0 * b1 + c0 * c1),
-            abs(a0 * a2 + b0 * b2 + c0 * c2),
-            abs(a1 * a2 + b1 * b2 + c1 * c2))
-    det = a0 * (b1 * c2 - b2 * c1) - a1 * (b0 * c2 - b2 * c0) + a2 * (b0 * c1 - b1 * c0)
-    if isinstance(det, np.ndarray):
-        return (float(max(e.max(initial=0.0) for e in errs)),
-                float(det.min(initial=1.0)))
-    return max(errs), det
-
-
-def _raise_not_rotation(name, err, det, tol):
-    if not err <= tol:
-        raise ValueError(
-            f"{name} is not orthonormal: |R^T R - I| reaches {err:.3g} (tolerance {tol:g})")
-    if det < 0.0:
-        raise ValueError(f"{name} is a reflection (determinant -1), not a rotation")
-
-
 def check_rotation_matrix(R, tol=1e-9, name="R"):
     r"""Return ``R`` as a float array, or raise if it is not a rotation matrix.
 
@@ -214,12 +185,12 @@ def check_rotation_matrix(R, tol=1e-9, name="R"):
     """
     R = as_float_array(R, name, (3, 3))
     if R.ndim == 2:
-        err, det = _orthonormality(*R.tolist())
+        err, det = orthonormality(*R.tolist())
     else:
         e = components(R.reshape(R.shape[:-2] + (9,)))
-        err, det = _orthonormality(e[0:3], e[3:6], e[6:9])
+        err, det = orthonormality(e[0:3], e[3:6], e[6:9])
     if not (err <= tol and det > 0.0):
-        _raise_not_rotation(name, err, det, tol)
+        rotation_or_raise(name, err, det, tol)
     return R
 
 
