@@ -37,6 +37,9 @@ def geometric_jacobian(robot, q):
     velocity in the world frame. For standard DH the axis of joint :math:`i` is the z axis of
     frame :math:`i-1`; for modified DH it is the z axis of frame :math:`i`.
 
+    The same as :meth:`dqlab.robot.Robot.jacobian`, which computes it from the robot's joint
+    axes (:meth:`~dqlab.robot.Robot.joint_axes`).
+
     Parameters
     ----------
     robot : Robot
@@ -56,14 +59,7 @@ def geometric_jacobian(robot, q):
     >>> J[:, 0].round(8)
     array([-0.49781088, -0.08817691,  0.        ,  0.        ,  0.        ,  1.        ])
     """
-    q = robot.check_joints(q)
-    points, axes, X_WT = robot._axes_and_tcp(q)
-    p_T = X_WT[..., None, :3, 3]                                    # (..., 1, 3)
-    revolute = np.asarray([lk.is_revolute for lk in robot.links])
-    linear = np.where(revolute[:, None], np.cross(axes, p_T - points), axes)
-    angular = np.where(revolute[:, None], axes, 0.0)
-    return np.concatenate([np.swapaxes(linear, -1, -2), np.swapaxes(angular, -1, -2)],
-                          axis=-2)
+    return robot.jacobian(q)
 
 
 def singular_values(J):
@@ -182,12 +178,10 @@ def xyz_yaw_jacobian(robot, q, *, tol=1e-9):
            [0.  , 0.  , 1.  , 0.  ],
            [1.  , 1.  , 0.  , 1.  ]])
     """
-    q = robot.check_joints(q)
-    _, axes, _ = robot._axes_and_tcp(q)
+    _, axes = robot.joint_axes(q)
     if np.any(np.abs(np.abs(axes[..., 2]) - 1.0) > tol):
         raise ValueError("xyz_yaw_jacobian needs every joint axis vertical (a SCARA)")
-    J = geometric_jacobian(robot, q)
-    return J[..., [0, 1, 2, 5], :]
+    return robot.jacobian(q)[..., [0, 1, 2, 5], :]
 
 
 def _scara_lengths(robot):
