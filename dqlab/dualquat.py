@@ -442,7 +442,7 @@ def rotation_translation_from_dual_quaternion(Q, *, tol=1e-9):
     return Q[..., :4].copy(), stack_components(translation_from_dual_quaternion_entries(*c))
 
 
-def dual_quaternion_from_transform(T, *, tol=1e-9):
+def dual_quaternion_from_transform(T, *, tol=1e-9, name="T"):
     r"""Unit dual quaternion of a homogeneous transform.
 
     :math:`q_r` is the quaternion of the rotation block (Shepperd's method, :math:`w \ge 0`,
@@ -455,6 +455,8 @@ def dual_quaternion_from_transform(T, *, tol=1e-9):
         Rigid transforms (checked: bottom row ``(0, 0, 0, 1)``, rotation block orthonormal
         with determinant +1 within ``tol``).
     tol : float
+    name : str
+        Name of the argument in error messages (the conversion is also the validation).
 
     Returns
     -------
@@ -473,27 +475,27 @@ def dual_quaternion_from_transform(T, *, tol=1e-9):
     >>> dual_quaternion_from_transform(T)
     array([1., 0., 0., 0., 0., 1., 0., 0.])
     """
-    T = float_array(T, "T", (4, 4))
+    T = float_array(T, name, (4, 4))
     if T.ndim == 2:
         a, b, c, d = T.tolist()
         err, det = orthonormality(a, b, c)  # NaN or inf in R fail this test too
         t = a[3] + b[3] + c[3]
         if not (err <= tol and det > 0.0 and t - t == 0.0 and d == [0.0, 0.0, 0.0, 1.0]):
-            check_transform(T, tol)  # raises with the right message
-            raise ValueError("T contains NaN or infinity")
+            check_transform(T, tol, name)  # raises with the right message
+            raise ValueError(f"{name} contains NaN or infinity")
         qr = quaternion_from_matrix_entries(a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2])
         qd = quaternion_mul(0.0, 0.5 * a[3], 0.5 * b[3], 0.5 * c[3], *qr)
         return np.array(qr + qd)
-    check_finite(T, "T")
+    check_finite(T, name)
 
     def kernel(T):
         e = components(T.reshape(-1, 16))
         if not ((e[12] == 0.0).all() and (e[13] == 0.0).all() and (e[14] == 0.0).all()
                 and (e[15] == 1.0).all()):
-            check_transform(T, tol)  # raises with the right message
+            check_transform(T, tol, name)  # raises with the right message
         err, det = orthonormality(e[0:3], e[4:7], e[8:11])
         if not (err <= tol and det > 0.0):
-            rotation_or_raise("the rotation block of T", err, det, tol)
+            rotation_or_raise(f"the rotation block of {name}", err, det, tol)
         qr = quaternion_from_matrix_entries(e[0], e[1], e[2], e[4], e[5], e[6], e[8], e[9], e[10])
         qd = quaternion_mul(0.0, 0.5 * e[3], 0.5 * e[7], 0.5 * e[11], *qr)
         return stack_components(qr + qd)

@@ -12,6 +12,7 @@ velocity of the tool, :math:`\dot x = J(q)\, \dot q`. Two forms are used in the 
 import numpy as np
 
 from ._checks import as_float_array
+from .models import SCARA_SHAPE
 
 __all__ = [
     "geometric_jacobian", "manipulability", "singular_values", "is_singular",
@@ -185,19 +186,14 @@ def xyz_yaw_jacobian(robot, q, *, tol=1e-9):
 
 
 def _scara_lengths(robot):
-    links = robot.links
-    ok = (robot.convention == "mdh" and robot.n == 4
-          and robot.joint_types == ("revolute", "revolute", "prismatic", "revolute")
-          and all(abs(lk.alpha) < 1e-12 for lk in links) and abs(links[0].a) < 1e-12
-          and abs(links[3].a) < 1e-12
-          and np.allclose(robot.base[:3, :3], np.eye(3))
-          and np.allclose(robot.tool[:2, 3], 0.0))
-    if not ok:
+    """``l1, l2`` of a SCARA whose x, y, yaw are the world's: the chain of
+    :data:`dqlab.models.SCARA_SHAPE` on an upright base, with a tool without x/y offset."""
+    SCARA_SHAPE.check(robot)
+    if not (np.allclose(robot.base[:3, :3], np.eye(3)) and np.allclose(robot.tool[:2, 3], 0.0)):
         raise ValueError(
-            "the closed-form SCARA formulas need a modified-DH RRPR chain with all "
-            "alpha = 0, a_0 = a_3 = 0, an upright base and a tool without x/y offset "
-            "(like dqlab.models.scara_rsm5()); use xyz_yaw_jacobian otherwise")
-    return links[1].a, links[2].a
+            "the closed-form SCARA Jacobian needs an upright base and a tool without x/y "
+            "offset (its x, y and yaw are the world's); use xyz_yaw_jacobian otherwise")
+    return robot.links[1].a, robot.links[2].a
 
 
 def scara_jacobian(robot, q):

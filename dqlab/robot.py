@@ -491,34 +491,31 @@ class Robot:
     def _product(self, q, record=False):
         r"""The chain's one product, :math:`X_{WT} = K_0 J_1 K_1 \cdots J_n K_n`.
 
-        Computed on components, the top three rows of the running product kept column by
-        column: the joint motion ``X @ Rz(theta) Tz(d)`` mixes columns 0 and 1 and shifts
-        column 3, and the constant ``@ K_i`` adds multiples of columns. ``q`` holds the
-        joint values, Python floats (one joint vector) or arrays of shape (N,) (a batch).
+        The top three rows of the running product are kept column by column: the joint
+        motion ``X @ Rz(theta) Tz(d)`` mixes columns 0 and 1 and shifts column 3
+        (:func:`_joint_step`), and the constant ``@ K_i`` adds multiples of columns
+        (:func:`_constant_step`). ``q`` holds the joint values: Python floats (one joint
+        vector; a column is three floats) or arrays of shape (N,) (a batch; a column is an
+        array of shape (3, N)).
 
-        Returns the four columns (3 components each) of :math:`X_{WT}`; with ``record``,
-        also the running products before and after each joint motion (lists of n such
-        column sets): before joint i it is the frame whose z axis is joint i's axis.
+        Returns the four columns of :math:`X_{WT}`; with ``record``, also the running
+        products before and after each joint motion (lists of n column sets): before joint
+        i it is the frame whose z axis is joint i's axis.
         """
-        cos, sin = (math.cos, math.sin) if type(q[0]) is float else (np.cos, np.sin)
-        X = self._K0_columns
+        single = type(q[0]) is float
+        cos, sin = (math.cos, math.sin) if single else (np.cos, np.sin)
+        X = self._K0_columns if single else [np.array(c)[:, None] for c in self._K0_columns]
         before, after = [], []
         for i, (theta0, d0, revolute) in enumerate(self._joint_constants):
             if revolute:
                 theta, d = q[i] + theta0, d0
             else:
                 theta, d = theta0, q[i] + d0
-            c, s = cos(theta), sin(theta)
-            x0, x1, x2, x3 = X
-            Y = ((c * x0[0] + s * x1[0], c * x0[1] + s * x1[1], c * x0[2] + s * x1[2]),
-                 (c * x1[0] - s * x0[0], c * x1[1] - s * x0[1], c * x1[2] - s * x0[2]),
-                 x2,
-                 (d * x2[0] + x3[0], d * x2[1] + x3[1], d * x2[2] + x3[2]))
+            Y = _joint_step(X, cos(theta), sin(theta), d)
             if record:
                 before.append(X)
                 after.append(Y)
-            X = tuple(_combine(Y, terms) for terms in self._K_terms[i + 1])
-            X = X[:3] + (_add(X[3], Y[3]),)                      # row 3 of K_i: (0, 0, 0, 1)
+            X = _constant_step(Y, self._K_terms[i + 1])
         return (X, before, after) if record else X
 
     def _pose_entries(self, q):
@@ -531,7 +528,7 @@ class Robot:
 
     def _axes_entries(self, q):
         X, before, _ = self._product(q, record=True)
-        return sum((B[3] + B[2] for B in before), ()) + X[3]
+        return sum((tuple(B[3]) + tuple(B[2]) for B in before), ()) + tuple(X[3])
 
     def joint_axes(self, q):
         r"""Points on the joint axes and their unit directions, in the world frame.
@@ -846,12 +843,19 @@ class Robot:
         return f"Robot({self.name!r}, convention={self._convention!r}, n={self.n})"
 
 
+_FEW = 8    # up to this many joint vectors, Python floats beat numpy's per-call overhead
+
+
 def _on_components(parts, q, trailing):
     """Run a formula on joint values, ``parts(q_1, ..., q_n) -> entries``, for checked joint
-    vectors ``q`` of shape (..., n): with Python floats for one joint vector, and with
-    arrays of shape (N,) per joint for blocks of a batch. Returns shape (...) + trailing."""
+    vectors ``q`` of shape (..., n): with Python floats for one joint vector (or each of a
+    few), and with arrays of shape (N,) per joint for blocks of a batch. Returns shape
+    (...) + trailing."""
     if q.ndim == 1:
         return np.array(parts(q.tolist())).reshape(trailing)
+    if q.size <= _FEW * q.shape[-1]:
+        rows = q.reshape(-1, q.shape[-1]).tolist()
+        return np.array([parts(row) for row in rows]).reshape(q.shape[:-1] + trailing)
 
     def kernel(block):
         entries = parts(list(np.ascontiguousarray(block.T)))
@@ -863,18 +867,39 @@ def _on_components(parts, q, trailing):
     return batched(kernel, [(q, 1)], trailing)
 
 
-def _combine(Y, terms):
-    """Column of ``Y @ K``: the sum of ``value * Y[k]`` over the ``(k, value)`` terms."""
-    acc = None
-    for k, value in terms:
-        y = Y[k]
-        term = y if value == 1.0 else (value * y[0], value * y[1], value * y[2])
-        acc = term if acc is None else (acc[0] + term[0], acc[1] + term[1], acc[2] + term[2])
-    return (0.0, 0.0, 0.0) if acc is None else acc
+def _joint_step(X, c, s, d):
+    """The columns of ``X @ Rz(theta) Tz(d)`` (``c, s`` the cosine and sine of theta)."""
+    x0, x1, x2, x3 = X
+    if type(x0) is tuple:
+        return ((c * x0[0] + s * x1[0], c * x0[1] + s * x1[1], c * x0[2] + s * x1[2]),
+                (c * x1[0] - s * x0[0], c * x1[1] - s * x0[1], c * x1[2] - s * x0[2]),
+                x2,
+                (d * x2[0] + x3[0], d * x2[1] + x3[1], d * x2[2] + x3[2]))
+    return (c * x0 + s * x1, c * x1 - s * x0, x2, d * x2 + x3)
 
 
-def _add(a, b):
-    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
+def _constant_step(Y, terms):
+    """The columns of ``Y @ K``: column j is the sum of ``value * Y[k]`` over the terms
+    ``(k, value)`` of column j of K (rows 0 to 2), plus ``Y[3]`` for j = 3 (row 3 of a rigid
+    transform is (0, 0, 0, 1))."""
+    if type(Y[0]) is not tuple:
+        columns = [sum(Y[k] if value == 1.0 else value * Y[k] for k, value in column)
+                   for column in terms]
+        columns[3] = columns[3] + Y[3]
+        return columns
+    columns = []
+    for column in terms:
+        x = y = z = 0.0
+        for k, value in column:
+            a, b, c = Y[k]
+            x += value * a
+            y += value * b
+            z += value * c
+        columns.append((x, y, z))
+    a, b, c = Y[3]
+    x, y, z = columns[3]
+    columns[3] = (x + a, y + b, z + c)
+    return columns
 
 
 def _entries(X):

@@ -16,10 +16,9 @@ import numpy as np
 import pytest
 
 from dqlab.ik import IKResult, ur
+from dqlab.ik import ur_closed_form as urmod
 from dqlab.models import ur3
 from dqlab.robot import Link, Robot
-
-urmod = sys.modules["dqlab.ik.ur"]  # the module (dqlab.ik.ur is the function)
 
 uik = pytest.importorskip("ur_analytic_ik")
 
@@ -234,7 +233,7 @@ def test_thesis_pose_is_singular_three_ways_and_has_one_solution(robot):
     up[2, 3] += 1e-6
     result = ur(robot, up)
     assert result.flags["unreachable"] and not result.valid.any()
-    assert result.reason == urmod._REASON_OUTER
+    assert result.reason == urmod.REASON_OUTER
     assert np.all(result.solutions == 0.0)
     up[2, 3] = T[2, 3] + 1e-12
     result = ur(robot, up)
@@ -383,7 +382,7 @@ def test_just_beyond_the_shoulder_cylinder(robot):
     inside[:, :2, 3] -= 1e-6 * radial
     result = ur(robot, inside)
     assert result.flags["unreachable"].all()
-    assert (result.reason == urmod._REASON_SHOULDER).all()
+    assert (result.reason == urmod.REASON_SHOULDER).all()
     assert not np.any(result.valid) and np.all(result.solutions == 0.0)
     # 1e-11 m inside is within tol: clipped, valid, flagged
     inside[:, :2, 3] = T[:, :2, 3] - 1e-11 * radial
@@ -423,12 +422,12 @@ def test_far_and_near_targets_are_unreachable_with_reasons(robot):
     T = np.eye(4)
     T[:3, 3] = [2.0, 0.3, 0.4]                  # 2 m away: beyond every branch
     result = ur(robot, T)
-    assert result.flags["unreachable"] and result.reason == urmod._REASON_OUTER
+    assert result.flags["unreachable"] and result.reason == urmod.REASON_OUTER
     # wrist centre exactly on the base axis: inside the shoulder cylinder
     T = np.eye(4)
     T[:3, 3] = [0.0, 0.0, 0.3 + UR3["d6"]]
     result = ur(robot, T)
-    assert result.flags["unreachable"] and result.reason == urmod._REASON_SHOULDER
+    assert result.flags["unreachable"] and result.reason == urmod.REASON_SHOULDER
     # (an inner-reach failure on every branch cannot happen on a UR: the two wrist
     # branches put the wrist-1 point 2 d5 apart, more than 2 ||a2| - |a3||)
     assert 2 * UR3["d5"] > 2 * abs(abs(UR3["a2"]) - abs(UR3["a3"]))
@@ -451,8 +450,8 @@ def test_random_targets_never_raise_and_modes_agree(robot):
     assert 0.05 < fast.flags["unreachable"].mean() < 0.95
     assert_reproduces(robot, fast, T)
     assert set(fast.reason[fast.flags["unreachable"]]) <= {
-        urmod._REASON_SHOULDER, urmod._REASON_OUTER, urmod._REASON_INNER,
-        urmod._REASON_REACH}
+        urmod.REASON_SHOULDER, urmod.REASON_OUTER, urmod.REASON_INNER,
+        urmod.REASON_REACH}
     assert (fast.reason[~fast.flags["unreachable"]] == "").all()
     # the analytic residuals are the FK distances wherever a row was clipped
     np.testing.assert_allclose(fast.position_error, slow.position_error,
@@ -523,7 +522,7 @@ def test_rounded_pose_from_a_file(robot):
     rng = np.random.default_rng(27)
     q = rng.uniform(-np.pi, np.pi, (200, 6))
     Q = np.round(dual_quaternion_from_transform(robot.fk(q)), 6)
-    with pytest.raises(ValueError, match="pose"):
+    with pytest.raises(ValueError, match="target"):
         ur(robot, Q)
     for mode in ("equations", "fk"):
         result = ur(robot, Q, pose_tol=1e-5, residuals=mode)
@@ -537,15 +536,15 @@ def test_invalid_inputs_raise(robot):
     T = robot.fk(np.zeros(6))
     bad = T.copy()
     bad[0, 0] = 1.1
-    with pytest.raises(ValueError, match="pose"):
+    with pytest.raises(ValueError, match="target"):
         ur(robot, bad)
     bad = T.copy()
     bad[3, 0] = 0.5
     with pytest.raises(ValueError):
         ur(robot, bad)
-    with pytest.raises(ValueError, match="pose"):
+    with pytest.raises(ValueError, match="target"):
         ur(robot, np.array([1.0, 0, 0, 0, 0, 1, 0, 0]) * 1.01)
-    with pytest.raises(ValueError, match="pose"):
+    with pytest.raises(ValueError, match="target"):
         ur(robot, np.array([1.0, 0, 0, 0, 1.0, 0, 0, 0]))   # <q_r, q_d> != 0
     with pytest.raises(ValueError, match="shape"):
         ur(robot, np.eye(3))

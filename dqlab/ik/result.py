@@ -62,3 +62,62 @@ class IKResult:
         dist = np.where(self.valid, np.linalg.norm(diff, axis=-1), np.inf)
         index = np.argmin(dist, axis=-1)
         return np.take_along_axis(self.solutions, index[..., None, None], axis=-2)[..., 0, :]
+
+
+def finish(solutions, valid, position_error, rotation_error, flags, reason=None):
+    """The :class:`IKResult` of a solver, with the rows that are not valid set to zero.
+
+    Every solver ends here, so that an invalid row never carries a NaN or a half-computed
+    angle a caller could mistake for a solution. ``solutions`` is the solver's own array
+    and is zeroed in place.
+
+    Parameters
+    ----------
+    solutions : ndarray, shape (..., k, n)
+    valid : ndarray of bool, shape (..., k)
+    position_error, rotation_error : ndarray, shape (..., k)
+    flags : dict of str to ndarray of bool, shape (...)
+    reason : ndarray of str, shape (...), optional
+
+    Returns
+    -------
+    IKResult
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> result = finish(np.full((2, 3), np.nan), np.array([False, False]), np.ones(2),
+    ...                 np.zeros(2), {})
+    >>> result.solutions
+    array([[0., 0., 0.],
+           [0., 0., 0.]])
+    """
+    solutions[~valid] = 0.0
+    return IKResult(solutions=solutions, valid=valid, position_error=position_error,
+                    rotation_error=rotation_error, flags=flags, reason=reason)
+
+
+def target_reasons(failed, explain):
+    """Why each target without a solution failed: ``explain(index)`` for those, ``""`` else.
+
+    Parameters
+    ----------
+    failed : ndarray of bool, shape (...)
+        The targets without a valid solution.
+    explain : callable
+        ``explain(index)`` returns the text for the target at ``index`` (a tuple).
+
+    Returns
+    -------
+    ndarray of str (object), shape (...)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> target_reasons(np.array([False, True]), lambda i: f"target {i[0]} is out of reach")
+    array(['', 'target 1 is out of reach'], dtype=object)
+    """
+    reason = np.full(np.shape(failed), "", dtype=object)
+    for index in np.argwhere(failed):
+        reason[tuple(index)] = explain(tuple(int(i) for i in index))
+    return reason

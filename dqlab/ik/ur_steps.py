@@ -1,6 +1,6 @@
 r"""The steps of the closed-form UR inverse kinematics, one equation per function.
 
-These are the building blocks of :func:`dqlab.ik.ur.ur`; each function solves one equation of
+These are the building blocks of :func:`dqlab.ik.ur`; each function solves one equation of
 the derivation (the book's inverse-kinematics chapter, after section 4.3 of the thesis) and
 works on arrays of any shape with plain numpy operations, so that a whole batch of poses is
 solved without a Python loop. Angles are in radians, lengths in metres, and the UR's

@@ -13,27 +13,15 @@ on either side), and :math:`q_3, q_4` follow.
 
 import numpy as np
 
+from ..models import SCARA_SHAPE
 from ..rotations import wrap_angle
-from .numerical import _target_transforms, pose_errors
-from .result import IKResult
+from .result import finish, target_reasons
+from .targets import parse_targets, pose_errors
 
 __all__ = ["scara"]
 
 
-def _scara_structure(robot):
-    links = robot.links
-    ok = (robot.convention == "mdh" and robot.n == 4
-          and robot.joint_types == ("revolute", "revolute", "prismatic", "revolute")
-          and all(abs(lk.alpha) < 1e-12 for lk in links)
-          and abs(links[0].a) < 1e-12 and abs(links[3].a) < 1e-12)
-    if not ok:
-        raise ValueError(
-            "scara needs a chain like dqlab.models.scara_rsm5(): modified DH, joints RRPR, "
-            "all alpha = 0, a_0 = a_3 = 0")
-    return links[1].a, links[2].a
-
-
-def scara(robot, pose, *, tol=1e-9, rotation_tol=None):
+def scara(robot, target, *, tol=1e-9, rotation_tol=None):
     r"""Both closed-form solutions of the SCARA for a tool pose.
 
     The target is brought back to the flange in frame 0,
@@ -57,7 +45,7 @@ def scara(robot, pose, *, tol=1e-9, rotation_tol=None):
     ----------
     robot : Robot
         A SCARA like :func:`dqlab.models.scara_rsm5`.
-    pose : array_like, shape (..., 4, 4) or (..., 8)
+    target : array_like, shape (..., 4, 4) or (..., 8)
         Target tool poses :math:`X_{WT}^\ast` (transforms or unit dual quaternions).
     tol : float, optional
         Position tolerance in metres of a solution marked valid.
@@ -101,12 +89,9 @@ def scara(robot, pose, *, tol=1e-9, rotation_tol=None):
     """
     if rotation_tol is None:
         rotation_tol = tol
-    l1, l2 = _scara_structure(robot)
-    shape = np.shape(pose)
-    if not (shape[-2:] == (4, 4) or shape[-1:] == (8,)):
-        raise ValueError("pose must have shape (..., 4, 4) (transform) or (..., 8) (dual "
-                         f"quaternion), got shape {shape}")
-    X_WT, _ = _target_transforms(pose, position_only=False)
+    SCARA_SHAPE.check(robot)
+    l1, l2 = robot.links[1].a, robot.links[2].a
+    X_WT = parse_targets(target).transforms
     X_0n = np.linalg.inv(robot.base) @ X_WT @ np.linalg.inv(robot.tool)
     R = X_0n[..., :3, :3]
     x, y, z = X_0n[..., 0, 3], X_0n[..., 1, 3], X_0n[..., 2, 3]
@@ -138,31 +123,28 @@ def scara(robot, pose, *, tol=1e-9, rotation_tol=None):
     position_error, rotation_error = pose_errors(robot.fk(clipped), X_WT[..., None, :, :])
     ok = reachable[..., None] & within & (tilt <= rotation_tol)[..., None]
     valid = ok & (position_error <= tol) & (rotation_error <= rotation_tol)
-    solutions = np.where(valid[..., None], clipped, 0.0)
-
     unreachable = ~np.any(valid, axis=-1)
-    reason = np.full(np.shape(x), "", dtype=object)
     k = np.hypot(x, y)
-    for idx in np.ndindex(reason.shape):
-        if not unreachable[idx]:
-            continue
+
+    def explain(index):
         parts = []
-        if tilt[idx] > rotation_tol:
-            parts.append(f"the tool axis is tilted {float(tilt[idx]):.3g} rad from vertical")
-        if k[idx] > l1 + l2:
-            parts.append(f"the point is {float(k[idx]) - (l1 + l2):.4g} m beyond the reach")
-        elif k[idx] < abs(l1 - l2):
-            parts.append(f"the point is {abs(l1 - l2) - float(k[idx]):.4g} m too close to "
+        if tilt[index] > rotation_tol:
+            parts.append(f"the tool axis is tilted {float(tilt[index]):.3g} rad from vertical")
+        if k[index] > l1 + l2:
+            parts.append(f"the point is {float(k[index]) - (l1 + l2):.4g} m beyond the reach")
+        elif k[index] < abs(l1 - l2):
+            parts.append(f"the point is {abs(l1 - l2) - float(k[index]):.4g} m too close to "
                          "axis 1")
         if not parts:
-            bad = (raw[idx] < lo - 1e-12) | (raw[idx] > hi + 1e-12)
+            bad = (raw[index] < lo - 1e-12) | (raw[index] > hi + 1e-12)
             joints = sorted({int(j) + 1 for j in np.nonzero(bad)[-1]})
             parts.append("beyond the limits of joint(s) " + ", ".join(map(str, joints)))
-        reason[idx] = "unreachable: " + "; ".join(parts)
+        return "unreachable: " + "; ".join(parts)
+
     flags = {
         "unreachable": unreachable,
         "tilted": tilt > rotation_tol,
         "singular": reachable & (s2 < 1e-7),
     }
-    return IKResult(solutions=solutions, valid=valid, position_error=position_error,
-                    rotation_error=rotation_error, flags=flags, reason=reason)
+    return finish(clipped, valid, position_error, rotation_error, flags,
+                  target_reasons(unreachable, explain))

@@ -8,32 +8,10 @@ from the previous solution.
 
 import numpy as np
 
-from .._checks import as_float_array
-from .result import IKResult
+from .result import finish, target_reasons
+from .targets import parse_targets, pose_errors
 
 __all__ = ["numerical", "pose_errors"]
-
-
-def _target_transforms(pose, position_only):
-    """Targets as 4x4 transforms, shape (..., 4, 4), and whether a rotation was given."""
-    a = as_float_array(pose, "pose")
-    if a.ndim >= 2 and a.shape[-2:] == (4, 4):
-        from ..transforms import check_transform
-
-        return check_transform(a, name="pose"), True
-    if a.ndim >= 1 and a.shape[-1] == 8:
-        from ..dualquat import transform_from_dual_quaternion
-
-        return transform_from_dual_quaternion(a), True
-    if a.ndim >= 1 and a.shape[-1] == 3:
-        if not position_only:
-            raise ValueError("pose of shape (..., 3) is a position: pass position_only=True "
-                             "or give a 4x4 transform / dual quaternion")
-        T = np.broadcast_to(np.eye(4), a.shape[:-1] + (4, 4)).copy()
-        T[..., :3, 3] = a
-        return T, False
-    raise ValueError("pose must have shape (..., 4, 4) (transform), (..., 8) (dual "
-                     f"quaternion) or (..., 3) (position), got shape {a.shape}")
 
 
 def _rotation_vector(R_err):
@@ -42,49 +20,6 @@ def _rotation_vector(R_err):
 
     axis, angle = axis_angle_from_quaternion(quaternion_from_matrix(R_err))
     return axis * angle[..., None]
-
-
-def pose_errors(X, X_target):
-    r"""Position and rotation errors between poses.
-
-    .. math::
-
-       e_p = \lVert p - p^\ast \rVert, \qquad
-       e_R = \angle\left(R^\ast R^\top\right) \in [0, \pi]
-
-    with the angle computed from quaternions (:func:`dqlab.quaternion.quaternion_distance`),
-    accurate for tiny errors.
-
-    Parameters
-    ----------
-    X, X_target : array_like, shape (..., 4, 4)
-
-    Returns
-    -------
-    position_error : ndarray, shape (...)
-        Metres.
-    rotation_error : ndarray, shape (...)
-        Radians.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from dqlab.rotations import rot_z
-    >>> X = np.eye(4)
-    >>> Y = np.eye(4)
-    >>> Y[:3, :3] = rot_z(1e-12)
-    >>> Y[0, 3] = 3e-3
-    >>> pose_errors(X, Y)
-    (array(0.003), array(1.e-12))
-    """
-    from ..quaternion import quaternion_distance, quaternion_from_matrix
-
-    X = np.asarray(X, dtype=float)
-    X_target = np.asarray(X_target, dtype=float)
-    position_error = np.linalg.norm(X[..., :3, 3] - X_target[..., :3, 3], axis=-1)
-    rotation_error = quaternion_distance(quaternion_from_matrix(X[..., :3, :3]),
-                                         quaternion_from_matrix(X_target[..., :3, :3]))
-    return np.asarray(position_error), np.asarray(rotation_error)
 
 
 def _residual(X, X_target, position_only):
@@ -96,7 +31,7 @@ def _residual(X, X_target, position_only):
     return np.concatenate([e_p, _rotation_vector(R_err)], axis=-1)
 
 
-def numerical(robot, pose, q0, *, position_only=False, tol=1e-10, rotation_tol=None,
+def numerical(robot, target, q0, *, position_only=False, tol=1e-10, rotation_tol=None,
               max_iter=100, damping=1e-2, min_damping=1e-9, max_damping=1e6,
               max_step=0.5):
     r"""Inverse kinematics by damped least squares, from a warm start ``q0``.
@@ -119,7 +54,7 @@ def numerical(robot, pose, q0, *, position_only=False, tol=1e-10, rotation_tol=N
     Parameters
     ----------
     robot : Robot
-    pose : array_like, shape (..., 4, 4), (..., 8) or (..., 3)
+    target : array_like, shape (..., 4, 4), (..., 8) or (..., 3)
         Targets :math:`X_{WT}^\ast` as transforms or unit dual quaternions, or positions
         (with ``position_only=True``).
     q0 : array_like, shape (..., n)
@@ -180,7 +115,8 @@ def numerical(robot, pose, q0, *, position_only=False, tol=1e-10, rotation_tol=N
     """
     if rotation_tol is None:
         rotation_tol = tol
-    X_target, has_rotation = _target_transforms(pose, position_only)
+    targets = parse_targets(target, position=position_only)
+    X_target, has_rotation = targets.transforms, targets.has_rotation
     q0 = robot.check_joints(q0, limits="none")
     batch = np.broadcast_shapes(X_target.shape[:-2], q0.shape[:-1])
     n = robot.n
@@ -190,8 +126,6 @@ def numerical(robot, pose, q0, *, position_only=False, tol=1e-10, rotation_tol=N
     q = np.clip(q, lo, hi)
     B = q.shape[0]
     rows = slice(0, 3) if position_only else slice(0, 6)
-
-    from ..jacobian import geometric_jacobian
 
     lam = np.full(B, float(damping))
     X = robot.fk(q)
@@ -214,7 +148,7 @@ def numerical(robot, pose, q0, *, position_only=False, tol=1e-10, rotation_tol=N
         if idx.size == 0:
             break
         qa = q[idx]
-        J = geometric_jacobian(robot, qa)[:, rows, :]                 # (b, m, n)
+        J = robot.jacobian(qa)[:, rows, :]                 # (b, m, n)
         Jt = np.swapaxes(J, -1, -2)
         A = Jt @ J + (lam[idx] ** 2)[:, None, None] * np.eye(n)
         g = (Jt @ e[idx][..., None])[..., 0]
@@ -246,23 +180,20 @@ def numerical(robot, pose, q0, *, position_only=False, tol=1e-10, rotation_tol=N
     valid = position_error <= tol
     if not position_only:
         valid &= rotation_error <= rotation_tol
-    reason = np.full(B, "", dtype=object)
-    for b in np.flatnonzero(~valid):
+
+    def explain(index):
+        (b,) = index
         why = (f"stalled (damping above {max_damping:g}) after {iterations[b]} iterations"
                if stuck[b] else f"did not converge after {iterations[b]} iterations")
         text = f"{why}: position error {position_error[b]:.3g} m"
         if has_rotation:
             text += f", rotation error {rotation_error[b]:.3g} rad"
         text += f" (tolerances {tol:g} m"
-        text += ")" if position_only else f", {rotation_tol:g} rad)"
-        reason[b] = text
-    solutions = np.where(valid[:, None], q, 0.0)
-    return IKResult(
-        solutions=solutions.reshape(batch + (1, n)),
-        valid=valid.reshape(batch + (1,)),
-        position_error=position_error.reshape(batch + (1,)),
-        rotation_error=rotation_error.reshape(batch + (1,)),
-        flags={"not_converged": (~valid).reshape(batch),
-               "stalled": (stuck & ~valid).reshape(batch)},
-        reason=reason.reshape(batch),
-    )
+        return text + (")" if position_only else f", {rotation_tol:g} rad)")
+
+    reason = target_reasons(~valid, explain)
+    return finish(q.reshape(batch + (1, n)), valid.reshape(batch + (1,)),
+                  position_error.reshape(batch + (1,)), rotation_error.reshape(batch + (1,)),
+                  {"not_converged": (~valid).reshape(batch),
+                   "stalled": (stuck & ~valid).reshape(batch)},
+                  reason.reshape(batch))
