@@ -762,7 +762,11 @@ def pyquaternion_from_quaternion(q):
     >>> type(pq).__name__, pq.elements
     ('Quaternion', array([1., 0., 0., 0.]))
     """
-    from pyquaternion import Quaternion as PyQuaternion
+    try:
+        from pyquaternion import Quaternion as PyQuaternion
+    except ImportError:
+        raise ImportError("pyquaternion_from_quaternion needs pyquaternion: "
+                          "pip install pyquaternion (or dqlab[interop])") from None
 
     q = as_float_array(q, "q", _Q)
     if q.ndim == 1:
