@@ -17,6 +17,7 @@ Array functions do the work; :class:`DualQuaternion` is a thin wrapper for noteb
 """
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from ._checks import (
     as_float_array,
@@ -85,7 +86,7 @@ def dual_quaternion_identity(shape=()):
     return Q
 
 
-def dual_quaternion_product(A, B):
+def dual_quaternion_product(A: ArrayLike, B: ArrayLike) -> NDArray[np.float64]:
     r"""Product of dual quaternions.
 
     .. math::
@@ -131,7 +132,7 @@ def _product_kernel(A, B):
     return stack_components(dual_quaternion_mul(components(A), components(B)))
 
 
-def dual_quaternion_conjugate(Q):
+def dual_quaternion_conjugate(Q: ArrayLike) -> NDArray[np.float64]:
     r"""Quaternion conjugate of both parts, :math:`Q^* = q_r^* + \varepsilon q_d^*`.
 
     This is the conjugate that reverses products, :math:`(AB)^* = B^* A^*`, and the inverse
@@ -157,7 +158,7 @@ def dual_quaternion_conjugate(Q):
     return out
 
 
-def dual_quaternion_dual_conjugate(Q):
+def dual_quaternion_dual_conjugate(Q: ArrayLike) -> NDArray[np.float64]:
     r"""Dual-number conjugate, :math:`\bar Q = q_r - \varepsilon q_d`.
 
     It flips the sign of :math:`\varepsilon`, as :math:`\overline{a + \varepsilon b} =
@@ -184,7 +185,7 @@ def dual_quaternion_dual_conjugate(Q):
     return out
 
 
-def dual_quaternion_combined_conjugate(Q):
+def dual_quaternion_combined_conjugate(Q: ArrayLike) -> NDArray[np.float64]:
     r"""Both conjugates at once, :math:`\bar Q^* = q_r^* - \varepsilon q_d^*`.
 
     This is the one that transforms points written as dual quaternions
@@ -215,7 +216,7 @@ def dual_quaternion_combined_conjugate(Q):
     return out
 
 
-def dual_quaternion_norm(Q):
+def dual_quaternion_norm(Q: ArrayLike) -> NDArray[np.float64]:
     r"""Norm of a dual quaternion, a dual number :math:`\|Q\| = a + \varepsilon b`.
 
     .. math::
@@ -254,7 +255,8 @@ def dual_quaternion_norm(Q):
     return np.stack([a, np.sum(qr * qd, axis=-1) / a], axis=-1)
 
 
-def check_unit_dual_quaternion(Q, tol=1e-9, name="Q"):
+def check_unit_dual_quaternion(Q: ArrayLike, tol: float = 1e-9, name: str = "Q"
+                               ) -> NDArray[np.float64]:
     r"""Return ``Q`` as a float array, or raise if it is not a unit dual quaternion.
 
     Unit means :math:`|q_r| = 1` and :math:`\langle q_r, q_d\rangle = 0` (within ``tol``).
@@ -289,7 +291,7 @@ def check_unit_dual_quaternion(Q, tol=1e-9, name="Q"):
     return Q
 
 
-def dual_quaternion_normalize(Q):
+def dual_quaternion_normalize(Q: ArrayLike) -> NDArray[np.float64]:
     r"""Unit dual quaternion :math:`Q / \|Q\|` (division by the dual-number norm).
 
     With :math:`\|Q\| = a + \varepsilon b` and
@@ -329,7 +331,7 @@ def dual_quaternion_normalize(Q):
     return np.concatenate([qr, qd], axis=-1)
 
 
-def dual_quaternion_inverse(Q):
+def dual_quaternion_inverse(Q: ArrayLike) -> NDArray[np.float64]:
     r"""Inverse :math:`Q^{-1}`, with :math:`Q Q^{-1} = Q^{-1} Q = 1`.
 
     .. math::
@@ -374,7 +376,8 @@ def dual_quaternion_inverse(Q):
 # Rigid motions
 
 
-def dual_quaternion_from_rotation_translation(q, t, *, tol=1e-9):
+def dual_quaternion_from_rotation_translation(q: ArrayLike, t: ArrayLike, *, tol: float = 1e-9
+                                              ) -> NDArray[np.float64]:
     r"""Unit dual quaternion of "rotate by ``q``, then translate by ``t``".
 
     .. math::
@@ -411,7 +414,8 @@ def dual_quaternion_from_rotation_translation(q, t, *, tol=1e-9):
     return pack(tuple(qc) + d, (t, "t", _V))
 
 
-def rotation_translation_from_dual_quaternion(Q, *, tol=1e-9):
+def rotation_translation_from_dual_quaternion(Q: ArrayLike, *, tol: float = 1e-9
+                                              ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     r"""Rotation quaternion and translation of a unit dual quaternion.
 
     .. math::
@@ -442,7 +446,8 @@ def rotation_translation_from_dual_quaternion(Q, *, tol=1e-9):
     return Q[..., :4].copy(), stack_components(translation_from_dual_quaternion_entries(*c))
 
 
-def dual_quaternion_from_transform(T, *, tol=1e-9, name="T"):
+def dual_quaternion_from_transform(T: ArrayLike, *, tol: float = 1e-9, name: str = "T"
+                                   ) -> NDArray[np.float64]:
     r"""Unit dual quaternion of a homogeneous transform.
 
     :math:`q_r` is the quaternion of the rotation block (Shepperd's method, :math:`w \ge 0`,
@@ -503,7 +508,7 @@ def dual_quaternion_from_transform(T, *, tol=1e-9, name="T"):
     return batched(kernel, [(T, 2)], _D)
 
 
-def transform_from_dual_quaternion(Q, *, tol=1e-9):
+def transform_from_dual_quaternion(Q: ArrayLike, *, tol: float = 1e-9) -> NDArray[np.float64]:
     r"""Homogeneous transform of a unit dual quaternion.
 
     .. math::
@@ -549,7 +554,8 @@ def _transform_parts(c, tol):
     return (m[0:3] + (tx,) + m[3:6] + (ty,) + m[6:9] + (tz,) + (z, z, z, z + 1.0))
 
 
-def dual_quaternion_apply(Q, points, *, tol=1e-9):
+def dual_quaternion_apply(Q: ArrayLike, points: ArrayLike, *, tol: float = 1e-9
+                          ) -> NDArray[np.float64]:
     r"""Apply rigid motions to points: :math:`\mathbf p' = R(q_r)\,\mathbf p + \mathbf t`.
 
     This equals the sandwich :math:`1 + \varepsilon\mathbf p' = Q\,(1 + \varepsilon
@@ -597,7 +603,8 @@ def _apply_parts(c, p, tol):
     return x + tx, y + ty, z + tz
 
 
-def dual_quaternion_apply_vector(Q, vectors, *, tol=1e-9):
+def dual_quaternion_apply_vector(Q: ArrayLike, vectors: ArrayLike, *, tol: float = 1e-9
+                                 ) -> NDArray[np.float64]:
     r"""Apply the rotation of rigid motions to free vectors: :math:`\mathbf v' = R\mathbf v`.
 
     Directions and velocities do not move with the translation. As dual quaternions,
@@ -629,7 +636,9 @@ def dual_quaternion_apply_vector(Q, vectors, *, tol=1e-9):
     return pack(quaternion_rotate(*c[:4], *components(v)), (v, "vectors", _V))
 
 
-def dual_quaternion_apply_line(Q, direction, moment, *, tol=1e-9):
+def dual_quaternion_apply_line(Q: ArrayLike, direction: ArrayLike, moment: ArrayLike, *,
+                               tol: float = 1e-9
+                               ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     r"""Apply rigid motions to lines in Plücker coordinates :math:`(\mathbf l, \mathbf m)`.
 
     A line through the point :math:`\mathbf c` with direction :math:`\mathbf l` has moment
@@ -669,7 +678,8 @@ def dual_quaternion_apply_line(Q, direction, moment, *, tol=1e-9):
 # The thesis's quaternion-vector pairs
 
 
-def dual_quaternion_from_pair(q, p, *, tol=1e-9):
+def dual_quaternion_from_pair(q: ArrayLike, p: ArrayLike, *, tol: float = 1e-9
+                              ) -> NDArray[np.float64]:
     r"""Dual quaternion of the thesis's pair :math:`(q, \mathbf p)`.
 
     The thesis describes a rigid motion by a unit quaternion :math:`q` and a translation
@@ -695,7 +705,8 @@ def dual_quaternion_from_pair(q, p, *, tol=1e-9):
     return dual_quaternion_from_rotation_translation(q, p, tol=tol)
 
 
-def pair_from_dual_quaternion(Q, *, tol=1e-9):
+def pair_from_dual_quaternion(Q: ArrayLike, *, tol: float = 1e-9
+                              ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     r"""The thesis's pair :math:`(q, \mathbf p)` of a unit dual quaternion.
 
     .. math::
@@ -720,7 +731,8 @@ def pair_from_dual_quaternion(Q, *, tol=1e-9):
     return rotation_translation_from_dual_quaternion(Q, tol=tol)
 
 
-def pair_product(q1, p1, q2, p2, *, tol=1e-9):
+def pair_product(q1: ArrayLike, p1: ArrayLike, q2: ArrayLike, p2: ArrayLike, *, tol: float = 1e-9
+                 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     r"""Product of quaternion-vector pairs (the thesis's composition rule).
 
     .. math::
@@ -760,7 +772,9 @@ def pair_product(q1, p1, q2, p2, *, tol=1e-9):
 # Screw motions, powers, interpolation
 
 
-def screw_from_dual_quaternion(Q, *, tol=1e-9, small_angle=1e-12):
+def screw_from_dual_quaternion(
+        Q: ArrayLike, *, tol: float = 1e-9, small_angle: float = 1e-12
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     r"""Screw parameters of a unit dual quaternion (Chasles' theorem).
 
     Every rigid motion is a rotation by :math:`\theta` about a line
@@ -836,7 +850,8 @@ def screw_from_dual_quaternion(Q, *, tol=1e-9, small_angle=1e-12):
     return l, m, theta, d
 
 
-def dual_quaternion_from_screw(l, m, theta, d):
+def dual_quaternion_from_screw(l: ArrayLike, m: ArrayLike, theta: ArrayLike, d: ArrayLike
+                               ) -> NDArray[np.float64]:
     r"""Unit dual quaternion of a screw motion (inverse of :func:`screw_from_dual_quaternion`).
 
     .. math::
@@ -886,7 +901,7 @@ def dual_quaternion_from_screw(l, m, theta, d):
     return Q
 
 
-def dual_quaternion_power(Q, t, *, tol=1e-9):
+def dual_quaternion_power(Q: ArrayLike, t: ArrayLike, *, tol: float = 1e-9) -> NDArray[np.float64]:
     r"""Power :math:`Q^t` of a unit dual quaternion: the same screw, scaled.
 
     In screw form (:func:`screw_from_dual_quaternion`) :math:`Q^t` turns by
@@ -951,7 +966,7 @@ def dual_quaternion_power(Q, t, *, tol=1e-9):
     return out
 
 
-def sclerp(Q0, Q1, t, *, tol=1e-9):
+def sclerp(Q0: ArrayLike, Q1: ArrayLike, t: ArrayLike, *, tol: float = 1e-9) -> NDArray[np.float64]:
     r"""Screw linear interpolation between unit dual quaternions.
 
     .. math::

@@ -10,9 +10,11 @@ velocity of the tool, :math:`\dot x = J(q)\, \dot q`. Two forms are used in the 
 """
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from ._checks import as_float_array
 from .models import SCARA_SHAPE
+from .robot import Robot
 
 __all__ = [
     "geometric_jacobian", "manipulability", "singular_values", "is_singular",
@@ -20,7 +22,7 @@ __all__ = [
 ]
 
 
-def geometric_jacobian(robot, q):
+def geometric_jacobian(robot: Robot, q: ArrayLike) -> NDArray[np.float64]:
     r"""Geometric Jacobian at the tool centre point, in the world frame, linear rows first.
 
     Column :math:`i` for a revolute joint about the unit axis :math:`z_i` through
@@ -63,7 +65,7 @@ def geometric_jacobian(robot, q):
     return robot.jacobian(q)
 
 
-def singular_values(J):
+def singular_values(J: ArrayLike) -> NDArray[np.float64]:
     """Singular values of Jacobians, largest first.
 
     Parameters
@@ -85,7 +87,7 @@ def singular_values(J):
     return np.linalg.svd(J, compute_uv=False)
 
 
-def manipulability(J):
+def manipulability(J: ArrayLike) -> NDArray[np.float64]:
     r"""Yoshikawa's manipulability measure :math:`w = \sqrt{\det(J J^\top)}`.
 
     Computed as the product of the singular values of :math:`J`, which is the same number
@@ -119,7 +121,7 @@ def manipulability(J):
     return np.prod(singular_values(J), axis=-1)
 
 
-def is_singular(J, tol=1e-6):
+def is_singular(J: ArrayLike, tol: float = 1e-6) -> NDArray[np.bool_]:
     r"""Whether Jacobians are singular: smallest singular value below ``tol``.
 
     Parameters
@@ -146,7 +148,7 @@ def is_singular(J, tol=1e-6):
     return singular_values(J)[..., -1] < tol
 
 
-def xyz_yaw_jacobian(robot, q, *, tol=1e-9):
+def xyz_yaw_jacobian(robot: Robot, q: ArrayLike, *, tol: float = 1e-9) -> NDArray[np.float64]:
     r"""Analytic Jacobian of :math:`(x, y, z, \text{yaw})` for a robot whose joint axes are
     all vertical (a SCARA).
 
@@ -196,7 +198,7 @@ def _scara_lengths(robot):
     return robot.links[1].a, robot.links[2].a
 
 
-def scara_jacobian(robot, q):
+def scara_jacobian(robot: Robot, q: ArrayLike) -> NDArray[np.float64]:
     r"""Closed-form analytic Jacobian of the SCARA in :math:`(x, y, z, \text{yaw})`.
 
     Differentiating the forward model of :func:`dqlab.models.scara_rsm5`,
@@ -254,7 +256,7 @@ def scara_jacobian(robot, q):
     return J
 
 
-def scara_jacobian_determinant(robot, q):
+def scara_jacobian_determinant(robot: Robot, q: ArrayLike) -> NDArray[np.float64]:
     r"""Determinant of the SCARA's analytic Jacobian: :math:`\det J = l_1 l_2 \sin q_2`.
 
     The last two columns only touch :math:`z` and yaw, so the determinant is that of the
@@ -284,7 +286,7 @@ def scara_jacobian_determinant(robot, q):
     return l1 * l2 * np.sin(q[..., 1])
 
 
-def scara_is_singular(robot, q, tol=1e-6):
+def scara_is_singular(robot: Robot, q: ArrayLike, tol: float = 1e-6) -> NDArray[np.bool_]:
     r"""Whether the SCARA is (within ``tol``) at a singular configuration.
 
     Tests :math:`|\det J| < \text{tol}\; l_1 l_2`, that is :math:`|\sin q_2| < \text{tol}`.

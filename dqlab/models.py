@@ -20,6 +20,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .robot import PRISMATIC, Link, Robot
 
@@ -70,7 +71,7 @@ def _ur(name, label):
     return Robot(links, convention="dh", name=label)
 
 
-def ur3():
+def ur3() -> Robot:
     r"""The Universal Robots UR3 with the maker's standard DH parameters.
 
     ==  ==========  ==========  ===========
@@ -108,7 +109,7 @@ def ur3():
     return _ur("UR3", "UR3")
 
 
-def ur5():
+def ur5() -> Robot:
     """The Universal Robots UR5 with the maker's standard DH parameters (see :func:`ur3`).
 
     Returns
@@ -123,7 +124,7 @@ def ur5():
     return _ur("UR5", "UR5")
 
 
-def ur10():
+def ur10() -> Robot:
     """The Universal Robots UR10 with the maker's standard DH parameters (see :func:`ur3`).
 
     Returns
@@ -138,7 +139,7 @@ def ur10():
     return _ur("UR10", "UR10")
 
 
-def ur3_mdh():
+def ur3_mdh() -> Robot:
     r"""The UR3 in the modified DH convention of the UR3 project report.
 
     ======================  =======  =========  =====  ========  ========  =========
@@ -189,7 +190,7 @@ def ur3_mdh():
     return Robot(links, convention="mdh", name="UR3 (report, modified DH)")
 
 
-def desk_arm():
+def desk_arm() -> Robot:
     r"""The 3-DOF desktop arm of the lab report, as a standard-DH chain.
 
     The lab writes its forward model with three angles in degrees: the base angle
@@ -253,7 +254,7 @@ def desk_arm():
     return Robot(links, convention="dh", name="desktop arm (lab report)")
 
 
-def desk_arm_joints_from_lab(q_lab):
+def desk_arm_joints_from_lab(q_lab: ArrayLike) -> NDArray[np.float64]:
     r"""Chain joint angles of :func:`desk_arm` from the lab's angles, and back.
 
     .. math:: (\theta_1, \theta_2, \theta_3) = (\pi/2 - q_0,\; q_1,\; -q_1 - q_2)
@@ -291,7 +292,7 @@ def desk_arm_joints_from_lab(q_lab):
 desk_arm_lab_from_joints = desk_arm_joints_from_lab
 
 
-def scara_rsm5():
+def scara_rsm5() -> Robot:
     r"""The Samsung RSM-5 SCARA (RRPR) of the course notes' annex A, in modified DH.
 
     ==  ==============  ======  =====================  ===============  ===========  ==========
@@ -338,7 +339,7 @@ def scara_rsm5():
     return Robot(links, convention="mdh", name="Samsung RSM-5 SCARA")
 
 
-def six_r(a2=0.4, r4=0.35, r7=0.1):
+def six_r(a2: float = 0.4, r4: float = 0.35, r7: float = 0.1) -> Robot:
     r"""The 6R arm with a spherical wrist of the course notes, chapter 2 (figure 2.5).
 
     ==  ===================  =========  =========  =====
@@ -428,7 +429,7 @@ class ChainShape:
     nonzero_d: tuple = ()
     zero_offsets: bool = False
 
-    def check(self, robot, *, atol=1e-12):
+    def check(self, robot: Robot, *, atol: float = 1e-12) -> None:
         """Raise ``ValueError`` (naming the first difference) unless ``robot`` has the shape.
 
         Parameters

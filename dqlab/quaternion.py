@@ -12,6 +12,7 @@ Array functions do the work; :class:`Quaternion` is a thin wrapper for notebooks
 
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from ._checks import (
     as_float_array,
@@ -74,7 +75,7 @@ def quaternion_identity(shape=()):
     return q
 
 
-def quaternion_product(a, b):
+def quaternion_product(a: ArrayLike, b: ArrayLike) -> NDArray[np.float64]:
     r"""Hamilton product :math:`a b` of quaternions.
 
     .. math::
@@ -118,7 +119,7 @@ def _product_kernel(a, b):
     return stack_components(quaternion_mul(*components(a), *components(b)))
 
 
-def quaternion_conjugate(q):
+def quaternion_conjugate(q: ArrayLike) -> NDArray[np.float64]:
     r"""Conjugate :math:`q^* = (w, -x, -y, -z)`; the inverse rotation when ``q`` is unit.
 
     Parameters
@@ -140,7 +141,7 @@ def quaternion_conjugate(q):
     return out
 
 
-def quaternion_norm(q):
+def quaternion_norm(q: ArrayLike) -> NDArray[np.float64]:
     r"""Norm :math:`|q| = \sqrt{w^2 + x^2 + y^2 + z^2}`.
 
     It is multiplicative: :math:`|ab| = |a|\,|b|`.
@@ -169,7 +170,7 @@ def _nonzero_norm(q, name):
     return n
 
 
-def quaternion_inverse(q):
+def quaternion_inverse(q: ArrayLike) -> NDArray[np.float64]:
     r"""Inverse :math:`q^{-1} = q^* / |q|^2` (equal to :math:`q^*` for a unit quaternion).
 
     Parameters
@@ -196,7 +197,7 @@ def quaternion_inverse(q):
     return quaternion_conjugate(q) / (n * n)[..., None]
 
 
-def quaternion_normalize(q):
+def quaternion_normalize(q: ArrayLike) -> NDArray[np.float64]:
     r"""Unit quaternion :math:`q / |q|` with the same direction.
 
     Parameters
@@ -222,7 +223,7 @@ def quaternion_normalize(q):
     return q / _nonzero_norm(q, "q")[..., None]
 
 
-def check_unit_quaternion(q, tol=1e-9, name="q"):
+def check_unit_quaternion(q: ArrayLike, tol: float = 1e-9, name: str = "q") -> NDArray[np.float64]:
     r"""Return ``q`` as a float array, or raise if it is not a unit quaternion.
 
     Parameters
@@ -256,7 +257,7 @@ def check_unit_quaternion(q, tol=1e-9, name="q"):
     return q
 
 
-def rotate_vector(q, v, *, tol=1e-9):
+def rotate_vector(q: ArrayLike, v: ArrayLike, *, tol: float = 1e-9) -> NDArray[np.float64]:
     r"""Rotate vectors by unit quaternions: :math:`v' = q\,v\,q^*` (active rotation).
 
     With :math:`q = (w, \mathbf u)` and :math:`\mathbf t = 2\,\mathbf u \times \mathbf v`
@@ -314,7 +315,7 @@ def rotate_vector(q, v, *, tol=1e-9):
 # Conversions
 
 
-def quaternion_from_axis_angle(axis, angle):
+def quaternion_from_axis_angle(axis: ArrayLike, angle: ArrayLike) -> NDArray[np.float64]:
     r"""Unit quaternion of the rotation by ``angle`` about ``axis``.
 
     .. math::
@@ -354,7 +355,8 @@ def quaternion_from_axis_angle(axis, angle):
     return stack_components([np.cos(half)] + [axis[..., i] * s for i in range(3)])
 
 
-def axis_angle_from_quaternion(q, *, tol=1e-9):
+def axis_angle_from_quaternion(q: ArrayLike, *, tol: float = 1e-9
+                               ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     r"""Axis and angle of the rotation of a unit quaternion.
 
     .. math::
@@ -398,7 +400,7 @@ def axis_angle_from_quaternion(q, *, tol=1e-9):
     return axis, angle
 
 
-def quaternion_from_matrix(R, *, tol=1e-9):
+def quaternion_from_matrix(R: ArrayLike, *, tol: float = 1e-9) -> NDArray[np.float64]:
     r"""Unit quaternion (with :math:`w \ge 0`) of a rotation matrix, by Shepperd's method.
 
     For the active convention :math:`R\,\mathbf v = q\,\mathbf v\,q^*` the symmetric matrix
@@ -463,7 +465,7 @@ def quaternion_from_matrix(R, *, tol=1e-9):
     return batched(kernel, [(R, 2)], _Q)
 
 
-def matrix_from_quaternion(q, *, tol=1e-9):
+def matrix_from_quaternion(q: ArrayLike, *, tol: float = 1e-9) -> NDArray[np.float64]:
     r"""Rotation matrix of a unit quaternion (active: :math:`R\mathbf v = q\mathbf v q^*`).
 
     .. math::
@@ -514,7 +516,7 @@ def matrix_from_quaternion(q, *, tol=1e-9):
 # Exponential, logarithm, power, interpolation
 
 
-def quaternion_exp(q):
+def quaternion_exp(q: ArrayLike) -> NDArray[np.float64]:
     r"""Quaternion exponential.
 
     .. math::
@@ -553,7 +555,7 @@ def quaternion_exp(q):
     return out
 
 
-def quaternion_log(q):
+def quaternion_log(q: ArrayLike) -> NDArray[np.float64]:
     r"""Quaternion logarithm (principal value).
 
     .. math::
@@ -599,7 +601,7 @@ def quaternion_log(q):
     return out
 
 
-def quaternion_power(q, t):
+def quaternion_power(q: ArrayLike, t: ArrayLike) -> NDArray[np.float64]:
     r"""Power :math:`q^t = \exp(t \log q)` of a non-zero quaternion.
 
     For a unit quaternion of angle :math:`\theta` about :math:`\mathbf n`, :math:`q^t`
@@ -627,7 +629,7 @@ def quaternion_power(q, t):
     return quaternion_exp(quaternion_log(q) * t[..., None])
 
 
-def slerp(q0, q1, t, *, tol=1e-9):
+def slerp(q0: ArrayLike, q1: ArrayLike, t: ArrayLike, *, tol: float = 1e-9) -> NDArray[np.float64]:
     r"""Spherical linear interpolation between unit quaternions, along the shortest arc.
 
     If :math:`q_0 \cdot q_1 < 0`, :math:`q_1` is replaced by :math:`-q_1` (same rotation),
@@ -679,7 +681,7 @@ def slerp(q0, q1, t, *, tol=1e-9):
     return a[..., None] * q0 + b[..., None] * q1
 
 
-def quaternion_distance(q0, q1, *, tol=1e-9):
+def quaternion_distance(q0: ArrayLike, q1: ArrayLike, *, tol: float = 1e-9) -> NDArray[np.float64]:
     r"""Angle of the rotation taking ``q0`` to ``q1``, in :math:`[0, \pi]`.
 
     .. math::
@@ -721,7 +723,7 @@ def quaternion_distance(q0, q1, *, tol=1e-9):
 # pyquaternion interoperability
 
 
-def quaternion_from_pyquaternion(pq):
+def quaternion_from_pyquaternion(pq) -> NDArray[np.float64]:
     """Array ``(w, x, y, z)`` from a ``pyquaternion.Quaternion`` (or a nested list of them).
 
     pyquaternion stores the scalar first too, so no reordering is needed.
@@ -745,7 +747,7 @@ def quaternion_from_pyquaternion(pq):
     return np.array([quaternion_from_pyquaternion(p) for p in pq], dtype=float)
 
 
-def pyquaternion_from_quaternion(q):
+def pyquaternion_from_quaternion(q: ArrayLike):
     """``pyquaternion.Quaternion`` from an array ``(w, x, y, z)``.
 
     Parameters

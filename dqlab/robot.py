@@ -40,6 +40,7 @@ Units are metres and radians.
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from ._checks import as_float_array, batched
 from ._kernels import dual_quaternion_mul, dual_quaternion_mul_z_screw, screw_entries
@@ -332,7 +333,7 @@ class Robot:
         self._screw_constants = (lines.tolist(), dual_quaternion_from_transform(X_WT0).tolist())
 
     # -- joint vectors -----------------------------------------------------------------------
-    def check_joints(self, q, *, limits="prismatic"):
+    def check_joints(self, q: ArrayLike, *, limits: str = "prismatic") -> NDArray[np.float64]:
         """Validate joint vectors and return them as a float array.
 
         Parameters
@@ -414,7 +415,7 @@ class Robot:
         J[..., 3, 3] = 1.0
         return J
 
-    def link_transforms(self, q):
+    def link_transforms(self, q: ArrayLike) -> NDArray[np.float64]:
         r"""The link transforms :math:`X_{i-1,i}(q_i)`, without base and tool.
 
         Parameters
@@ -440,7 +441,7 @@ class Robot:
         return self._L @ self._joint_motions(q) @ self._R
 
     # -- forward kinematics, matrices ---------------------------------------------------
-    def fk(self, q, all_frames=False):
+    def fk(self, q: ArrayLike, all_frames: bool = False) -> NDArray[np.float64]:
         r"""Forward kinematics as homogeneous transforms.
 
         .. math::
@@ -530,7 +531,7 @@ class Robot:
         X, before, _ = self._product(q, record=True)
         return sum((tuple(B[3]) + tuple(B[2]) for B in before), ()) + tuple(X[3])
 
-    def joint_axes(self, q):
+    def joint_axes(self, q: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         r"""Points on the joint axes and their unit directions, in the world frame.
 
         The joint :math:`i` moves along or about the z axis of the frame
@@ -567,7 +568,7 @@ class Robot:
         return flat[..., 0:2 * n:2, :], flat[..., 1:2 * n:2, :], flat[..., 2 * n, :]
 
     # -- forward kinematics, dual quaternions --------------------------------------------
-    def fk_dq(self, q):
+    def fk_dq(self, q: ArrayLike) -> NDArray[np.float64]:
         r"""Forward kinematics as a unit dual quaternion, link by link.
 
         Each link is written as a product of three dual quaternions, the constant parts and
@@ -642,7 +643,8 @@ class Robot:
             Q = dual_quaternion_mul(Q, K[i + 1])
         return Q
 
-    def zero_pose_screws(self):
+    def zero_pose_screws(self
+                         ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         r"""The joint axes at :math:`q = 0` in the world frame and the zero-pose TCP.
 
         Returns
@@ -664,7 +666,7 @@ class Robot:
         points, axes, X_WT0 = self._zero_pose
         return points.copy(), axes.copy(), X_WT0.copy()
 
-    def fk_dq_screw(self, q):
+    def fk_dq_screw(self, q: ArrayLike) -> NDArray[np.float64]:
         r"""Forward kinematics as a product of base-frame screw motions (thesis, second way).
 
         Joint :math:`i` turns the rest of the arm about its axis at the zero pose, the line
@@ -728,7 +730,7 @@ class Robot:
         return Q
 
     # -- differential kinematics ----------------------------------------------------------
-    def jacobian(self, q):
+    def jacobian(self, q: ArrayLike) -> NDArray[np.float64]:
         r"""Geometric Jacobian at the tool centre point, in the world frame, linear rows first.
 
         Column :math:`i` for a revolute joint about the unit axis :math:`z_i` through
@@ -773,7 +775,7 @@ class Robot:
                               axis=-2)
 
     # -- printing -------------------------------------------------------------------------
-    def dh_table(self):
+    def dh_table(self) -> str:
         """The parameter table as text, in the robot's own convention.
 
         Angles are printed in degrees, lengths in metres. For modified DH the columns are

@@ -9,6 +9,7 @@ Every function takes array-likes and broadcasts over leading axes.
 """
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from ._checks import as_float_array, components, rotation_or_raise
 from ._kernels import orthonormality
@@ -35,7 +36,7 @@ def _elementary(theta, i, j):
     return R
 
 
-def rot_x(theta):
+def rot_x(theta: ArrayLike) -> NDArray[np.float64]:
     r"""Rotation by ``theta`` about the x axis.
 
     .. math::
@@ -63,7 +64,7 @@ def rot_x(theta):
     return _elementary(theta, 1, 2)
 
 
-def rot_y(theta):
+def rot_y(theta: ArrayLike) -> NDArray[np.float64]:
     r"""Rotation by ``theta`` about the y axis.
 
     .. math::
@@ -91,7 +92,7 @@ def rot_y(theta):
     return _elementary(theta, 2, 0)
 
 
-def rot_z(theta):
+def rot_z(theta: ArrayLike) -> NDArray[np.float64]:
     r"""Rotation by ``theta`` about the z axis.
 
     .. math::
@@ -120,7 +121,7 @@ def rot_z(theta):
     return _elementary(theta, 0, 1)
 
 
-def skew(v):
+def skew(v: ArrayLike) -> NDArray[np.float64]:
     r"""Cross-product matrix :math:`[\mathbf v]_\times`, with :math:`[\mathbf v]_\times
     \mathbf w = \mathbf v \times \mathbf w`.
 
@@ -151,7 +152,7 @@ def skew(v):
     return S
 
 
-def check_rotation_matrix(R, tol=1e-9, name="R"):
+def check_rotation_matrix(R: ArrayLike, tol: float = 1e-9, name: str = "R") -> NDArray[np.float64]:
     r"""Return ``R`` as a float array, or raise if it is not a rotation matrix.
 
     A rotation matrix is orthonormal, :math:`R^\mathsf{T} R = I`, with
@@ -194,7 +195,7 @@ def check_rotation_matrix(R, tol=1e-9, name="R"):
     return R
 
 
-def matrix_from_euler_zxz(angles):
+def matrix_from_euler_zxz(angles: ArrayLike) -> NDArray[np.float64]:
     r"""Rotation matrix from classical Euler angles (precession, nutation, spin).
 
     The rotations are about moving axes: :math:`\psi` about z, then :math:`\theta` about
@@ -233,7 +234,8 @@ def matrix_from_euler_zxz(angles):
     return rot_z(angles[..., 0]) @ rot_x(angles[..., 1]) @ rot_z(angles[..., 2])
 
 
-def euler_zxz_from_matrix(R, *, tol=1e-9, singular_tol=1e-12):
+def euler_zxz_from_matrix(R: ArrayLike, *, tol: float = 1e-9, singular_tol: float = 1e-12
+                          ) -> NDArray[np.float64]:
     r"""Classical Euler angles :math:`(\psi, \theta, \varphi)` of a rotation matrix.
 
     With :math:`\mathbf x, \mathbf y, \mathbf z` the columns of :math:`R` (course notes,
@@ -303,7 +305,7 @@ def euler_zxz_from_matrix(R, *, tol=1e-9, singular_tol=1e-12):
     return np.stack([psi, theta, phi], axis=-1)
 
 
-def wrap_angle(theta):
+def wrap_angle(theta: ArrayLike) -> NDArray[np.float64]:
     r"""Wrap angles to the interval :math:`(-\pi, \pi]`.
 
     Parameters
@@ -330,7 +332,7 @@ def wrap_angle(theta):
     return w
 
 
-def matrix_from_rpy(rpy):
+def matrix_from_rpy(rpy: ArrayLike) -> NDArray[np.float64]:
     r"""Rotation matrix from roll, pitch, yaw (Craig's fixed x-y-z angles).
 
     Roll :math:`\gamma` about x, then pitch :math:`\beta` about the fixed y, then yaw
@@ -366,7 +368,8 @@ def matrix_from_rpy(rpy):
     return rot_z(rpy[..., 2]) @ rot_y(rpy[..., 1]) @ rot_x(rpy[..., 0])
 
 
-def rpy_from_matrix(R, *, tol=1e-9, singular_tol=1e-12):
+def rpy_from_matrix(R: ArrayLike, *, tol: float = 1e-9, singular_tol: float = 1e-12
+                    ) -> NDArray[np.float64]:
     r"""Roll, pitch, yaw :math:`(\gamma, \beta, \alpha)` of a rotation matrix (Craig).
 
     With :math:`\mathbf x, \mathbf y, \mathbf z` the columns of :math:`R`, in the regular
@@ -436,7 +439,7 @@ def _unit_axis(axis):
     return axis / n[..., None]
 
 
-def matrix_from_axis_angle(axis, angle):
+def matrix_from_axis_angle(axis: ArrayLike, angle: ArrayLike) -> NDArray[np.float64]:
     r"""Rotation matrix of the rotation by ``angle`` about ``axis`` (Rodrigues' formula).
 
     .. math::
@@ -469,7 +472,8 @@ def matrix_from_axis_angle(axis, angle):
     return c * np.eye(3) + s * skew(n) + (1.0 - c) * nnT
 
 
-def axis_angle_from_matrix(R, *, tol=1e-9):
+def axis_angle_from_matrix(R: ArrayLike, *, tol: float = 1e-9
+                           ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     r"""Axis and angle of a rotation matrix, accurate for every angle in :math:`[0, \pi]`.
 
     .. math::
@@ -526,7 +530,7 @@ def axis_angle_from_matrix(R, *, tol=1e-9):
     return axis, angle
 
 
-def rodrigues(v, axis, angle):
+def rodrigues(v: ArrayLike, axis: ArrayLike, angle: ArrayLike) -> NDArray[np.float64]:
     r"""Rotate vectors by ``angle`` about ``axis`` with Rodrigues' formula.
 
     .. math::

@@ -7,8 +7,10 @@ from the previous solution.
 """
 
 import numpy as np
+from numpy.typing import ArrayLike
 
-from .result import finish, target_reasons
+from ..robot import Robot
+from .result import IKResult, finish, target_reasons
 from .targets import parse_targets, pose_errors
 
 __all__ = ["numerical", "pose_errors"]
@@ -31,9 +33,10 @@ def _residual(X, X_target, position_only):
     return np.concatenate([e_p, _rotation_vector(R_err)], axis=-1)
 
 
-def numerical(robot, target, q0, *, position_only=False, tol=1e-10, rotation_tol=None,
-              max_iter=100, damping=1e-2, min_damping=1e-9, max_damping=1e6,
-              max_step=0.5):
+def numerical(robot: Robot, target: ArrayLike, q0: ArrayLike, *, position_only: bool = False,
+              tol: float = 1e-10, rotation_tol: float | None = None, max_iter: int = 100,
+              damping: float = 1e-2, min_damping: float = 1e-9, max_damping: float = 1e6,
+              max_step: float = 0.5) -> IKResult:
     r"""Inverse kinematics by damped least squares, from a warm start ``q0``.
 
     Each iteration linearises the forward kinematics at :math:`q` with the geometric

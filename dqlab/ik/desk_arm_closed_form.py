@@ -8,10 +8,12 @@ solutions: the arm faces the point or turns its back to it (base angle :math:`\v
 """
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..models import DESK_ARM_SHAPE
+from ..robot import Robot
 from ..rotations import wrap_angle
-from .result import finish, target_reasons
+from .result import IKResult, finish, target_reasons
 from .targets import parse_targets
 
 __all__ = ["desk_arm"]
@@ -27,7 +29,7 @@ def _lengths(robot):
     return links[0].d, links[0].a, links[1].a, links[2].a
 
 
-def desk_arm(robot, target, *, tol=1e-9):
+def desk_arm(robot: Robot, target: ArrayLike, *, tol: float = 1e-9) -> IKResult:
     r"""All closed-form solutions for the desktop arm to put its hand at ``position``.
 
     With the target in the base frame :math:`(x, y, z)`, :math:`\rho = \sqrt{x^2 + y^2}` and

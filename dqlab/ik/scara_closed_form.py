@@ -12,16 +12,19 @@ on either side), and :math:`q_3, q_4` follow.
 """
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..models import SCARA_SHAPE
+from ..robot import Robot
 from ..rotations import wrap_angle
-from .result import finish, target_reasons
+from .result import IKResult, finish, target_reasons
 from .targets import parse_targets, pose_errors
 
 __all__ = ["scara"]
 
 
-def scara(robot, target, *, tol=1e-9, rotation_tol=None):
+def scara(robot: Robot, target: ArrayLike, *, tol: float = 1e-9,
+          rotation_tol: float | None = None) -> IKResult:
     r"""Both closed-form solutions of the SCARA for a tool pose.
 
     The target is brought back to the flange in frame 0,

@@ -11,6 +11,7 @@ its target.
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .._checks import as_float_array
 from ..dualquat import (
@@ -88,7 +89,8 @@ class Targets:
         return self.transforms[..., :3, 3]
 
 
-def parse_targets(target, *, position=False, tol=RIGID_TOL, name="target"):
+def parse_targets(target: ArrayLike, *, position: bool | str = False, tol: float = RIGID_TOL,
+                  name: str = "target") -> Targets:
     r"""Check IK targets once and return them as :class:`Targets`.
 
     Parameters
@@ -173,7 +175,8 @@ def _kind(a, position, name):
     raise ValueError(f"{name} must have shape {want}, got shape {a.shape}")
 
 
-def pose_errors(X, X_target):
+def pose_errors(X: ArrayLike, X_target: ArrayLike
+                ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     r"""Position and rotation errors between poses: the one error measure of :mod:`dqlab.ik`.
 
     .. math::

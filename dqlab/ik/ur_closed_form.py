@@ -105,6 +105,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .._checks import as_float_array
 from ..dualquat import (
@@ -116,10 +117,11 @@ from ..dualquat import (
 )
 from ..models import UR_SHAPE
 from ..quaternion import rotate_vector
+from ..robot import Robot
 from ..rotations import wrap_angle
 from ..transforms import transform_inverse
 from . import ur_steps as steps
-from .result import finish
+from .result import IKResult, finish
 from .targets import parse_targets, pose_errors
 
 __all__ = ["ur", "ur_parameters", "equivalent_solutions", "closest_solution",
@@ -147,7 +149,7 @@ REASON_REACH = "elbow: the wrist-1 point is out of the forearm's reach on every 
 REASON_TOL = "no branch reproduces the pose within tol"
 
 
-def ur_parameters(robot, *, atol=1e-12):
+def ur_parameters(robot: Robot, *, atol: float = 1e-12) -> dict:
     r"""The standard DH lengths of a UR-family arm, checked.
 
     Parameters
@@ -288,8 +290,9 @@ def _theta6_reference(q_ref, batch):
                          f"poses' leading shape {batch}") from None
 
 
-def ur(robot, target, *, tol=1e-9, tool=None, q_ref=None, singular_tol=5e-7, pose_tol=1e-9,
-       residuals="equations"):
+def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | None = None,
+       q_ref: ArrayLike | None = None, singular_tol: float = 5e-7, pose_tol: float = 1e-9,
+       residuals: str = "equations") -> IKResult:
     r"""Every closed-form inverse-kinematics solution of a UR-family arm.
 
     Solves :math:`X_{W0}\, X_{06}(q)\, X_{6T} = X` for the joint vector :math:`q` by the
@@ -648,7 +651,7 @@ def _reasons(prm, flange, branches, ok, tol):
     return reason
 
 
-def distinct_solutions(result, atol=1e-9):
+def distinct_solutions(result: IKResult, atol: float = 1e-9) -> NDArray[np.bool_]:
     r"""Mark the first valid row of each group of equal solutions (angles compared mod 2 pi).
 
     Parameters
@@ -685,7 +688,8 @@ def distinct_solutions(result, atol=1e-9):
     return valid & ~np.any(same & earlier, axis=-1)
 
 
-def equivalent_solutions(q, limits=(-2 * np.pi, 2 * np.pi)):
+def equivalent_solutions(q: ArrayLike, limits: ArrayLike = (-2 * np.pi, 2 * np.pi)
+                         ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
     r"""All :math:`2\pi`-equivalents of joint vectors within the joint limits.
 
     A UR joint turns :math:`\pm 360` degrees, so each angle in :math:`(-\pi, \pi]` has one
@@ -732,7 +736,8 @@ def equivalent_solutions(q, limits=(-2 * np.pi, 2 * np.pi)):
     return cands, within
 
 
-def closest_solution(result, q_ref, limits=(-2 * np.pi, 2 * np.pi)):
+def closest_solution(result: IKResult, q_ref: ArrayLike,
+                     limits: ArrayLike = (-2 * np.pi, 2 * np.pi)) -> NDArray[np.float64]:
     r"""The valid solution nearest ``q_ref``, unwrapped to the equivalent nearest ``q_ref``.
 
     The branch is chosen exactly as :meth:`~dqlab.ik.result.IKResult.best` does (joint-wise
