@@ -161,6 +161,22 @@ class Link:
                 f"limits={self.limits!r})")
 
 
+def _link_constants(links, convention):
+    """The constant factors L_i, R_i (n, 4, 4) of the links X_{i-1,i} = L_i J_i R_i, with
+    the joint motion J = Rz(theta) Tz(d) between them: L = I, R = Tx(a) Rx(alpha) in
+    standard DH; L = Rx(alpha) Tx(a), R = I in modified DH."""
+    L = np.empty((len(links), 4, 4))
+    R = np.empty((len(links), 4, 4))
+    for i, lk in enumerate(links):
+        if convention == "dh":
+            L[i] = np.eye(4)
+            R[i] = _trans_x_h(lk.a) @ _rot_x_h(lk.alpha)
+        else:
+            L[i] = _rot_x_h(lk.alpha) @ _trans_x_h(lk.a)
+            R[i] = np.eye(4)
+    return L, R
+
+
 def _check_transform_like(T, name):
     if T is None:
         return np.eye(4)
@@ -292,27 +308,11 @@ class Robot:
         self._prismatic_idx = np.flatnonzero(~self._revolute)
         # (theta_i offset, d_i offset, revolute?) as Python values for the products
         self._joint_constants = [(lk.theta_offset, lk.d, lk.is_revolute) for lk in self._links]
-        # Each link is X_{i-1,i} = L_i @ J_i(theta_i, d_i) @ R_i with the joint motion
-        # J = Rz(theta) Tz(d) and constant L, R: L = I, R = Tx(a) Rx(alpha) in standard DH;
-        # L = Rx(alpha) Tx(a), R = I in modified DH.
-        L = np.empty((n, 4, 4))
-        R = np.empty((n, 4, 4))
-        for i, lk in enumerate(self._links):
-            if self._convention == "dh":
-                L[i] = np.eye(4)
-                R[i] = _trans_x_h(lk.a) @ _rot_x_h(lk.alpha)
-            else:
-                L[i] = _rot_x_h(lk.alpha) @ _trans_x_h(lk.a)
-                R[i] = np.eye(4)
-        self._L = L
-        self._R = R
+        self._L, self._R = _link_constants(self._links, self._convention)
         # The constant factors of neighbouring links multiplied once:
         # X_WT = K_0 J_1 K_1 J_2 ... J_n K_n, K_0 = X_W0 L_1, K_i = R_i L_{i+1}, K_n = R_n X_nT
-        K = np.empty((n + 1, 4, 4))
-        K[0] = self._base @ L[0]
-        for i in range(1, n):
-            K[i] = R[i - 1] @ L[i]
-        K[n] = R[n - 1] @ self._tool
+        K = np.concatenate([self._base[None] @ self._L[:1], self._R[:-1] @ self._L[1:],
+                            self._R[-1:] @ self._tool[None]])
         self._K = K
         self._K0_columns = [tuple(K[0, :3, j].tolist()) for j in range(4)]
         self._base_columns = [tuple(self._base[:3, j].tolist()) for j in range(4)]

@@ -6,6 +6,8 @@ the whole batch). The UR3 report solves its circular path this way, each point w
 from the previous solution.
 """
 
+from dataclasses import dataclass
+
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -119,84 +121,103 @@ def numerical(robot: Robot, target: ArrayLike, q0: ArrayLike, *, position_only: 
     if rotation_tol is None:
         rotation_tol = tol
     targets = parse_targets(target, position=position_only)
-    X_target, has_rotation = targets.transforms, targets.has_rotation
     q0 = robot.check_joints(q0, limits="none")
-    batch = np.broadcast_shapes(X_target.shape[:-2], q0.shape[:-1])
+    batch = np.broadcast_shapes(targets.batch, q0.shape[:-1])
     n = robot.n
-    X_target = np.broadcast_to(X_target, batch + (4, 4)).reshape(-1, 4, 4)
-    q = np.broadcast_to(q0, batch + (n,)).reshape(-1, n).copy()
-    lo, hi = robot.limits.T
-    q = np.clip(q, lo, hi)
-    B = q.shape[0]
-    rows = slice(0, 3) if position_only else slice(0, 6)
-
-    lam = np.full(B, float(damping))
-    X = robot.fk(q)
-    e = _residual(X, X_target, position_only)
-    cost = np.sum(e * e, axis=-1)
-    active = np.ones(B, dtype=bool)
-    iterations = np.zeros(B, dtype=int)
-    stuck = np.zeros(B, dtype=bool)
-
-    def converged(X_now, X_goal):
-        pe, re = pose_errors(X_now, X_goal)
-        done = pe <= tol
-        if not position_only:
-            done &= re <= rotation_tol
-        return done
-
-    active &= ~converged(X, X_target)
-    for _ in range(int(max_iter)):
-        idx = np.flatnonzero(active)
-        if idx.size == 0:
-            break
-        qa = q[idx]
-        J = robot.jacobian(qa)[:, rows, :]                 # (b, m, n)
-        Jt = np.swapaxes(J, -1, -2)
-        A = Jt @ J + (lam[idx] ** 2)[:, None, None] * np.eye(n)
-        g = (Jt @ e[idx][..., None])[..., 0]
-        try:
-            step = np.linalg.solve(A, g[..., None])[..., 0]
-        except np.linalg.LinAlgError:   # an exactly singular system: least-squares step
-            step = (np.linalg.pinv(A) @ g[..., None])[..., 0]
-        biggest = np.max(np.abs(step), axis=-1, keepdims=True)
-        step *= np.minimum(1.0, max_step / np.maximum(biggest, 1e-300))
-        q_try = np.clip(qa + step, lo, hi)
-        X_try = robot.fk(q_try)
-        e_try = _residual(X_try, X_target[idx], position_only)
-        cost_try = np.sum(e_try * e_try, axis=-1)
-        better = cost_try < cost[idx]
-        acc = idx[better]
-        q[acc] = q_try[better]
-        X[acc] = X_try[better]
-        e[acc] = e_try[better]
-        cost[acc] = cost_try[better]
-        lam[idx] = np.where(better, np.maximum(lam[idx] / 3.0, min_damping),
-                            lam[idx] * 5.0)
-        iterations[idx] += 1
-        stuck[idx] = lam[idx] > max_damping
-        active[idx] = ~converged(X[idx], X_target[idx]) & ~stuck[idx]
+    X_target = np.broadcast_to(targets.transforms, batch + (4, 4)).reshape(-1, 4, 4)
+    q = np.clip(np.broadcast_to(q0, batch + (n,)).reshape(-1, n), *robot.limits.T)
+    options = _Options(position_only, tol, rotation_tol, int(max_iter), float(damping),
+                       min_damping, max_damping, max_step)
+    q, X, iterations, stuck = _iterate(robot, q, X_target, options)
 
     position_error, rotation_error = pose_errors(X, X_target)
-    if not has_rotation:
+    if not targets.has_rotation:
         rotation_error = np.zeros_like(rotation_error)
-    valid = position_error <= tol
-    if not position_only:
-        valid &= rotation_error <= rotation_tol
+    valid = options.met(position_error, rotation_error)
 
     def explain(index):
         (b,) = index
         why = (f"stalled (damping above {max_damping:g}) after {iterations[b]} iterations"
                if stuck[b] else f"did not converge after {iterations[b]} iterations")
         text = f"{why}: position error {position_error[b]:.3g} m"
-        if has_rotation:
+        if targets.has_rotation:
             text += f", rotation error {rotation_error[b]:.3g} rad"
         text += f" (tolerances {tol:g} m"
         return text + (")" if position_only else f", {rotation_tol:g} rad)")
 
-    reason = target_reasons(~valid, explain)
     return finish(q.reshape(batch + (1, n)), valid.reshape(batch + (1,)),
                   position_error.reshape(batch + (1,)), rotation_error.reshape(batch + (1,)),
                   {"not_converged": (~valid).reshape(batch),
                    "stalled": (stuck & ~valid).reshape(batch)},
-                  reason.reshape(batch))
+                  target_reasons(~valid, explain).reshape(batch))
+
+
+@dataclass
+class _Options:
+    """The solver's settings (see :func:`numerical`)."""
+
+    position_only: bool
+    tol: float
+    rotation_tol: float
+    max_iter: int
+    damping: float
+    min_damping: float
+    max_damping: float
+    max_step: float
+
+    def met(self, position_error, rotation_error):
+        """Where the tolerances are met."""
+        done = position_error <= self.tol
+        if not self.position_only:
+            done &= rotation_error <= self.rotation_tol
+        return done
+
+
+def _iterate(robot, q, X_target, options):
+    """Levenberg--Marquardt iterations from ``q`` (B, n) towards ``X_target`` (B, 4, 4),
+    every target that has not converged or stalled moved together. Returns the last
+    iterates ``q`` and their poses ``X``, the number of iterations and whether the damping
+    ran away (stalled), per target."""
+    B = q.shape[0]
+    lam = np.full(B, options.damping)
+    X = robot.fk(q)
+    e = _residual(X, X_target, options.position_only)
+    cost = np.sum(e * e, axis=-1)
+    iterations = np.zeros(B, dtype=int)
+    stuck = np.zeros(B, dtype=bool)
+    active = ~options.met(*pose_errors(X, X_target))
+    for _ in range(options.max_iter):
+        idx = np.flatnonzero(active)
+        if idx.size == 0:
+            break
+        q_try = _step(robot, q[idx], e[idx], lam[idx], options)
+        X_try = robot.fk(q_try)
+        e_try = _residual(X_try, X_target[idx], options.position_only)
+        cost_try = np.sum(e_try * e_try, axis=-1)
+        better = cost_try < cost[idx]
+        acc = idx[better]
+        q[acc], X[acc], e[acc], cost[acc] = (q_try[better], X_try[better], e_try[better],
+                                             cost_try[better])
+        lam[idx] = np.where(better, np.maximum(lam[idx] / 3.0, options.min_damping),
+                            lam[idx] * 5.0)
+        iterations[idx] += 1
+        stuck[idx] = lam[idx] > options.max_damping
+        active[idx] = ~options.met(*pose_errors(X[idx], X_target[idx])) & ~stuck[idx]
+    return q, X, iterations, stuck
+
+
+def _step(robot, q, e, lam, options):
+    r"""The damped least-squares step :math:`(J^\top J + \lambda^2 I)^{-1} J^\top e` from
+    ``q`` (b, n), capped at ``max_step`` per joint and clipped to the joint limits."""
+    rows = slice(0, 3) if options.position_only else slice(0, 6)
+    J = robot.jacobian(q)[:, rows, :]                                 # (b, m, n)
+    Jt = np.swapaxes(J, -1, -2)
+    A = Jt @ J + (lam ** 2)[:, None, None] * np.eye(q.shape[-1])
+    g = (Jt @ e[..., None])[..., 0]
+    try:
+        step = np.linalg.solve(A, g[..., None])[..., 0]
+    except np.linalg.LinAlgError:   # an exactly singular system: least-squares step
+        step = (np.linalg.pinv(A) @ g[..., None])[..., 0]
+    biggest = np.max(np.abs(step), axis=-1, keepdims=True)
+    step *= np.minimum(1.0, options.max_step / np.maximum(biggest, 1e-300))
+    return np.clip(q + step, *robot.limits.T)

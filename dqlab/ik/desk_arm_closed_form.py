@@ -15,6 +15,7 @@ from ..robot import Robot
 from ..rotations import wrap_angle
 from .result import IKResult, finish, target_reasons
 from .targets import parse_targets
+from .two_link import elbow_cosine, two_link_angles
 
 __all__ = ["desk_arm"]
 
@@ -109,22 +110,16 @@ def desk_arm(robot: Robot, target: ArrayLike, *, tol: float = 1e-9) -> IKResult:
     base_singular = rho < 1e-12
 
     theta1 = np.stack([phi, phi + np.pi], axis=-1)                  # (..., 2)
-    r = np.stack([rho, -rho], axis=-1)
-    u = r - l3
+    u = np.stack([rho, -rho], axis=-1) - l3
     v = (z - h)[..., None]
-    c3 = (u * u + v * v - l1 * l1 - l2 * l2) / (2 * l1 * l2)
-    reachable = np.abs(c3) <= 1.0 + 1e-12
-    c3 = np.clip(c3, -1.0, 1.0)
-    s3 = np.sqrt(1.0 - c3 * c3)
+    c3, s3, reachable = elbow_cosine(u, v, l1, l2)
     # facing: elbow up is theta3 <= 0; turned away: elbow up is theta3 >= 0
     s3_up = np.stack([-s3[..., 0], s3[..., 1]], axis=-1)
     sols = []
     for branch in (0, 1):
         for sign in (1.0, -1.0):
-            sb = sign * s3_up[..., branch]
-            cb = c3[..., branch]
-            t3 = np.arctan2(sb, cb)
-            t2 = np.arctan2(v[..., 0], u[..., branch]) - np.arctan2(l2 * sb, l1 + l2 * cb)
+            t2, t3 = two_link_angles(u[..., branch], v[..., 0], c3[..., branch],
+                                     sign * s3_up[..., branch], l1, l2)
             sols.append(np.stack([theta1[..., branch], t2, t3], axis=-1))
     solutions = wrap_angle(np.stack(sols, axis=-2))                 # (..., 4, 3)
     ok = np.repeat(reachable, 2, axis=-1)

@@ -19,6 +19,7 @@ from ..robot import Robot
 from ..rotations import wrap_angle
 from .result import IKResult, finish, target_reasons
 from .targets import parse_targets, pose_errors
+from .two_link import elbow_cosine, two_link_angles
 
 __all__ = ["scara"]
 
@@ -106,14 +107,10 @@ def scara(robot: Robot, target: ArrayLike, *, tol: float = 1e-9,
     off = np.array([lk.theta_offset for lk in links])      # theta_3 is the constant for P
     z0 = links[0].d + links[1].d + links[2].d + links[3].d
 
-    c2 = (x * x + y * y - l1 * l1 - l2 * l2) / (2 * l1 * l2)
-    reachable = np.abs(c2) <= 1.0 + 1e-12
-    c2 = np.clip(c2, -1.0, 1.0)
-    s2 = np.sqrt(1.0 - c2 * c2)
+    c2, s2, reachable = elbow_cosine(x, y, l1, l2)
     rows = []
     for sign in (1.0, -1.0):
-        t2 = np.arctan2(sign * s2, c2)
-        t1 = np.arctan2(y, x) - np.arctan2(l2 * sign * s2, l1 + l2 * c2)
+        t1, t2 = two_link_angles(x, y, c2, sign * s2, l1, l2)
         t4 = psi - t1 - t2 - off[2]
         q1, q2, q4 = wrap_angle(t1 - off[0]), wrap_angle(t2 - off[1]), wrap_angle(t4 - off[3])
         rows.append(np.stack([q1, q2, z - z0, q4], axis=-1))
