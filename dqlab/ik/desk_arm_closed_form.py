@@ -102,26 +102,7 @@ def desk_arm(robot: Robot, target: ArrayLike, *, tol: float = 1e-9) -> IKResult:
     """
     h, l3, l1, l2 = _lengths(robot)
     p = parse_targets(target, position="only").positions
-    X_0W = np.linalg.inv(robot.base)
-    p0 = p @ X_0W[:3, :3].T + X_0W[:3, 3]
-    x, y, z = p0[..., 0], p0[..., 1], p0[..., 2]
-    rho = np.hypot(x, y)
-    phi = np.arctan2(y, x)
-    base_singular = rho < 1e-12
-
-    theta1 = np.stack([phi, phi + np.pi], axis=-1)                  # (..., 2)
-    u = np.stack([rho, -rho], axis=-1) - l3
-    v = (z - h)[..., None]
-    c3, s3, reachable = elbow_cosine(u, v, l1, l2)
-    # facing: elbow up is theta3 <= 0; turned away: elbow up is theta3 >= 0
-    s3_up = np.stack([-s3[..., 0], s3[..., 1]], axis=-1)
-    sols = []
-    for branch in (0, 1):
-        for sign in (1.0, -1.0):
-            t2, t3 = two_link_angles(u[..., branch], v[..., 0], c3[..., branch],
-                                     sign * s3_up[..., branch], l1, l2)
-            sols.append(np.stack([theta1[..., branch], t2, t3], axis=-1))
-    solutions = wrap_angle(np.stack(sols, axis=-2))                 # (..., 4, 3)
+    solutions, reachable, s3, base_singular, k = _candidates(robot, p, (h, l3, l1, l2))
     ok = np.repeat(reachable, 2, axis=-1)
     lo, hi = robot.limits.T
     ok &= np.all((solutions >= lo) & (solutions <= hi), axis=-1)
@@ -131,7 +112,6 @@ def desk_arm(robot: Robot, target: ArrayLike, *, tol: float = 1e-9) -> IKResult:
     position_error = np.linalg.norm(X[..., :3, 3] - p[..., None, :], axis=-1)
     valid = ok & (position_error <= tol)
     unreachable = ~np.any(valid, axis=-1)
-    k = np.hypot(u, v)                                                # (..., 2)
 
     def explain(index):
         parts = []
@@ -152,3 +132,31 @@ def desk_arm(robot: Robot, target: ArrayLike, *, tol: float = 1e-9) -> IKResult:
     }
     return finish(solutions, valid, position_error, np.zeros(valid.shape), flags,
                   target_reasons(unreachable, explain))
+
+
+def _candidates(robot, p, lengths):
+    r"""The four candidates (..., 4, 3) for hand positions ``p`` in the world frame, whether
+    each side reaches, :math:`|\sin\theta_3|` per side, whether the point is on the base
+    axis, and the shoulder-to-point distance per side (..., 2)."""
+    h, l3, l1, l2 = lengths
+    X_0W = np.linalg.inv(robot.base)
+    p0 = p @ X_0W[:3, :3].T + X_0W[:3, 3]
+    x, y, z = p0[..., 0], p0[..., 1], p0[..., 2]
+    rho = np.hypot(x, y)
+    phi = np.arctan2(y, x)
+    base_singular = rho < 1e-12
+
+    theta1 = np.stack([phi, phi + np.pi], axis=-1)                  # (..., 2)
+    u = np.stack([rho, -rho], axis=-1) - l3
+    v = (z - h)[..., None]
+    c3, s3, reachable = elbow_cosine(u, v, l1, l2)
+    # facing: elbow up is theta3 <= 0; turned away: elbow up is theta3 >= 0
+    s3_up = np.stack([-s3[..., 0], s3[..., 1]], axis=-1)
+    sols = []
+    for branch in (0, 1):
+        for sign in (1.0, -1.0):
+            t2, t3 = two_link_angles(u[..., branch], v[..., 0], c3[..., branch],
+                                     sign * s3_up[..., branch], l1, l2)
+            sols.append(np.stack([theta1[..., branch], t2, t3], axis=-1))
+    solutions = wrap_angle(np.stack(sols, axis=-2))                 # (..., 4, 3)
+    return solutions, reachable, s3, base_singular, np.hypot(u, v)

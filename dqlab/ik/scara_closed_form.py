@@ -97,34 +97,15 @@ def scara(robot: Robot, target: ArrayLike, *, tol: float = 1e-9,
     l1, l2 = robot.links[1].a, robot.links[2].a
     X_WT = parse_targets(target).transforms
     X_0n = np.linalg.inv(robot.base) @ X_WT @ np.linalg.inv(robot.tool)
-    R = X_0n[..., :3, :3]
-    x, y, z = X_0n[..., 0, 3], X_0n[..., 1, 3], X_0n[..., 2, 3]
-    # angle between the target's z axis and the vertical
-    tilt = np.arctan2(np.hypot(R[..., 0, 2], R[..., 1, 2]), R[..., 2, 2])
-    psi = np.arctan2(R[..., 1, 0], R[..., 0, 0])
-
-    links = robot.links
-    off = np.array([lk.theta_offset for lk in links])      # theta_3 is the constant for P
-    z0 = links[0].d + links[1].d + links[2].d + links[3].d
-
-    c2, s2, reachable = elbow_cosine(x, y, l1, l2)
-    rows = []
-    for sign in (1.0, -1.0):
-        t1, t2 = two_link_angles(x, y, c2, sign * s2, l1, l2)
-        t4 = psi - t1 - t2 - off[2]
-        q1, q2, q4 = wrap_angle(t1 - off[0]), wrap_angle(t2 - off[1]), wrap_angle(t4 - off[3])
-        rows.append(np.stack([q1, q2, z - z0, q4], axis=-1))
-    solutions = np.stack(rows, axis=-2)                                # (..., 2, 4)
-    raw = solutions
-
+    raw, reachable, s2, tilt = _candidates(robot, X_0n)             # (..., 2, 4), ...
     lo, hi = robot.limits.T
-    within = np.all((solutions >= lo - 1e-12) & (solutions <= hi + 1e-12), axis=-1)
-    clipped = np.clip(solutions, lo, hi)
+    within = np.all((raw >= lo - 1e-12) & (raw <= hi + 1e-12), axis=-1)
+    clipped = np.clip(raw, lo, hi)
     position_error, rotation_error = pose_errors(robot.fk(clipped), X_WT[..., None, :, :])
     ok = reachable[..., None] & within & (tilt <= rotation_tol)[..., None]
     valid = ok & (position_error <= tol) & (rotation_error <= rotation_tol)
     unreachable = ~np.any(valid, axis=-1)
-    k = np.hypot(x, y)
+    k = np.hypot(X_0n[..., 0, 3], X_0n[..., 1, 3])
 
     def explain(index):
         parts = []
@@ -148,3 +129,25 @@ def scara(robot: Robot, target: ArrayLike, *, tol: float = 1e-9,
     }
     return finish(clipped, valid, position_error, rotation_error, flags,
                   target_reasons(unreachable, explain))
+
+
+def _candidates(robot, X_0n):
+    r"""Both elbow branches for flange poses ``X_0n`` in frame 0: joint vectors (..., 2, 4)
+    before the limits, whether the point is within the arm's reach, :math:`|\sin\theta_2|`,
+    and the tilt of the tool axis from the vertical."""
+    R = X_0n[..., :3, :3]
+    x, y, z = X_0n[..., 0, 3], X_0n[..., 1, 3], X_0n[..., 2, 3]
+    tilt = np.arctan2(np.hypot(R[..., 0, 2], R[..., 1, 2]), R[..., 2, 2])
+    psi = np.arctan2(R[..., 1, 0], R[..., 0, 0])
+    links = robot.links
+    l1, l2 = links[1].a, links[2].a
+    off = np.array([lk.theta_offset for lk in links])      # theta_3 is the constant for P
+    z0 = links[0].d + links[1].d + links[2].d + links[3].d
+    c2, s2, reachable = elbow_cosine(x, y, l1, l2)
+    rows = []
+    for sign in (1.0, -1.0):
+        t1, t2 = two_link_angles(x, y, c2, sign * s2, l1, l2)
+        t4 = psi - t1 - t2 - off[2]
+        q1, q2, q4 = wrap_angle(t1 - off[0]), wrap_angle(t2 - off[1]), wrap_angle(t4 - off[3])
+        rows.append(np.stack([q1, q2, z - z0, q4], axis=-1))
+    return np.stack(rows, axis=-2), reachable, s2, tilt
