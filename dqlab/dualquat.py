@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ._checks import (
     as_float_array,
+    batch_shape,
     batched,
     check_finite,
     components,
@@ -81,7 +82,7 @@ def dual_quaternion_identity(shape=()):
     >>> dual_quaternion_identity()
     array([1., 0., 0., 0., 0., 0., 0., 0.])
     """
-    Q = np.zeros(tuple(np.atleast_1d(shape).astype(int)) + (8,))
+    Q = np.zeros(batch_shape(shape) + (8,))
     Q[..., 0] = 1.0
     return Q
 

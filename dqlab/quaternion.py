@@ -16,6 +16,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ._checks import (
     as_float_array,
+    batch_shape,
     batched,
     check_finite,
     components,
@@ -70,7 +71,7 @@ def quaternion_identity(shape=()):
     >>> quaternion_identity((2,)).shape
     (2, 4)
     """
-    q = np.zeros(tuple(np.atleast_1d(shape).astype(int)) + (4,))
+    q = np.zeros(batch_shape(shape) + (4,))
     q[..., 0] = 1.0
     return q
 

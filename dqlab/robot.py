@@ -42,7 +42,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._checks import as_float_array, batched
+from ._checks import as_float_array, batched, real_array
 from ._kernels import dual_quaternion_mul, dual_quaternion_mul_z_screw, screw_entries
 from .dualquat import dual_quaternion_from_transform
 
@@ -366,7 +366,7 @@ class Robot:
         ...
         ValueError: joint 3 (prismatic) = 0.5 is beyond its limits [0, 0.15]
         """
-        q = np.asarray(q, dtype=float)
+        q = real_array(q, "q")
         if q.ndim == 0 or q.shape[-1] != self.n:
             raise ValueError(
                 f"q must have shape (..., {self.n}) for this {self.n}-joint robot, "

@@ -11,7 +11,7 @@ Every function takes array-likes and broadcasts over leading axes.
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._checks import as_float_array, components, rotation_or_raise
+from ._checks import as_float_array, components, real_array, rotation_or_raise
 from ._kernels import orthonormality
 
 __all__ = [
@@ -324,7 +324,7 @@ def wrap_angle(theta: ArrayLike) -> NDArray[np.float64]:
     >>> wrap_angle([np.pi, -np.pi, 3 * np.pi / 2, 0.5])
     array([ 3.14159265,  3.14159265, -1.57079633,  0.5       ])
     """
-    theta = np.asarray(theta, dtype=float)
+    theta = real_array(theta, "theta")
     w = theta - _TWO_PI * np.round(theta * (1.0 / _TWO_PI))   # exact when |theta| < pi
     outside = (w <= -np.pi) | (w > np.pi)     # -pi, or a rounding of theta / (2 pi)
     if outside.any():

@@ -16,7 +16,7 @@ axes and :math:`\mathbf p_{AB}` is B's origin, both written in A. Composition re
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._checks import as_float_array
+from ._checks import as_float_array, batch_shape
 from .rotations import check_rotation_matrix
 
 __all__ = [
@@ -77,7 +77,7 @@ def transform_identity(shape=()):
     >>> transform_identity((2,)).shape
     (2, 4, 4)
     """
-    return np.broadcast_to(np.eye(4), tuple(np.atleast_1d(shape).astype(int)) + (4, 4)).copy()
+    return np.broadcast_to(np.eye(4), batch_shape(shape) + (4, 4)).copy()
 
 
 def transform_from(R: ArrayLike, p: ArrayLike, *, tol: float = 1e-9) -> NDArray[np.float64]:

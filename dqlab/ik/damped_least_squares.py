@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._checks import check_tolerance
 from ..robot import Robot
 from .result import IKResult, finish, target_reasons
 from .targets import parse_targets, pose_errors
@@ -118,8 +119,11 @@ def numerical(robot: Robot, target: ArrayLike, q0: ArrayLike, *, position_only: 
     stalled (damping above 1e+06) after ... iterations: position error 1.49 m, rotation error
     ... rad (tolerances 1e-10 m, 1e-10 rad)
     """
-    if rotation_tol is None:
-        rotation_tol = tol
+    tol = check_tolerance(tol, "tol")
+    rotation_tol = tol if rotation_tol is None else check_tolerance(rotation_tol, "rotation_tol")
+    for value, label in ((damping, "damping"), (min_damping, "min_damping"),
+                         (max_damping, "max_damping"), (max_step, "max_step")):
+        check_tolerance(value, label)
     targets = parse_targets(target, position=position_only)
     q0 = robot.check_joints(q0, limits="none")
     batch = np.broadcast_shapes(targets.batch, q0.shape[:-1])

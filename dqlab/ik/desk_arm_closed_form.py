@@ -10,6 +10,7 @@ solutions: the arm faces the point or turns its back to it (base angle :math:`\v
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._checks import check_tolerance
 from ..models import DESK_ARM_SHAPE
 from ..robot import Robot
 from ..rotations import wrap_angle
@@ -100,6 +101,7 @@ def desk_arm(robot: Robot, target: ArrayLike, *, tol: float = 1e-9) -> IKResult:
     >>> bool(desk_arm(arm, [1.0, 0.0, 0.0]).success)
     False
     """
+    tol = check_tolerance(tol, "tol")
     h, l3, l1, l2 = _lengths(robot)
     p = parse_targets(target, position="only").positions
     solutions, reachable, s3, base_singular, k = _candidates(robot, p, (h, l3, l1, l2))

@@ -14,6 +14,7 @@ on either side), and :math:`q_3, q_4` follow.
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._checks import check_tolerance
 from ..models import SCARA_SHAPE
 from ..robot import Robot
 from ..rotations import wrap_angle
@@ -91,8 +92,8 @@ def scara(robot: Robot, target: ArrayLike, *, tol: float = 1e-9,
     >>> print(result.reason)
     unreachable: beyond the limits of joint(s) 3
     """
-    if rotation_tol is None:
-        rotation_tol = tol
+    tol = check_tolerance(tol, "tol")
+    rotation_tol = tol if rotation_tol is None else check_tolerance(rotation_tol, "rotation_tol")
     SCARA_SHAPE.check(robot)
     l1, l2 = robot.links[1].a, robot.links[2].a
     X_WT = parse_targets(target).transforms

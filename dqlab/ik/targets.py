@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._checks import as_float_array
+from .._checks import as_float_array, check_tolerance, real_array
 from ..dualquat import (
     check_unit_dual_quaternion,
     dual_quaternion_from_transform,
@@ -130,10 +130,8 @@ def parse_targets(target: ArrayLike, *, position: bool | str = False, tol: float
     ...
     ValueError: target must have shape (..., 4, 4) (a transform) or (..., 8) (a unit dual ...
     """
-    try:
-        a = np.asarray(target, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be an array of numbers: {exc}") from None
+    a = real_array(target, name)
+    tol = check_tolerance(tol, "pose_tol" if name == "target" else "tol")
     kind = _kind(a, position, name)
     if kind == "position":
         a = as_float_array(a, name, (3,))

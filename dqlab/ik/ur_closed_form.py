@@ -107,7 +107,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._checks import as_float_array
+from .._checks import as_float_array, check_tolerance
 from ..dualquat import (
     dual_quaternion_conjugate,
     dual_quaternion_from_transform,
@@ -425,6 +425,8 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     elbow_singular [False  True]
     unreachable [False False]
     """
+    tol = check_tolerance(tol, "tol")
+    singular_tol = check_tolerance(singular_tol, "singular_tol")
     if residuals not in ("fk", "equations"):
         raise ValueError(f"residuals must be 'fk' or 'equations', got {residuals!r}")
     prm = ur_parameters(robot)
