@@ -43,7 +43,7 @@ from ._kernels import (
     translation_from_dual_quaternion_entries,
 )
 from ._wrapper import ArrayWrapper, array_of
-from .quaternion import quaternion_product
+from .quaternion import check_unit_quaternion, quaternion_product, rotate_vector
 from .transforms import check_transform
 
 __all__ = [
@@ -762,11 +762,11 @@ def pair_product(q1: ArrayLike, p1: ArrayLike, q2: ArrayLike, p2: ArrayLike, *, 
     >>> q, p + 0.0
     (array([0., 0., 0., 1.]), array([0., 0., 0.]))
     """
-    from .quaternion import rotate_vector
-
-    q = quaternion_product(q1, q2)
-    p = rotate_vector(q1, p2, tol=tol) + as_float_array(p1, "p1", _V)
-    return q, p
+    q1 = check_unit_quaternion(q1, tol, "q1")
+    q2 = check_unit_quaternion(q2, tol, "q2")
+    p1 = as_float_array(p1, "p1", _V)
+    p2 = as_float_array(p2, "p2", _V)
+    return quaternion_product(q1, q2), rotate_vector(q1, p2, tol=np.inf) + p1
 
 
 # --------------------------------------------------------------------------------------

@@ -184,3 +184,40 @@ def test_probing_for_a_missing_sub_package_is_false_not_an_import_error():
     for name in sorted(dqlab._SUBMODULES):
         present = importlib.util.find_spec(f"dqlab.{name}") is not None
         assert hasattr(dqlab, name) == present, name
+
+
+# --- the IK helpers ----------------------------------------------------------------------
+
+RESULT = ik.ur(ROBOT, X_UR)
+
+
+@pytest.mark.parametrize("call, error, message", [
+    (lambda: RESULT.best(np.full(6, np.nan)), ValueError, "q_ref contains NaN"),
+    (lambda: RESULT.best(np.zeros(5)), ValueError, r"q_ref must have shape \(\.\.\., 6\)"),
+    (lambda: ik.closest_solution(RESULT, None), TypeError, "q_ref must be an array"),
+    (lambda: ik.equivalent_solutions(1.0), ValueError, r"q must have shape \(\.\.\., n\)"),
+    (lambda: ik.equivalent_solutions([np.nan] * 6), ValueError, "q contains NaN"),
+    (lambda: ik.equivalent_solutions(np.zeros(30)), ValueError, "at most 12 joints"),
+    (lambda: ik.equivalent_solutions(np.zeros(6), limits=[1.0]), ValueError,
+     r"limits must have shape"),
+])
+def test_ik_helpers_validate_their_arguments(call, error, message):
+    with pytest.raises(error, match=message):
+        call()
+
+
+def test_ik_helpers_still_answer_good_input():
+    np.testing.assert_allclose(RESULT.best(Q_UR), Q_UR, atol=1e-12)
+    np.testing.assert_allclose(ik.closest_solution(RESULT, Q_UR), Q_UR, atol=1e-12)
+
+
+@pytest.mark.parametrize("args, message", [
+    (([1, 0, 0, 0], [0, 0, 0], [0, 0, 0, 0], [0, 0, 0]), "q2 is the zero quaternion"),
+    (([1, 0, 0, 0], [0, 0, 0], [np.nan, 0, 0, 0], [0, 0, 0]), "q2 contains NaN"),
+    (([2, 0, 0, 0], [0, 0, 0], [1, 0, 0, 0], [0, 0, 0]), "q1 must be a unit quaternion"),
+    (([1, 0, 0, 0], [0, 0, 0], [1, 0, 0, 0], [np.inf, 0, 0]), "p2 contains NaN"),
+    (([1, 0, 0, 0], [0, 0], [1, 0, 0, 0], [0, 0, 0]), r"p1 must have shape"),
+])
+def test_pair_product_checks_both_pairs_by_name(args, message):
+    with pytest.raises(ValueError, match=message):
+        dualquat.pair_product(*args)

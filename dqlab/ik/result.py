@@ -4,6 +4,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._checks import as_float_array
 from ..rotations import wrap_angle
 
 
@@ -49,22 +50,25 @@ class IKResult:
         """True where at least one valid solution exists, shape (...)."""
         return self.count > 0
 
-    def best(self, q_ref):
+    def best(self, q_ref) -> np.ndarray:
         """The valid solution closest to ``q_ref`` (shape (..., n)) for each target.
 
         Distance is measured joint-wise with angle wrapping for revolute joints. Raises
         ``ValueError`` if some target has no valid solution.
         """
+        n = np.shape(self.solutions)[-1]
+        q_ref = as_float_array(q_ref, "q_ref", (n,))[..., None, :]
         if not np.all(self.success):
             raise ValueError("some targets have no valid solution; check result.reason")
-        q_ref = np.asarray(q_ref, dtype=float)[..., None, :]
         diff = wrap_angle(self.solutions - q_ref)
         dist = np.where(self.valid, np.linalg.norm(diff, axis=-1), np.inf)
         index = np.argmin(dist, axis=-1)
         return np.take_along_axis(self.solutions, index[..., None, None], axis=-2)[..., 0, :]
 
 
-def finish(solutions, valid, position_error, rotation_error, flags, reason=None):
+def finish(solutions: np.ndarray, valid: np.ndarray, position_error: np.ndarray,
+           rotation_error: np.ndarray, flags: dict, reason: np.ndarray | None = None
+           ) -> IKResult:
     """The :class:`IKResult` of a solver, with the rows that are not valid set to zero.
 
     Every solver ends here, so that an invalid row never carries a NaN or a half-computed
@@ -97,7 +101,7 @@ def finish(solutions, valid, position_error, rotation_error, flags, reason=None)
                     rotation_error=rotation_error, flags=flags, reason=reason)
 
 
-def target_reasons(failed, explain):
+def target_reasons(failed: np.ndarray, explain) -> np.ndarray:
     """Why each target without a solution failed: ``explain(index)`` for those, ``""`` else.
 
     Parameters

@@ -131,6 +131,7 @@ _HALF_SQRT2 = np.sqrt(0.5)
 _CHUNK = 1024                               # poses per block: temporaries of 64 kB at most
 _FLAGS = ("wrist_singular", "shoulder_singular", "elbow_singular", "unreachable")
 _EYE_BYTES = np.eye(4).tobytes()
+_MAX_EQUIVALENT_JOINTS = 12                # 4096 candidates per joint vector
 _SIGMA = np.array([[1.0], [-1.0]])        # wrist branch w = 0, 1, axis -2 of (s, w, n)
 _ELBOW = np.array([[[1.0]], [[-1.0]]])    # elbow branch e = 0, 1, axis -3 of (s, e, w, n)
 
@@ -724,9 +725,16 @@ def equivalent_solutions(q: ArrayLike, limits: ArrayLike = (-2 * np.pi, 2 * np.p
     >>> cands[1].round(4)
     array([-5.7832, -3.    ,  0.    ,  1.    ,  2.    , -1.    ])
     """
-    q = np.asarray(q, dtype=float)
+    q = as_float_array(q, "q")
+    if q.ndim == 0:
+        raise ValueError("q must have shape (..., n), a joint vector or a batch of them")
     n = q.shape[-1]
-    limits = np.asarray(limits, dtype=float)
+    if n > _MAX_EQUIVALENT_JOINTS:
+        raise ValueError(f"equivalent_solutions lists 2**n candidates: at most "
+                         f"{_MAX_EQUIVALENT_JOINTS} joints, got {n}")
+    limits = as_float_array(limits, "limits")
+    if limits.shape not in ((2,), (n, 2)):
+        raise ValueError(f"limits must have shape (2,) or ({n}, 2), got {limits.shape}")
     lo = np.broadcast_to(limits[..., 0], (n,))
     hi = np.broadcast_to(limits[..., 1], (n,))
     if np.any(hi - lo > 4 * np.pi + 1e-12):
@@ -773,7 +781,7 @@ def closest_solution(result: IKResult, q_ref: ArrayLike,
     array([ 3., -1.,  1., -2.,  1.,  6.])
     """
     best = result.best(q_ref)
-    q_ref = np.asarray(q_ref, dtype=float)
+    q_ref = as_float_array(q_ref, "q_ref")
     cands, within = equivalent_solutions(best, limits)
     dist = np.abs(cands - q_ref[..., None, :]).sum(axis=-1)
     dist = np.where(within, dist, np.inf)
