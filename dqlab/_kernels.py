@@ -204,3 +204,30 @@ def translation_from_dual_quaternion_entries(rw, rx, ry, rz, dw, dx, dy, dz):
     """
     _, tx, ty, tz = quaternion_mul(dw, dx, dy, dz, rw, -rx, -ry, -rz)
     return 2.0 * tx, 2.0 * ty, 2.0 * tz
+
+
+# --------------------------------------------------------------------------------------
+# Norms
+
+
+def norm_last_axis(a):
+    r"""Euclidean norm over the last axis of an array, without overflow or underflow.
+
+    :math:`\sqrt{\sum a_i^2}` directly where the sum of squares is a normal number (the
+    result is then exactly that of the plain formula), and as
+    :math:`m \sqrt{\sum (a_i / m)^2}` with :math:`m = \max |a_i|` elsewhere (entries near
+    1e±154 and beyond, whose squares overflow or underflow).
+
+    >>> norm_last_axis(np.array([3e200, 4e200])), norm_last_axis(np.array([3e-200, 4e-200]))
+    (array(5.e+200), array(5.e-200))
+    """
+    with np.errstate(over="ignore", under="ignore"):
+        n2 = np.sum(a * a, axis=-1)
+    n = np.array(np.sqrt(n2))
+    risky = ~((n2 > 1e-290) & (n2 < 1e290))
+    if risky.any():
+        sub = a[risky]
+        m = np.max(np.abs(sub), axis=-1)
+        safe = np.where(m > 0.0, m, 1.0)
+        n[risky] = m * np.sqrt(np.sum((sub / safe[..., None]) ** 2, axis=-1))
+    return n

@@ -35,6 +35,7 @@ from ._checks import (
 from ._kernels import (
     dual_quaternion_mul,
     matrix_entries_from_quaternion,
+    norm_last_axis,
     orthonormality,
     quaternion_from_matrix_entries,
     quaternion_mul,
@@ -250,7 +251,7 @@ def dual_quaternion_norm(Q: ArrayLike) -> NDArray[np.float64]:
     """
     Q = as_float_array(Q, "Q", _D)
     qr, qd = Q[..., :4], Q[..., 4:]
-    a = np.sqrt(np.sum(qr * qr, axis=-1))
+    a = norm_last_axis(qr)
     if np.any(a == 0.0):
         raise ValueError("the real part of Q is the zero quaternion: the norm is undefined")
     return np.stack([a, np.sum(qr * qd, axis=-1) / a], axis=-1)

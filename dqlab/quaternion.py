@@ -28,6 +28,7 @@ from ._checks import (
 )
 from ._kernels import (
     matrix_entries_from_quaternion,
+    norm_last_axis,
     orthonormality,
     quaternion_from_matrix_entries,
     quaternion_mul,
@@ -161,11 +162,11 @@ def quaternion_norm(q: ArrayLike) -> NDArray[np.float64]:
     2.0
     """
     q = as_float_array(q, "q", _Q)
-    return np.sqrt(np.sum(q * q, axis=-1))
+    return norm_last_axis(q)
 
 
 def _nonzero_norm(q, name):
-    n = np.sqrt(np.sum(q * q, axis=-1))
+    n = norm_last_axis(q)
     if np.any(n == 0.0):
         raise ValueError(f"{name} is the zero quaternion, which has no inverse or direction")
     return n
@@ -195,7 +196,7 @@ def quaternion_inverse(q: ArrayLike) -> NDArray[np.float64]:
     """
     q = as_float_array(q, "q", _Q)
     n = _nonzero_norm(q, "q")
-    return quaternion_conjugate(q) / (n * n)[..., None]
+    return quaternion_conjugate(q) / n[..., None] / n[..., None]
 
 
 def quaternion_normalize(q: ArrayLike) -> NDArray[np.float64]:
@@ -348,7 +349,7 @@ def quaternion_from_axis_angle(axis: ArrayLike, angle: ArrayLike) -> NDArray[np.
     """
     axis = as_float_array(axis, "axis", _V)
     angle = as_float_array(angle, "angle")
-    n = np.sqrt(np.sum(axis * axis, axis=-1))
+    n = norm_last_axis(axis)
     if np.any(n == 0.0):
         raise ValueError("axis is the zero vector, which has no direction")
     half = 0.5 * angle

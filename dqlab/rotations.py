@@ -12,7 +12,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._checks import as_float_array, components, real_array, rotation_or_raise
-from ._kernels import orthonormality
+from ._kernels import norm_last_axis, orthonormality
 
 __all__ = [
     "rot_x", "rot_y", "rot_z", "matrix_from_euler_zxz", "euler_zxz_from_matrix",
@@ -433,7 +433,7 @@ def rpy_from_matrix(R: ArrayLike, *, tol: float = 1e-9, singular_tol: float = 1e
 
 def _unit_axis(axis):
     axis = as_float_array(axis, "axis", (3,))
-    n = np.sqrt(np.sum(axis * axis, axis=-1))
+    n = norm_last_axis(axis)
     if np.any(n == 0.0):
         raise ValueError("axis is the zero vector, which has no direction")
     return axis / n[..., None]

@@ -221,3 +221,31 @@ def test_ik_helpers_still_answer_good_input():
 def test_pair_product_checks_both_pairs_by_name(args, message):
     with pytest.raises(ValueError, match=message):
         dualquat.pair_product(*args)
+
+
+# --- huge and tiny magnitudes ------------------------------------------------------------
+
+@pytest.mark.parametrize("scale", [1e-200, 1e-160, 1e160, 1e200])
+def test_norms_and_normalisations_neither_overflow_nor_underflow(scale):
+    q = np.array([1.0, 1.0, 0.0, 0.0]) * scale
+    np.testing.assert_allclose(quaternion.quaternion_norm(q), np.sqrt(2) * scale, rtol=1e-15)
+    np.testing.assert_allclose(quaternion.quaternion_normalize(q), q / scale / np.sqrt(2),
+                               rtol=1e-15)
+    np.testing.assert_allclose(quaternion.quaternion_product(
+        quaternion.quaternion_inverse(q), q), [1, 0, 0, 0], atol=1e-15)
+    axis = np.array([1.0, 1.0, 0.0]) * scale
+    R = rotations.matrix_from_axis_angle(axis, 0.5)
+    np.testing.assert_allclose(R, rotations.matrix_from_axis_angle([1, 1, 0], 0.5),
+                               atol=1e-15)
+    np.testing.assert_allclose(quaternion.quaternion_from_axis_angle(axis, 0.5),
+                               quaternion.quaternion_from_axis_angle([1, 1, 0], 0.5),
+                               atol=1e-15)
+    Q = np.array([1.0, 1.0, 0, 0, 0, 0, 0, 0]) * scale
+    np.testing.assert_allclose(dualquat.dual_quaternion_normalize(Q)[:4],
+                               [np.sqrt(0.5), np.sqrt(0.5), 0, 0], rtol=1e-15)
+
+
+def test_norms_of_ordinary_values_are_the_plain_formula():
+    rng = np.random.default_rng(3)
+    q = rng.normal(size=(100, 4))
+    assert np.array_equal(quaternion.quaternion_norm(q), np.sqrt(np.sum(q * q, axis=-1)))
