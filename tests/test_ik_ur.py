@@ -779,3 +779,36 @@ def test_thesis_theta5_acos_loses_half_the_digits(robot):
     our_error = np.where(result.valid, np.abs(ours - 1e-7), np.inf).min(axis=-1)
     assert thesis_error.max() > 1e-9          # digits lost
     assert our_error.max() < 1e-14
+
+
+def test_no_missed_solution_near_the_wrist_and_elbow_singularities_together(robot):
+    """100,000 configurations with theta5 log-uniform within 1e-12..1e-5 of 0 (half of them
+    of +-pi) and theta3 within 1e-4..1e-1 of 0 (a nearly stretched elbow), the other joints
+    uniform. Near the wrist singularity theta234 is ill-conditioned; a row whose wrist-1
+    point it pushes out of the forearm's reach moves within its wrist family instead of
+    being declared unreachable. Every pose is solved, the generating configuration is among
+    the valid rows (exactly, or as the member of its wrist family: same theta1, theta5 and
+    theta234 -+ theta6, to 1e-6 rad), and every valid row reproduces the pose to 1e-9 m."""
+    rng = np.random.default_rng(11)
+    n = 100_000
+    q = rng.uniform(-np.pi, np.pi, (n, 6))
+    q[:, 4] = rng.choice([-1.0, 1.0], n) * 10 ** rng.uniform(-12, -5, n)
+    half = n // 2
+    q[half:, 4] = rng.choice([-np.pi, np.pi], n - half) - q[half:, 4]
+    q[:, 2] = rng.choice([-1.0, 1.0], n) * 10 ** rng.uniform(-4, -1, n)
+    q = wrapped(q)
+    T = robot.fk(q)
+    result = ur(robot, T)
+    assert result.success.all() and not result.flags["unreachable"].any()
+    sol = result.solutions
+    exact = (np.abs(wrapped(sol - q[:, None, :])).max(-1) < 1e-6) & result.valid
+    near0 = np.abs(q[:, 4]) < 1.0
+    theta234 = sol[..., 1] + sol[..., 2] + sol[..., 3]
+    fixed = np.where(near0[:, None], theta234 + sol[..., 5], theta234 - sol[..., 5])
+    q_fixed = np.where(near0, q[:, 1:4].sum(-1) + q[:, 5], q[:, 1:4].sum(-1) - q[:, 5])
+    family = (result.valid
+              & (np.abs(wrapped(sol[..., 0] - q[:, None, 0])) < 1e-6)
+              & (np.abs(wrapped(sol[..., 4] - q[:, None, 4])) < 1e-6)
+              & (np.abs(wrapped(fixed - q_fixed[:, None])) < 1e-6))
+    assert (exact | family).any(-1).all()
+    assert_reproduces(robot, result, T, tol=1e-9)

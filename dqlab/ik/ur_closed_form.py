@@ -132,6 +132,7 @@ _CHUNK = 1024                               # poses per block: temporaries of 64
 _FLAGS = ("wrist_singular", "shoulder_singular", "elbow_singular", "unreachable")
 _EYE_BYTES = np.eye(4).tobytes()
 _MAX_EQUIVALENT_JOINTS = 12                # 4096 candidates per joint vector
+_NEAR_WRIST = 1e-3                        # |sin theta5| below which a clipped row is moved
 _SIGMA = np.array([[1.0], [-1.0]])        # wrist branch w = 0, 1, axis -2 of (s, w, n)
 _ELBOW = np.array([[[1.0]], [[-1.0]]])    # elbow branch e = 0, 1, axis -3 of (s, e, w, n)
 
@@ -482,7 +483,7 @@ def _solve_block(robot, prm, flange, targets, theta6_ref, options, out=None):
 def _branches(prm, flange, theta6_ref, tol, out=None):
     """Steps 1 to 4 for every branch: the candidate joint vectors of a block of poses
     (written into ``out`` when given)."""
-    d1, a2, a3, d4, d5 = (prm[k] for k in ("d1", "a2", "a3", "d4", "d5"))
+    d1, d4 = prm["d1"], prm["d4"]
     n = flange.q.shape[1]
     x5, y5, z5 = flange.p5
 
@@ -499,13 +500,23 @@ def _branches(prm, flange, theta6_ref, tol, out=None):
     theta5, half_sum, half_diff, c5bar, s5bar = steps.wrist_angles(L, _SIGMA)
     Px, Py = steps.arm_plane_wrist((x5, y5, z5), c1, s1, d1)
     Px = Px[:, None, :]                                       # (2, 1, n)
-    theta234, theta6, represented = _wrist_family(
-        prm, half_sum, half_diff, s5bar, c5bar, Px, Py, theta6_ref, tol)
+    family = (prm, half_sum, half_diff, s5bar, c5bar, Px, Py, theta6_ref, tol)
+    theta234, theta6, represented = _wrist_family(*family)
 
     # Steps 3 and 4, the planar chain: arrays (2, 2, 2, n) over (s, e, w)
-    X, Y = steps.wrist1_point(Px, Py, theta234, d5)          # (2, 2, n) over (s, w)
-    X, Y = X[:, None], Y[:, None]                             # (2, 1, 2, n)
-    theta2, theta3, outer, inner, sin3 = steps.elbow_angles(X, Y, a2, a3, _ELBOW)
+    X, Y, theta2, theta3, outer, inner, sin3 = _planar_chain(prm, Px, Py, theta234)
+    # Near the wrist singularity theta234 comes from coefficients of the size of theta5 and
+    # may be off by eps / |theta5|: enough to put the wrist-1 point of a stretched or folded
+    # elbow out of reach. Such rows move within their wrist family to where the forearm
+    # reaches (and are checked by forward kinematics).
+    repair = _out_of_reach(prm, outer, inner, tol) & (2.0 * s5bar * c5bar < _NEAR_WRIST)
+    if repair.any():
+        theta234, theta6, represented = _wrist_family(*family, repair=repair)
+        cols = np.flatnonzero(repair.any(axis=(0, 1)))        # the poses concerned
+        chain = (X, Y, theta2, theta3, outer, inner, sin3)
+        for whole, part in zip(chain, _planar_chain(prm, Px[..., cols], Py[..., cols],
+                                                    theta234[..., cols]), strict=True):
+            whole[..., cols] = part
     # theta4 = theta234 - theta2 - theta3, with theta234 in (-pi, pi]: in (-3 pi, 3 pi]
     theta4 = wrap_angle(wrap_angle(theta234)[:, None] - theta2 - theta3)
     solutions = _joint_vectors((theta1[:, None, None, :], theta2, theta3, theta4,
@@ -515,27 +526,28 @@ def _branches(prm, flange, theta6_ref, tol, out=None):
                      sin3=sin3, outer=outer, inner=inner, represented=represented)
 
 
-def _wrist_family(prm, half_sum, half_diff, s5bar, c5bar, Px, Py, theta6_ref, tol):
+def _wrist_family(prm, half_sum, half_diff, s5bar, c5bar, Px, Py, theta6_ref, tol, repair=None):
     """theta234 and theta6 (2, 2, n) from the half sum and difference; at a wrist
     singularity, where only theta234 -+ theta6 is fixed, the member of the family whose
-    theta6 is nearest ``theta6_ref`` among those the arm can reach. Also returns the mask
-    of the rows that stand for such a family (None when there is none)."""
+    theta6 is nearest ``theta6_ref`` among those the arm can reach; for the rows in
+    ``repair`` (near the singularity), the member nearest the computed theta234 that the arm
+    can reach. Also returns the mask of the rows so chosen (None when there is none)."""
     theta234 = half_sum + half_diff
     theta6 = half_sum - half_diff
     rep_tol = tol / (8.0 * max(1.0, abs(prm["d6"])))
-    rep0 = s5bar <= rep_tol                                   # (2, 1, n)
-    reppi = (c5bar <= rep_tol) & ~rep0
-    if not (rep0.any() or reppi.any()):
+    exact = (s5bar <= rep_tol) | (c5bar <= rep_tol)           # (2, 1, n)
+    if not (exact.any() or (repair is not None and repair.any())):
         return theta234, theta6, None
     shape = theta234.shape
     n = shape[-1]
-    rep0 = np.broadcast_to(rep0, shape)
-    rep = rep0 | np.broadcast_to(reppi, shape)
+    exact = np.broadcast_to(exact, shape)
+    rep = exact if repair is None else exact | repair
+    rep0 = np.broadcast_to(s5bar <= c5bar, shape)    # theta5 near 0: theta234 + theta6 fixed
     ref = np.zeros(n) if theta6_ref is None else theta6_ref
     ref = np.broadcast_to(ref + prm["offsets"][5], shape)
     full_sum = np.broadcast_to(2.0 * half_sum, shape)
     full_diff = 2.0 * half_diff
-    want = np.where(rep0, full_sum - ref, full_diff + ref)[rep]
+    want = np.where(exact, np.where(rep0, full_sum - ref, full_diff + ref), theta234)[rep]
     got = steps.feasible_theta234(np.broadcast_to(Px, shape)[rep],
                                   np.broadcast_to(Py, shape)[rep], want,
                                   prm["a2"], prm["a3"], prm["d5"])
@@ -545,6 +557,22 @@ def _wrist_family(prm, half_sum, half_diff, s5bar, c5bar, Px, Py, theta6_ref, to
     theta6[rep] = steps.wrap_angle(np.where(rep0[rep], full_sum[rep] - got,
                                             got - full_diff[rep]))
     return theta234, theta6, rep
+
+
+def _out_of_reach(prm, outer, inner, tol):
+    """Rows (2, 2, n) over (s, w) whose wrist-1 point lies more than tol / 2 beyond the
+    forearm's reach on some elbow branch."""
+    r_out, r_in = abs(prm["a2"] + prm["a3"]), abs(prm["a2"] - prm["a3"])
+    far = (outer < -tol * r_out) | (inner < -tol * r_in)     # (2, 1 or 2, 2, n)
+    return far.any(axis=1)
+
+
+def _planar_chain(prm, Px, Py, theta234):
+    """Steps 3 and 4: the wrist-1 point (2, 1, 2, n) and the elbow angles (2, 2, 2, n)."""
+    X, Y = steps.wrist1_point(Px, Py, theta234, prm["d5"])   # (2, 2, n) over (s, w)
+    X, Y = X[:, None], Y[:, None]                             # (2, 1, 2, n)
+    theta2, theta3, outer, inner, sin3 = steps.elbow_angles(X, Y, prm["a2"], prm["a3"], _ELBOW)
+    return X, Y, theta2, theta3, outer, inner, sin3
 
 
 def _joint_vectors(thetas, offsets, n, out=None):
