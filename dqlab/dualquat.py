@@ -254,7 +254,7 @@ def dual_quaternion_norm(Q: ArrayLike) -> NDArray[np.float64]:
     a = norm_last_axis(qr)
     if np.any(a == 0.0):
         raise ValueError("the real part of Q is the zero quaternion: the norm is undefined")
-    return np.stack([a, np.sum(qr * qd, axis=-1) / a], axis=-1)
+    return np.stack([a, np.sum((qr / a[..., None]) * qd, axis=-1)], axis=-1)
 
 
 def check_unit_dual_quaternion(Q: ArrayLike, tol: float = 1e-9, name: str = "Q"
@@ -366,10 +366,10 @@ def dual_quaternion_inverse(Q: ArrayLike) -> NDArray[np.float64]:
     """
     Q = as_float_array(Q, "Q", _D)
     qr, qd = Q[..., :4], Q[..., 4:]
-    n2 = np.sum(qr * qr, axis=-1, keepdims=True)
-    if np.any(n2 == 0.0):
+    n = norm_last_axis(qr)[..., None]
+    if np.any(n == 0.0):
         raise ValueError("the real part of Q is the zero quaternion: Q has no inverse")
-    ri = qr * np.array([1.0, -1.0, -1.0, -1.0]) / n2
+    ri = qr * np.array([1.0, -1.0, -1.0, -1.0]) / n / n
     di = -quaternion_product(quaternion_product(ri, qd), ri)
     return np.concatenate([ri, di], axis=-1)
 
@@ -670,6 +670,8 @@ def dual_quaternion_apply_line(Q: ArrayLike, direction: ArrayLike, moment: Array
     >>> dual_quaternion_apply_line(Q, [0, 0, 1], [0, 0, 0])   # z axis moved to y = 1
     (array([0., 0., 1.]), array([1., 0., 0.]))
     """
+    direction = as_float_array(direction, "direction", _V)
+    moment = as_float_array(moment, "moment", _V)
     t = rotation_translation_from_dual_quaternion(Q, tol=tol)[1]
     l2 = dual_quaternion_apply_vector(Q, direction, tol=tol)
     m2 = dual_quaternion_apply_vector(Q, moment, tol=tol) + np.cross(t, l2)
@@ -704,7 +706,7 @@ def dual_quaternion_from_pair(q: ArrayLike, p: ArrayLike, *, tol: float = 1e-9
     >>> dual_quaternion_from_pair([1, 0, 0, 0], [0, 0, 2])
     array([1., 0., 0., 0., 0., 0., 0., 1.])
     """
-    return dual_quaternion_from_rotation_translation(q, p, tol=tol)
+    return dual_quaternion_from_rotation_translation(q, as_float_array(p, "p", _V), tol=tol)
 
 
 def pair_from_dual_quaternion(Q: ArrayLike, *, tol: float = 1e-9
@@ -888,10 +890,10 @@ def dual_quaternion_from_screw(l: ArrayLike, m: ArrayLike, theta: ArrayLike, d: 
     m = as_float_array(m, "m", _V)
     theta = as_float_array(theta, "theta")
     d = as_float_array(d, "d")
-    ln = np.sqrt(np.sum(l * l, axis=-1))
+    ln = norm_last_axis(l)
     if np.any(np.abs(ln - 1.0) > 1e-9):
         raise ValueError("l must be a unit vector (the direction of the screw axis)")
-    mn = np.sqrt(np.sum(m * m, axis=-1))
+    mn = norm_last_axis(m)
     if np.any(np.abs(np.sum(l * m, axis=-1)) > 1e-9 * np.maximum(1.0, mn)):
         raise ValueError("m must be orthogonal to l (it is the moment c x l of the axis)")
     shape = np.broadcast_shapes(l.shape[:-1], m.shape[:-1], theta.shape, d.shape)
@@ -956,15 +958,18 @@ def dual_quaternion_power(Q: ArrayLike, t: ArrayLike, *, tol: float = 1e-9) -> N
     th = t * h
     rho = t * np.sinc(th / np.pi) / np.sinc(h / np.pi)
     small = s2 == 0.0
-    frac = np.where(small, t * (1.0 - t * t) / 3.0,
-                    (t * np.cos(th) - rho * w) / np.where(small, 1.0, s2))
     pu = np.sum(p * u, axis=-1)
     shape = np.broadcast_shapes(Q.shape[:-1], t.shape)
     out = np.empty(shape + (8,))
-    out[..., 0] = np.cos(th)
-    out[..., 1:4] = rho[..., None] * u
-    out[..., 4] = -0.5 * t * rho * pu
-    out[..., 5:8] = rho[..., None] * qd[..., 1:] + (0.5 * frac * pu)[..., None] * u
+    with np.errstate(over="ignore", invalid="ignore"):
+        frac = np.where(small, t * (1.0 - t * t) / 3.0,
+                        (t * np.cos(th) - rho * w) / np.where(small, 1.0, s2))
+        out[..., 0] = np.cos(th)
+        out[..., 1:4] = rho[..., None] * u
+        out[..., 4] = -0.5 * t * rho * pu
+        out[..., 5:8] = rho[..., None] * qd[..., 1:] + (0.5 * frac * pu)[..., None] * u
+    if not np.isfinite(out).all():
+        raise ValueError("t is too large: the power overflows")
     return out
 
 

@@ -118,7 +118,11 @@ def manipulability(J: ArrayLike) -> NDArray[np.float64]:
     J = as_float_array(J, "J")
     if J.ndim < 2 or J.shape[-2] > J.shape[-1]:
         raise ValueError(f"J must have shape (..., m, n) with m <= n, got shape {J.shape}")
-    return np.prod(singular_values(J), axis=-1)
+    with np.errstate(over="ignore"):
+        w = np.prod(singular_values(J), axis=-1)
+    if not np.isfinite(w).all():
+        raise ValueError("J is too large: its manipulability overflows")
+    return w
 
 
 def is_singular(J: ArrayLike, tol: float = 1e-6) -> NDArray[np.bool_]:

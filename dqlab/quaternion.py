@@ -545,13 +545,14 @@ def quaternion_exp(q: ArrayLike) -> NDArray[np.float64]:
     """
     q = as_float_array(q, "q", _Q)
     v = q[..., 1:]
-    a = np.sqrt(np.sum(v * v, axis=-1))
-    e = np.exp(q[..., 0])
-    # sin(a)/a written with np.sinc, which is exact at a = 0
-    s = e * np.sinc(a / np.pi)
-    out = np.empty(np.shape(q))
-    out[..., 0] = e * np.cos(a)
-    out[..., 1:] = v * s[..., None]
+    a = norm_last_axis(v)
+    with np.errstate(over="ignore", invalid="ignore"):
+        e = np.exp(q[..., 0])
+        # sin(a)/a written with np.sinc, which is exact at a = 0
+        s = e * np.sinc(a / np.pi)
+        out = np.empty(np.shape(q))
+        out[..., 0] = e * np.cos(a)
+        out[..., 1:] = v * s[..., None]
     if not np.isfinite(out).all():
         raise ValueError("q is too large: its exponential overflows")
     return out
@@ -593,7 +594,7 @@ def quaternion_log(q: ArrayLike) -> NDArray[np.float64]:
     q = as_float_array(q, "q", _Q)
     n = _nonzero_norm(q, "q")
     u = q[..., 1:]
-    s = np.sqrt(np.sum(u * u, axis=-1))
+    s = norm_last_axis(u)
     phi = np.arctan2(s, q[..., 0])
     zero = s == 0.0
     out = np.empty(np.shape(q))

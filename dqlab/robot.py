@@ -333,7 +333,8 @@ class Robot:
         self._screw_constants = (lines.tolist(), dual_quaternion_from_transform(X_WT0).tolist())
 
     # -- joint vectors -----------------------------------------------------------------------
-    def check_joints(self, q: ArrayLike, *, limits: str = "prismatic") -> NDArray[np.float64]:
+    def check_joints(self, q: ArrayLike, *, limits: str = "prismatic", name: str = "q"
+                     ) -> NDArray[np.float64]:
         """Validate joint vectors and return them as a float array.
 
         Parameters
@@ -366,13 +367,13 @@ class Robot:
         ...
         ValueError: joint 3 (prismatic) = 0.5 is beyond its limits [0, 0.15]
         """
-        q = real_array(q, "q")
+        q = real_array(q, name)
         if q.ndim == 0 or q.shape[-1] != self.n:
             raise ValueError(
-                f"q must have shape (..., {self.n}) for this {self.n}-joint robot, "
+                f"{name} must have shape (..., {self.n}) for this {self.n}-joint robot, "
                 f"got shape {q.shape}")
         if not np.isfinite(q).all():
-            raise ValueError("q contains NaN or infinity")
+            raise ValueError(f"{name} contains NaN or infinity")
         if limits == "none":
             return q
         if limits == "prismatic":

@@ -125,7 +125,7 @@ def numerical(robot: Robot, target: ArrayLike, q0: ArrayLike, *, position_only: 
                          (max_damping, "max_damping"), (max_step, "max_step")):
         check_tolerance(value, label)
     targets = parse_targets(target, position=position_only)
-    q0 = robot.check_joints(q0, limits="none")
+    q0 = robot.check_joints(q0, limits="none", name="q0")
     batch = np.broadcast_shapes(targets.batch, q0.shape[:-1])
     n = robot.n
     X_target = np.broadcast_to(targets.transforms, batch + (4, 4)).reshape(-1, 4, 4)

@@ -11,6 +11,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._checks import check_tolerance
+from .._kernels import norm_last_axis
 from ..models import DESK_ARM_SHAPE
 from ..robot import Robot
 from ..rotations import wrap_angle
@@ -111,7 +112,7 @@ def desk_arm(robot: Robot, target: ArrayLike, *, tol: float = 1e-9) -> IKResult:
     # For an unreachable point the clipped cosine gives the closest pose, so the reported
     # position error says how far out of reach the point is.
     X = robot.fk(solutions)
-    position_error = np.linalg.norm(X[..., :3, 3] - p[..., None, :], axis=-1)
+    position_error = norm_last_axis(X[..., :3, 3] - p[..., None, :])
     valid = ok & (position_error <= tol)
     unreachable = ~np.any(valid, axis=-1)
 

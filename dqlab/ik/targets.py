@@ -213,7 +213,8 @@ def pose_errors(X: ArrayLike, X_target: ArrayLike
     X = as_float_array(X, "X", (4, 4))
     X_target = as_float_array(X_target, "X_target", (4, 4))
     dp = X[..., :3, 3] - X_target[..., :3, 3]
-    position_error = np.sqrt(np.einsum("...i,...i->...", dp, dp))
+    with np.errstate(over="ignore", invalid="ignore"):
+        position_error = np.sqrt(np.einsum("...i,...i->...", dp, dp))
     # M = R R*^T: M_ij is the dot product of row i of R with row j of R*
     A = [X[..., i, :3] for i in range(3)]
     B = [X_target[..., i, :3] for i in range(3)]
@@ -221,9 +222,15 @@ def pose_errors(X: ArrayLike, X_target: ArrayLike
     def dot(u, v):
         return np.einsum("...k,...k->...", u, v)
 
-    vx = dot(A[1], B[2]) - dot(A[2], B[1])
-    vy = dot(A[2], B[0]) - dot(A[0], B[2])
-    vz = dot(A[0], B[1]) - dot(A[1], B[0])
-    sin2 = np.sqrt(vx * vx + vy * vy + vz * vz)
-    cos2 = dot(A[0], B[0]) + dot(A[1], B[1]) + dot(A[2], B[2]) - 1.0
-    return np.asarray(position_error), np.asarray(np.arctan2(sin2, cos2))
+    with np.errstate(over="ignore", invalid="ignore"):
+        vx = dot(A[1], B[2]) - dot(A[2], B[1])
+        vy = dot(A[2], B[0]) - dot(A[0], B[2])
+        vz = dot(A[0], B[1]) - dot(A[1], B[0])
+    with np.errstate(over="ignore", invalid="ignore"):
+        sin2 = np.sqrt(vx * vx + vy * vy + vz * vz)
+        rotation_error = np.arctan2(sin2, dot(A[0], B[0]) + dot(A[1], B[1])
+                                    + dot(A[2], B[2]) - 1.0)
+    if not (np.isfinite(position_error).all() and np.isfinite(rotation_error).all()):
+        raise ValueError("X and X_target are too large for their errors (overflow): they "
+                         "must be rigid transforms")
+    return np.asarray(position_error), np.asarray(rotation_error)

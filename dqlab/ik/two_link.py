@@ -44,7 +44,8 @@ def elbow_cosine(u: ArrayLike, v: ArrayLike, l1: float, l2: float
     (array([0., 1.]), array([1., 0.]), array([ True, False]))
     """
     u, v = np.asarray(u, dtype=float), np.asarray(v, dtype=float)
-    c = (u * u + v * v - l1 * l1 - l2 * l2) / (2 * l1 * l2)
+    with np.errstate(over="ignore", invalid="ignore"):   # far away: c = inf, out of reach
+        c = (u * u + v * v - l1 * l1 - l2 * l2) / (2 * l1 * l2)
     reachable = np.abs(c) <= 1.0 + 1e-12
     c = np.clip(c, -1.0, 1.0)
     return c, np.sqrt(1.0 - c * c), reachable
