@@ -468,20 +468,20 @@ class ChainShape:
         return ""
 
 
-#: The UR family (UR3, UR5, UR10, e-series) for :func:`dqlab.ik.ur`.
+#: The UR family (UR3, UR5, UR10, e-series) for :func:`dqlab.ik.ur_closed_form.ur`.
 UR_SHAPE = ChainShape(
     "ur()", "a UR-family arm like dqlab.models.ur3() (standard DH, six revolute joints, "
     "alpha = (pi/2, 0, 0, pi/2, -pi/2, 0), a1 = a4 = a5 = a6 = 0, d2 = d3 = 0, nonzero a2, "
     "a3 and d4)", "dh", "RRRRRR", alpha=UR_ALPHA, zero_a=(0, 3, 4, 5), zero_d=(1, 2),
     nonzero_a=(1, 2), nonzero_d=(3,))
 
-#: The desktop arm for :func:`dqlab.ik.desk_arm`.
+#: The desktop arm for :func:`dqlab.ik.desk_arm_closed_form.desk_arm`.
 DESK_ARM_SHAPE = ChainShape(
     "desk_arm", "a chain like dqlab.models.desk_arm() (standard DH, three revolute joints, "
     "alpha = (pi/2, 0, 0), d_2 = d_3 = 0, no offsets)", "dh", "RRR", alpha=(PI / 2, 0.0, 0.0),
     zero_d=(1, 2), zero_offsets=True)
 
-#: The SCARA for :func:`dqlab.ik.scara` and the closed-form SCARA Jacobian.
+#: The SCARA for :func:`dqlab.ik.scara_closed_form.scara` and the closed-form SCARA Jacobian.
 SCARA_SHAPE = ChainShape(
     "scara()", "a chain like dqlab.models.scara_rsm5() (modified DH, joints RRPR, all "
     "alpha = 0, a_0 = a_3 = 0)", "mdh", "RRPR", alpha=(0.0,) * 4, zero_a=(0, 3))

@@ -630,7 +630,7 @@ class Robot:
 
         ``q`` holds the joint values one per joint: Python floats (one joint vector) or
         arrays of shape (N,) (a batch). The products are those of validated unit dual
-        quaternions, so the unchecked component kernels of :mod:`dqlab._kernels` serve.
+        quaternions, so the unchecked component kernels of ``dqlab._kernels`` serve.
         """
         cos, sin = (math.cos, math.sin) if type(q[0]) is float else (np.cos, np.sin)
         K = self._K_dual_quaternions

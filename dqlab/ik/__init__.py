@@ -3,20 +3,23 @@
 Every solver is called ``solver(robot, target, *, tol, ...)`` and returns an
 :class:`~dqlab.ik.result.IKResult` (the numerical solver also takes its start ``q0``):
 
-- :func:`ur` (:mod:`dqlab.ik.ur_closed_form`) -- every closed-form solution of a
-  UR-family arm, by dual quaternions; its steps are :mod:`dqlab.ik.ur_steps`;
-- :func:`desk_arm` (:mod:`dqlab.ik.desk_arm_closed_form`) -- the 3-DOF desktop arm in
-  closed form (the robot itself is :func:`dqlab.models.desk_arm`);
-- :func:`scara` (:mod:`dqlab.ik.scara_closed_form`) -- the SCARA RSM-5 in closed form;
-- :func:`numerical` (:mod:`dqlab.ik.damped_least_squares`) -- damped least squares,
-  position-only or full pose, for any chain.
+- ``dqlab.ik.ur`` (:func:`dqlab.ik.ur_closed_form.ur`) -- every closed-form solution of
+  a UR-family arm, by dual quaternions; its steps are :mod:`dqlab.ik.ur_steps`;
+- ``dqlab.ik.desk_arm`` (:func:`dqlab.ik.desk_arm_closed_form.desk_arm`) -- the 3-DOF
+  desktop arm in closed form (the robot itself is :func:`dqlab.models.desk_arm`);
+- ``dqlab.ik.scara`` (:func:`dqlab.ik.scara_closed_form.scara`) -- the SCARA RSM-5 in
+  closed form;
+- ``dqlab.ik.numerical`` (:func:`dqlab.ik.damped_least_squares.numerical`) -- damped least
+  squares, position-only or full pose, for any chain.
 
-What they share lives in two modules: :mod:`dqlab.ik.targets` parses and checks the targets
-once (:func:`~dqlab.ik.targets.parse_targets`) and measures the errors of a pose
-(:func:`pose_errors`); :mod:`dqlab.ik.result` holds the result type and how a solver
-finishes it (:func:`~dqlab.ik.result.finish`, :func:`~dqlab.ik.result.target_reasons`).
-A closed-form solver checks the robot against its :class:`dqlab.models.ChainShape`. A new
-closed-form solver is one new module built from these pieces.
+What they share lives in a few small modules: :mod:`dqlab.ik.targets` parses and checks
+the targets once (:func:`~dqlab.ik.targets.parse_targets`) and measures the errors of a pose
+(:func:`~dqlab.ik.targets.pose_errors`); :mod:`dqlab.ik.result` holds the result type and
+how a solver finishes it (:func:`~dqlab.ik.result.finish`,
+:func:`~dqlab.ik.result.target_reasons`); :mod:`dqlab.ik.two_link` solves the planar
+two-link arm. A closed-form solver checks the robot against its
+:class:`dqlab.models.ChainShape`. A new closed-form solver is one new module built from
+these pieces.
 
 Helpers for the UR solutions: ``SOLUTION_ORDER`` (the meaning of the eight rows),
 ``ur_parameters``, ``distinct_solutions``, ``equivalent_solutions`` (the 2 pi-equivalents

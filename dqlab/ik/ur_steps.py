@@ -1,11 +1,11 @@
 r"""The steps of the closed-form UR inverse kinematics, one equation per function.
 
-These are the building blocks of :func:`dqlab.ik.ur`; each function solves one equation of
-the derivation (the book's inverse-kinematics chapter, after section 4.3 of the thesis) and
-works on arrays of any shape with plain numpy operations, so that a whole batch of poses is
-solved without a Python loop. Angles are in radians, lengths in metres, and the UR's
-standard Denavit-Hartenberg values are used with their published signs (``a2``, ``a3`` are
-negative).
+These are the building blocks of :func:`dqlab.ik.ur_closed_form.ur`; each function solves
+one equation of the derivation (the book's inverse-kinematics chapter, after section 4.3 of
+the thesis) and works on arrays of any shape with plain numpy operations, so that a whole
+batch of poses is solved without a Python loop. Angles are in radians, lengths in metres,
+and the UR's standard Denavit-Hartenberg values are used with their published signs
+(``a2``, ``a3`` are negative).
 
 Notation. The pose is written relative to the arm's *zero pose* as the product of the six
 joint screws about their zero-pose axes (the thesis's axis-angle dual quaternions
