@@ -827,7 +827,7 @@ class LiveWindow:
     Attributes
     ----------
     server_proc : subprocess.Popen
-        The server process (:mod:`dqlab.viz._server`).
+        The server process (``python -m dqlab.viz._server``).
     zmq_url, web_url : str
         Where the server takes commands and where a browser opens the viewer.
     """
