@@ -325,9 +325,8 @@ def wrap_angle(theta: ArrayLike) -> NDArray[np.float64]:
     array([ 3.14159265,  3.14159265, -1.57079633,  0.5       ])
     """
     theta = real_array(theta, "theta")
-    w = theta - _TWO_PI * np.round(theta * (1.0 / _TWO_PI))   # exact when |theta| < pi
-    outside = (w <= -np.pi) | (w > np.pi)     # -pi, or a rounding of theta / (2 pi)
-    if outside.any():
+    w = theta - _TWO_PI * np.rint(theta * (1.0 / _TWO_PI))    # exact when |theta| < pi
+    if w.size and not np.abs(w).max() < np.pi:   # -pi, or a rounding of theta / (2 pi)
         w = np.where(w > np.pi, w - _TWO_PI, np.where(w <= -np.pi, w + _TWO_PI, w))
     return w
 

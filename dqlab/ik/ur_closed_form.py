@@ -509,7 +509,8 @@ def _branches(prm, flange, theta6_ref, tol, out=None):
     # may be off by eps / |theta5|: enough to put the wrist-1 point of a stretched or folded
     # elbow out of reach. Such rows move within their wrist family to where the forearm
     # reaches (and are checked by forward kinematics).
-    repair = _out_of_reach(prm, outer, inner, tol) & (2.0 * s5bar * c5bar < _NEAR_WRIST)
+    near = 2.0 * s5bar * c5bar < _NEAR_WRIST                  # (2, 1, n)
+    repair = _out_of_reach(prm, outer, inner, tol) & near if near.any() else near
     if repair.any():
         theta234, theta6, represented = _wrist_family(*family, repair=repair)
         cols = np.flatnonzero(repair.any(axis=(0, 1)))        # the poses concerned
