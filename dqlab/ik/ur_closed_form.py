@@ -443,10 +443,13 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     # The batch axis goes last, (branch axes..., n), so that every operation runs over long
     # contiguous rows; big batches are cut into blocks whose temporaries stay small.
     solutions = np.empty((n, 8, 6))
-    blocks = [_solve_block(robot, prm, flange[part], targets[part],
-                           None if theta6_ref is None else theta6_ref[part], options,
-                           out=solutions[part])
-              for part in (slice(start, start + _CHUNK) for start in range(0, n, _CHUNK))]
+    if 0 < n <= _CHUNK:
+        blocks = [_solve_block(robot, prm, flange, targets, theta6_ref, options, solutions)]
+    else:
+        blocks = [_solve_block(robot, prm, flange[part], targets[part],
+                               None if theta6_ref is None else theta6_ref[part], options,
+                               out=solutions[part])
+                  for part in (slice(start, start + _CHUNK) for start in range(0, n, _CHUNK))]
     out = _joined(blocks, n)
     return finish(solutions.reshape(batch + (8, 6)), out.valid.reshape(batch + (8,)),
                   out.position_error.reshape(batch + (8,)),
@@ -475,9 +478,11 @@ def _solve_block(robot, prm, flange, targets, theta6_ref, options, out=None):
     branches = _branches(prm, flange, theta6_ref, options.tol, out)
     pe, re = _errors(robot, prm, flange, branches, targets, options)       # (8, n) each
     ok = (pe <= options.tol) & (re <= options.tol)
+    any_valid = ok.any(axis=0)                                              # (n,)
     return _Block(solutions=branches.solutions, valid=ok.T, position_error=pe.T,
-                  rotation_error=re.T, flags=_flags(prm, branches, ok, options.singular_tol),
-                  reason=_reasons(prm, flange, branches, ok, options.tol))
+                  rotation_error=re.T,
+                  flags=_flags(prm, branches, ok, any_valid, options.singular_tol),
+                  reason=_reasons(prm, flange, branches, any_valid, options.tol))
 
 
 def _branches(prm, flange, theta6_ref, tol, out=None):
@@ -649,12 +654,11 @@ def _fk_errors(robot, solutions, X_target, tool_fix):
     return pose_errors(X, X_target)
 
 
-def _flags(prm, branches, ok, singular_tol):
+def _flags(prm, branches, ok, any_valid, singular_tol):
     """The singularity and reach flags (n,) of a block, over its valid rows."""
     n = ok.shape[1]
     ok4 = ok.reshape(2, 2, 2, n)
     sin5 = 2.0 * branches.s5bar * branches.c5bar               # (2, 1, n) over (s, w)
-    any_valid = ok.any(axis=0)
     flags = {"wrist_singular": np.zeros(n, dtype=bool),
              "shoulder_singular": any_valid & (branches.h < singular_tol * prm["d4"]),
              "elbow_singular": np.zeros(n, dtype=bool),
@@ -666,14 +670,13 @@ def _flags(prm, branches, ok, singular_tol):
     return flags
 
 
-def _reasons(prm, flange, branches, ok, tol):
+def _reasons(prm, flange, branches, any_valid, tol):
     """Why each pose of a block without a valid row has none (n,): the first step that
     fails on every branch."""
-    n = ok.shape[1]
-    reason = np.full(n, "", dtype=object)
-    none = ~ok.any(axis=0)
-    if not none.any():
+    reason = np.full(any_valid.shape, "", dtype=object)
+    if any_valid.all():
         return reason
+    none = ~any_valid
     outer, inner = branches.outer < 0, branches.inner < 0
     reason[none] = REASON_TOL
     reason[none & (outer | inner).all(axis=(0, 1, 2))] = REASON_REACH
