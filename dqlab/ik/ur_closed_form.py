@@ -217,8 +217,8 @@ class _Branches:
     the checks need; arrays over the branch axes (s, e, w) with the poses last."""
 
     solutions: np.ndarray      # (n, 8, 6), wrapped to (-pi, pi]
-    h: np.ndarray              # (2, n) shoulder: distance of p5 from the cylinder, signed
-    h2: np.ndarray             # (2, n) its square before clipping (negative: inside)
+    h: np.ndarray              # (n,) sqrt(x5^2 + y5^2 - d4^2), clipped at 0
+    h2: np.ndarray             # (n,) x5^2 + y5^2 - d4^2 before clipping (negative: inside)
     s5bar: np.ndarray          # (2, 1, n) |sin(theta5 / 2)|
     c5bar: np.ndarray          # (2, 1, n) |cos(theta5 / 2)|
     X: np.ndarray              # (2, 1, 2, n) wrist-1 point in the arm plane
