@@ -2,8 +2,12 @@
 """The project's task runner. Needs nothing but Python >= 3.10.
 
     python3 tasks.py book    build the HTML book into _build/html
-    python3 tasks.py test    unit tests, doctests, every notebook (nbval), the strict book
-                             build and the browser check of the built pages
+    python3 tasks.py test    the strict book build, then one pytest session: unit tests,
+                             doctests, every notebook (nbval) and the browser check of the
+                             built pages
+    python3 tasks.py fast    the inner loop: unit tests and doctests, no book, no slow
+                             sweeps (under a minute)
+    python3 tasks.py lint    ruff over the package, tests and scripts, then the chapters
     python3 tasks.py lab     open the chapters in JupyterLab
     python3 tasks.py serve   serve the built book on http://127.0.0.1:8000
     python3 tasks.py clean   remove the build directory
@@ -84,9 +88,19 @@ def task_test():
     say("building the book with warnings as errors (executes every chapter)")
     build_book(strict=True)
     say("unit tests, doctests, notebooks (nbval) and the browser check of the built book")
-    run(PYTHON, "-m", "pytest", "tests", "dqlab", "book", "--doctest-modules", "--nbval-lax",
-        "--nbval-cell-timeout=120")
+    run(PYTHON, "-m", "pytest")     # what plain `pytest` runs: see [tool.pytest] in pyproject
     say(f"all checks passed in {time.time() - start:.0f} s")
+
+
+def task_fast():
+    ensure_environment()
+    run(PYTHON, "-m", "pytest", "-q", "tests", "dqlab", "-m", "not slow and not browser")
+
+
+def task_lint():
+    ensure_environment()
+    run(BIN / "ruff", "check", ".")
+    run(BIN / "ruff", "check", *sorted((ROOT / "book").glob("*.ipynb")))
 
 
 def task_lab():
@@ -107,8 +121,8 @@ def task_clean():
     say("removed _build")
 
 
-TASKS = {"book": task_book, "test": task_test, "lab": task_lab, "serve": task_serve,
-         "clean": task_clean}
+TASKS = {"book": task_book, "test": task_test, "fast": task_fast, "lint": task_lint,
+         "lab": task_lab, "serve": task_serve, "clean": task_clean}
 
 if __name__ == "__main__":
     if len(sys.argv) != 2 or sys.argv[1] not in TASKS:

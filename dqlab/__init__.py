@@ -125,5 +125,9 @@ _SUBMODULES = {
 
 def __getattr__(name):
     if name in _SUBMODULES:
-        return importlib.import_module(f"{__name__}.{name}")
+        try:
+            return importlib.import_module(f"{__name__}.{name}")
+        except ModuleNotFoundError as exc:
+            if exc.name != f"{__name__}.{name}":   # the module exists, a dependency is absent
+                raise
     raise AttributeError(f"module 'dqlab' has no attribute {name!r}")

@@ -1,6 +1,80 @@
 """Input validation shared by every module: shapes, finiteness, clear ``ValueError`` s."""
 
+import math
+
 import numpy as np
+
+_FLOAT64 = np.dtype(np.float64)
+
+
+def real_array(x, name):
+    """``x`` as a float array: ``TypeError`` naming ``name`` for complex numbers or text,
+    ``ValueError`` for anything else that is not an array of numbers (ragged, None...).
+
+    >>> real_array([1, 2], "v")
+    array([1., 2.])
+    >>> real_array([1j], "v")
+    Traceback (most recent call last):
+    ...
+    TypeError: v must hold real numbers, got complex numbers (dtype complex128)
+    """
+    if x is None:
+        raise TypeError(f"{name} must be an array of numbers, got None")
+    try:
+        a = np.asarray(x)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise ValueError(f"{name} must be an array of numbers: {exc}") from None
+    kind = a.dtype.kind
+    if kind == "f":
+        return a if a.dtype == _FLOAT64 else a.astype(float)
+    if kind == "c":
+        raise TypeError(f"{name} must hold real numbers, got complex numbers (dtype {a.dtype})")
+    if kind in "USV":
+        raise TypeError(f"{name} must hold numbers, got {a.dtype.name} data")
+    if kind == "O" and any(v is None for v in a.flat):
+        raise TypeError(f"{name} must be an array of numbers, got None in it")
+    try:
+        return a.astype(float)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise ValueError(f"{name} must be an array of numbers: {exc}") from None
+
+
+def batch_shape(shape, name="shape"):
+    """A batch shape as a tuple of non-negative ints (an int or a sequence of ints).
+
+    >>> batch_shape(3), batch_shape((2, 0))
+    ((3,), (2, 0))
+    """
+    if isinstance(shape, tuple) and not shape:
+        return ()
+    dims = np.atleast_1d(np.asarray(shape, dtype=object))
+    out = []
+    for d in dims:
+        if isinstance(d, (bool, np.bool_)) or not isinstance(d, (int, np.integer)) or d < 0:
+            raise ValueError(f"{name} must be a non-negative int or a tuple of them, "
+                             f"got {shape!r}")
+        out.append(int(d))
+    return tuple(out)
+
+
+def check_tolerance(value, name):
+    """``value`` as a float, or ``ValueError`` naming ``name`` unless it is a number >= 0
+    (``inf`` switches a check off; NaN and negative numbers are refused).
+
+    >>> check_tolerance(1e-9, "tol")
+    1e-09
+    >>> check_tolerance(float("nan"), "tol")
+    Traceback (most recent call last):
+    ...
+    ValueError: tol must be a number >= 0, got nan
+    """
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number >= 0, got {value!r}") from None
+    if not v >= 0.0:
+        raise ValueError(f"{name} must be a number >= 0, got {value!r}")
+    return v
 
 
 def as_float_array(x, name, trailing=None):
@@ -12,10 +86,7 @@ def as_float_array(x, name, trailing=None):
     >>> as_float_array([1, 0, 0, 0], "q", (4,))
     array([1., 0., 0., 0.])
     """
-    try:
-        a = np.asarray(x, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be an array of numbers: {exc}") from None
+    a = real_array(x, name)
     if trailing is not None:
         trailing = tuple(trailing)
         if a.ndim < len(trailing) or a.shape[a.ndim - len(trailing):] != trailing:
@@ -47,8 +118,6 @@ def float_array(x, name, trailing):
         return x
     return as_float_array(x, name, trailing)
 
-
-_FLOAT64 = np.dtype(np.float64)
 
 
 def check_finite(a, name):
@@ -146,3 +215,79 @@ def batched(kernel, inputs, out_trailing, chunk=CHUNK):
         for start in range(0, n, chunk):
             out[start:start + chunk] = kernel(*(f[start:start + chunk] for f in flat))
     return out.reshape(shape + tuple(out_trailing))
+
+
+# --- Checks on components (see dqlab._kernels) ------------------------------------------
+
+
+def unit_quaternion_or_raise(parts, name, tol, subject=None):
+    """Raise unless the quaternion given by its components has norm 1 within ``tol``.
+
+    ``parts`` are four floats or four arrays; ``name`` is the argument, ``subject`` what the
+    message says is not unit (default ``name``, e.g. "the real part of Q").
+
+    >>> unit_quaternion_or_raise((0.0, 0.0, 0.0, 1.0), "q", 1e-9)
+    >>> unit_quaternion_or_raise((0.0, 0.0, 0.0, 0.0), "Q", 1e-9, "the real part of Q")
+    Traceback (most recent call last):
+    ...
+    ValueError: the real part of Q is the zero quaternion, which is not a rotation
+    """
+    w, x, y, z = parts
+    n2 = w * w + x * x + y * y + z * z
+    if isinstance(n2, np.ndarray):
+        if not np.isfinite(n2).all():
+            raise ValueError(f"{name} contains NaN or infinity")
+        bad = ~(np.abs(np.sqrt(n2) - 1.0) <= tol)
+        if bad.any():
+            _raise_not_unit(subject or name, np.sqrt(n2)[bad].flat[0], tol)
+        return
+    if abs(n2 - 1.0) <= tol:  # implies | |q| - 1 | <= tol / 2 (and catches NaN/inf below)
+        return
+    if not n2 - n2 == 0.0:
+        raise ValueError(f"{name} contains NaN or infinity")
+    if not abs(math.sqrt(n2) - 1.0) <= tol:
+        _raise_not_unit(subject or name, math.sqrt(n2), tol)
+
+
+def _raise_not_unit(subject, n, tol):
+    check_tolerance(tol, "tol")
+    if n == 0.0:
+        raise ValueError(f"{subject} is the zero quaternion, which is not a rotation")
+    raise ValueError(
+        f"{subject} must be a unit quaternion (norm 1 within {tol:g}), got norm {n:.12g}; "
+        "normalise it with quaternion_normalize first")
+
+
+def unit_dual_quaternion_or_raise(parts, name, tol):
+    """Raise unless :math:`|q_r| = 1` and :math:`\\langle q_r, q_d\\rangle = 0` within ``tol``.
+
+    >>> unit_dual_quaternion_or_raise((1.0, 0, 0, 0, 0, 0.5, 0, 0), "Q", 1e-9)
+    """
+    rw, rx, ry, rz, dw, dx, dy, dz = parts
+    unit_quaternion_or_raise((rw, rx, ry, rz), name, tol, f"the real part of {name}")
+    dot = rw * dw + rx * dx + ry * dy + rz * dz
+    bad = np.max(np.abs(dot), initial=0.0) if isinstance(dot, np.ndarray) else abs(dot)
+    if not bad - bad == 0.0:
+        raise ValueError(f"{name} contains NaN or infinity")
+    if not bad <= tol:
+        check_tolerance(tol, "tol")
+        raise ValueError(
+            f"{name} must be a unit dual quaternion: <q_r, q_d> = {bad:.3g} should be 0 "
+            f"(tolerance {tol:g}); normalise it with dual_quaternion_normalize first")
+
+
+def rotation_or_raise(name, err, det, tol):
+    """Raise unless ``err`` (largest entry of :math:`|R^T R - I|`, see
+    :func:`dqlab._kernels.orthonormality`) is within ``tol`` and ``det`` is positive.
+
+    >>> rotation_or_raise("R", 0.0, -1.0, 1e-9)
+    Traceback (most recent call last):
+    ...
+    ValueError: R is a reflection (determinant -1), not a rotation
+    """
+    check_tolerance(tol, "tol")
+    if not err <= tol:
+        raise ValueError(
+            f"{name} is not orthonormal: |R^T R - I| reaches {err:.3g} (tolerance {tol:g})")
+    if not det > 0.0:
+        raise ValueError(f"{name} is a reflection (determinant -1), not a rotation")

@@ -24,6 +24,10 @@ class ArrayWrapper:
 
     __slots__ = ("array",)
     __array_priority__ = 20
+    # numpy must not apply its ufuncs element-wise to a wrapper (``Q * ndarray`` would be
+    # an element-wise product): binary operators with arrays defer to the methods below,
+    # which refuse them (TypeError); ``np.asarray(Q)`` still gives the array.
+    __array_ufunc__ = None
     _trailing = None
     _name = "x"
     _product = None

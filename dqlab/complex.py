@@ -8,6 +8,7 @@ and broadcasts (NumPy's ``complex128``).
 """
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from ._checks import as_float_array
 
@@ -27,7 +28,7 @@ def _complex(z, name):
     return z
 
 
-def rotate_planar(z, theta):
+def rotate_planar(z: ArrayLike, theta: ArrayLike) -> NDArray[np.float64]:
     r"""Turn points of the plane by ``theta`` about the origin: :math:`z' = z\,e^{i\theta}`.
 
     .. math::
@@ -59,7 +60,7 @@ def rotate_planar(z, theta):
     return z * np.exp(1j * theta)
 
 
-def scale_rotate(z, r, theta):
+def scale_rotate(z: ArrayLike, r: ArrayLike, theta: ArrayLike) -> NDArray[np.float64]:
     r"""Scale by ``r`` and turn by ``theta``: :math:`z' = r e^{i\theta} z`.
 
     Parameters
@@ -83,7 +84,7 @@ def scale_rotate(z, r, theta):
     return _complex(z, "z") * from_polar(r, theta)
 
 
-def polar(z):
+def polar(z: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     r"""Modulus and argument of complex numbers, :math:`z = r e^{i\varphi}`.
 
     Parameters
@@ -108,7 +109,7 @@ def polar(z):
     return np.abs(z), np.angle(z)
 
 
-def from_polar(r, phi):
+def from_polar(r: ArrayLike, phi: ArrayLike) -> NDArray[np.float64]:
     r"""Complex numbers :math:`r e^{i\varphi} = r(\cos\varphi + i\sin\varphi)`.
 
     Parameters
@@ -131,7 +132,7 @@ def from_polar(r, phi):
     return r * np.exp(1j * phi)
 
 
-def compose_planar(*thetas):
+def compose_planar(*thetas: ArrayLike) -> NDArray[np.float64]:
     r"""The single rotation :math:`e^{i(\theta_1 + \theta_2 + \cdots)}` of successive ones.
 
     Planar rotations commute; their composition is the product of unit complex numbers,
@@ -157,7 +158,8 @@ def compose_planar(*thetas):
     return out
 
 
-def planar_arm_joints(lengths, angles, relative=True):
+def planar_arm_joints(lengths: ArrayLike, angles: ArrayLike, relative: bool = True
+                      ) -> NDArray[np.float64]:
     r"""Positions of the joints and the tip of a planar serial arm, as complex numbers.
 
     Link :math:`k` has length :math:`l_k` and absolute direction
@@ -205,7 +207,7 @@ def planar_arm_joints(lengths, angles, relative=True):
     return np.concatenate([base, z], axis=-1)
 
 
-def planar_arm_tip(lengths, angles, relative=True):
+def planar_arm_tip(lengths: ArrayLike, angles: ArrayLike, relative: bool = True):
     r"""Tip of a planar serial arm, :math:`\sum_k l_k e^{i(\theta_1 + \cdots + \theta_k)}`.
 
     See :func:`planar_arm_joints`.
@@ -219,7 +221,7 @@ def planar_arm_tip(lengths, angles, relative=True):
     return planar_arm_joints(lengths, angles, relative)[..., -1]
 
 
-def point_from_complex(z):
+def point_from_complex(z: ArrayLike):
     """``(..., 2)`` real coordinates ``(x, y)`` of complex numbers.
 
     Examples
@@ -231,7 +233,7 @@ def point_from_complex(z):
     return np.stack([z.real, z.imag], axis=-1)
 
 
-def complex_from_point(p):
+def complex_from_point(p: ArrayLike):
     """Complex numbers ``x + iy`` of ``(..., 2)`` points.
 
     Examples

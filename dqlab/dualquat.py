@@ -17,26 +17,34 @@ Array functions do the work; :class:`DualQuaternion` is a thin wrapper for noteb
 """
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from ._checks import (
     as_float_array,
+    batch_shape,
     batched,
     check_finite,
     components,
     float_array,
     pack,
+    rotation_or_raise,
     stack_components,
+    unit_dual_quaternion_or_raise,
+    unit_quaternion_or_raise,
+)
+from ._kernels import (
+    dual_quaternion_mul,
+    matrix_entries_from_quaternion,
+    norm_last_axis,
+    orthonormality,
+    quaternion_from_matrix_entries,
+    quaternion_mul,
+    quaternion_rotate,
+    screw_entries,
+    translation_from_dual_quaternion_entries,
 )
 from ._wrapper import ArrayWrapper, array_of
-from .quaternion import (
-    _from_matrix,
-    _matrix,
-    _mul,
-    _rot,
-    _unit_or_raise,
-    quaternion_product,
-)
-from .rotations import _orthonormality, _raise_not_rotation
+from .quaternion import check_unit_quaternion, quaternion_product, rotate_vector
 from .transforms import check_transform
 
 __all__ = [
@@ -63,27 +71,6 @@ def _in(x, name, trailing=_D):
     return a
 
 
-def _dq_unit_or_raise(parts, name, tol):
-    """Raise unless |q_r| = 1 and <q_r, q_d> = 0 within ``tol``."""
-    rw, rx, ry, rz, dw, dx, dy, dz = parts
-    try:
-        _unit_or_raise((rw, rx, ry, rz), name, tol)
-    except ValueError as exc:
-        msg = str(exc).replace(f"{name} must be a unit quaternion",
-                               f"the real part of {name} must be a unit quaternion")
-        msg = msg.replace(f"{name} is the zero quaternion",
-                          f"the real part of {name} is the zero quaternion")
-        raise ValueError(msg) from None
-    dot = rw * dw + rx * dx + ry * dy + rz * dz
-    bad = np.max(np.abs(dot)) if isinstance(dot, np.ndarray) else abs(dot)
-    if not bad - bad == 0.0:
-        raise ValueError(f"{name} contains NaN or infinity")
-    if not bad <= tol:
-        raise ValueError(
-            f"{name} must be a unit dual quaternion: <q_r, q_d> = {bad:.3g} should be 0 "
-            f"(tolerance {tol:g}); normalise it with dual_quaternion_normalize first")
-
-
 # --------------------------------------------------------------------------------------
 # Algebra
 
@@ -96,12 +83,12 @@ def dual_quaternion_identity(shape=()):
     >>> dual_quaternion_identity()
     array([1., 0., 0., 0., 0., 0., 0., 0.])
     """
-    Q = np.zeros(tuple(np.atleast_1d(shape).astype(int)) + (8,))
+    Q = np.zeros(batch_shape(shape) + (8,))
     Q[..., 0] = 1.0
     return Q
 
 
-def dual_quaternion_product(A, B):
+def dual_quaternion_product(A: ArrayLike, B: ArrayLike) -> NDArray[np.float64]:
     r"""Product of dual quaternions.
 
     .. math::
@@ -137,53 +124,17 @@ def dual_quaternion_product(A, B):
     A = _in(A, "A")
     B = _in(B, "B")
     if A.ndim == 1 and B.ndim == 1:
-        return pack(_dq_mul(A.tolist(), B.tolist()), (A, "A", _D), (B, "B", _D))
+        return pack(dual_quaternion_mul(A.tolist(), B.tolist()), (A, "A", _D), (B, "B", _D))
     check_finite(A, "A")
     check_finite(B, "B")
     return batched(_product_kernel, [(A, 1), (B, 1)], _D)
 
 
-def _dq_mul(a, b):
-    """(a_r + eps a_d)(b_r + eps b_d) on components: a_r b_r + eps (a_r b_d + a_d b_r)."""
-    arw, arx, ary, arz, adw, adx, ady, adz = a
-    brw, brx, bry, brz, bdw, bdx, bdy, bdz = b
-    rw, rx, ry, rz = _mul(arw, arx, ary, arz, brw, brx, bry, brz)
-    d1w, d1x, d1y, d1z = _mul(arw, arx, ary, arz, bdw, bdx, bdy, bdz)
-    d2w, d2x, d2y, d2z = _mul(adw, adx, ady, adz, brw, brx, bry, brz)
-    return rw, rx, ry, rz, d1w + d2w, d1x + d2x, d1y + d2y, d1z + d2z
-
-
-def _dq_mul_z_screw(a, c, s, h):
-    r"""``a`` times the screw about the z axis, on components (no checks).
-
-    The screw turns by :math:`\theta` about z and moves by :math:`2h` along it,
-    :math:`J = r + \varepsilon\, h k r` with :math:`r = c + s k`,
-    :math:`(c, s) = (\cos\frac\theta2, \sin\frac\theta2)`. As :math:`k` and :math:`r`
-    commute, :math:`a J = a_r r + \varepsilon\,(a_d r + h\, (a_r r)\, k)`: the same as
-    ``_dq_mul(a, (c, 0, 0, s, -h s, 0, 0, h c))`` without the products by zero.
-    """
-    arw, arx, ary, arz, adw, adx, ady, adz = a
-    # p r with r = c + s k is (c w - s z, c x + s y, c y - s x, c z + s w)
-    rw, rx, ry, rz = c * arw - s * arz, c * arx + s * ary, c * ary - s * arx, c * arz + s * arw
-    dw, dx, dy, dz = c * adw - s * adz, c * adx + s * ady, c * ady - s * adx, c * adz + s * adw
-    # p k is (-z, y, -x, w)
-    return rw, rx, ry, rz, dw - h * rz, dx + h * ry, dy - h * rx, dz + h * rw
-
-
-def _screw_parts(lx, ly, lz, mx, my, mz, c, s, h):
-    """The screw about the axis (l, m) on components (no checks); see
-    :func:`dual_quaternion_from_screw`. ``c, s`` are the cosine and sine of half the angle,
-    ``h`` half the displacement along the axis."""
-    hc = h * c
-    return (c, s * lx, s * ly, s * lz,
-            -h * s, s * mx + hc * lx, s * my + hc * ly, s * mz + hc * lz)
-
-
 def _product_kernel(A, B):
-    return stack_components(_dq_mul(components(A), components(B)))
+    return stack_components(dual_quaternion_mul(components(A), components(B)))
 
 
-def dual_quaternion_conjugate(Q):
+def dual_quaternion_conjugate(Q: ArrayLike) -> NDArray[np.float64]:
     r"""Quaternion conjugate of both parts, :math:`Q^* = q_r^* + \varepsilon q_d^*`.
 
     This is the conjugate that reverses products, :math:`(AB)^* = B^* A^*`, and the inverse
@@ -209,7 +160,7 @@ def dual_quaternion_conjugate(Q):
     return out
 
 
-def dual_quaternion_dual_conjugate(Q):
+def dual_quaternion_dual_conjugate(Q: ArrayLike) -> NDArray[np.float64]:
     r"""Dual-number conjugate, :math:`\bar Q = q_r - \varepsilon q_d`.
 
     It flips the sign of :math:`\varepsilon`, as :math:`\overline{a + \varepsilon b} =
@@ -236,7 +187,7 @@ def dual_quaternion_dual_conjugate(Q):
     return out
 
 
-def dual_quaternion_combined_conjugate(Q):
+def dual_quaternion_combined_conjugate(Q: ArrayLike) -> NDArray[np.float64]:
     r"""Both conjugates at once, :math:`\bar Q^* = q_r^* - \varepsilon q_d^*`.
 
     This is the one that transforms points written as dual quaternions
@@ -267,7 +218,7 @@ def dual_quaternion_combined_conjugate(Q):
     return out
 
 
-def dual_quaternion_norm(Q):
+def dual_quaternion_norm(Q: ArrayLike) -> NDArray[np.float64]:
     r"""Norm of a dual quaternion, a dual number :math:`\|Q\| = a + \varepsilon b`.
 
     .. math::
@@ -300,13 +251,14 @@ def dual_quaternion_norm(Q):
     """
     Q = as_float_array(Q, "Q", _D)
     qr, qd = Q[..., :4], Q[..., 4:]
-    a = np.sqrt(np.sum(qr * qr, axis=-1))
+    a = norm_last_axis(qr)
     if np.any(a == 0.0):
         raise ValueError("the real part of Q is the zero quaternion: the norm is undefined")
-    return np.stack([a, np.sum(qr * qd, axis=-1) / a], axis=-1)
+    return np.stack([a, np.sum((qr / a[..., None]) * qd, axis=-1)], axis=-1)
 
 
-def check_unit_dual_quaternion(Q, tol=1e-9, name="Q"):
+def check_unit_dual_quaternion(Q: ArrayLike, tol: float = 1e-9, name: str = "Q"
+                               ) -> NDArray[np.float64]:
     r"""Return ``Q`` as a float array, or raise if it is not a unit dual quaternion.
 
     Unit means :math:`|q_r| = 1` and :math:`\langle q_r, q_d\rangle = 0` (within ``tol``).
@@ -337,11 +289,11 @@ def check_unit_dual_quaternion(Q, tol=1e-9, name="Q"):
     ValueError: Q must be a unit dual quaternion: <q_r, q_d> = 1 should be 0 ...
     """
     Q = as_float_array(Q, name, _D)
-    _dq_unit_or_raise(components(Q), name, tol)
+    unit_dual_quaternion_or_raise(components(Q), name, tol)
     return Q
 
 
-def dual_quaternion_normalize(Q):
+def dual_quaternion_normalize(Q: ArrayLike) -> NDArray[np.float64]:
     r"""Unit dual quaternion :math:`Q / \|Q\|` (division by the dual-number norm).
 
     With :math:`\|Q\| = a + \varepsilon b` and
@@ -381,7 +333,7 @@ def dual_quaternion_normalize(Q):
     return np.concatenate([qr, qd], axis=-1)
 
 
-def dual_quaternion_inverse(Q):
+def dual_quaternion_inverse(Q: ArrayLike) -> NDArray[np.float64]:
     r"""Inverse :math:`Q^{-1}`, with :math:`Q Q^{-1} = Q^{-1} Q = 1`.
 
     .. math::
@@ -414,10 +366,10 @@ def dual_quaternion_inverse(Q):
     """
     Q = as_float_array(Q, "Q", _D)
     qr, qd = Q[..., :4], Q[..., 4:]
-    n2 = np.sum(qr * qr, axis=-1, keepdims=True)
-    if np.any(n2 == 0.0):
+    n = norm_last_axis(qr)[..., None]
+    if np.any(n == 0.0):
         raise ValueError("the real part of Q is the zero quaternion: Q has no inverse")
-    ri = qr * np.array([1.0, -1.0, -1.0, -1.0]) / n2
+    ri = qr * np.array([1.0, -1.0, -1.0, -1.0]) / n / n
     di = -quaternion_product(quaternion_product(ri, qd), ri)
     return np.concatenate([ri, di], axis=-1)
 
@@ -426,7 +378,8 @@ def dual_quaternion_inverse(Q):
 # Rigid motions
 
 
-def dual_quaternion_from_rotation_translation(q, t, *, tol=1e-9):
+def dual_quaternion_from_rotation_translation(q: ArrayLike, t: ArrayLike, *, tol: float = 1e-9
+                                              ) -> NDArray[np.float64]:
     r"""Unit dual quaternion of "rotate by ``q``, then translate by ``t``".
 
     .. math::
@@ -457,13 +410,14 @@ def dual_quaternion_from_rotation_translation(q, t, *, tol=1e-9):
         check_finite(q, "q")
         check_finite(t, "t")
     qc = components(q)
-    _unit_or_raise(qc, "q", tol)
+    unit_quaternion_or_raise(qc, "q", tol)
     tx, ty, tz = components(t)
-    d = _mul(0.0, 0.5 * tx, 0.5 * ty, 0.5 * tz, *qc)
+    d = quaternion_mul(0.0, 0.5 * tx, 0.5 * ty, 0.5 * tz, *qc)
     return pack(tuple(qc) + d, (t, "t", _V))
 
 
-def rotation_translation_from_dual_quaternion(Q, *, tol=1e-9):
+def rotation_translation_from_dual_quaternion(Q: ArrayLike, *, tol: float = 1e-9
+                                              ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     r"""Rotation quaternion and translation of a unit dual quaternion.
 
     .. math::
@@ -490,13 +444,12 @@ def rotation_translation_from_dual_quaternion(Q, *, tol=1e-9):
     """
     Q = _in(Q, "Q")
     c = components(Q)
-    _dq_unit_or_raise(c, "Q", tol)
-    rw, rx, ry, rz = c[:4]
-    t = _mul(*c[4:], rw, -rx, -ry, -rz)[1:]
-    return Q[..., :4].copy(), stack_components([2.0 * t[0], 2.0 * t[1], 2.0 * t[2]])
+    unit_dual_quaternion_or_raise(c, "Q", tol)
+    return Q[..., :4].copy(), stack_components(translation_from_dual_quaternion_entries(*c))
 
 
-def dual_quaternion_from_transform(T, *, tol=1e-9):
+def dual_quaternion_from_transform(T: ArrayLike, *, tol: float = 1e-9, name: str = "T"
+                                   ) -> NDArray[np.float64]:
     r"""Unit dual quaternion of a homogeneous transform.
 
     :math:`q_r` is the quaternion of the rotation block (Shepperd's method, :math:`w \ge 0`,
@@ -509,6 +462,8 @@ def dual_quaternion_from_transform(T, *, tol=1e-9):
         Rigid transforms (checked: bottom row ``(0, 0, 0, 1)``, rotation block orthonormal
         with determinant +1 within ``tol``).
     tol : float
+    name : str
+        Name of the argument in error messages (the conversion is also the validation).
 
     Returns
     -------
@@ -527,35 +482,35 @@ def dual_quaternion_from_transform(T, *, tol=1e-9):
     >>> dual_quaternion_from_transform(T)
     array([1., 0., 0., 0., 0., 1., 0., 0.])
     """
-    T = float_array(T, "T", (4, 4))
+    T = float_array(T, name, (4, 4))
     if T.ndim == 2:
         a, b, c, d = T.tolist()
-        err, det = _orthonormality(a, b, c)  # NaN or inf in R fail this test too
+        err, det = orthonormality(a, b, c)  # NaN or inf in R fail this test too
         t = a[3] + b[3] + c[3]
         if not (err <= tol and det > 0.0 and t - t == 0.0 and d == [0.0, 0.0, 0.0, 1.0]):
-            check_transform(T, tol)  # raises with the right message
-            raise ValueError("T contains NaN or infinity")
-        qr = _from_matrix(a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2])
-        qd = _mul(0.0, 0.5 * a[3], 0.5 * b[3], 0.5 * c[3], *qr)
+            check_transform(T, tol, name)  # raises with the right message
+            raise ValueError(f"{name} contains NaN or infinity")
+        qr = quaternion_from_matrix_entries(a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2])
+        qd = quaternion_mul(0.0, 0.5 * a[3], 0.5 * b[3], 0.5 * c[3], *qr)
         return np.array(qr + qd)
-    check_finite(T, "T")
+    check_finite(T, name)
 
     def kernel(T):
         e = components(T.reshape(-1, 16))
         if not ((e[12] == 0.0).all() and (e[13] == 0.0).all() and (e[14] == 0.0).all()
                 and (e[15] == 1.0).all()):
-            check_transform(T, tol)  # raises with the right message
-        err, det = _orthonormality(e[0:3], e[4:7], e[8:11])
+            check_transform(T, tol, name)  # raises with the right message
+        err, det = orthonormality(e[0:3], e[4:7], e[8:11])
         if not (err <= tol and det > 0.0):
-            _raise_not_rotation("the rotation block of T", err, det, tol)
-        qr = _from_matrix(e[0], e[1], e[2], e[4], e[5], e[6], e[8], e[9], e[10])
-        qd = _mul(0.0, 0.5 * e[3], 0.5 * e[7], 0.5 * e[11], *qr)
+            rotation_or_raise(f"the rotation block of {name}", err, det, tol)
+        qr = quaternion_from_matrix_entries(e[0], e[1], e[2], e[4], e[5], e[6], e[8], e[9], e[10])
+        qd = quaternion_mul(0.0, 0.5 * e[3], 0.5 * e[7], 0.5 * e[11], *qr)
         return stack_components(qr + qd)
 
     return batched(kernel, [(T, 2)], _D)
 
 
-def transform_from_dual_quaternion(Q, *, tol=1e-9):
+def transform_from_dual_quaternion(Q: ArrayLike, *, tol: float = 1e-9) -> NDArray[np.float64]:
     r"""Homogeneous transform of a unit dual quaternion.
 
     .. math::
@@ -594,16 +549,15 @@ def transform_from_dual_quaternion(Q, *, tol=1e-9):
 
 def _transform_parts(c, tol):
     """The 16 entries of the 4x4 of a unit dual quaternion given by its components."""
-    _dq_unit_or_raise(c, "Q", tol)
-    rw, rx, ry, rz = c[:4]
-    _, tx, ty, tz = _mul(*c[4:], rw, -rx, -ry, -rz)
-    m = _matrix(rw, rx, ry, rz)
-    z = 0.0 * rw
-    return (m[0:3] + (2.0 * tx,) + m[3:6] + (2.0 * ty,) + m[6:9] + (2.0 * tz,)
-            + (z, z, z, z + 1.0))
+    unit_dual_quaternion_or_raise(c, "Q", tol)
+    tx, ty, tz = translation_from_dual_quaternion_entries(*c)
+    m = matrix_entries_from_quaternion(*c[:4])
+    z = 0.0 * c[0]
+    return (m[0:3] + (tx,) + m[3:6] + (ty,) + m[6:9] + (tz,) + (z, z, z, z + 1.0))
 
 
-def dual_quaternion_apply(Q, points, *, tol=1e-9):
+def dual_quaternion_apply(Q: ArrayLike, points: ArrayLike, *, tol: float = 1e-9
+                          ) -> NDArray[np.float64]:
     r"""Apply rigid motions to points: :math:`\mathbf p' = R(q_r)\,\mathbf p + \mathbf t`.
 
     This equals the sandwich :math:`1 + \varepsilon\mathbf p' = Q\,(1 + \varepsilon
@@ -645,14 +599,14 @@ def dual_quaternion_apply(Q, points, *, tol=1e-9):
 
 def _apply_parts(c, p, tol):
     """R p + t on components, with (0, t) = 2 q_d q_r^*."""
-    _dq_unit_or_raise(c, "Q", tol)
-    rw, rx, ry, rz = c[:4]
-    _, tx, ty, tz = _mul(*c[4:], rw, -rx, -ry, -rz)
-    x, y, z = _rot(rw, rx, ry, rz, *p)
-    return x + 2.0 * tx, y + 2.0 * ty, z + 2.0 * tz
+    unit_dual_quaternion_or_raise(c, "Q", tol)
+    tx, ty, tz = translation_from_dual_quaternion_entries(*c)
+    x, y, z = quaternion_rotate(*c[:4], *p)
+    return x + tx, y + ty, z + tz
 
 
-def dual_quaternion_apply_vector(Q, vectors, *, tol=1e-9):
+def dual_quaternion_apply_vector(Q: ArrayLike, vectors: ArrayLike, *, tol: float = 1e-9
+                                 ) -> NDArray[np.float64]:
     r"""Apply the rotation of rigid motions to free vectors: :math:`\mathbf v' = R\mathbf v`.
 
     Directions and velocities do not move with the translation. As dual quaternions,
@@ -680,11 +634,13 @@ def dual_quaternion_apply_vector(Q, vectors, *, tol=1e-9):
         check_finite(Q, "Q")
         check_finite(v, "vectors")
     c = components(Q)
-    _dq_unit_or_raise(c, "Q", tol)
-    return pack(_rot(*c[:4], *components(v)), (v, "vectors", _V))
+    unit_dual_quaternion_or_raise(c, "Q", tol)
+    return pack(quaternion_rotate(*c[:4], *components(v)), (v, "vectors", _V))
 
 
-def dual_quaternion_apply_line(Q, direction, moment, *, tol=1e-9):
+def dual_quaternion_apply_line(Q: ArrayLike, direction: ArrayLike, moment: ArrayLike, *,
+                               tol: float = 1e-9
+                               ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     r"""Apply rigid motions to lines in Plücker coordinates :math:`(\mathbf l, \mathbf m)`.
 
     A line through the point :math:`\mathbf c` with direction :math:`\mathbf l` has moment
@@ -714,7 +670,9 @@ def dual_quaternion_apply_line(Q, direction, moment, *, tol=1e-9):
     >>> dual_quaternion_apply_line(Q, [0, 0, 1], [0, 0, 0])   # z axis moved to y = 1
     (array([0., 0., 1.]), array([1., 0., 0.]))
     """
-    q, t = rotation_translation_from_dual_quaternion(Q, tol=tol)
+    direction = as_float_array(direction, "direction", _V)
+    moment = as_float_array(moment, "moment", _V)
+    t = rotation_translation_from_dual_quaternion(Q, tol=tol)[1]
     l2 = dual_quaternion_apply_vector(Q, direction, tol=tol)
     m2 = dual_quaternion_apply_vector(Q, moment, tol=tol) + np.cross(t, l2)
     return l2, m2
@@ -724,7 +682,8 @@ def dual_quaternion_apply_line(Q, direction, moment, *, tol=1e-9):
 # The thesis's quaternion-vector pairs
 
 
-def dual_quaternion_from_pair(q, p, *, tol=1e-9):
+def dual_quaternion_from_pair(q: ArrayLike, p: ArrayLike, *, tol: float = 1e-9
+                              ) -> NDArray[np.float64]:
     r"""Dual quaternion of the thesis's pair :math:`(q, \mathbf p)`.
 
     The thesis describes a rigid motion by a unit quaternion :math:`q` and a translation
@@ -747,10 +706,11 @@ def dual_quaternion_from_pair(q, p, *, tol=1e-9):
     >>> dual_quaternion_from_pair([1, 0, 0, 0], [0, 0, 2])
     array([1., 0., 0., 0., 0., 0., 0., 1.])
     """
-    return dual_quaternion_from_rotation_translation(q, p, tol=tol)
+    return dual_quaternion_from_rotation_translation(q, as_float_array(p, "p", _V), tol=tol)
 
 
-def pair_from_dual_quaternion(Q, *, tol=1e-9):
+def pair_from_dual_quaternion(Q: ArrayLike, *, tol: float = 1e-9
+                              ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     r"""The thesis's pair :math:`(q, \mathbf p)` of a unit dual quaternion.
 
     .. math::
@@ -775,7 +735,8 @@ def pair_from_dual_quaternion(Q, *, tol=1e-9):
     return rotation_translation_from_dual_quaternion(Q, tol=tol)
 
 
-def pair_product(q1, p1, q2, p2, *, tol=1e-9):
+def pair_product(q1: ArrayLike, p1: ArrayLike, q2: ArrayLike, p2: ArrayLike, *, tol: float = 1e-9
+                 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     r"""Product of quaternion-vector pairs (the thesis's composition rule).
 
     .. math::
@@ -804,18 +765,20 @@ def pair_product(q1, p1, q2, p2, *, tol=1e-9):
     >>> q, p + 0.0
     (array([0., 0., 0., 1.]), array([0., 0., 0.]))
     """
-    from .quaternion import rotate_vector
-
-    q = quaternion_product(q1, q2)
-    p = rotate_vector(q1, p2, tol=tol) + as_float_array(p1, "p1", _V)
-    return q, p
+    q1 = check_unit_quaternion(q1, tol, "q1")
+    q2 = check_unit_quaternion(q2, tol, "q2")
+    p1 = as_float_array(p1, "p1", _V)
+    p2 = as_float_array(p2, "p2", _V)
+    return quaternion_product(q1, q2), rotate_vector(q1, p2, tol=np.inf) + p1
 
 
 # --------------------------------------------------------------------------------------
 # Screw motions, powers, interpolation
 
 
-def screw_from_dual_quaternion(Q, *, tol=1e-9, small_angle=1e-12):
+def screw_from_dual_quaternion(
+        Q: ArrayLike, *, tol: float = 1e-9, small_angle: float = 1e-12
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     r"""Screw parameters of a unit dual quaternion (Chasles' theorem).
 
     Every rigid motion is a rotation by :math:`\theta` about a line
@@ -891,7 +854,8 @@ def screw_from_dual_quaternion(Q, *, tol=1e-9, small_angle=1e-12):
     return l, m, theta, d
 
 
-def dual_quaternion_from_screw(l, m, theta, d):
+def dual_quaternion_from_screw(l: ArrayLike, m: ArrayLike, theta: ArrayLike, d: ArrayLike
+                               ) -> NDArray[np.float64]:
     r"""Unit dual quaternion of a screw motion (inverse of :func:`screw_from_dual_quaternion`).
 
     .. math::
@@ -926,14 +890,14 @@ def dual_quaternion_from_screw(l, m, theta, d):
     m = as_float_array(m, "m", _V)
     theta = as_float_array(theta, "theta")
     d = as_float_array(d, "d")
-    ln = np.sqrt(np.sum(l * l, axis=-1))
+    ln = norm_last_axis(l)
     if np.any(np.abs(ln - 1.0) > 1e-9):
         raise ValueError("l must be a unit vector (the direction of the screw axis)")
-    mn = np.sqrt(np.sum(m * m, axis=-1))
+    mn = norm_last_axis(m)
     if np.any(np.abs(np.sum(l * m, axis=-1)) > 1e-9 * np.maximum(1.0, mn)):
         raise ValueError("m must be orthogonal to l (it is the moment c x l of the axis)")
     shape = np.broadcast_shapes(l.shape[:-1], m.shape[:-1], theta.shape, d.shape)
-    parts = _screw_parts(*np.moveaxis(l, -1, 0), *np.moveaxis(m, -1, 0),
+    parts = screw_entries(*np.moveaxis(l, -1, 0), *np.moveaxis(m, -1, 0),
                          np.cos(0.5 * theta), np.sin(0.5 * theta), 0.5 * d)
     Q = np.empty(shape + (8,))
     for k, part in enumerate(parts):
@@ -941,7 +905,7 @@ def dual_quaternion_from_screw(l, m, theta, d):
     return Q
 
 
-def dual_quaternion_power(Q, t, *, tol=1e-9):
+def dual_quaternion_power(Q: ArrayLike, t: ArrayLike, *, tol: float = 1e-9) -> NDArray[np.float64]:
     r"""Power :math:`Q^t` of a unit dual quaternion: the same screw, scaled.
 
     In screw form (:func:`screw_from_dual_quaternion`) :math:`Q^t` turns by
@@ -994,19 +958,22 @@ def dual_quaternion_power(Q, t, *, tol=1e-9):
     th = t * h
     rho = t * np.sinc(th / np.pi) / np.sinc(h / np.pi)
     small = s2 == 0.0
-    frac = np.where(small, t * (1.0 - t * t) / 3.0,
-                    (t * np.cos(th) - rho * w) / np.where(small, 1.0, s2))
     pu = np.sum(p * u, axis=-1)
     shape = np.broadcast_shapes(Q.shape[:-1], t.shape)
     out = np.empty(shape + (8,))
-    out[..., 0] = np.cos(th)
-    out[..., 1:4] = rho[..., None] * u
-    out[..., 4] = -0.5 * t * rho * pu
-    out[..., 5:8] = rho[..., None] * qd[..., 1:] + (0.5 * frac * pu)[..., None] * u
+    with np.errstate(over="ignore", invalid="ignore"):
+        frac = np.where(small, t * (1.0 - t * t) / 3.0,
+                        (t * np.cos(th) - rho * w) / np.where(small, 1.0, s2))
+        out[..., 0] = np.cos(th)
+        out[..., 1:4] = rho[..., None] * u
+        out[..., 4] = -0.5 * t * rho * pu
+        out[..., 5:8] = rho[..., None] * qd[..., 1:] + (0.5 * frac * pu)[..., None] * u
+    if not np.isfinite(out).all():
+        raise ValueError("t is too large: the power overflows")
     return out
 
 
-def sclerp(Q0, Q1, t, *, tol=1e-9):
+def sclerp(Q0: ArrayLike, Q1: ArrayLike, t: ArrayLike, *, tol: float = 1e-9) -> NDArray[np.float64]:
     r"""Screw linear interpolation between unit dual quaternions.
 
     .. math::

@@ -10,8 +10,11 @@ velocity of the tool, :math:`\dot x = J(q)\, \dot q`. Two forms are used in the 
 """
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from ._checks import as_float_array
+from .models import SCARA_SHAPE
+from .robot import Robot
 
 __all__ = [
     "geometric_jacobian", "manipulability", "singular_values", "is_singular",
@@ -19,7 +22,7 @@ __all__ = [
 ]
 
 
-def geometric_jacobian(robot, q):
+def geometric_jacobian(robot: Robot, q: ArrayLike) -> NDArray[np.float64]:
     r"""Geometric Jacobian at the tool centre point, in the world frame, linear rows first.
 
     Column :math:`i` for a revolute joint about the unit axis :math:`z_i` through
@@ -36,6 +39,9 @@ def geometric_jacobian(robot, q):
     :math:`(\dot p_T, \omega) = J(q)\, \dot q` with :math:`\omega` the tool's angular
     velocity in the world frame. For standard DH the axis of joint :math:`i` is the z axis of
     frame :math:`i-1`; for modified DH it is the z axis of frame :math:`i`.
+
+    The same as :meth:`dqlab.robot.Robot.jacobian`, which computes it from the robot's joint
+    axes (:meth:`~dqlab.robot.Robot.joint_axes`).
 
     Parameters
     ----------
@@ -56,17 +62,10 @@ def geometric_jacobian(robot, q):
     >>> J[:, 0].round(8)
     array([-0.49781088, -0.08817691,  0.        ,  0.        ,  0.        ,  1.        ])
     """
-    q = robot.check_joints(q)
-    points, axes, X_WT = robot._axes_and_tcp(q)
-    p_T = X_WT[..., None, :3, 3]                                    # (..., 1, 3)
-    revolute = np.asarray([lk.is_revolute for lk in robot.links])
-    linear = np.where(revolute[:, None], np.cross(axes, p_T - points), axes)
-    angular = np.where(revolute[:, None], axes, 0.0)
-    return np.concatenate([np.swapaxes(linear, -1, -2), np.swapaxes(angular, -1, -2)],
-                          axis=-2)
+    return robot.jacobian(q)
 
 
-def singular_values(J):
+def singular_values(J: ArrayLike) -> NDArray[np.float64]:
     """Singular values of Jacobians, largest first.
 
     Parameters
@@ -88,7 +87,7 @@ def singular_values(J):
     return np.linalg.svd(J, compute_uv=False)
 
 
-def manipulability(J):
+def manipulability(J: ArrayLike) -> NDArray[np.float64]:
     r"""Yoshikawa's manipulability measure :math:`w = \sqrt{\det(J J^\top)}`.
 
     Computed as the product of the singular values of :math:`J`, which is the same number
@@ -119,10 +118,14 @@ def manipulability(J):
     J = as_float_array(J, "J")
     if J.ndim < 2 or J.shape[-2] > J.shape[-1]:
         raise ValueError(f"J must have shape (..., m, n) with m <= n, got shape {J.shape}")
-    return np.prod(singular_values(J), axis=-1)
+    with np.errstate(over="ignore"):
+        w = np.prod(singular_values(J), axis=-1)
+    if not np.isfinite(w).all():
+        raise ValueError("J is too large: its manipulability overflows")
+    return w
 
 
-def is_singular(J, tol=1e-6):
+def is_singular(J: ArrayLike, tol: float = 1e-6) -> NDArray[np.bool_]:
     r"""Whether Jacobians are singular: smallest singular value below ``tol``.
 
     Parameters
@@ -149,7 +152,7 @@ def is_singular(J, tol=1e-6):
     return singular_values(J)[..., -1] < tol
 
 
-def xyz_yaw_jacobian(robot, q, *, tol=1e-9):
+def xyz_yaw_jacobian(robot: Robot, q: ArrayLike, *, tol: float = 1e-9) -> NDArray[np.float64]:
     r"""Analytic Jacobian of :math:`(x, y, z, \text{yaw})` for a robot whose joint axes are
     all vertical (a SCARA).
 
@@ -182,31 +185,24 @@ def xyz_yaw_jacobian(robot, q, *, tol=1e-9):
            [0.  , 0.  , 1.  , 0.  ],
            [1.  , 1.  , 0.  , 1.  ]])
     """
-    q = robot.check_joints(q)
-    _, axes, _ = robot._axes_and_tcp(q)
+    _, axes = robot.joint_axes(q)
     if np.any(np.abs(np.abs(axes[..., 2]) - 1.0) > tol):
         raise ValueError("xyz_yaw_jacobian needs every joint axis vertical (a SCARA)")
-    J = geometric_jacobian(robot, q)
-    return J[..., [0, 1, 2, 5], :]
+    return robot.jacobian(q)[..., [0, 1, 2, 5], :]
 
 
 def _scara_lengths(robot):
-    links = robot.links
-    ok = (robot.convention == "mdh" and robot.n == 4
-          and robot.joint_types == ("revolute", "revolute", "prismatic", "revolute")
-          and all(abs(lk.alpha) < 1e-12 for lk in links) and abs(links[0].a) < 1e-12
-          and abs(links[3].a) < 1e-12
-          and np.allclose(robot.base[:3, :3], np.eye(3))
-          and np.allclose(robot.tool[:2, 3], 0.0))
-    if not ok:
+    """``l1, l2`` of a SCARA whose x, y, yaw are the world's: the chain of
+    :data:`dqlab.models.SCARA_SHAPE` on an upright base, with a tool without x/y offset."""
+    SCARA_SHAPE.check(robot)
+    if not (np.allclose(robot.base[:3, :3], np.eye(3)) and np.allclose(robot.tool[:2, 3], 0.0)):
         raise ValueError(
-            "the closed-form SCARA formulas need a modified-DH RRPR chain with all "
-            "alpha = 0, a_0 = a_3 = 0, an upright base and a tool without x/y offset "
-            "(like dqlab.models.scara_rsm5()); use xyz_yaw_jacobian otherwise")
-    return links[1].a, links[2].a
+            "the closed-form SCARA Jacobian needs an upright base and a tool without x/y "
+            "offset (its x, y and yaw are the world's); use xyz_yaw_jacobian otherwise")
+    return robot.links[1].a, robot.links[2].a
 
 
-def scara_jacobian(robot, q):
+def scara_jacobian(robot: Robot, q: ArrayLike) -> NDArray[np.float64]:
     r"""Closed-form analytic Jacobian of the SCARA in :math:`(x, y, z, \text{yaw})`.
 
     Differentiating the forward model of :func:`dqlab.models.scara_rsm5`,
@@ -264,7 +260,7 @@ def scara_jacobian(robot, q):
     return J
 
 
-def scara_jacobian_determinant(robot, q):
+def scara_jacobian_determinant(robot: Robot, q: ArrayLike) -> NDArray[np.float64]:
     r"""Determinant of the SCARA's analytic Jacobian: :math:`\det J = l_1 l_2 \sin q_2`.
 
     The last two columns only touch :math:`z` and yaw, so the determinant is that of the
@@ -294,7 +290,7 @@ def scara_jacobian_determinant(robot, q):
     return l1 * l2 * np.sin(q[..., 1])
 
 
-def scara_is_singular(robot, q, tol=1e-6):
+def scara_is_singular(robot: Robot, q: ArrayLike, tol: float = 1e-6) -> NDArray[np.bool_]:
     r"""Whether the SCARA is (within ``tol``) at a singular configuration.
 
     Tests :math:`|\det J| < \text{tol}\; l_1 l_2`, that is :math:`|\sin q_2| < \text{tol}`.

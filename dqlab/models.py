@@ -17,15 +17,18 @@ other users. Units are metres and radians.
 """
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .robot import PRISMATIC, Link, Robot
 
 __all__ = [
     "ur3", "ur5", "ur10", "ur3_mdh", "desk_arm", "scara_rsm5", "six_r",
-    "UR_DH", "UR3_MDH", "DESK_ARM", "SCARA_RSM5",
+    "UR_DH", "UR_ALPHA", "UR3_MDH", "DESK_ARM", "SCARA_RSM5",
     "desk_arm_joints_from_lab", "desk_arm_lab_from_joints",
+    "ChainShape", "UR_SHAPE", "DESK_ARM_SHAPE", "SCARA_SHAPE",
 ]
 
 PI = math.pi
@@ -39,7 +42,8 @@ UR_DH = {
     "UR10": {"d": (0.1273, 0.0, 0.0, 0.163941, 0.1157, 0.0922),
              "a": (0.0, -0.612, -0.5723, 0.0, 0.0, 0.0)},
 }
-_UR_ALPHA = (PI / 2, 0.0, 0.0, PI / 2, -PI / 2, 0.0)
+#: The link twists shared by every UR arm (standard DH), radians.
+UR_ALPHA = (PI / 2, 0.0, 0.0, PI / 2, -PI / 2, 0.0)
 
 #: The UR3 report's modified-DH lengths in metres.
 UR3_MDH = {"r1": 0.152, "r2": 0.120, "a2": 0.244, "a3": 0.213,
@@ -63,11 +67,11 @@ SCARA_RSM5 = {"l1": 0.350, "l2": 0.260, "z_low": 0.180, "stroke": 0.150,
 def _ur(name, label):
     p = UR_DH[name]
     links = [Link(a=a, alpha=alpha, d=d, limits=(-2 * PI, 2 * PI))
-             for a, alpha, d in zip(p["a"], _UR_ALPHA, p["d"], strict=True)]
+             for a, alpha, d in zip(p["a"], UR_ALPHA, p["d"], strict=True)]
     return Robot(links, convention="dh", name=label)
 
 
-def ur3():
+def ur3() -> Robot:
     r"""The Universal Robots UR3 with the maker's standard DH parameters.
 
     ==  ==========  ==========  ===========
@@ -105,7 +109,7 @@ def ur3():
     return _ur("UR3", "UR3")
 
 
-def ur5():
+def ur5() -> Robot:
     """The Universal Robots UR5 with the maker's standard DH parameters (see :func:`ur3`).
 
     Returns
@@ -120,7 +124,7 @@ def ur5():
     return _ur("UR5", "UR5")
 
 
-def ur10():
+def ur10() -> Robot:
     """The Universal Robots UR10 with the maker's standard DH parameters (see :func:`ur3`).
 
     Returns
@@ -135,7 +139,7 @@ def ur10():
     return _ur("UR10", "UR10")
 
 
-def ur3_mdh():
+def ur3_mdh() -> Robot:
     r"""The UR3 in the modified DH convention of the UR3 project report.
 
     ======================  =======  =========  =====  ========  ========  =========
@@ -186,7 +190,7 @@ def ur3_mdh():
     return Robot(links, convention="mdh", name="UR3 (report, modified DH)")
 
 
-def desk_arm():
+def desk_arm() -> Robot:
     r"""The 3-DOF desktop arm of the lab report, as a standard-DH chain.
 
     The lab writes its forward model with three angles in degrees: the base angle
@@ -250,15 +254,20 @@ def desk_arm():
     return Robot(links, convention="dh", name="desktop arm (lab report)")
 
 
-def desk_arm_joints_from_lab(q_lab):
-    r"""Chain joint angles of :func:`desk_arm` from the lab's angles.
+def desk_arm_joints_from_lab(q_lab: ArrayLike) -> NDArray[np.float64]:
+    r"""Chain joint angles of :func:`desk_arm` from the lab's angles, and back.
 
     .. math:: (\theta_1, \theta_2, \theta_3) = (\pi/2 - q_0,\; q_1,\; -q_1 - q_2)
+
+    The map is an involution (applied twice it gives back its argument):
+    :math:`(q_0, q_1, q_2) = (\pi/2 - \theta_1,\; \theta_2,\; -\theta_2 - \theta_3)`.
+    :func:`desk_arm_lab_from_joints` is therefore the same function under the name that
+    says the other direction.
 
     Parameters
     ----------
     q_lab : array_like, shape (..., 3)
-        The lab's :math:`(q_0, q_1, q_2)` in radians.
+        The lab's :math:`(q_0, q_1, q_2)` in radians (or the chain angles, to go back).
 
     Returns
     -------
@@ -269,6 +278,8 @@ def desk_arm_joints_from_lab(q_lab):
     >>> import numpy as np
     >>> np.degrees(desk_arm_joints_from_lab(np.radians([90, 51, 65])))
     array([   0.,   51., -116.])
+    >>> np.degrees(desk_arm_lab_from_joints(np.radians([0, 51, -116])))
+    array([90., 51., 65.])
     """
     from ._checks import as_float_array
 
@@ -276,34 +287,12 @@ def desk_arm_joints_from_lab(q_lab):
     return np.stack([PI / 2 - q[..., 0], q[..., 1], -q[..., 1] - q[..., 2]], axis=-1)
 
 
-def desk_arm_lab_from_joints(q):
-    r"""The lab's angles from the chain joint angles of :func:`desk_arm`.
-
-    .. math:: (q_0, q_1, q_2) = (\pi/2 - \theta_1,\; \theta_2,\; -\theta_2 - \theta_3)
-
-    Parameters
-    ----------
-    q : array_like, shape (..., 3)
-        Chain joint angles in radians.
-
-    Returns
-    -------
-    ndarray, shape (..., 3)
-        The lab's :math:`(q_0, q_1, q_2)` in radians.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> np.degrees(desk_arm_lab_from_joints(np.radians([0, 51, -116])))
-    array([90., 51., 65.])
-    """
-    from ._checks import as_float_array
-
-    q = as_float_array(q, "q", (3,))
-    return np.stack([PI / 2 - q[..., 0], q[..., 1], -q[..., 1] - q[..., 2]], axis=-1)
+#: The lab's angles from the chain joint angles of :func:`desk_arm`: the same involution as
+#: :func:`desk_arm_joints_from_lab`.
+desk_arm_lab_from_joints = desk_arm_joints_from_lab
 
 
-def scara_rsm5():
+def scara_rsm5() -> Robot:
     r"""The Samsung RSM-5 SCARA (RRPR) of the course notes' annex A, in modified DH.
 
     ==  ==============  ======  =====================  ===============  ===========  ==========
@@ -350,7 +339,7 @@ def scara_rsm5():
     return Robot(links, convention="mdh", name="Samsung RSM-5 SCARA")
 
 
-def six_r(a2=0.4, r4=0.35, r7=0.1):
+def six_r(a2: float = 0.4, r4: float = 0.35, r7: float = 0.1) -> Robot:
     r"""The 6R arm with a spherical wrist of the course notes, chapter 2 (figure 2.5).
 
     ==  ===================  =========  =========  =====
@@ -389,3 +378,110 @@ def six_r(a2=0.4, r4=0.35, r7=0.1):
     tool = np.eye(4)
     tool[2, 3] = r7
     return Robot(links, convention="mdh", tool=tool, name="6R with spherical wrist")
+
+
+# --------------------------------------------------------------------------------------
+# Chain shapes: what a closed-form formula needs of a chain
+
+
+@dataclass(frozen=True)
+class ChainShape:
+    r"""The structure a closed-form formula needs of a chain, checked in one place.
+
+    A closed-form solver (or Jacobian) reads its lengths from the robot's links; before it
+    does, :meth:`check` makes sure the chain is one the formulas hold for.
+
+    Attributes
+    ----------
+    label : str
+        Who needs the shape, first word of the error message (``"ur()"``).
+    description : str
+        The shape in words, quoted by the error message.
+    convention : {"dh", "mdh"}
+    joints : str
+        One letter per joint, ``R`` (revolute) or ``P`` (prismatic).
+    alpha : tuple of float, optional
+        The twist of every link, compared modulo :math:`2\pi`.
+    zero_a, zero_d : tuple of int
+        Links (0-based) whose ``a`` or ``d`` must be zero.
+    nonzero_a, nonzero_d : tuple of int
+        Links whose ``a`` or ``d`` must not be zero.
+    zero_offsets : bool
+        Whether every ``theta_offset`` must be zero.
+
+    Examples
+    --------
+    >>> UR_SHAPE.check(ur5())
+    >>> SCARA_SHAPE.check(ur3())
+    Traceback (most recent call last):
+    ...
+    ValueError: scara() needs a chain like dqlab.models.scara_rsm5() (modified DH, joints RRPR, ...
+    """
+
+    label: str
+    description: str
+    convention: str
+    joints: str
+    alpha: tuple = None
+    zero_a: tuple = ()
+    zero_d: tuple = ()
+    nonzero_a: tuple = ()
+    nonzero_d: tuple = ()
+    zero_offsets: bool = False
+
+    def check(self, robot: Robot, *, atol: float = 1e-12) -> None:
+        """Raise ``ValueError`` (naming the first difference) unless ``robot`` has the shape.
+
+        Parameters
+        ----------
+        robot : Robot
+        atol : float
+            Tolerance of the comparisons (lengths in metres, angles in radians).
+        """
+        problem = self._difference(robot, atol)
+        if problem:
+            raise ValueError(f"{self.label} needs {self.description}; {problem}")
+
+    def _difference(self, robot, atol):
+        links = getattr(robot, "links", None)
+        if links is None:
+            return f"got {type(robot).__name__}, not a Robot"
+        if robot.convention != self.convention:
+            return f"the robot's convention is {robot.convention!r}"
+        joints = "".join("R" if lk.is_revolute else "P" for lk in links)
+        if joints != self.joints:
+            return f"the robot's joints are {joints}"
+        for i, lk in enumerate(links):
+            if self.alpha is not None and abs(math.remainder(lk.alpha - self.alpha[i],
+                                                             2 * PI)) > atol:
+                return f"link {i + 1} has alpha = {lk.alpha!r}"
+            if self.zero_offsets and abs(lk.theta_offset) > atol:
+                return f"link {i + 1} has theta_offset = {lk.theta_offset!r}"
+        for name, zero, nonzero in (("a", self.zero_a, self.nonzero_a),
+                                    ("d", self.zero_d, self.nonzero_d)):
+            for i in zero:
+                if abs(getattr(links[i], name)) > atol:
+                    return f"link {i + 1} has {name} = {getattr(links[i], name)!r}"
+            for i in nonzero:
+                if abs(getattr(links[i], name)) <= atol:
+                    return f"link {i + 1} has {name} = 0"
+        return ""
+
+
+#: The UR family (UR3, UR5, UR10, e-series) for :func:`dqlab.ik.ur_closed_form.ur`.
+UR_SHAPE = ChainShape(
+    "ur()", "a UR-family arm like dqlab.models.ur3() (standard DH, six revolute joints, "
+    "alpha = (pi/2, 0, 0, pi/2, -pi/2, 0), a1 = a4 = a5 = a6 = 0, d2 = d3 = 0, nonzero a2, "
+    "a3 and d4)", "dh", "RRRRRR", alpha=UR_ALPHA, zero_a=(0, 3, 4, 5), zero_d=(1, 2),
+    nonzero_a=(1, 2), nonzero_d=(3,))
+
+#: The desktop arm for :func:`dqlab.ik.desk_arm_closed_form.desk_arm`.
+DESK_ARM_SHAPE = ChainShape(
+    "desk_arm", "a chain like dqlab.models.desk_arm() (standard DH, three revolute joints, "
+    "alpha = (pi/2, 0, 0), d_2 = d_3 = 0, no offsets)", "dh", "RRR", alpha=(PI / 2, 0.0, 0.0),
+    zero_d=(1, 2), zero_offsets=True)
+
+#: The SCARA for :func:`dqlab.ik.scara_closed_form.scara` and the closed-form SCARA Jacobian.
+SCARA_SHAPE = ChainShape(
+    "scara()", "a chain like dqlab.models.scara_rsm5() (modified DH, joints RRPR, all "
+    "alpha = 0, a_0 = a_3 = 0)", "mdh", "RRPR", alpha=(0.0,) * 4, zero_a=(0, 3))

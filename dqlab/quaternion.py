@@ -10,18 +10,29 @@ leading axes. pyquaternion uses the same order; scipy's ``(x, y, z, w)`` does no
 Array functions do the work; :class:`Quaternion` is a thin wrapper for notebooks.
 """
 
-import math
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from ._checks import (
     as_float_array,
+    batch_shape,
     batched,
     check_finite,
     components,
     float_array,
     pack,
+    rotation_or_raise,
     stack_components,
+    unit_quaternion_or_raise,
+)
+from ._kernels import (
+    matrix_entries_from_quaternion,
+    norm_last_axis,
+    orthonormality,
+    quaternion_from_matrix_entries,
+    quaternion_mul,
+    quaternion_rotate,
 )
 from ._wrapper import ArrayWrapper, array_of
 
@@ -47,100 +58,6 @@ def _in(x, name, trailing=_Q):
     return float_array(x, name, trailing)
 
 
-def _unit_or_raise(parts, name, tol):
-    """Raise unless the quaternion given by its components has norm 1 within ``tol``."""
-    w, x, y, z = parts
-    n2 = w * w + x * x + y * y + z * z
-    if isinstance(n2, np.ndarray):
-        if not np.isfinite(n2).all():
-            raise ValueError(f"{name} contains NaN or infinity")
-        bad = np.abs(np.sqrt(n2) - 1.0) > tol
-        if bad.any():
-            n = np.sqrt(n2)[bad].flat[0]
-            _raise_not_unit(name, n, tol)
-        return
-    if abs(n2 - 1.0) <= tol:  # implies | |q| - 1 | <= tol / 2 (and catches NaN/inf below)
-        return
-    if not n2 - n2 == 0.0:
-        raise ValueError(f"{name} contains NaN or infinity")
-    if abs(math.sqrt(n2) - 1.0) > tol:
-        _raise_not_unit(name, math.sqrt(n2), tol)
-
-
-def _raise_not_unit(name, n, tol):
-    if n == 0.0:
-        raise ValueError(f"{name} is the zero quaternion, which is not a rotation")
-    raise ValueError(
-        f"{name} must be a unit quaternion (norm 1 within {tol:g}), got norm {n:.12g}; "
-        "normalise it with quaternion_normalize first")
-
-
-# --------------------------------------------------------------------------------------
-# Component formulas (floats or arrays)
-
-
-def _mul(aw, ax, ay, az, bw, bx, by, bz):
-    return (aw * bw - ax * bx - ay * by - az * bz,
-            aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw)
-
-
-def _rot(w, x, y, z, vx, vy, vz):
-    # p' = p + w t + u x t with t = 2 u x p, u = (x, y, z): q p q* expanded for |q| = 1
-    tx = 2.0 * (y * vz - z * vy)
-    ty = 2.0 * (z * vx - x * vz)
-    tz = 2.0 * (x * vy - y * vx)
-    return (vx + w * tx + (y * tz - z * ty),
-            vy + w * ty + (z * tx - x * tz),
-            vz + w * tz + (x * ty - y * tx))
-
-
-def _matrix(w, x, y, z):
-    xx, yy, zz = x * x, y * y, z * z
-    xy, xz, yz = x * y, x * z, y * z
-    wx, wy, wz = w * x, w * y, w * z
-    return (1.0 - 2.0 * (yy + zz), 2.0 * (xy - wz), 2.0 * (xz + wy),
-            2.0 * (xy + wz), 1.0 - 2.0 * (xx + zz), 2.0 * (yz - wx),
-            2.0 * (xz - wy), 2.0 * (yz + wx), 1.0 - 2.0 * (xx + yy))
-
-
-# Positions of the rows of K = 4 q q^T in the tuple returned by _shepperd_terms.
-_K_ROWS = ((0, 4, 5, 6), (4, 1, 7, 8), (5, 7, 2, 9), (6, 8, 9, 3))
-
-
-def _shepperd_terms(r00, r01, r02, r10, r11, r12, r20, r21, r22):
-    # The ten distinct entries of K = 4 q q^T written with the entries of R (active
-    # convention): the diagonal 4w^2, 4x^2, 4y^2, 4z^2, then 4wx, 4wy, 4wz, 4xy, 4xz, 4yz.
-    tr = r00 + r11 + r22
-    return (1.0 + tr, 1.0 + r00 - r11 - r22, 1.0 - r00 + r11 - r22, 1.0 - r00 - r11 + r22,
-            r21 - r12, r02 - r20, r10 - r01, r01 + r10, r02 + r20, r12 + r21)
-
-
-def _from_matrix(r00, r01, r02, r10, r11, r12, r20, r21, r22):
-    # Row k of K divided by 2 sqrt(K_kk) is q, for any k; Shepperd's method takes the row
-    # of the largest diagonal entry (it divides by the largest component of q).
-    K = _shepperd_terms(r00, r01, r02, r10, r11, r12, r20, r21, r22)
-    if not isinstance(r00, np.ndarray):
-        k = 0
-        for j in (1, 2, 3):
-            if K[j] > K[k]:
-                k = j
-        w, x, y, z = (K[i] for i in _K_ROWS[k])
-        s = 0.5 / math.sqrt(K[k])
-        if w < 0.0:
-            s = -s  # canonical sign: w >= 0
-        return (w * s, x * s, y * s, z * s)
-    best, row = K[0], [K[i] for i in _K_ROWS[0]]
-    for k in (1, 2, 3):
-        larger = K[k] > best
-        best = np.where(larger, K[k], best)
-        row = [np.where(larger, K[i], r) for i, r in zip(_K_ROWS[k], row, strict=True)]
-    s = 0.5 / np.sqrt(best)
-    s = np.where(row[0] < 0.0, -s, s)
-    return tuple(c * s for c in row)
-
-
 # --------------------------------------------------------------------------------------
 # Algebra
 
@@ -155,12 +72,12 @@ def quaternion_identity(shape=()):
     >>> quaternion_identity((2,)).shape
     (2, 4)
     """
-    q = np.zeros(tuple(np.atleast_1d(shape).astype(int)) + (4,))
+    q = np.zeros(batch_shape(shape) + (4,))
     q[..., 0] = 1.0
     return q
 
 
-def quaternion_product(a, b):
+def quaternion_product(a: ArrayLike, b: ArrayLike) -> NDArray[np.float64]:
     r"""Hamilton product :math:`a b` of quaternions.
 
     .. math::
@@ -194,17 +111,17 @@ def quaternion_product(a, b):
     a = _in(a, "a")
     b = _in(b, "b")
     if a.ndim == 1 and b.ndim == 1:
-        return pack(_mul(*a.tolist(), *b.tolist()), (a, "a", _Q), (b, "b", _Q))
+        return pack(quaternion_mul(*a.tolist(), *b.tolist()), (a, "a", _Q), (b, "b", _Q))
     check_finite(a, "a")
     check_finite(b, "b")
     return batched(_product_kernel, [(a, 1), (b, 1)], _Q)
 
 
 def _product_kernel(a, b):
-    return stack_components(_mul(*components(a), *components(b)))
+    return stack_components(quaternion_mul(*components(a), *components(b)))
 
 
-def quaternion_conjugate(q):
+def quaternion_conjugate(q: ArrayLike) -> NDArray[np.float64]:
     r"""Conjugate :math:`q^* = (w, -x, -y, -z)`; the inverse rotation when ``q`` is unit.
 
     Parameters
@@ -226,7 +143,7 @@ def quaternion_conjugate(q):
     return out
 
 
-def quaternion_norm(q):
+def quaternion_norm(q: ArrayLike) -> NDArray[np.float64]:
     r"""Norm :math:`|q| = \sqrt{w^2 + x^2 + y^2 + z^2}`.
 
     It is multiplicative: :math:`|ab| = |a|\,|b|`.
@@ -245,17 +162,17 @@ def quaternion_norm(q):
     2.0
     """
     q = as_float_array(q, "q", _Q)
-    return np.sqrt(np.sum(q * q, axis=-1))
+    return norm_last_axis(q)
 
 
 def _nonzero_norm(q, name):
-    n = np.sqrt(np.sum(q * q, axis=-1))
+    n = norm_last_axis(q)
     if np.any(n == 0.0):
         raise ValueError(f"{name} is the zero quaternion, which has no inverse or direction")
     return n
 
 
-def quaternion_inverse(q):
+def quaternion_inverse(q: ArrayLike) -> NDArray[np.float64]:
     r"""Inverse :math:`q^{-1} = q^* / |q|^2` (equal to :math:`q^*` for a unit quaternion).
 
     Parameters
@@ -279,10 +196,10 @@ def quaternion_inverse(q):
     """
     q = as_float_array(q, "q", _Q)
     n = _nonzero_norm(q, "q")
-    return quaternion_conjugate(q) / (n * n)[..., None]
+    return quaternion_conjugate(q) / n[..., None] / n[..., None]
 
 
-def quaternion_normalize(q):
+def quaternion_normalize(q: ArrayLike) -> NDArray[np.float64]:
     r"""Unit quaternion :math:`q / |q|` with the same direction.
 
     Parameters
@@ -308,7 +225,7 @@ def quaternion_normalize(q):
     return q / _nonzero_norm(q, "q")[..., None]
 
 
-def check_unit_quaternion(q, tol=1e-9, name="q"):
+def check_unit_quaternion(q: ArrayLike, tol: float = 1e-9, name: str = "q") -> NDArray[np.float64]:
     r"""Return ``q`` as a float array, or raise if it is not a unit quaternion.
 
     Parameters
@@ -338,11 +255,11 @@ def check_unit_quaternion(q, tol=1e-9, name="q"):
     ValueError: q must be a unit quaternion (norm 1 within 1e-09), got norm 1.41421356237; ...
     """
     q = as_float_array(q, name, _Q)
-    _unit_or_raise(components(q), name, tol)
+    unit_quaternion_or_raise(components(q), name, tol)
     return q
 
 
-def rotate_vector(q, v, *, tol=1e-9):
+def rotate_vector(q: ArrayLike, v: ArrayLike, *, tol: float = 1e-9) -> NDArray[np.float64]:
     r"""Rotate vectors by unit quaternions: :math:`v' = q\,v\,q^*` (active rotation).
 
     With :math:`q = (w, \mathbf u)` and :math:`\mathbf t = 2\,\mathbf u \times \mathbf v`
@@ -383,15 +300,15 @@ def rotate_vector(q, v, *, tol=1e-9):
     v = _in(v, "v", _V)
     if q.ndim == 1 and v.ndim == 1:
         qc = q.tolist()
-        _unit_or_raise(qc, "q", tol)
-        return pack(_rot(*qc, *v.tolist()), (v, "v", _V))
+        unit_quaternion_or_raise(qc, "q", tol)
+        return pack(quaternion_rotate(*qc, *v.tolist()), (v, "v", _V))
     check_finite(q, "q")
     check_finite(v, "v")
 
     def kernel(q, v):
         qc = components(q)
-        _unit_or_raise(qc, "q", tol)
-        return stack_components(_rot(*qc, *components(v)))
+        unit_quaternion_or_raise(qc, "q", tol)
+        return stack_components(quaternion_rotate(*qc, *components(v)))
 
     return batched(kernel, [(q, 1), (v, 1)], _V)
 
@@ -400,7 +317,7 @@ def rotate_vector(q, v, *, tol=1e-9):
 # Conversions
 
 
-def quaternion_from_axis_angle(axis, angle):
+def quaternion_from_axis_angle(axis: ArrayLike, angle: ArrayLike) -> NDArray[np.float64]:
     r"""Unit quaternion of the rotation by ``angle`` about ``axis``.
 
     .. math::
@@ -432,7 +349,7 @@ def quaternion_from_axis_angle(axis, angle):
     """
     axis = as_float_array(axis, "axis", _V)
     angle = as_float_array(angle, "angle")
-    n = np.sqrt(np.sum(axis * axis, axis=-1))
+    n = norm_last_axis(axis)
     if np.any(n == 0.0):
         raise ValueError("axis is the zero vector, which has no direction")
     half = 0.5 * angle
@@ -440,7 +357,8 @@ def quaternion_from_axis_angle(axis, angle):
     return stack_components([np.cos(half)] + [axis[..., i] * s for i in range(3)])
 
 
-def axis_angle_from_quaternion(q, *, tol=1e-9):
+def axis_angle_from_quaternion(q: ArrayLike, *, tol: float = 1e-9
+                               ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     r"""Axis and angle of the rotation of a unit quaternion.
 
     .. math::
@@ -484,7 +402,7 @@ def axis_angle_from_quaternion(q, *, tol=1e-9):
     return axis, angle
 
 
-def quaternion_from_matrix(R, *, tol=1e-9):
+def quaternion_from_matrix(R: ArrayLike, *, tol: float = 1e-9) -> NDArray[np.float64]:
     r"""Unit quaternion (with :math:`w \ge 0`) of a rotation matrix, by Shepperd's method.
 
     For the active convention :math:`R\,\mathbf v = q\,\mathbf v\,q^*` the symmetric matrix
@@ -529,29 +447,27 @@ def quaternion_from_matrix(R, *, tol=1e-9):
     >>> quaternion_from_matrix(R)
     array([0., 0., 0., 1.])
     """
-    from .rotations import _orthonormality, _raise_not_rotation
-
     R = float_array(R, "R", _M)
     if R.ndim == 2:
         a, b, c = R.tolist()
-        err, det = _orthonormality(a, b, c)
+        err, det = orthonormality(a, b, c)
         if not (err <= tol and det > 0.0):  # also catches NaN
             check_finite(R, "R")
-            _raise_not_rotation("R", err, det, tol)
-        return np.array(_from_matrix(*a, *b, *c))
+            rotation_or_raise("R", err, det, tol)
+        return np.array(quaternion_from_matrix_entries(*a, *b, *c))
     check_finite(R, "R")
 
     def kernel(R):
         e = components(R.reshape(-1, 9))
-        err, det = _orthonormality(e[0:3], e[3:6], e[6:9])
+        err, det = orthonormality(e[0:3], e[3:6], e[6:9])
         if not (err <= tol and det > 0.0):
-            _raise_not_rotation("R", err, det, tol)
-        return stack_components(_from_matrix(*e))
+            rotation_or_raise("R", err, det, tol)
+        return stack_components(quaternion_from_matrix_entries(*e))
 
     return batched(kernel, [(R, 2)], _Q)
 
 
-def matrix_from_quaternion(q, *, tol=1e-9):
+def matrix_from_quaternion(q: ArrayLike, *, tol: float = 1e-9) -> NDArray[np.float64]:
     r"""Rotation matrix of a unit quaternion (active: :math:`R\mathbf v = q\mathbf v q^*`).
 
     .. math::
@@ -585,14 +501,14 @@ def matrix_from_quaternion(q, *, tol=1e-9):
     q = _in(q, "q")
     if q.ndim == 1:
         qc = q.tolist()
-        _unit_or_raise(qc, "q", tol)
-        return np.array(_matrix(*qc)).reshape(3, 3)
+        unit_quaternion_or_raise(qc, "q", tol)
+        return np.array(matrix_entries_from_quaternion(*qc)).reshape(3, 3)
     check_finite(q, "q")
 
     def kernel(q):
         qc = components(q)
-        _unit_or_raise(qc, "q", tol)
-        return stack_components(_matrix(*qc))
+        unit_quaternion_or_raise(qc, "q", tol)
+        return stack_components(matrix_entries_from_quaternion(*qc))
 
     m = batched(kernel, [(q, 1)], (9,))
     return m.reshape(m.shape[:-1] + (3, 3))
@@ -602,7 +518,7 @@ def matrix_from_quaternion(q, *, tol=1e-9):
 # Exponential, logarithm, power, interpolation
 
 
-def quaternion_exp(q):
+def quaternion_exp(q: ArrayLike) -> NDArray[np.float64]:
     r"""Quaternion exponential.
 
     .. math::
@@ -629,19 +545,20 @@ def quaternion_exp(q):
     """
     q = as_float_array(q, "q", _Q)
     v = q[..., 1:]
-    a = np.sqrt(np.sum(v * v, axis=-1))
-    e = np.exp(q[..., 0])
-    # sin(a)/a written with np.sinc, which is exact at a = 0
-    s = e * np.sinc(a / np.pi)
-    out = np.empty(np.shape(q))
-    out[..., 0] = e * np.cos(a)
-    out[..., 1:] = v * s[..., None]
+    a = norm_last_axis(v)
+    with np.errstate(over="ignore", invalid="ignore"):
+        e = np.exp(q[..., 0])
+        # sin(a)/a written with np.sinc, which is exact at a = 0
+        s = e * np.sinc(a / np.pi)
+        out = np.empty(np.shape(q))
+        out[..., 0] = e * np.cos(a)
+        out[..., 1:] = v * s[..., None]
     if not np.isfinite(out).all():
         raise ValueError("q is too large: its exponential overflows")
     return out
 
 
-def quaternion_log(q):
+def quaternion_log(q: ArrayLike) -> NDArray[np.float64]:
     r"""Quaternion logarithm (principal value).
 
     .. math::
@@ -677,7 +594,7 @@ def quaternion_log(q):
     q = as_float_array(q, "q", _Q)
     n = _nonzero_norm(q, "q")
     u = q[..., 1:]
-    s = np.sqrt(np.sum(u * u, axis=-1))
+    s = norm_last_axis(u)
     phi = np.arctan2(s, q[..., 0])
     zero = s == 0.0
     out = np.empty(np.shape(q))
@@ -687,7 +604,7 @@ def quaternion_log(q):
     return out
 
 
-def quaternion_power(q, t):
+def quaternion_power(q: ArrayLike, t: ArrayLike) -> NDArray[np.float64]:
     r"""Power :math:`q^t = \exp(t \log q)` of a non-zero quaternion.
 
     For a unit quaternion of angle :math:`\theta` about :math:`\mathbf n`, :math:`q^t`
@@ -715,7 +632,7 @@ def quaternion_power(q, t):
     return quaternion_exp(quaternion_log(q) * t[..., None])
 
 
-def slerp(q0, q1, t, *, tol=1e-9):
+def slerp(q0: ArrayLike, q1: ArrayLike, t: ArrayLike, *, tol: float = 1e-9) -> NDArray[np.float64]:
     r"""Spherical linear interpolation between unit quaternions, along the shortest arc.
 
     If :math:`q_0 \cdot q_1 < 0`, :math:`q_1` is replaced by :math:`-q_1` (same rotation),
@@ -767,7 +684,7 @@ def slerp(q0, q1, t, *, tol=1e-9):
     return a[..., None] * q0 + b[..., None] * q1
 
 
-def quaternion_distance(q0, q1, *, tol=1e-9):
+def quaternion_distance(q0: ArrayLike, q1: ArrayLike, *, tol: float = 1e-9) -> NDArray[np.float64]:
     r"""Angle of the rotation taking ``q0`` to ``q1``, in :math:`[0, \pi]`.
 
     .. math::
@@ -809,7 +726,7 @@ def quaternion_distance(q0, q1, *, tol=1e-9):
 # pyquaternion interoperability
 
 
-def quaternion_from_pyquaternion(pq):
+def quaternion_from_pyquaternion(pq) -> NDArray[np.float64]:
     """Array ``(w, x, y, z)`` from a ``pyquaternion.Quaternion`` (or a nested list of them).
 
     pyquaternion stores the scalar first too, so no reordering is needed.
@@ -833,7 +750,7 @@ def quaternion_from_pyquaternion(pq):
     return np.array([quaternion_from_pyquaternion(p) for p in pq], dtype=float)
 
 
-def pyquaternion_from_quaternion(q):
+def pyquaternion_from_quaternion(q: ArrayLike):
     """``pyquaternion.Quaternion`` from an array ``(w, x, y, z)``.
 
     Parameters
@@ -850,7 +767,11 @@ def pyquaternion_from_quaternion(q):
     >>> type(pq).__name__, pq.elements
     ('Quaternion', array([1., 0., 0., 0.]))
     """
-    from pyquaternion import Quaternion as PyQuaternion
+    try:
+        from pyquaternion import Quaternion as PyQuaternion
+    except ImportError:
+        raise ImportError("pyquaternion_from_quaternion needs pyquaternion: "
+                          "pip install pyquaternion (or dqlab[interop])") from None
 
     q = as_float_array(q, "q", _Q)
     if q.ndim == 1:

@@ -40,9 +40,11 @@ Units are metres and radians.
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
-from ._checks import as_float_array, batched, stack_components
-from .dualquat import _dq_mul, _dq_mul_z_screw, _screw_parts, dual_quaternion_from_transform
+from ._checks import as_float_array, batched, real_array
+from ._kernels import dual_quaternion_mul, dual_quaternion_mul_z_screw, screw_entries
+from .dualquat import dual_quaternion_from_transform
 
 __all__ = ["Link", "Robot", "REVOLUTE", "PRISMATIC"]
 
@@ -157,6 +159,22 @@ class Link:
         return (f"Link(a={self.a!r}, alpha={self.alpha!r}, d={self.d!r}, "
                 f"theta_offset={self.theta_offset!r}, joint={self.joint!r}, "
                 f"limits={self.limits!r})")
+
+
+def _link_constants(links, convention):
+    """The constant factors L_i, R_i (n, 4, 4) of the links X_{i-1,i} = L_i J_i R_i, with
+    the joint motion J = Rz(theta) Tz(d) between them: L = I, R = Tx(a) Rx(alpha) in
+    standard DH; L = Rx(alpha) Tx(a), R = I in modified DH."""
+    L = np.empty((len(links), 4, 4))
+    R = np.empty((len(links), 4, 4))
+    for i, lk in enumerate(links):
+        if convention == "dh":
+            L[i] = np.eye(4)
+            R[i] = _trans_x_h(lk.a) @ _rot_x_h(lk.alpha)
+        else:
+            L[i] = _rot_x_h(lk.alpha) @ _trans_x_h(lk.a)
+            R[i] = np.eye(4)
+    return L, R
 
 
 def _check_transform_like(T, name):
@@ -278,52 +296,45 @@ class Robot:
 
     # -- constant parts, precomputed once ------------------------------------------------
     def _prepare(self):
+        """Compute everything derived from the links, the base and the tool.
+
+        The one cache rule of a robot: this runs when the robot is built and whenever its
+        base or tool is assigned (links are immutable), and nothing else is cached.
+        """
         n = self.n
         self._revolute = np.array([lk.is_revolute for lk in self._links])
-        rev = self._revolute.astype(float)
-        self._theta_const = np.array([lk.theta_offset for lk in self._links])
-        self._d_const = np.array([lk.d for lk in self._links])
-        self._q_to_theta = rev            # theta = theta_const + q * rev
-        self._q_to_d = 1.0 - rev          # d = d_const + q * (1 - rev)
         self._lo = np.array([lk.limits[0] for lk in self._links])
         self._hi = np.array([lk.limits[1] for lk in self._links])
         self._prismatic_idx = np.flatnonzero(~self._revolute)
-        # Each link is X_{i-1,i} = L_i @ J_i(theta_i, d_i) @ R_i with the joint motion
-        # J = Rz(theta) Tz(d) and constant L, R: L = I, R = Tx(a) Rx(alpha) in standard DH;
-        # L = Rx(alpha) Tx(a), R = I in modified DH.
-        L = np.empty((n, 4, 4))
-        R = np.empty((n, 4, 4))
-        for i, lk in enumerate(self._links):
-            if self._convention == "dh":
-                L[i] = np.eye(4)
-                R[i] = _trans_x_h(lk.a) @ _rot_x_h(lk.alpha)
-            else:
-                L[i] = _rot_x_h(lk.alpha) @ _trans_x_h(lk.a)
-                R[i] = np.eye(4)
-        self._L = L
-        self._R = R
-        # Pre-multiplied constants for the fast product:
-        # X_WT = (X_W0 L_1) J_1 (R_1 L_2) J_2 ... J_n (R_n X_nT)
-        K = np.empty((n + 1, 4, 4))
-        K[0] = self._base @ L[0]
-        for i in range(1, n):
-            K[i] = R[i - 1] @ L[i]
-        K[n] = R[n - 1] @ self._tool
-        self._K = K
-        # rows of K_1..K_n, for building M_i = Rz(theta_i) Tz(d_i) K_i directly: rows 0 and 1
-        # mix with cos/sin, row 2 gains d_i times row 3, row 3 stays [0, 0, 0, 1]
-        self._K_rows = [K[1:, r, :].copy() for r in range(4)]
-        M0 = K[1:].copy()
-        M0[:, 2, :] = K[1:, 2, :] + self._d_const[:, None] * K[1:, 3, :]
-        self._M_template = M0
-        self._has_prismatic = bool(self._prismatic_idx.size)
-        self._screws = None  # zero-pose screw axes, computed on first use
-        self._screw_consts = None  # the same as floats for fk_dq_screw
-        # (theta_i offset, d_i offset, revolute?) as Python values for fk_dq
+        # (theta_i offset, d_i offset, revolute?) as Python values for the products
         self._joint_constants = [(lk.theta_offset, lk.d, lk.is_revolute) for lk in self._links]
+        self._L, self._R = _link_constants(self._links, self._convention)
+        # The constant factors of neighbouring links multiplied once:
+        # X_WT = K_0 J_1 K_1 J_2 ... J_n K_n, K_0 = X_W0 L_1, K_i = R_i L_{i+1}, K_n = R_n X_nT
+        K = np.concatenate([self._base[None] @ self._L[:1], self._R[:-1] @ self._L[1:],
+                            self._R[-1:] @ self._tool[None]])
+        self._K = K
+        self._K0_columns = [tuple(K[0, :3, j].tolist()) for j in range(4)]
+        self._base_columns = [tuple(self._base[:3, j].tolist()) for j in range(4)]
+        # column j of K_i as the terms (k, K_i[k, j]) of its rows k < 3 that are not zero;
+        # row 3 is (0, 0, 0, 1)
+        self._K_terms = [[tuple((k, float(K[i, k, j])) for k in range(3)
+                                if K[i, k, j] != 0.0) for j in range(4)]
+                         for i in range(n + 1)]
+        self._K_dual_quaternions = dual_quaternion_from_transform(K).tolist()
+        # the zero pose: joint axes in the world frame and the TCP (fk_dq_screw's constants)
+        zero = [0.0] * n
+        X0, before, _ = self._product(zero, record=True)
+        self._zero_pose = (np.array([X[3] for X in before]),
+                           np.array([X[2] for X in before]),
+                           _matrix_from_columns(X0))
+        points, axes, X_WT0 = self._zero_pose
+        lines = np.concatenate([axes, np.cross(points, axes)], axis=-1)
+        self._screw_constants = (lines.tolist(), dual_quaternion_from_transform(X_WT0).tolist())
 
     # -- joint vectors -----------------------------------------------------------------------
-    def check_joints(self, q, *, limits="prismatic"):
+    def check_joints(self, q: ArrayLike, *, limits: str = "prismatic", name: str = "q"
+                     ) -> NDArray[np.float64]:
         """Validate joint vectors and return them as a float array.
 
         Parameters
@@ -356,13 +367,13 @@ class Robot:
         ...
         ValueError: joint 3 (prismatic) = 0.5 is beyond its limits [0, 0.15]
         """
-        q = np.asarray(q, dtype=float)
+        q = real_array(q, name)
         if q.ndim == 0 or q.shape[-1] != self.n:
             raise ValueError(
-                f"q must have shape (..., {self.n}) for this {self.n}-joint robot, "
+                f"{name} must have shape (..., {self.n}) for this {self.n}-joint robot, "
                 f"got shape {q.shape}")
         if not np.isfinite(q).all():
-            raise ValueError("q contains NaN or infinity")
+            raise ValueError(f"{name} contains NaN or infinity")
         if limits == "none":
             return q
         if limits == "prismatic":
@@ -387,8 +398,8 @@ class Robot:
 
     def _link_parameters(self, q):
         """Joint angles theta and offsets d of every link, shape (..., n) each."""
-        theta = self._theta_const + q * self._q_to_theta
-        d = self._d_const + q * self._q_to_d
+        theta = np.array([c[0] for c in self._joint_constants]) + q * self._revolute
+        d = np.array([c[1] for c in self._joint_constants]) + q * ~self._revolute
         return theta, d
 
     def _joint_motions(self, q):
@@ -405,7 +416,7 @@ class Robot:
         J[..., 3, 3] = 1.0
         return J
 
-    def link_transforms(self, q):
+    def link_transforms(self, q: ArrayLike) -> NDArray[np.float64]:
         r"""The link transforms :math:`X_{i-1,i}(q_i)`, without base and tool.
 
         Parameters
@@ -431,7 +442,7 @@ class Robot:
         return self._L @ self._joint_motions(q) @ self._R
 
     # -- forward kinematics, matrices ---------------------------------------------------
-    def fk(self, q, all_frames=False):
+    def fk(self, q: ArrayLike, all_frames: bool = False) -> NDArray[np.float64]:
         r"""Forward kinematics as homogeneous transforms.
 
         .. math::
@@ -471,76 +482,57 @@ class Robot:
         (5, 7, 4, 4)
         """
         q = self.check_joints(q)
-        if not all_frames and q.ndim > 1 and q.size >= 64 * self.n:
-            return self._fk_batch(q)
-        if all_frames:
-            J = self._joint_motions(q)
-            M = self._L @ J @ self._R
-            frames = np.empty(q.shape[:-1] + (self.n + 1, 4, 4))
-            frames[..., 0, :, :] = self._base
-            X = self._base
-            for i in range(self.n):
-                X = X @ M[..., i, :, :]
-                frames[..., i + 1, :, :] = X
-            frames[..., self.n, :, :] = X @ self._tool
-            return frames
-        # X_WT = K_0 M_1 M_2 ... M_n with M_i = Rz(theta_i) Tz(d_i) K_i
-        theta, d = self._link_parameters(q)
-        c = np.cos(theta)[..., None]
-        s = np.sin(theta)[..., None]
-        K0r, K1r, K2r, K3r = self._K_rows
-        M = np.broadcast_to(self._M_template, q.shape + (4, 4)).copy()
-        M[..., 0, :] = c * K0r - s * K1r
-        M[..., 1, :] = s * K0r + c * K1r
-        if self._has_prismatic:
-            M[..., 2, :] = K2r + d[..., None] * K3r
-        X = self._K[0] @ M[..., 0, :, :]
-        for i in range(1, self.n):
-            X = X @ M[..., i, :, :]
-        return X
+        if not all_frames:
+            return _on_components(self._pose_entries, q, (4, 4))
+        last = self.n + 1
+        frames = _on_components(self._frame_entries, q, (last, 4, 4))
+        # frames hold K_0 J_1 ... J_i (after joint i); frame i is that times R_i
+        frames[..., 1:last - 1, :, :] = frames[..., 1:last - 1, :, :] @ self._R[:-1]
+        return frames
 
-    def _fk_batch(self, q, chunk=8192):
-        """The same product as :meth:`fk` for many joint vectors, batch axis last.
+    def _product(self, q, record=False):
+        r"""The chain's one product, :math:`X_{WT} = K_0 J_1 K_1 \cdots J_n K_n`.
 
-        The running product is kept column by column, only its top three rows, each column
-        an array of shape (3, N), so that every step is a handful of contiguous vector
-        operations: the joint motion ``X @ Rz(theta) Tz(d)`` mixes columns 0 and 1 and
-        shifts column 3, and the constant ``@ K_i`` adds multiples of columns (terms with
-        ``|K_i[k, j]| < 1e-15``, the rounding of ``cos(pi/2)``, are skipped). The batch is
-        processed in blocks of ``chunk`` joint vectors so that the work stays in cache.
+        The top three rows of the running product are kept column by column: the joint
+        motion ``X @ Rz(theta) Tz(d)`` mixes columns 0 and 1 and shifts column 3
+        (:func:`_joint_step`), and the constant ``@ K_i`` adds multiples of columns
+        (:func:`_constant_step`). ``q`` holds the joint values: Python floats (one joint
+        vector; a column is three floats) or arrays of shape (N,) (a batch; a column is an
+        array of shape (3, N)).
+
+        Returns the four columns of :math:`X_{WT}`; with ``record``, also the running
+        products before and after each joint motion (lists of n column sets): before joint
+        i it is the frame whose z axis is joint i's axis.
         """
-        lead = q.shape[:-1]
-        q2 = q.reshape(-1, self.n)
-        total = q2.shape[0]
-        out = np.zeros((total, 4, 4))
-        out[:, 3, 3] = 1.0
-        K = self._K
-        terms = [[[(k, K[i, k, j]) for k in range(4) if abs(K[i, k, j]) >= 1e-15]
-                  for j in range(4)] for i in range(self.n + 1)]
-        d_const = [None if self._revolute[i] else i for i in range(self.n)]
-        for start in range(0, total, chunk):
-            block = q2[start:start + chunk]
-            theta, d = self._link_parameters(block)
-            theta = np.ascontiguousarray(theta.T)                   # (n, N)
-            d = np.ascontiguousarray(d.T)
-            c, s = np.cos(theta), np.sin(theta)
-            N = block.shape[0]
-            X = [np.repeat(K[0][:3, j, None], N, axis=1) for j in range(4)]
-            for i in range(self.n):
-                ci, si = c[i], s[i]
-                di = d[i] if d_const[i] is not None else d[i, 0]
-                Y = (ci * X[0] + si * X[1], ci * X[1] - si * X[0], X[2], di * X[2] + X[3])
-                X = []
-                for col in terms[i + 1]:
-                    acc = None
-                    for k, value in col:
-                        term = Y[k] if value == 1.0 else value * Y[k]
-                        acc = term if acc is None else acc + term
-                    X.append(np.zeros_like(Y[0]) if acc is None else acc)
-            out[start:start + N, :3, :] = np.stack(X, axis=-1).transpose(1, 0, 2)
-        return out.reshape(lead + (4, 4))
+        single = type(q[0]) is float
+        cos, sin = (math.cos, math.sin) if single else (np.cos, np.sin)
+        X = self._K0_columns if single else [np.array(c)[:, None] for c in self._K0_columns]
+        before, after = [], []
+        for i, (theta0, d0, revolute) in enumerate(self._joint_constants):
+            if revolute:
+                theta, d = q[i] + theta0, d0
+            else:
+                theta, d = theta0, q[i] + d0
+            Y = _joint_step(X, cos(theta), sin(theta), d)
+            if record:
+                before.append(X)
+                after.append(Y)
+            X = _constant_step(Y, self._K_terms[i + 1])
+        return (X, before, after) if record else X
 
-    def joint_axes(self, q):
+    def _pose_entries(self, q):
+        return _entries(self._product(q))
+
+    def _frame_entries(self, q):
+        X, _, after = self._product(q, record=True)
+        return (_entries(self._base_columns) + sum((_entries(Y) for Y in after[:-1]), ())
+                + _entries(X))
+
+    def _axes_entries(self, q):
+        X, before, _ = self._product(q, record=True)
+        return sum((tuple(B[3]) + tuple(B[2]) for B in before), ()) + tuple(X[3])
+
+    def joint_axes(self, q: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         r"""Points on the joint axes and their unit directions, in the world frame.
 
         The joint :math:`i` moves along or about the z axis of the frame
@@ -566,25 +558,18 @@ class Robot:
                [ 0., -1.,  0.],
                [ 0., -1.,  0.]])
         """
-        points, axes, _ = self._axes_and_tcp(self.check_joints(q))
+        points, axes, _ = self._axes_and_tcp_position(self.check_joints(q))
         return points, axes
 
-    def _axes_and_tcp(self, q):
-        """Joint axis points and directions, shape (..., n, 3) each, and X_WT (..., 4, 4)."""
-        J = self._joint_motions(q)
-        points = np.empty(q.shape + (3,))
-        axes = np.empty(q.shape + (3,))
-        X = self._base
-        for i in range(self.n):
-            Y = X @ self._L[i]
-            points[..., i, :] = Y[..., :3, 3]
-            axes[..., i, :] = Y[..., :3, 2]
-            X = Y @ J[..., i, :, :] @ self._R[i]
-        X = X @ self._tool
-        return points, axes, np.broadcast_to(X, q.shape[:-1] + (4, 4))
+    def _axes_and_tcp_position(self, q):
+        """Joint axis points and directions (..., n, 3) and the TCP position (..., 3) of
+        checked joint vectors."""
+        n = self.n
+        flat = _on_components(self._axes_entries, q, (2 * n + 1, 3))
+        return flat[..., 0:2 * n:2, :], flat[..., 1:2 * n:2, :], flat[..., 2 * n, :]
 
     # -- forward kinematics, dual quaternions --------------------------------------------
-    def fk_dq(self, q):
+    def fk_dq(self, q: ArrayLike) -> NDArray[np.float64]:
         r"""Forward kinematics as a unit dual quaternion, link by link.
 
         Each link is written as a product of three dual quaternions, the constant parts and
@@ -638,34 +623,29 @@ class Robot:
         >>> np.allclose(dualquat.transform_from_dual_quaternion(Q), robot.fk(q))
         True
         """
-        return _on_components(self._fk_dq_parts, self.check_joints(q))
+        return _on_components(self._fk_dq_parts, self.check_joints(q), (8,))
 
     def _fk_dq_parts(self, q):
         """The product K_0 J_1 K_1 ... J_n K_n on components.
 
         ``q`` holds the joint values one per joint: Python floats (one joint vector) or
         arrays of shape (N,) (a batch). The products are those of validated unit dual
-        quaternions, so the unchecked component kernels of :mod:`dqlab.dualquat` serve.
+        quaternions, so the unchecked component kernels of ``dqlab._kernels`` serve.
         """
         cos, sin = (math.cos, math.sin) if type(q[0]) is float else (np.cos, np.sin)
-        K = self._constant_dual_quaternions()
+        K = self._K_dual_quaternions
         Q = K[0]
         for i, (theta0, d0, revolute) in enumerate(self._joint_constants):
             if revolute:
                 half, h = 0.5 * (q[i] + theta0), 0.5 * d0
             else:
                 half, h = 0.5 * theta0, 0.5 * (q[i] + d0)
-            Q = _dq_mul(_dq_mul_z_screw(Q, cos(half), sin(half), h), K[i + 1])
+            Q = dual_quaternion_mul_z_screw(Q, cos(half), sin(half), h)
+            Q = dual_quaternion_mul(Q, K[i + 1])
         return Q
 
-    def _constant_dual_quaternions(self):
-        """The constant factors K_0 .. K_n of the chain as dual quaternions (lists of 8 floats)."""
-        cached = getattr(self, "_dq_consts", None)
-        if cached is None or cached[0] is not self._K:
-            self._dq_consts = (self._K, dual_quaternion_from_transform(self._K).tolist())
-        return self._dq_consts[1]
-
-    def zero_pose_screws(self):
+    def zero_pose_screws(self
+                         ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         r"""The joint axes at :math:`q = 0` in the world frame and the zero-pose TCP.
 
         Returns
@@ -684,14 +664,10 @@ class Robot:
         >>> points[1].round(4), axes[1].round(4)
         (array([0.    , 0.    , 0.1519]), array([ 0., -1.,  0.]))
         """
-        if self._screws is None:
-            zero = np.zeros(self.n)
-            points, axes = self.joint_axes(zero)
-            self._screws = (points, axes, self.fk(zero))
-        points, axes, X = self._screws
-        return points.copy(), axes.copy(), X.copy()
+        points, axes, X_WT0 = self._zero_pose
+        return points.copy(), axes.copy(), X_WT0.copy()
 
-    def fk_dq_screw(self, q):
+    def fk_dq_screw(self, q: ArrayLike) -> NDArray[np.float64]:
         r"""Forward kinematics as a product of base-frame screw motions (thesis, second way).
 
         Joint :math:`i` turns the rest of the arm about its axis at the zero pose, the line
@@ -740,33 +716,39 @@ class Robot:
         >>> tcp.round(5) + 0.0
         array([ 0.     , -0.39425,  0.69415])
         """
-        return _on_components(self._fk_dq_screw_parts, self.check_joints(q))
+        return _on_components(self._fk_dq_screw_parts, self.check_joints(q), (8,))
 
     def _fk_dq_screw_parts(self, q):
         """The product S_1 S_2 ... S_n Q_WT(0) on components (``q`` as in _fk_dq_parts)."""
         cos, sin = (math.cos, math.sin) if type(q[0]) is float else (np.cos, np.sin)
-        lines, Q = self._screw_constants()
+        lines, Q = self._screw_constants
         for i in range(self.n - 1, -1, -1):
             if self._joint_constants[i][2]:
                 half, h = 0.5 * q[i], 0.0
             else:
                 half, h = 0.0, 0.5 * q[i]
-            Q = _dq_mul(_screw_parts(*lines[i], cos(half), sin(half), h), Q)
+            Q = dual_quaternion_mul(screw_entries(*lines[i], cos(half), sin(half), h), Q)
         return Q
 
-    def _screw_constants(self):
-        """Per joint the zero-pose axis (l, m = p x l) as 6 floats, and Q_WT(0) as 8."""
-        if self._screw_consts is None:
-            points, axes, X0 = self.zero_pose_screws()
-            lines = np.concatenate([axes, np.cross(points, axes)], axis=-1)
-            self._screw_consts = (lines.tolist(), dual_quaternion_from_transform(X0).tolist())
-        return self._screw_consts
-
     # -- differential kinematics ----------------------------------------------------------
-    def jacobian(self, q):
-        r"""Geometric Jacobian at the TCP in the world frame, linear rows first.
+    def jacobian(self, q: ArrayLike) -> NDArray[np.float64]:
+        r"""Geometric Jacobian at the tool centre point, in the world frame, linear rows first.
 
-        See :func:`dqlab.jacobian.geometric_jacobian`.
+        Column :math:`i` for a revolute joint about the unit axis :math:`z_i` through
+        :math:`o_i`, and for a prismatic joint along :math:`z_i`:
+
+        .. math::
+
+           J_i = \begin{pmatrix} z_i \times (p_T - o_i) \\ z_i \end{pmatrix}
+           \quad\text{(revolute)},\qquad
+           J_i = \begin{pmatrix} z_i \\ 0 \end{pmatrix}
+           \quad\text{(prismatic)},
+
+        where :math:`p_T` is the TCP position (see :meth:`joint_axes`). Then
+        :math:`(\dot p_T, \omega) = J(q)\, \dot q` with :math:`\omega` the tool's angular
+        velocity in the world frame. For standard DH the axis of joint :math:`i` is the z
+        axis of frame :math:`i-1`; for modified DH it is the z axis of frame :math:`i`.
+        :func:`dqlab.jacobian.geometric_jacobian` is the same function.
 
         Parameters
         ----------
@@ -778,17 +760,23 @@ class Robot:
 
         Examples
         --------
-        >>> import numpy as np
-        >>> from dqlab.models import ur3
-        >>> ur3().jacobian(np.zeros(6)).shape
-        (6, 6)
-        """
-        from .jacobian import geometric_jacobian
+        The UR3 report's Jacobian (modified DH) at its joint angles, first column:
 
-        return geometric_jacobian(self, q)
+        >>> import numpy as np
+        >>> from dqlab.models import ur3_mdh
+        >>> J = ur3_mdh().jacobian([0.1, -0.5, 0.8, -0.2, 0.5, 0.1])
+        >>> J[:, 0].round(8)
+        array([-0.49781088, -0.08817691,  0.        ,  0.        ,  0.        ,  1.        ])
+        """
+        points, axes, p_T = self._axes_and_tcp_position(self.check_joints(q))
+        revolute = self._revolute[:, None]
+        linear = np.where(revolute, np.cross(axes, p_T[..., None, :] - points), axes)
+        angular = np.where(revolute, axes, 0.0)
+        return np.concatenate([np.swapaxes(linear, -1, -2), np.swapaxes(angular, -1, -2)],
+                              axis=-2)
 
     # -- printing -------------------------------------------------------------------------
-    def dh_table(self):
+    def dh_table(self) -> str:
         """The parameter table as text, in the robot's own convention.
 
         Angles are printed in degrees, lengths in metres. For modified DH the columns are
@@ -855,20 +843,79 @@ class Robot:
         return "\n".join(lines + extra)
 
     def __repr__(self):
-        return self.dh_table()
+        return f"Robot({self.name!r}, convention={self._convention!r}, n={self.n})"
 
 
-def _on_components(parts, q):
-    """Run a formula on joint values, ``parts(q_1, ..., q_n) -> 8 components``, for checked
-    joint vectors ``q`` of shape (..., n): with Python floats for one joint vector, and with
-    arrays of shape (N,) per joint for blocks of a batch. Returns shape (..., 8)."""
+_FEW = 8    # up to this many joint vectors, Python floats beat numpy's per-call overhead
+
+
+def _on_components(parts, q, trailing):
+    """Run a formula on joint values, ``parts(q_1, ..., q_n) -> entries``, for checked joint
+    vectors ``q`` of shape (..., n): with Python floats for one joint vector (or each of a
+    few), and with arrays of shape (N,) per joint for blocks of a batch. Returns shape
+    (...) + trailing."""
     if q.ndim == 1:
-        return np.array(parts(q.tolist()))
+        return np.array(parts(q.tolist())).reshape(trailing)
+    if q.size <= _FEW * q.shape[-1]:
+        rows = q.reshape(-1, q.shape[-1]).tolist()
+        return np.array([parts(row) for row in rows]).reshape(q.shape[:-1] + trailing)
 
     def kernel(block):
-        return stack_components(parts(np.ascontiguousarray(block.T)))
+        entries = parts(list(np.ascontiguousarray(block.T)))
+        out = np.empty((block.shape[0], len(entries)))
+        for k, entry in enumerate(entries):     # constants (floats) broadcast
+            out[:, k] = entry
+        return out.reshape(out.shape[:1] + trailing)
 
-    return batched(kernel, [(q, 1)], (8,))
+    return batched(kernel, [(q, 1)], trailing)
+
+
+def _joint_step(X, c, s, d):
+    """The columns of ``X @ Rz(theta) Tz(d)`` (``c, s`` the cosine and sine of theta)."""
+    x0, x1, x2, x3 = X
+    if type(x0) is tuple:
+        return ((c * x0[0] + s * x1[0], c * x0[1] + s * x1[1], c * x0[2] + s * x1[2]),
+                (c * x1[0] - s * x0[0], c * x1[1] - s * x0[1], c * x1[2] - s * x0[2]),
+                x2,
+                (d * x2[0] + x3[0], d * x2[1] + x3[1], d * x2[2] + x3[2]))
+    return (c * x0 + s * x1, c * x1 - s * x0, x2, d * x2 + x3)
+
+
+def _constant_step(Y, terms):
+    """The columns of ``Y @ K``: column j is the sum of ``value * Y[k]`` over the terms
+    ``(k, value)`` of column j of K (rows 0 to 2), plus ``Y[3]`` for j = 3 (row 3 of a rigid
+    transform is (0, 0, 0, 1))."""
+    if type(Y[0]) is not tuple:
+        columns = [sum(Y[k] if value == 1.0 else value * Y[k] for k, value in column)
+                   for column in terms]
+        columns[3] = columns[3] + Y[3]
+        return columns
+    columns = []
+    for column in terms:
+        x = y = z = 0.0
+        for k, value in column:
+            a, b, c = Y[k]
+            x += value * a
+            y += value * b
+            z += value * c
+        columns.append((x, y, z))
+    a, b, c = Y[3]
+    x, y, z = columns[3]
+    columns[3] = (x + a, y + b, z + c)
+    return columns
+
+
+def _entries(X):
+    """The 16 entries, row by row, of the 4x4 whose top rows are the columns ``X``."""
+    return (X[0][0], X[1][0], X[2][0], X[3][0],
+            X[0][1], X[1][1], X[2][1], X[3][1],
+            X[0][2], X[1][2], X[2][2], X[3][2],
+            0.0, 0.0, 0.0, 1.0)
+
+
+def _matrix_from_columns(X):
+    """A (4, 4) array from the float columns of a product."""
+    return np.array(_entries(X)).reshape(4, 4)
 
 
 def _num(x):

@@ -9,8 +9,10 @@ Every function takes array-likes and broadcasts over leading axes.
 """
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
-from ._checks import as_float_array, components
+from ._checks import as_float_array, components, real_array, rotation_or_raise
+from ._kernels import norm_last_axis, orthonormality
 
 __all__ = [
     "rot_x", "rot_y", "rot_z", "matrix_from_euler_zxz", "euler_zxz_from_matrix",
@@ -34,7 +36,7 @@ def _elementary(theta, i, j):
     return R
 
 
-def rot_x(theta):
+def rot_x(theta: ArrayLike) -> NDArray[np.float64]:
     r"""Rotation by ``theta`` about the x axis.
 
     .. math::
@@ -62,7 +64,7 @@ def rot_x(theta):
     return _elementary(theta, 1, 2)
 
 
-def rot_y(theta):
+def rot_y(theta: ArrayLike) -> NDArray[np.float64]:
     r"""Rotation by ``theta`` about the y axis.
 
     .. math::
@@ -90,7 +92,7 @@ def rot_y(theta):
     return _elementary(theta, 2, 0)
 
 
-def rot_z(theta):
+def rot_z(theta: ArrayLike) -> NDArray[np.float64]:
     r"""Rotation by ``theta`` about the z axis.
 
     .. math::
@@ -119,7 +121,7 @@ def rot_z(theta):
     return _elementary(theta, 0, 1)
 
 
-def skew(v):
+def skew(v: ArrayLike) -> NDArray[np.float64]:
     r"""Cross-product matrix :math:`[\mathbf v]_\times`, with :math:`[\mathbf v]_\times
     \mathbf w = \mathbf v \times \mathbf w`.
 
@@ -150,37 +152,7 @@ def skew(v):
     return S
 
 
-def _orthonormality(a, b, c):
-    """Largest entry of |R^T R - I| and det R, R given by its rows ``a, b, c``.
-
-    The entries are floats (one matrix) or arrays (a batch: the largest error over the batch
-    and the smallest determinant are returned).
-    """
-    a0, a1, a2 = a[0], a[1], a[2]
-    b0, b1, b2 = b[0], b[1], b[2]
-    c0, c1, c2 = c[0], c[1], c[2]
-    errs = (abs(a0 * a0 + b0 * b0 + c0 * c0 - 1.0),
-            abs(a1 * a1 + b1 * b1 + c1 * c1 - 1.0),
-            abs(a2 * a2 + b2 * b2 + c2 * c2 - 1.0),
-            abs(a0 * a1 + b0 * b1 + c0 * c1),
-            abs(a0 * a2 + b0 * b2 + c0 * c2),
-            abs(a1 * a2 + b1 * b2 + c1 * c2))
-    det = a0 * (b1 * c2 - b2 * c1) - a1 * (b0 * c2 - b2 * c0) + a2 * (b0 * c1 - b1 * c0)
-    if isinstance(det, np.ndarray):
-        return (float(max(e.max(initial=0.0) for e in errs)),
-                float(det.min(initial=1.0)))
-    return max(errs), det
-
-
-def _raise_not_rotation(name, err, det, tol):
-    if not err <= tol:
-        raise ValueError(
-            f"{name} is not orthonormal: |R^T R - I| reaches {err:.3g} (tolerance {tol:g})")
-    if det < 0.0:
-        raise ValueError(f"{name} is a reflection (determinant -1), not a rotation")
-
-
-def check_rotation_matrix(R, tol=1e-9, name="R"):
+def check_rotation_matrix(R: ArrayLike, tol: float = 1e-9, name: str = "R") -> NDArray[np.float64]:
     r"""Return ``R`` as a float array, or raise if it is not a rotation matrix.
 
     A rotation matrix is orthonormal, :math:`R^\mathsf{T} R = I`, with
@@ -214,16 +186,16 @@ def check_rotation_matrix(R, tol=1e-9, name="R"):
     """
     R = as_float_array(R, name, (3, 3))
     if R.ndim == 2:
-        err, det = _orthonormality(*R.tolist())
+        err, det = orthonormality(*R.tolist())
     else:
         e = components(R.reshape(R.shape[:-2] + (9,)))
-        err, det = _orthonormality(e[0:3], e[3:6], e[6:9])
+        err, det = orthonormality(e[0:3], e[3:6], e[6:9])
     if not (err <= tol and det > 0.0):
-        _raise_not_rotation(name, err, det, tol)
+        rotation_or_raise(name, err, det, tol)
     return R
 
 
-def matrix_from_euler_zxz(angles):
+def matrix_from_euler_zxz(angles: ArrayLike) -> NDArray[np.float64]:
     r"""Rotation matrix from classical Euler angles (precession, nutation, spin).
 
     The rotations are about moving axes: :math:`\psi` about z, then :math:`\theta` about
@@ -262,7 +234,8 @@ def matrix_from_euler_zxz(angles):
     return rot_z(angles[..., 0]) @ rot_x(angles[..., 1]) @ rot_z(angles[..., 2])
 
 
-def euler_zxz_from_matrix(R, *, tol=1e-9, singular_tol=1e-12):
+def euler_zxz_from_matrix(R: ArrayLike, *, tol: float = 1e-9, singular_tol: float = 1e-12
+                          ) -> NDArray[np.float64]:
     r"""Classical Euler angles :math:`(\psi, \theta, \varphi)` of a rotation matrix.
 
     With :math:`\mathbf x, \mathbf y, \mathbf z` the columns of :math:`R` (course notes,
@@ -332,7 +305,7 @@ def euler_zxz_from_matrix(R, *, tol=1e-9, singular_tol=1e-12):
     return np.stack([psi, theta, phi], axis=-1)
 
 
-def wrap_angle(theta):
+def wrap_angle(theta: ArrayLike) -> NDArray[np.float64]:
     r"""Wrap angles to the interval :math:`(-\pi, \pi]`.
 
     Parameters
@@ -351,15 +324,14 @@ def wrap_angle(theta):
     >>> wrap_angle([np.pi, -np.pi, 3 * np.pi / 2, 0.5])
     array([ 3.14159265,  3.14159265, -1.57079633,  0.5       ])
     """
-    theta = np.asarray(theta, dtype=float)
-    w = theta - _TWO_PI * np.round(theta * (1.0 / _TWO_PI))   # exact when |theta| < pi
-    outside = (w <= -np.pi) | (w > np.pi)     # -pi, or a rounding of theta / (2 pi)
-    if outside.any():
+    theta = real_array(theta, "theta")
+    w = theta - _TWO_PI * np.rint(theta * (1.0 / _TWO_PI))    # exact when |theta| < pi
+    if w.size and not np.abs(w).max() < np.pi:   # -pi, or a rounding of theta / (2 pi)
         w = np.where(w > np.pi, w - _TWO_PI, np.where(w <= -np.pi, w + _TWO_PI, w))
     return w
 
 
-def matrix_from_rpy(rpy):
+def matrix_from_rpy(rpy: ArrayLike) -> NDArray[np.float64]:
     r"""Rotation matrix from roll, pitch, yaw (Craig's fixed x-y-z angles).
 
     Roll :math:`\gamma` about x, then pitch :math:`\beta` about the fixed y, then yaw
@@ -395,7 +367,8 @@ def matrix_from_rpy(rpy):
     return rot_z(rpy[..., 2]) @ rot_y(rpy[..., 1]) @ rot_x(rpy[..., 0])
 
 
-def rpy_from_matrix(R, *, tol=1e-9, singular_tol=1e-12):
+def rpy_from_matrix(R: ArrayLike, *, tol: float = 1e-9, singular_tol: float = 1e-12
+                    ) -> NDArray[np.float64]:
     r"""Roll, pitch, yaw :math:`(\gamma, \beta, \alpha)` of a rotation matrix (Craig).
 
     With :math:`\mathbf x, \mathbf y, \mathbf z` the columns of :math:`R`, in the regular
@@ -459,13 +432,13 @@ def rpy_from_matrix(R, *, tol=1e-9, singular_tol=1e-12):
 
 def _unit_axis(axis):
     axis = as_float_array(axis, "axis", (3,))
-    n = np.sqrt(np.sum(axis * axis, axis=-1))
+    n = norm_last_axis(axis)
     if np.any(n == 0.0):
         raise ValueError("axis is the zero vector, which has no direction")
     return axis / n[..., None]
 
 
-def matrix_from_axis_angle(axis, angle):
+def matrix_from_axis_angle(axis: ArrayLike, angle: ArrayLike) -> NDArray[np.float64]:
     r"""Rotation matrix of the rotation by ``angle`` about ``axis`` (Rodrigues' formula).
 
     .. math::
@@ -498,7 +471,8 @@ def matrix_from_axis_angle(axis, angle):
     return c * np.eye(3) + s * skew(n) + (1.0 - c) * nnT
 
 
-def axis_angle_from_matrix(R, *, tol=1e-9):
+def axis_angle_from_matrix(R: ArrayLike, *, tol: float = 1e-9
+                           ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     r"""Axis and angle of a rotation matrix, accurate for every angle in :math:`[0, \pi]`.
 
     .. math::
@@ -555,7 +529,7 @@ def axis_angle_from_matrix(R, *, tol=1e-9):
     return axis, angle
 
 
-def rodrigues(v, axis, angle):
+def rodrigues(v: ArrayLike, axis: ArrayLike, angle: ArrayLike) -> NDArray[np.float64]:
     r"""Rotate vectors by ``angle`` about ``axis`` with Rodrigues' formula.
 
     .. math::

@@ -14,8 +14,9 @@ axes and :math:`\mathbf p_{AB}` is B's origin, both written in A. Composition re
 """
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
-from ._checks import as_float_array
+from ._checks import as_float_array, batch_shape
 from .rotations import check_rotation_matrix
 
 __all__ = [
@@ -24,7 +25,7 @@ __all__ = [
 ]
 
 
-def check_transform(T, tol=1e-9, name="T"):
+def check_transform(T: ArrayLike, tol: float = 1e-9, name: str = "T") -> NDArray[np.float64]:
     r"""Return ``T`` as a float array, or raise if it is not a rigid transform.
 
     The bottom row must be exactly ``(0, 0, 0, 1)`` and the upper-left block a rotation
@@ -76,10 +77,10 @@ def transform_identity(shape=()):
     >>> transform_identity((2,)).shape
     (2, 4, 4)
     """
-    return np.broadcast_to(np.eye(4), tuple(np.atleast_1d(shape).astype(int)) + (4, 4)).copy()
+    return np.broadcast_to(np.eye(4), batch_shape(shape) + (4, 4)).copy()
 
 
-def transform_from(R, p, *, tol=1e-9):
+def transform_from(R: ArrayLike, p: ArrayLike, *, tol: float = 1e-9) -> NDArray[np.float64]:
     r"""Homogeneous transform from a rotation matrix and a translation.
 
     .. math::
@@ -117,7 +118,7 @@ def transform_from(R, p, *, tol=1e-9):
     return T
 
 
-def rotation_translation_from_transform(T, *, tol=1e-9):
+def rotation_translation_from_transform(T: ArrayLike, *, tol: float = 1e-9):
     """Split a transform into its rotation matrix ``(..., 3, 3)`` and translation ``(..., 3)``.
 
     Examples
@@ -130,7 +131,7 @@ def rotation_translation_from_transform(T, *, tol=1e-9):
     return T[..., :3, :3].copy(), T[..., :3, 3].copy()
 
 
-def transform_inverse(T, *, tol=1e-9):
+def transform_inverse(T: ArrayLike, *, tol: float = 1e-9) -> NDArray[np.float64]:
     r"""Inverse of rigid transforms, without a general matrix inverse.
 
     .. math::
@@ -165,7 +166,7 @@ def transform_inverse(T, *, tol=1e-9):
     return out
 
 
-def compose(*Ts):
+def compose(*Ts: ArrayLike) -> NDArray[np.float64]:
     r"""Product of transforms, left to right: ``compose(X_AB, X_BC, X_CD)`` is ``X_AD``.
 
     .. math::
@@ -196,7 +197,7 @@ def compose(*Ts):
     return out if len(Ts) > 1 else out.copy()
 
 
-def apply_transform(T, points):
+def apply_transform(T: ArrayLike, points: ArrayLike) -> NDArray[np.float64]:
     r"""Transform points: :math:`\mathbf p_A = R_{AB}\,\mathbf p_B + \mathbf p_{AB}`.
 
     Parameters
@@ -223,7 +224,7 @@ def apply_transform(T, points):
     return (T[..., :3, :3] @ p[..., None])[..., 0] + T[..., :3, 3]
 
 
-def apply_to_vectors(T, vectors):
+def apply_to_vectors(T: ArrayLike, vectors: ArrayLike) -> NDArray[np.float64]:
     r"""Transform free vectors (directions, velocities): rotation only, :math:`R\,\mathbf v`.
 
     Parameters

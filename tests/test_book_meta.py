@@ -5,6 +5,7 @@ import re
 from pathlib import Path
 
 import pytest
+import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 BOOK = ROOT / "book"
@@ -12,9 +13,19 @@ BOOK = ROOT / "book"
 
 def toc_entries():
     """The documents listed in _toc.yml (root and every `file:` entry), in order."""
-    text = (ROOT / "_toc.yml").read_text()
-    lines = [line for line in text.splitlines() if not line.lstrip().startswith("#")]
-    return re.findall(r"^\s*(?:root|-\s*file):\s*(\S+)\s*$", "\n".join(lines), re.M)
+    toc = yaml.safe_load((ROOT / "_toc.yml").read_text())
+    entries = [toc["root"]]
+
+    def walk(node):
+        if isinstance(node, dict):
+            if "file" in node:
+                entries.append(node["file"])
+            for key in ("parts", "chapters", "sections"):
+                for child in node.get(key, ()):
+                    walk(child)
+
+    walk(toc)
+    return entries
 
 
 def toc_files():

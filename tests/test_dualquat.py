@@ -550,17 +550,17 @@ def test_screw_round_trip_near_0_and_pi(angle, atol):
 
 def test_product_by_a_screw_about_z_is_the_general_product():
     """The kernel behind Robot.fk_dq skips the zeros of J; the result is A J all the same."""
-    from dqlab.dualquat import _dq_mul, _dq_mul_z_screw, _screw_parts
+    from dqlab._kernels import dual_quaternion_mul, dual_quaternion_mul_z_screw, screw_entries
 
     rng = np.random.default_rng(19)
     A = random_dq(rng, (50,))
     theta, d = rng.uniform(-np.pi, np.pi, 50), rng.normal(size=50)
     J = dual_quaternion_from_screw([0, 0, 1], [0, 0, 0], theta, d)
     c, s, h = np.cos(theta / 2), np.sin(theta / 2), d / 2
-    np.testing.assert_allclose(np.stack(_dq_mul_z_screw(list(A.T), c, s, h), axis=-1),
+    np.testing.assert_allclose(np.stack(dual_quaternion_mul_z_screw(list(A.T), c, s, h), axis=-1),
                                dual_quaternion_product(A, J), atol=1e-15)
-    np.testing.assert_allclose(np.stack(_screw_parts(0, 0, 1, 0, 0, 0, c, s, h), axis=-1) + 0.0,
+    np.testing.assert_allclose(np.stack(screw_entries(0, 0, 1, 0, 0, 0, c, s, h), axis=-1) + 0.0,
                                J, atol=0)
-    one = _dq_mul(A[0].tolist(), J[0].tolist())
-    np.testing.assert_allclose(one, _dq_mul_z_screw(A[0].tolist(), c[0], s[0], h[0]),
+    one = dual_quaternion_mul(A[0].tolist(), J[0].tolist())
+    np.testing.assert_allclose(one, dual_quaternion_mul_z_screw(A[0].tolist(), c[0], s[0], h[0]),
                                atol=1e-15)

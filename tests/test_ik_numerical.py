@@ -6,8 +6,7 @@ import numpy as np
 import pytest
 
 from dqlab import dualquat
-from dqlab.ik import numerical
-from dqlab.ik.numerical import pose_errors
+from dqlab.ik import numerical, pose_errors
 from dqlab.models import desk_arm, scara_rsm5, ur3
 from dqlab.robot import Link, Robot
 
@@ -133,7 +132,7 @@ def test_broadcasting_and_input_errors():
     assert result.reason.shape == (2, 2) and result.flags["not_converged"].shape == (2, 2)
     with pytest.raises(ValueError, match="position_only"):
         numerical(robot, X[:3, 3], q0[0])
-    with pytest.raises(ValueError, match="pose must have shape"):
+    with pytest.raises(ValueError, match="target must have shape"):
         numerical(robot, np.zeros(5), q0[0])
     with pytest.raises(ValueError, match=r"shape \(\.\.\., 6\)"):
         numerical(robot, X, np.zeros(5))

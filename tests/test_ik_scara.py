@@ -121,5 +121,5 @@ def test_elbow_beyond_its_stop_is_invalid():
 def test_other_robots_are_refused():
     with pytest.raises(ValueError, match="RRPR"):
         solve(ur3(), np.eye(4))
-    with pytest.raises(ValueError, match=r"pose must have shape \(\.\.\., 4, 4\)"):
+    with pytest.raises(ValueError, match=r"target must have shape \(\.\.\., 4, 4\)"):
         solve(scara_rsm5(), np.zeros(3))

@@ -133,7 +133,7 @@ def test_dh_table_lists_every_link_in_its_convention():
     assert "modified DH" in text and "alpha_i-1" in text
     assert text.splitlines()[0] == "UR3 (report, modified DH), 6 joints"   # said once
     assert "q1 + 90" in text and "q6 - 90" in text and "-0.12" in text
-    assert repr(ur3_mdh()) == text
+    assert repr(ur3_mdh()) == "Robot('UR3 (report, modified DH)', convention='mdh', n=6)"
     text = scara_rsm5().dh_table()
     assert "q3 + 0.18" in text and "[0, 0.15] m" in text
     assert "standard DH" in ur3().dh_table()
@@ -210,17 +210,20 @@ def test_batches_of_0_1_2_leading_dimensions_match_single_calls(model):
 
 
 @pytest.mark.parametrize("model", MODELS)
-def test_large_batches_use_the_vectorised_path_and_agree(model):
+def test_large_batches_are_computed_in_blocks_and_agree(model):
+    """A batch larger than one block (8192 joint vectors) equals small batches and single
+    calls: one product for every size."""
     rng = np.random.default_rng(5)
     robot = model()
     robot.base = random_transform(rng)
-    q = random_joints(robot, rng, (10, 100))
+    q = random_joints(robot, rng, (10, 1000))
     small = np.stack([robot.fk(block) for block in q.reshape(-1, 20, robot.n)])
     big = robot.fk(q)
-    assert big.shape == (10, 100, 4, 4)
+    assert big.shape == (10, 1000, 4, 4)
     np.testing.assert_allclose(big.reshape(small.shape), small, atol=1e-14)
-    np.testing.assert_allclose(robot._fk_batch(q, chunk=64), big, atol=1e-15)
-    np.testing.assert_allclose(big[..., 3, :], np.broadcast_to([0, 0, 0, 1.0], (10, 100, 4)))
+    for index in [(0, 0), (8, 191), (9, 999)]:
+        np.testing.assert_allclose(robot.fk(q[index]), big[index], atol=1e-15)
+    np.testing.assert_allclose(big[..., 3, :], np.broadcast_to([0, 0, 0, 1.0], (10, 1000, 4)))
 
 
 @pytest.mark.parametrize("model", MODELS)

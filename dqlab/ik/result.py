@@ -4,6 +4,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._checks import as_float_array
 from ..rotations import wrap_angle
 
 
@@ -49,16 +50,78 @@ class IKResult:
         """True where at least one valid solution exists, shape (...)."""
         return self.count > 0
 
-    def best(self, q_ref):
+    def best(self, q_ref) -> np.ndarray:
         """The valid solution closest to ``q_ref`` (shape (..., n)) for each target.
 
         Distance is measured joint-wise with angle wrapping for revolute joints. Raises
         ``ValueError`` if some target has no valid solution.
         """
+        n = np.shape(self.solutions)[-1]
+        q_ref = as_float_array(q_ref, "q_ref", (n,))[..., None, :]
         if not np.all(self.success):
             raise ValueError("some targets have no valid solution; check result.reason")
-        q_ref = np.asarray(q_ref, dtype=float)[..., None, :]
         diff = wrap_angle(self.solutions - q_ref)
         dist = np.where(self.valid, np.linalg.norm(diff, axis=-1), np.inf)
         index = np.argmin(dist, axis=-1)
         return np.take_along_axis(self.solutions, index[..., None, None], axis=-2)[..., 0, :]
+
+
+def finish(solutions: np.ndarray, valid: np.ndarray, position_error: np.ndarray,
+           rotation_error: np.ndarray, flags: dict, reason: np.ndarray | None = None
+           ) -> IKResult:
+    """The :class:`IKResult` of a solver, with the rows that are not valid set to zero.
+
+    Every solver ends here, so that an invalid row never carries a NaN or a half-computed
+    angle a caller could mistake for a solution. ``solutions`` is the solver's own array
+    and is zeroed in place.
+
+    Parameters
+    ----------
+    solutions : ndarray, shape (..., k, n)
+    valid : ndarray of bool, shape (..., k)
+    position_error, rotation_error : ndarray, shape (..., k)
+    flags : dict of str to ndarray of bool, shape (...)
+    reason : ndarray of str, shape (...), optional
+
+    Returns
+    -------
+    IKResult
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> result = finish(np.full((2, 3), np.nan), np.array([False, False]), np.ones(2),
+    ...                 np.zeros(2), {})
+    >>> result.solutions
+    array([[0., 0., 0.],
+           [0., 0., 0.]])
+    """
+    solutions[~valid] = 0.0
+    return IKResult(solutions=solutions, valid=valid, position_error=position_error,
+                    rotation_error=rotation_error, flags=flags, reason=reason)
+
+
+def target_reasons(failed: np.ndarray, explain) -> np.ndarray:
+    """Why each target without a solution failed: ``explain(index)`` for those, ``""`` else.
+
+    Parameters
+    ----------
+    failed : ndarray of bool, shape (...)
+        The targets without a valid solution.
+    explain : callable
+        ``explain(index)`` returns the text for the target at ``index`` (a tuple).
+
+    Returns
+    -------
+    ndarray of str (object), shape (...)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> target_reasons(np.array([False, True]), lambda i: f"target {i[0]} is out of reach")
+    array(['', 'target 1 is out of reach'], dtype=object)
+    """
+    reason = np.full(np.shape(failed), "", dtype=object)
+    for index in np.argwhere(failed):
+        reason[tuple(index)] = explain(tuple(int(i) for i in index))
+    return reason

@@ -1,11 +1,11 @@
 r"""The steps of the closed-form UR inverse kinematics, one equation per function.
 
-These are the building blocks of :func:`dqlab.ik.ur.ur`; each function solves one equation of
-the derivation (the book's inverse-kinematics chapter, after section 4.3 of the thesis) and
-works on arrays of any shape with plain numpy operations, so that a whole batch of poses is
-solved without a Python loop. Angles are in radians, lengths in metres, and the UR's
-standard Denavit-Hartenberg values are used with their published signs (``a2``, ``a3`` are
-negative).
+These are the building blocks of :func:`dqlab.ik.ur_closed_form.ur`; each function solves
+one equation of the derivation (the book's inverse-kinematics chapter, after section 4.3 of
+the thesis) and works on arrays of any shape with plain numpy operations, so that a whole
+batch of poses is solved without a Python loop. Angles are in radians, lengths in metres,
+and the UR's standard Denavit-Hartenberg values are used with their published signs
+(``a2``, ``a3`` are negative).
 
 Notation. The pose is written relative to the arm's *zero pose* as the product of the six
 joint screws about their zero-pose axes (the thesis's axis-angle dual quaternions
@@ -22,13 +22,17 @@ quaternion of a turn by :math:`\theta` about the unit axis :math:`u`.
 """
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from ..rotations import wrap_angle  # noqa: F401  (the steps' angle wrapping)
+
+#: The arrays of the steps: float64 arrays of any shape.
+Array = NDArray[np.float64]
 
 _PLUS_MINUS = np.array([1.0, -1.0])
 
 
-def wrist_center(p, z6, d6):
+def wrist_center(p: ArrayLike, z6: ArrayLike, d6: float) -> Array:
     r"""Position of the wrist-2 point, :math:`p_5 = p_6 - d_6\, z_6`.
 
     Joint 6 only turns the flange about its own :math:`z_6` axis, so the origin of frame 5
@@ -56,7 +60,7 @@ def wrist_center(p, z6, d6):
     return p - d6 * z6
 
 
-def shoulder_angles(x5, y5, d4):
+def shoulder_angles(x5: Array, y5: Array, d4: float) -> tuple[Array, Array, Array, Array, Array]:
     r"""Both solutions of :math:`\sin\theta_1\, x_5 - \cos\theta_1\, y_5 = d_4` (thesis 4.9).
 
     With :math:`h = \sqrt{x_5^2 + y_5^2 - d_4^2}` the two roots are
@@ -108,7 +112,8 @@ def shoulder_angles(x5, y5, d4):
     return theta1, np.cos(theta1), np.sin(theta1), h, h2
 
 
-def relative_rotation_coefficients(q, half1):
+def relative_rotation_coefficients(q: tuple, half1: Array
+                                   ) -> tuple[Array, Array, Array, Array]:
     r"""The four coefficients of :math:`L = r_z(\theta_1)^{-1} q_D` (thesis 4.14-4.17).
 
     With :math:`q_D = (w, x, y, z)` and :math:`\bar c_1 = \cos\frac{\theta_1}{2}`,
@@ -145,7 +150,7 @@ def relative_rotation_coefficients(q, half1):
     return c * w + s * z, c * x + s * y, c * y - s * x, c * z - s * w
 
 
-def wrist_angles(L, sigma):
+def wrist_angles(L: tuple, sigma: ArrayLike) -> tuple[Array, Array, Array, Array, Array]:
     r""":math:`\theta_5` and the half sum/difference of :math:`\theta_{234}` and :math:`\theta_6`.
 
     Expanding :math:`r_{-y}(\theta_{234})\, r_{-z}(\theta_5)\, r_{-y}(\theta_6)` gives
@@ -204,7 +209,7 @@ def wrist_angles(L, sigma):
     return theta5, half_sum, half_diff, c5bar, s5bar
 
 
-def arm_plane_wrist(p5, c1, s1, d1):
+def arm_plane_wrist(p5: tuple, c1: Array, s1: Array, d1: float) -> tuple[Array, Array]:
     r"""Wrist centre in the arm plane: :math:`P = (c_1 x_5 + s_1 y_5,\; z_5 - d_1)`.
 
     The plane of the planar 3R chain (joints 2, 3, 4) contains the shoulder point
@@ -232,7 +237,7 @@ def arm_plane_wrist(p5, c1, s1, d1):
     return c1 * x5 + s1 * y5, z5 - d1
 
 
-def wrist1_point(Px, Py, theta234, d5):
+def wrist1_point(Px: Array, Py: Array, theta234: Array, d5: float) -> tuple[Array, Array]:
     r"""Wrist-1 point in the arm plane, :math:`(X, Y) = P - d_5 (s_{234}, -c_{234})`.
 
     The wrist-2 axis :math:`z_4 = (c_1 s_{234},\, s_1 s_{234},\, -c_{234})` carries the
@@ -253,7 +258,8 @@ def wrist1_point(Px, Py, theta234, d5):
     return Px - d5 * np.sin(theta234), Py + d5 * np.cos(theta234)
 
 
-def elbow_angles(X, Y, a2, a3, elbow_sign):
+def elbow_angles(X: Array, Y: Array, a2: float, a3: float, elbow_sign: ArrayLike
+                 ) -> tuple[Array, Array, Array, Array, Array]:
     r"""Planar 2R: :math:`\theta_3` from the law of cosines, :math:`\theta_2` by ``atan2``.
 
     With :math:`\rho^2 = X^2 + Y^2` the law of cosines (thesis 4.37) reads
@@ -333,7 +339,8 @@ def elbow_angles(X, Y, a2, a3, elbow_sign):
     return theta2, theta3, outer, inner, k / m
 
 
-def feasible_theta234(Px, Py, theta234_ref, a2, a3, d5):
+def feasible_theta234(Px: Array, Py: Array, theta234_ref: Array, a2: float, a3: float,
+                      d5: float) -> Array:
     r"""The angle :math:`\theta_{234}` nearest to a wanted value for which the arm reaches.
 
     Used at a wrist singularity, where only :math:`\theta_{234} \pm \theta_6` is fixed by

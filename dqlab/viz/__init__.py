@@ -21,7 +21,15 @@ Examples
 True
 """
 
-from .plots import (
+import importlib.util
+
+_missing = [name for name in ("matplotlib", "meshcat", "umsgpack", "tornado", "zmq")
+            if importlib.util.find_spec(name) is None]
+if _missing:
+    raise ImportError("dqlab.viz needs the viz extra: pip install 'dqlab[viz]' "
+                      f"(missing: {', '.join(_missing)})")
+
+from .plots import (  # noqa: E402
     axes_3d,
     plot_arm,
     plot_complex,
@@ -31,7 +39,7 @@ from .plots import (
     plot_vector,
     set_axes_equal,
 )
-from .scene import Scene, SceneView, live_server, stop_live_server
+from .scene import Scene, SceneView, live_server, stop_live_server  # noqa: E402
 
 __all__ = [
     "Scene", "SceneView", "live_server", "stop_live_server",

@@ -37,9 +37,8 @@ with warnings.catch_warnings():
     import meshcat
     import meshcat.animation
     import meshcat.geometry as g
-    import meshcat.visualizer
 
-__all__ = ["Scene", "SceneView", "LiveView", "live_server", "stop_live_server",
+__all__ = ["Scene", "SceneView", "LiveView", "LiveWindow", "live_server", "stop_live_server",
            "viewer_script_path"]
 
 #: Environment variable naming the book's source directory while the book is built; set by
@@ -817,6 +816,53 @@ function dqlabFail(msg) {{
 _live = {"window": None, "recorder": None}
 
 
+class LiveWindow:
+    """The connection to a live meshcat server that this kernel started.
+
+    It speaks meshcat's command protocol (what ``meshcat.visualizer.ViewerWindow.send``
+    sends: the command type, its path and the msgpack-encoded command, one reply per
+    command) over a ZeroMQ request socket with time-outs, so a dead server raises instead of
+    hanging the kernel.
+
+    Attributes
+    ----------
+    server_proc : subprocess.Popen
+        The server process (``python -m dqlab.viz._server``).
+    zmq_url, web_url : str
+        Where the server takes commands and where a browser opens the viewer.
+    """
+
+    def __init__(self, server_proc, zmq_url, web_url, *, timeout_ms=10_000):
+        import zmq
+
+        self.server_proc = server_proc
+        self.zmq_url = zmq_url
+        self.web_url = web_url
+        self._context = zmq.Context()
+        self.zmq_socket = self._context.socket(zmq.REQ)
+        self.zmq_socket.setsockopt(zmq.LINGER, 0)
+        self.zmq_socket.setsockopt(zmq.RCVTIMEO, timeout_ms)
+        self.zmq_socket.setsockopt(zmq.SNDTIMEO, timeout_ms)
+        self.zmq_socket.connect(zmq_url)
+
+    def send(self, command):
+        """Send one meshcat command (an object with ``lower()``) and wait for the reply."""
+        data = command.lower()
+        self.zmq_socket.send_multipart([data["type"].encode("utf-8"),
+                                        data["path"].encode("utf-8"), umsgpack.packb(data)])
+        self.zmq_socket.recv()
+
+    def get_scene(self):
+        """The server's current scene as a self-contained HTML page."""
+        self.zmq_socket.send(b"get_scene")
+        return self.zmq_socket.recv().decode("utf-8")
+
+    def close(self):
+        """Close the socket (the server keeps running; see :func:`stop_live_server`)."""
+        self.zmq_socket.close(linger=0)
+        self._context.term()
+
+
 def live_server():
     """Start the meshcat server for this kernel on 127.0.0.1, or return the running one.
 
@@ -827,7 +873,7 @@ def live_server():
 
     Returns
     -------
-    meshcat.visualizer.ViewerWindow
+    LiveWindow
         The connection; its ``web_url`` is the page to open.
     """
     window = _live["window"]
@@ -846,16 +892,7 @@ def live_server():
             key, value = line.split("=", 1)
             urls[key] = value
     proc.stdout.close()
-    window = meshcat.visualizer.ViewerWindow.__new__(meshcat.visualizer.ViewerWindow)
-    window.server_proc = proc
-    window.zmq_url = urls["zmq_url"]
-    window.web_url = urls["web_url"]
-    window.connect_zmq()
-    import zmq
-
-    window.zmq_socket.setsockopt(zmq.LINGER, 0)
-    window.zmq_socket.setsockopt(zmq.RCVTIMEO, 10_000)
-    window.zmq_socket.setsockopt(zmq.SNDTIMEO, 10_000)
+    window = LiveWindow(proc, urls["zmq_url"], urls["web_url"])
     _live["window"] = window
     return window
 
@@ -869,7 +906,7 @@ def stop_live_server():
     if window is None:
         return
     try:
-        window.zmq_socket.close(linger=0)
+        window.close()
     finally:
         proc = window.server_proc
         if proc.poll() is None:

@@ -12,28 +12,21 @@ on either side), and :math:`q_3, q_4` follow.
 """
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from .._checks import check_tolerance
+from ..models import SCARA_SHAPE
+from ..robot import Robot
 from ..rotations import wrap_angle
-from .numerical import _target_transforms, pose_errors
-from .result import IKResult
+from .result import IKResult, finish, target_reasons
+from .targets import parse_targets, pose_errors
+from .two_link import elbow_cosine, two_link_angles
 
 __all__ = ["scara"]
 
 
-def _scara_structure(robot):
-    links = robot.links
-    ok = (robot.convention == "mdh" and robot.n == 4
-          and robot.joint_types == ("revolute", "revolute", "prismatic", "revolute")
-          and all(abs(lk.alpha) < 1e-12 for lk in links)
-          and abs(links[0].a) < 1e-12 and abs(links[3].a) < 1e-12)
-    if not ok:
-        raise ValueError(
-            "scara needs a chain like dqlab.models.scara_rsm5(): modified DH, joints RRPR, "
-            "all alpha = 0, a_0 = a_3 = 0")
-    return links[1].a, links[2].a
-
-
-def scara(robot, pose, *, tol=1e-9, rotation_tol=None):
+def scara(robot: Robot, target: ArrayLike, *, tol: float = 1e-9,
+          rotation_tol: float | None = None) -> IKResult:
     r"""Both closed-form solutions of the SCARA for a tool pose.
 
     The target is brought back to the flange in frame 0,
@@ -57,7 +50,7 @@ def scara(robot, pose, *, tol=1e-9, rotation_tol=None):
     ----------
     robot : Robot
         A SCARA like :func:`dqlab.models.scara_rsm5`.
-    pose : array_like, shape (..., 4, 4) or (..., 8)
+    target : array_like, shape (..., 4, 4) or (..., 8)
         Target tool poses :math:`X_{WT}^\ast` (transforms or unit dual quaternions).
     tol : float, optional
         Position tolerance in metres of a solution marked valid.
@@ -99,70 +92,63 @@ def scara(robot, pose, *, tol=1e-9, rotation_tol=None):
     >>> print(result.reason)
     unreachable: beyond the limits of joint(s) 3
     """
-    if rotation_tol is None:
-        rotation_tol = tol
-    l1, l2 = _scara_structure(robot)
-    shape = np.shape(pose)
-    if not (shape[-2:] == (4, 4) or shape[-1:] == (8,)):
-        raise ValueError("pose must have shape (..., 4, 4) (transform) or (..., 8) (dual "
-                         f"quaternion), got shape {shape}")
-    X_WT, _ = _target_transforms(pose, position_only=False)
+    tol = check_tolerance(tol, "tol")
+    rotation_tol = tol if rotation_tol is None else check_tolerance(rotation_tol, "rotation_tol")
+    SCARA_SHAPE.check(robot)
+    l1, l2 = robot.links[1].a, robot.links[2].a
+    X_WT = parse_targets(target).transforms
     X_0n = np.linalg.inv(robot.base) @ X_WT @ np.linalg.inv(robot.tool)
-    R = X_0n[..., :3, :3]
-    x, y, z = X_0n[..., 0, 3], X_0n[..., 1, 3], X_0n[..., 2, 3]
-    # angle between the target's z axis and the vertical
-    tilt = np.arctan2(np.hypot(R[..., 0, 2], R[..., 1, 2]), R[..., 2, 2])
-    psi = np.arctan2(R[..., 1, 0], R[..., 0, 0])
-
-    links = robot.links
-    off = np.array([lk.theta_offset for lk in links])      # theta_3 is the constant for P
-    z0 = links[0].d + links[1].d + links[2].d + links[3].d
-
-    c2 = (x * x + y * y - l1 * l1 - l2 * l2) / (2 * l1 * l2)
-    reachable = np.abs(c2) <= 1.0 + 1e-12
-    c2 = np.clip(c2, -1.0, 1.0)
-    s2 = np.sqrt(1.0 - c2 * c2)
-    rows = []
-    for sign in (1.0, -1.0):
-        t2 = np.arctan2(sign * s2, c2)
-        t1 = np.arctan2(y, x) - np.arctan2(l2 * sign * s2, l1 + l2 * c2)
-        t4 = psi - t1 - t2 - off[2]
-        q1, q2, q4 = wrap_angle(t1 - off[0]), wrap_angle(t2 - off[1]), wrap_angle(t4 - off[3])
-        rows.append(np.stack([q1, q2, z - z0, q4], axis=-1))
-    solutions = np.stack(rows, axis=-2)                                # (..., 2, 4)
-    raw = solutions
-
+    raw, reachable, s2, tilt = _candidates(robot, X_0n)             # (..., 2, 4), ...
     lo, hi = robot.limits.T
-    within = np.all((solutions >= lo - 1e-12) & (solutions <= hi + 1e-12), axis=-1)
-    clipped = np.clip(solutions, lo, hi)
+    within = np.all((raw >= lo - 1e-12) & (raw <= hi + 1e-12), axis=-1)
+    clipped = np.clip(raw, lo, hi)
     position_error, rotation_error = pose_errors(robot.fk(clipped), X_WT[..., None, :, :])
     ok = reachable[..., None] & within & (tilt <= rotation_tol)[..., None]
     valid = ok & (position_error <= tol) & (rotation_error <= rotation_tol)
-    solutions = np.where(valid[..., None], clipped, 0.0)
-
     unreachable = ~np.any(valid, axis=-1)
-    reason = np.full(np.shape(x), "", dtype=object)
-    k = np.hypot(x, y)
-    for idx in np.ndindex(reason.shape):
-        if not unreachable[idx]:
-            continue
+    k = np.hypot(X_0n[..., 0, 3], X_0n[..., 1, 3])
+
+    def explain(index):
         parts = []
-        if tilt[idx] > rotation_tol:
-            parts.append(f"the tool axis is tilted {float(tilt[idx]):.3g} rad from vertical")
-        if k[idx] > l1 + l2:
-            parts.append(f"the point is {float(k[idx]) - (l1 + l2):.4g} m beyond the reach")
-        elif k[idx] < abs(l1 - l2):
-            parts.append(f"the point is {abs(l1 - l2) - float(k[idx]):.4g} m too close to "
+        if tilt[index] > rotation_tol:
+            parts.append(f"the tool axis is tilted {float(tilt[index]):.3g} rad from vertical")
+        if k[index] > l1 + l2:
+            parts.append(f"the point is {float(k[index]) - (l1 + l2):.4g} m beyond the reach")
+        elif k[index] < abs(l1 - l2):
+            parts.append(f"the point is {abs(l1 - l2) - float(k[index]):.4g} m too close to "
                          "axis 1")
         if not parts:
-            bad = (raw[idx] < lo - 1e-12) | (raw[idx] > hi + 1e-12)
+            bad = (raw[index] < lo - 1e-12) | (raw[index] > hi + 1e-12)
             joints = sorted({int(j) + 1 for j in np.nonzero(bad)[-1]})
             parts.append("beyond the limits of joint(s) " + ", ".join(map(str, joints)))
-        reason[idx] = "unreachable: " + "; ".join(parts)
+        return "unreachable: " + "; ".join(parts)
+
     flags = {
         "unreachable": unreachable,
         "tilted": tilt > rotation_tol,
         "singular": reachable & (s2 < 1e-7),
     }
-    return IKResult(solutions=solutions, valid=valid, position_error=position_error,
-                    rotation_error=rotation_error, flags=flags, reason=reason)
+    return finish(clipped, valid, position_error, rotation_error, flags,
+                  target_reasons(unreachable, explain))
+
+
+def _candidates(robot, X_0n):
+    r"""Both elbow branches for flange poses ``X_0n`` in frame 0: joint vectors (..., 2, 4)
+    before the limits, whether the point is within the arm's reach, :math:`|\sin\theta_2|`,
+    and the tilt of the tool axis from the vertical."""
+    R = X_0n[..., :3, :3]
+    x, y, z = X_0n[..., 0, 3], X_0n[..., 1, 3], X_0n[..., 2, 3]
+    tilt = np.arctan2(np.hypot(R[..., 0, 2], R[..., 1, 2]), R[..., 2, 2])
+    psi = np.arctan2(R[..., 1, 0], R[..., 0, 0])
+    links = robot.links
+    l1, l2 = links[1].a, links[2].a
+    off = np.array([lk.theta_offset for lk in links])      # theta_3 is the constant for P
+    z0 = links[0].d + links[1].d + links[2].d + links[3].d
+    c2, s2, reachable = elbow_cosine(x, y, l1, l2)
+    rows = []
+    for sign in (1.0, -1.0):
+        t1, t2 = two_link_angles(x, y, c2, sign * s2, l1, l2)
+        t4 = psi - t1 - t2 - off[2]
+        q1, q2, q4 = wrap_angle(t1 - off[0]), wrap_angle(t2 - off[1]), wrap_angle(t4 - off[3])
+        rows.append(np.stack([q1, q2, z - z0, q4], axis=-1))
+    return np.stack(rows, axis=-2), reachable, s2, tilt

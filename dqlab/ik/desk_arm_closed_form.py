@@ -8,32 +8,31 @@ solutions: the arm faces the point or turns its back to it (base angle :math:`\v
 """
 
 import numpy as np
+from numpy.typing import ArrayLike
 
-from .._checks import as_float_array
+from .._checks import check_tolerance
+from .._kernels import norm_last_axis
+from ..models import DESK_ARM_SHAPE
+from ..robot import Robot
 from ..rotations import wrap_angle
-from .result import IKResult
+from .result import IKResult, finish, target_reasons
+from .targets import parse_targets
+from .two_link import elbow_cosine, two_link_angles
 
 __all__ = ["desk_arm"]
 
 
-def _arm_parameters(robot):
+def _lengths(robot):
+    """The arm's ``h = l0 - l4, l3, l1, l2`` (checked shape)."""
+    DESK_ARM_SHAPE.check(robot)
+    if not np.allclose(robot.tool[:3, 3], 0.0):
+        raise ValueError("desk_arm needs a tool without translation (the hand's offset is "
+                         "part of the chain)")
     links = robot.links
-    ok = (robot.convention == "dh" and robot.n == 3
-          and robot.joint_types == ("revolute",) * 3
-          and abs(links[0].alpha - np.pi / 2) < 1e-12
-          and all(abs(lk.alpha) < 1e-12 for lk in links[1:])
-          and all(abs(lk.d) < 1e-12 for lk in links[1:])
-          and all(abs(lk.theta_offset) < 1e-12 for lk in links)
-          and np.allclose(robot.tool[:3, 3], 0.0))
-    if not ok:
-        raise ValueError(
-            "desk_arm needs a chain like dqlab.models.desk_arm(): standard DH, three "
-            "revolute joints, alpha = (pi/2, 0, 0), d_2 = d_3 = 0, no offsets, and a tool "
-            "without translation")
     return links[0].d, links[0].a, links[1].a, links[2].a
 
 
-def desk_arm(robot, position, *, tol=1e-9):
+def desk_arm(robot: Robot, target: ArrayLike, *, tol: float = 1e-9) -> IKResult:
     r"""All closed-form solutions for the desktop arm to put its hand at ``position``.
 
     With the target in the base frame :math:`(x, y, z)`, :math:`\rho = \sqrt{x^2 + y^2}` and
@@ -70,7 +69,7 @@ def desk_arm(robot, position, *, tol=1e-9):
     robot : Robot
         :func:`dqlab.models.desk_arm` (lengths are read from its links; a base transform is
         allowed).
-    position : array_like, shape (..., 3)
+    target : array_like, shape (..., 3)
         Target hand positions in the world frame, metres.
     tol : float, optional
         Largest position error (metres) of a solution marked valid.
@@ -103,8 +102,46 @@ def desk_arm(robot, position, *, tol=1e-9):
     >>> bool(desk_arm(arm, [1.0, 0.0, 0.0]).success)
     False
     """
-    h, l3, l1, l2 = _arm_parameters(robot)
-    p = as_float_array(position, "position", (3,))
+    tol = check_tolerance(tol, "tol")
+    h, l3, l1, l2 = _lengths(robot)
+    p = parse_targets(target, position="only").positions
+    solutions, reachable, s3, base_singular, k = _candidates(robot, p, (h, l3, l1, l2))
+    ok = np.repeat(reachable, 2, axis=-1)
+    lo, hi = robot.limits.T
+    ok &= np.all((solutions >= lo) & (solutions <= hi), axis=-1)
+    # For an unreachable point the clipped cosine gives the closest pose, so the reported
+    # position error says how far out of reach the point is.
+    X = robot.fk(solutions)
+    position_error = norm_last_axis(X[..., :3, 3] - p[..., None, :])
+    valid = ok & (position_error <= tol)
+    unreachable = ~np.any(valid, axis=-1)
+
+    def explain(index):
+        parts = []
+        for branch, label in ((0, "facing it"), (1, "turned away")):
+            kk = float(k[index + (branch,)])
+            if kk > l1 + l2:
+                parts.append(f"{label}, {kk - (l1 + l2):.4g} m beyond the reach")
+            elif kk < abs(l1 - l2):
+                parts.append(f"{label}, {abs(l1 - l2) - kk:.4g} m too close to the shoulder")
+            else:
+                parts.append(f"{label}, beyond the joint limits")
+        return "unreachable: " + "; ".join(parts)
+
+    flags = {
+        "unreachable": unreachable,
+        "base_singular": base_singular,
+        "elbow_singular": np.any(reachable & (np.abs(s3) < 1e-7), axis=-1) & ~unreachable,
+    }
+    return finish(solutions, valid, position_error, np.zeros(valid.shape), flags,
+                  target_reasons(unreachable, explain))
+
+
+def _candidates(robot, p, lengths):
+    r"""The four candidates (..., 4, 3) for hand positions ``p`` in the world frame, whether
+    each side reaches, :math:`|\sin\theta_3|` per side, whether the point is on the base
+    axis, and the shoulder-to-point distance per side (..., 2)."""
+    h, l3, l1, l2 = lengths
     X_0W = np.linalg.inv(robot.base)
     p0 = p @ X_0W[:3, :3].T + X_0W[:3, 3]
     x, y, z = p0[..., 0], p0[..., 1], p0[..., 2]
@@ -113,54 +150,16 @@ def desk_arm(robot, position, *, tol=1e-9):
     base_singular = rho < 1e-12
 
     theta1 = np.stack([phi, phi + np.pi], axis=-1)                  # (..., 2)
-    r = np.stack([rho, -rho], axis=-1)
-    u = r - l3
+    u = np.stack([rho, -rho], axis=-1) - l3
     v = (z - h)[..., None]
-    c3 = (u * u + v * v - l1 * l1 - l2 * l2) / (2 * l1 * l2)
-    reachable = np.abs(c3) <= 1.0 + 1e-12
-    c3 = np.clip(c3, -1.0, 1.0)
-    s3 = np.sqrt(1.0 - c3 * c3)
+    c3, s3, reachable = elbow_cosine(u, v, l1, l2)
     # facing: elbow up is theta3 <= 0; turned away: elbow up is theta3 >= 0
     s3_up = np.stack([-s3[..., 0], s3[..., 1]], axis=-1)
     sols = []
     for branch in (0, 1):
         for sign in (1.0, -1.0):
-            sb = sign * s3_up[..., branch]
-            cb = c3[..., branch]
-            t3 = np.arctan2(sb, cb)
-            t2 = np.arctan2(v[..., 0], u[..., branch]) - np.arctan2(l2 * sb, l1 + l2 * cb)
+            t2, t3 = two_link_angles(u[..., branch], v[..., 0], c3[..., branch],
+                                     sign * s3_up[..., branch], l1, l2)
             sols.append(np.stack([theta1[..., branch], t2, t3], axis=-1))
     solutions = wrap_angle(np.stack(sols, axis=-2))                 # (..., 4, 3)
-    ok = np.repeat(reachable, 2, axis=-1)
-    lo, hi = robot.limits.T
-    ok &= np.all((solutions >= lo) & (solutions <= hi), axis=-1)
-    # For an unreachable point the clipped cosine gives the closest pose, so the reported
-    # position error says how far out of reach the point is.
-    X = robot.fk(solutions)
-    position_error = np.linalg.norm(X[..., :3, 3] - p[..., None, :], axis=-1)
-    valid = ok & (position_error <= tol)
-    solutions = np.where(valid[..., None], solutions, 0.0)
-
-    k = np.hypot(u, v)                                                # (..., 2)
-    unreachable = ~np.any(valid, axis=-1)
-    reason = np.full(np.shape(x), "", dtype=object)
-    for idx in np.ndindex(reason.shape):
-        if not unreachable[idx]:
-            continue
-        parts = []
-        for branch, label in ((0, "facing it"), (1, "turned away")):
-            kk = float(k[idx + (branch,)])
-            if kk > l1 + l2:
-                parts.append(f"{label}, {kk - (l1 + l2):.4g} m beyond the reach")
-            elif kk < abs(l1 - l2):
-                parts.append(f"{label}, {abs(l1 - l2) - kk:.4g} m too close to the shoulder")
-            else:
-                parts.append(f"{label}, beyond the joint limits")
-        reason[idx] = "unreachable: " + "; ".join(parts)
-    flags = {
-        "unreachable": unreachable,
-        "base_singular": base_singular,
-        "elbow_singular": np.any(reachable & (np.abs(s3) < 1e-7), axis=-1) & ~unreachable,
-    }
-    return IKResult(solutions=solutions, valid=valid, position_error=position_error,
-                    rotation_error=np.zeros(valid.shape), flags=flags, reason=reason)
+    return solutions, reachable, s3, base_singular, np.hypot(u, v)

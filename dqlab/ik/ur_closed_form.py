@@ -102,48 +102,56 @@ but:
 """
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
-from .._checks import as_float_array
+from .._checks import as_float_array, check_tolerance
+from ..dualquat import (
+    dual_quaternion_conjugate,
+    dual_quaternion_from_transform,
+    dual_quaternion_inverse,
+    dual_quaternion_product,
+    rotation_translation_from_dual_quaternion,
+)
+from ..models import UR_SHAPE
+from ..quaternion import rotate_vector
+from ..robot import Robot
+from ..rotations import wrap_angle
+from ..transforms import transform_inverse
 from . import ur_steps as steps
-from .result import IKResult
+from .result import IKResult, finish
+from .targets import parse_targets, pose_errors
 
 __all__ = ["ur", "ur_parameters", "equivalent_solutions", "closest_solution",
            "distinct_solutions", "SOLUTION_ORDER"]
 
 _HALF_SQRT2 = np.sqrt(0.5)
-_TWO_PI = 2.0 * np.pi
 _CHUNK = 1024                               # poses per block: temporaries of 64 kB at most
 _FLAGS = ("wrist_singular", "shoulder_singular", "elbow_singular", "unreachable")
 _EYE_BYTES = np.eye(4).tobytes()
-_RIGID_TOL = 1e-9                           # poses this close to rigid are used as given
+_MAX_EQUIVALENT_JOINTS = 12                # 4096 candidates per joint vector
+_NEAR_WRIST = 1e-3                        # |sin theta5| below which a clipped row is moved
 _SIGMA = np.array([[1.0], [-1.0]])        # wrist branch w = 0, 1, axis -2 of (s, w, n)
 _ELBOW = np.array([[[1.0]], [[-1.0]]])    # elbow branch e = 0, 1, axis -3 of (s, e, w, n)
-_UR_ALPHA = (np.pi / 2, 0.0, 0.0, np.pi / 2, -np.pi / 2, 0.0)
 
 #: ``(shoulder, elbow, wrist)`` labels of the eight rows, in order ``k = 4 s + 2 e + w``.
 SOLUTION_ORDER = tuple(
     (s, e, w) for s in ("left", "right") for e in ("up", "down") for w in ("noflip", "flip"))
 
-_REASON_SHOULDER = ("shoulder: the wrist centre p5 = p6 - d6 z6 lies inside the cylinder "
-                    "x5^2 + y5^2 < d4^2 about the base axis")
-_REASON_OUTER = ("elbow: the wrist-1 point is farther from the shoulder than |a2| + |a3| on "
-                 "every branch")
-_REASON_INNER = ("elbow: the wrist-1 point is closer to the shoulder than ||a2| - |a3|| on "
-                 "every branch")
-_REASON_REACH = "elbow: the wrist-1 point is out of the forearm's reach on every branch"
-_REASON_TOL = "no branch reproduces the pose within tol"
+#: Why a pose has no solution (``IKResult.reason``), from the first step that fails.
+REASON_SHOULDER = ("shoulder: the wrist centre p5 = p6 - d6 z6 lies inside the cylinder "
+                   "x5^2 + y5^2 < d4^2 about the base axis")
+REASON_OUTER = ("elbow: the wrist-1 point is farther from the shoulder than |a2| + |a3| on "
+                "every branch")
+REASON_INNER = ("elbow: the wrist-1 point is closer to the shoulder than ||a2| - |a3|| on "
+                "every branch")
+REASON_REACH = "elbow: the wrist-1 point is out of the forearm's reach on every branch"
+REASON_TOL = "no branch reproduces the pose within tol"
 
 
-def _shift(x):
-    """x moved into (-pi, pi] by at most one turn (x in (-3 pi, 3 pi]); x may be reused."""
-    x = x - _TWO_PI * (x > np.pi)
-    x += _TWO_PI * (x <= -np.pi)
-    return x
-
-
-def ur_parameters(robot, *, atol=1e-12):
+def ur_parameters(robot: Robot, *, atol: float = 1e-12) -> dict:
     r"""The standard DH lengths of a UR-family arm, checked.
 
     Parameters
@@ -172,126 +180,121 @@ def ur_parameters(robot, *, atol=1e-12):
     >>> p["d1"], p["a2"], p["a3"], p["d4"], p["d5"], p["d6"]
     (0.1519, -0.24365, -0.21325, 0.11235, 0.08535, 0.0819)
     """
-    links = getattr(robot, "links", None)
-    if links is None or len(links) != 6:
-        raise ValueError("ur() needs a six-joint UR-family robot (standard DH)")
-    if getattr(robot, "convention", "dh") != "dh":
-        raise ValueError("ur() needs the standard DH convention (robot.convention == 'dh')")
-    for i, link in enumerate(links):
-        if getattr(link, "joint", "revolute") != "revolute":
-            raise ValueError(f"ur() needs revolute joints; joint {i + 1} is {link.joint}")
-        if abs(math.remainder(link.alpha - _UR_ALPHA[i], 2.0 * math.pi)) > atol:
-            raise ValueError("ur() needs a UR-family arm, alpha = (pi/2, 0, 0, pi/2, -pi/2, "
-                             f"0); joint {i + 1} has alpha = {link.alpha!r}")
-    for i in (0, 3, 4, 5):
-        if abs(links[i].a) > atol:
-            raise ValueError(f"ur() needs a{i + 1} = 0, got {links[i].a!r}")
-    for i in (1, 2):
-        if abs(links[i].d) > atol:
-            raise ValueError(f"ur() needs d{i + 1} = 0, got {links[i].d!r}")
-    if abs(links[1].a) <= atol or abs(links[2].a) <= atol or abs(links[3].d) <= atol:
-        raise ValueError("ur() needs nonzero a2, a3 and d4")
+    UR_SHAPE.check(robot, atol=atol)
+    links = robot.links
     return {"d1": links[0].d, "a2": links[1].a, "a3": links[2].a, "d4": links[3].d,
             "d5": links[4].d, "d6": links[5].d,
             "offsets": [lk.theta_offset for lk in links]}
 
 
-def _target(robot, pose, tool, pose_tol):
-    r"""Checked target: the pose as a unit dual quaternion in the world frame (``Q``, or the
-    4x4 ``T`` when given as a matrix), and the flange pose in frame 0 as rotation
-    quaternion ``q`` (..., 4), position ``p`` (..., 3) and flange z axis ``z6`` (..., 3)."""
-    from ..dualquat import (
-        check_unit_dual_quaternion,
-        dual_quaternion_conjugate,
-        dual_quaternion_from_transform,
-        dual_quaternion_inverse,
-        dual_quaternion_product,
-        rotation_translation_from_dual_quaternion,
-    )
-    from ..quaternion import rotate_vector
+@dataclass
+class _Flange:
+    """The flange poses :math:`X_{06}` of a block of n targets, batch axis last: rotation
+    quaternions ``q`` (4, n) and wrist centres ``p5`` (3, n) in the base frame 0."""
 
-    pose = np.asarray(pose, dtype=float)
-    T = None
-    if pose.ndim >= 2 and pose.shape[-2:] == (4, 4):
-        T = pose
-        try:
-            Q = dual_quaternion_from_transform(pose, tol=pose_tol)
-        except ValueError as exc:
-            raise ValueError(f"pose is not a rigid transform: {exc}") from None
-    elif pose.ndim >= 1 and pose.shape[-1] == 8:
-        Q = check_unit_dual_quaternion(pose, pose_tol, name="pose")
-    else:
-        raise ValueError("pose must have shape (..., 4, 4) (a transform) or (..., 8) (a unit "
-                         f"dual quaternion), got shape {pose.shape}")
-    if pose_tol > _RIGID_TOL:
-        # a loosened check lets slightly non-rigid poses through (rounded numbers from a
-        # file): solve for the rigid pose of the normalised dual quaternion instead
-        from ..dualquat import dual_quaternion_normalize
+    q: np.ndarray
+    p5: np.ndarray
 
-        Q = dual_quaternion_normalize(Q)
-        T = None
+    def __getitem__(self, part):
+        return _Flange(self.q[:, part], self.p5[:, part])
+
+
+@dataclass
+class _Options:
+    """What the steps need besides the poses: tolerances, residual mode, the tool change
+    ``tool_fix`` (``None``, or :math:`X_{6T_r}^{-1} X_{6T}` from the robot's tool to the
+    one asked for) for forward kinematics."""
+
+    tol: float
+    singular_tol: float
+    residuals: str
+    tool_fix: np.ndarray
+
+
+@dataclass
+class _Branches:
+    """The eight candidate joint vectors of a block of n poses and the intermediate values
+    the checks need; arrays over the branch axes (s, e, w) with the poses last."""
+
+    solutions: np.ndarray      # (n, 8, 6), wrapped to (-pi, pi]
+    h: np.ndarray              # (n,) sqrt(x5^2 + y5^2 - d4^2), clipped at 0
+    h2: np.ndarray             # (n,) x5^2 + y5^2 - d4^2 before clipping (negative: inside)
+    s5bar: np.ndarray          # (2, 1, n) |sin(theta5 / 2)|
+    c5bar: np.ndarray          # (2, 1, n) |cos(theta5 / 2)|
+    X: np.ndarray              # (2, 1, 2, n) wrist-1 point in the arm plane
+    Y: np.ndarray
+    sin3: np.ndarray           # (2, 2, 2, n)
+    outer: np.ndarray          # (2, 2, 2, n) margin to the outer reach (negative: beyond)
+    inner: np.ndarray          # (2, 2, 2, n) margin to the inner reach
+    represented: np.ndarray    # (2, 2, n) over (s, w) rows standing for a wrist family, or None
+
+
+@dataclass
+class _Block:
+    """The results of a block of n poses, poses first: ``solutions`` (n, 8, 6), ``valid``,
+    ``position_error``, ``rotation_error`` (n, 8), ``flags`` (n,) each, ``reason`` (n,)."""
+
+    solutions: np.ndarray
+    valid: np.ndarray
+    position_error: np.ndarray
+    rotation_error: np.ndarray
+    flags: dict
+    reason: np.ndarray
+
+
+def _flange(robot, targets, tool, tool_dq, d6):
+    r"""The flange poses :math:`X_{06} = X_{W0}^{-1} X_{WT}^* X_{6T}^{-1}` of the targets."""
+    Q = targets.dual_quaternions
     base = robot.base
-    robot_tool = robot.tool
-    if tool is not None:
-        tool = np.asarray(tool, dtype=float)
-        try:
-            tool_dq = dual_quaternion_from_transform(tool, tol=pose_tol)
-        except ValueError as exc:
-            raise ValueError(f"tool is not a rigid transform: {exc}") from None
-        if tool.shape != (4, 4):
-            raise ValueError(f"tool must have shape (4, 4), got {tool.shape}")
-    else:
-        tool = robot_tool
-        tool_dq = None
     moved = base.tobytes() != _EYE_BYTES
-    tooled = np.ascontiguousarray(tool, dtype=float).tobytes() != _EYE_BYTES
-    if T is not None and not (moved or tooled):
-        return Q, T, Q[..., :4], T[..., :3, 3], T[..., :3, 2], tool, robot_tool
-    Q06 = Q
-    if moved:
-        Q06 = dual_quaternion_product(
-            dual_quaternion_conjugate(dual_quaternion_from_transform(base)), Q06)
-    if tooled:
-        if tool_dq is None:
-            tool_dq = dual_quaternion_from_transform(tool)
-        Q06 = dual_quaternion_product(Q06, dual_quaternion_inverse(tool_dq))
-    q, p = rotation_translation_from_dual_quaternion(Q06, tol=np.inf)
-    z6 = rotate_vector(q, np.array([0.0, 0.0, 1.0]), tol=np.inf)
-    return Q, T, q, p, z6, tool, robot_tool
+    tooled = tool.tobytes() != _EYE_BYTES
+    if targets.kind == "transform" and not (moved or tooled):
+        T = targets.transforms
+        q, p, z6 = Q[..., :4], T[..., :3, 3], T[..., :3, 2]
+    else:
+        if moved:
+            Q = dual_quaternion_product(
+                dual_quaternion_conjugate(dual_quaternion_from_transform(base)), Q)
+        if tooled:
+            if tool_dq is None:
+                tool_dq = dual_quaternion_from_transform(tool)
+            Q = dual_quaternion_product(Q, dual_quaternion_inverse(tool_dq))
+        q, p = rotation_translation_from_dual_quaternion(Q, tol=np.inf)
+        z6 = rotate_vector(q, np.array([0.0, 0.0, 1.0]), tol=np.inf)
+    n = math.prod(targets.batch)
+    return _Flange(q=np.ascontiguousarray(q.reshape(n, 4).T),
+                   p5=np.ascontiguousarray(steps.wrist_center(p, z6, d6).reshape(n, 3).T))
 
 
-def _fk_residuals(robot, solutions, Q, T, tool, robot_tool):
-    r"""Position and rotation errors between robot.fk of the rows and the target."""
-    if T is None:
-        from ..dualquat import transform_from_dual_quaternion
-
-        T = transform_from_dual_quaternion(Q, tol=np.inf)
-    X = robot.fk(solutions)
-    if tool is not robot_tool and not np.array_equal(tool, robot_tool):
-        from ..transforms import transform_inverse
-
-        X = X @ (transform_inverse(robot_tool) @ tool)
-    T = T[..., None, :, :]
-    dp = X[..., :3, 3] - T[..., :3, 3]
-    position_error = np.sqrt(np.einsum("...i,...i->...", dp, dp))
-    # angle of R_fk^T R: its sine from the vector part sum_k a_k x b_k of the columns, its
-    # cosine from the trace; accurate for small angles
-    A = [X[..., i, :3] for i in range(3)]
-    B = [T[..., i, :3] for i in range(3)]
-
-    def dot(u, v):
-        return np.einsum("...k,...k->...", u, v)
-
-    vx = dot(A[1], B[2]) - dot(A[2], B[1])
-    vy = dot(A[2], B[0]) - dot(A[0], B[2])
-    vz = dot(A[0], B[1]) - dot(A[1], B[0])
-    sin2 = np.sqrt(vx * vx + vy * vy + vz * vz)
-    cos2 = dot(A[0], B[0]) + dot(A[1], B[1]) + dot(A[2], B[2]) - 1.0
-    return position_error, np.arctan2(sin2, cos2)
+def _tool(robot, tool, pose_tol):
+    """The tool to solve for (checked), its dual quaternion and the change from the
+    robot's own tool for forward kinematics (or None)."""
+    if tool is None:
+        return robot.tool, None, None
+    tool_dq = dual_quaternion_from_transform(tool, tol=pose_tol, name="tool")
+    tool = np.asarray(tool, dtype=float)
+    if tool.shape != (4, 4):
+        raise ValueError(f"tool must have shape (4, 4), got {tool.shape}")
+    robot_tool = robot.tool
+    fix = None if np.array_equal(tool, robot_tool) else transform_inverse(robot_tool) @ tool
+    return tool, tool_dq, fix
 
 
-def ur(robot, pose, *, tool=None, q_ref=None, tol=1e-9, singular_tol=5e-7, pose_tol=1e-9,
-       residuals="equations"):
+def _theta6_reference(q_ref, batch):
+    """The theta6 of ``q_ref`` for every pose, shape (n,), or None."""
+    if q_ref is None:
+        return None
+    q_ref = as_float_array(q_ref, "q_ref", (6,))
+    try:
+        return np.broadcast_to(q_ref[..., 5], batch).reshape(math.prod(batch))
+    except ValueError:
+        raise ValueError(f"q_ref of shape {q_ref.shape} does not broadcast against the "
+                         f"poses' leading shape {batch}") from None
+
+
+def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | None = None,
+       q_ref: ArrayLike | None = None, singular_tol: float = 5e-7, pose_tol: float = 1e-9,
+       residuals: str = "equations") -> IKResult:
     r"""Every closed-form inverse-kinematics solution of a UR-family arm.
 
     Solves :math:`X_{W0}\, X_{06}(q)\, X_{6T} = X` for the joint vector :math:`q` by the
@@ -305,9 +308,10 @@ def ur(robot, pose, *, tool=None, q_ref=None, tol=1e-9, singular_tol=5e-7, pose_
     robot : dqlab.robot.Robot
         A UR-family arm in standard DH (for example :func:`dqlab.models.ur3`); its base
         transform and tool are taken into account, and joint offsets are honoured.
-    pose : array_like, shape (..., 4, 4) or (..., 8)
+    target : array_like, shape (..., 4, 4) or (..., 8)
         Target pose(s) of the TCP in the world frame, as rigid transforms or unit dual
-        quaternions ``(q_r, q_d)`` (told apart by the trailing shape).
+        quaternions ``(q_r, q_d)`` (told apart by the trailing shape; see
+        :func:`dqlab.ik.targets.parse_targets`).
     tool : array_like, shape (4, 4), optional
         Flange-to-TCP transform :math:`X_{6T}` to use instead of ``robot.tool``.
     q_ref : array_like, shape (6,) or (..., 6), optional
@@ -324,7 +328,7 @@ def ur(robot, pose, *, tool=None, q_ref=None, tol=1e-9, singular_tol=5e-7, pose_
         to about :math:`10^{-7}`), the conditioning of those angles; the default leaves a
         margin above that. :math:`\theta_5` itself is computed to full accuracy.
     pose_tol : float
-        Tolerance of the rigidity check of ``pose`` (and ``tool``). With a tolerance above
+        Tolerance of the rigidity check of ``target`` (and ``tool``). With a tolerance above
         the default (for poses read from rounded numbers, as in the thesis's pose file),
         each pose is replaced by the rigid pose of its normalised dual quaternion, which is
         what the solutions and the residuals then refer to.
@@ -357,8 +361,9 @@ def ur(robot, pose, *, tool=None, q_ref=None, tol=1e-9, singular_tol=5e-7, pose_
     Raises
     ------
     ValueError
-        If the robot is not UR-shaped, or ``pose`` has the wrong shape, holds NaN, is not
-        a rigid transform or not a unit dual quaternion. Unreachable poses do not raise.
+        If the robot is not UR-shaped (:data:`dqlab.models.UR_SHAPE`), or ``target`` has
+        the wrong shape, holds NaN, is not a rigid transform or not a unit dual quaternion.
+        Unreachable poses do not raise.
 
     Notes
     -----
@@ -422,186 +427,266 @@ def ur(robot, pose, *, tool=None, q_ref=None, tol=1e-9, singular_tol=5e-7, pose_
     elbow_singular [False  True]
     unreachable [False False]
     """
+    tol = check_tolerance(tol, "tol")
+    singular_tol = check_tolerance(singular_tol, "singular_tol")
     if residuals not in ("fk", "equations"):
         raise ValueError(f"residuals must be 'fk' or 'equations', got {residuals!r}")
     prm = ur_parameters(robot)
-    Q, T, q, p, z6, tool_used, robot_tool = _target(robot, pose, tool, pose_tol)
-    batch = q.shape[:-1]
+    targets = parse_targets(target, tol=pose_tol)
+    tool, tool_dq, tool_fix = _tool(robot, tool, pose_tol)
+    batch = targets.batch
     n = math.prod(batch)
-    theta6_ref = None
-    if q_ref is not None:
-        q_ref = as_float_array(q_ref, "q_ref", (6,))
-        try:
-            theta6_ref = np.broadcast_to(q_ref[..., 5], batch).reshape(n)
-        except ValueError:
-            raise ValueError(f"q_ref of shape {q_ref.shape} does not broadcast against the "
-                             f"poses' leading shape {batch}") from None
+    theta6_ref = _theta6_reference(q_ref, batch)
+    flange = _flange(robot, targets, tool, tool_dq, prm["d6"])
+    targets = targets.reshape((n,))
+    options = _Options(tol, singular_tol, residuals, tool_fix)
     # The batch axis goes last, (branch axes..., n), so that every operation runs over long
-    # contiguous rows; big batches are cut into chunks whose temporaries stay small.
-    q = np.ascontiguousarray(q.reshape(n, 4).T)
-    p5 = np.ascontiguousarray(steps.wrist_center(p, z6, prm["d6"]).reshape(n, 3).T)
-    Q = Q.reshape(n, 8)
-    T = None if T is None else T.reshape(n, 4, 4)
-    sol = np.empty((n, 8, 6))
-    position_error = np.empty((n, 8))
-    rotation_error = np.empty((n, 8))
-    valid = np.empty((n, 8), dtype=bool)
-    flags = {name: np.empty(n, dtype=bool) for name in _FLAGS}
-    reason = np.full(n, "", dtype=object)
-    for start in range(0, n, _CHUNK):
-        part = slice(start, min(start + _CHUNK, n))
-        _solve(robot, prm, q[:, part], p5[:, part], Q[part],
-               None if T is None else T[part], tool_used, robot_tool,
-               None if theta6_ref is None else theta6_ref[part], tol, singular_tol,
-               residuals, sol[part], position_error[part], rotation_error[part],
-               valid[part], {name: f[part] for name, f in flags.items()}, reason[part])
-    return IKResult(solutions=sol.reshape(batch + (8, 6)), valid=valid.reshape(batch + (8,)),
-                    position_error=position_error.reshape(batch + (8,)),
-                    rotation_error=rotation_error.reshape(batch + (8,)),
-                    flags={name: f.reshape(batch) for name, f in flags.items()},
-                    reason=reason.reshape(batch))
+    # contiguous rows; big batches are cut into blocks whose temporaries stay small.
+    solutions = np.empty((n, 8, 6))
+    if 0 < n <= _CHUNK:
+        blocks = [_solve_block(robot, prm, flange, targets, theta6_ref, options, solutions)]
+    else:
+        blocks = [_solve_block(robot, prm, flange[part], targets[part],
+                               None if theta6_ref is None else theta6_ref[part], options,
+                               out=solutions[part])
+                  for part in (slice(start, start + _CHUNK) for start in range(0, n, _CHUNK))]
+    out = _joined(blocks, n)
+    return finish(solutions.reshape(batch + (8, 6)), out.valid.reshape(batch + (8,)),
+                  out.position_error.reshape(batch + (8,)),
+                  out.rotation_error.reshape(batch + (8,)),
+                  {name: f.reshape(batch) for name, f in out.flags.items()},
+                  out.reason.reshape(batch))
 
 
-def _solve(robot, prm, q, p5, Q, T, tool, robot_tool, theta6_ref, tol, singular_tol,
-           residuals, sol, position_error, rotation_error, valid, flags, reason):
-    """The steps for a chunk of n poses (batch axis last); results written into the
-    (n, ...) output slices ``sol``, ``position_error``, ``rotation_error``, ``valid``,
-    ``flags`` and ``reason``."""
-    d1, a2, a3, d4, d5, d6 = (prm[k] for k in ("d1", "a2", "a3", "d4", "d5", "d6"))
-    n = q.shape[1]
-    x5, y5, z5 = p5
+def _joined(blocks, n):
+    """The results of consecutive blocks as one (their solutions share one array)."""
+    if len(blocks) == 1:
+        return blocks[0]
+    if not blocks:
+        return _Block(None, np.empty((n, 8), dtype=bool), np.empty((n, 8)), np.empty((n, 8)),
+                      {name: np.empty(n, dtype=bool) for name in _FLAGS},
+                      np.full(n, "", dtype=object))
+    return _Block(None, *(np.concatenate([getattr(b, name) for b in blocks])
+                          for name in ("valid", "position_error", "rotation_error")),
+                  {name: np.concatenate([b.flags[name] for b in blocks]) for name in _FLAGS},
+                  np.concatenate([b.reason for b in blocks]))
+
+
+def _solve_block(robot, prm, flange, targets, theta6_ref, options, out=None):
+    """Every branch of a block of n poses (batch axis last), checked and flagged; the
+    solutions are written into ``out`` (n, 8, 6) when given."""
+    branches = _branches(prm, flange, theta6_ref, options.tol, out)
+    pe, re = _errors(robot, prm, flange, branches, targets, options)       # (8, n) each
+    ok = (pe <= options.tol) & (re <= options.tol)
+    any_valid = ok.any(axis=0)                                              # (n,)
+    return _Block(solutions=branches.solutions, valid=ok.T, position_error=pe.T,
+                  rotation_error=re.T,
+                  flags=_flags(prm, branches, ok, any_valid, options.singular_tol),
+                  reason=_reasons(prm, flange, branches, any_valid, options.tol))
+
+
+def _branches(prm, flange, theta6_ref, tol, out=None):
+    """Steps 1 to 4 for every branch: the candidate joint vectors of a block of poses
+    (written into ``out`` when given)."""
+    d1, d4 = prm["d1"], prm["d4"]
+    n = flange.q.shape[1]
+    x5, y5, z5 = flange.p5
 
     # Step 1, theta1: arrays (2, n) over the shoulder branch s
     theta1, c1, s1, h, h2 = steps.shoulder_angles(x5, y5, d4)
 
     # Step 2, rotation: q_D = q q0^* with q0 = (1 + i)/sqrt(2), then L = r_z(theta1)^* q_D
-    qw, qx, qy, qz = q
+    qw, qx, qy, qz = flange.q
     qD = (_HALF_SQRT2 * (qw + qx), _HALF_SQRT2 * (qx - qw),
           _HALF_SQRT2 * (qy - qz), _HALF_SQRT2 * (qy + qz))
     L = steps.relative_rotation_coefficients(qD, 0.5 * theta1)
     # arrays (2, 2, n) over (s, w), the wrist branch sigma = +1, -1
     L = tuple(c[:, None, :] for c in L)
     theta5, half_sum, half_diff, c5bar, s5bar = steps.wrist_angles(L, _SIGMA)
-    theta234 = half_sum + half_diff
-    theta6 = half_sum - half_diff
     Px, Py = steps.arm_plane_wrist((x5, y5, z5), c1, s1, d1)
     Px = Px[:, None, :]                                       # (2, 1, n)
-
-    # wrist singularity: the family theta234 -+ theta6 = const, represented by the member
-    # whose theta6 is nearest theta6_ref among those the arm can reach
-    rep_tol = tol / (8.0 * max(1.0, abs(d6)))
-    rep0 = s5bar <= rep_tol                                   # (2, 1, n)
-    reppi = (c5bar <= rep_tol) & ~rep0
-    any_rep = bool(rep0.any() or reppi.any())
-    if any_rep:
-        shape = theta234.shape
-        rep0 = np.broadcast_to(rep0, shape)
-        rep = rep0 | np.broadcast_to(reppi, shape)
-        ref = np.zeros(n) if theta6_ref is None else theta6_ref
-        ref = np.broadcast_to(ref + prm["offsets"][5], shape)
-        full_sum = np.broadcast_to(2.0 * half_sum, shape)
-        full_diff = 2.0 * half_diff
-        want = np.where(rep0, full_sum - ref, full_diff + ref)[rep]
-        got = steps.feasible_theta234(np.broadcast_to(Px, shape)[rep],
-                                      np.broadcast_to(Py, shape)[rep], want, a2, a3, d5)
-        theta234 = theta234.copy()
-        theta6 = theta6.copy()
-        theta234[rep] = steps.wrap_angle(got)
-        theta6[rep] = steps.wrap_angle(
-            np.where(rep0[rep], full_sum[rep] - got, got - full_diff[rep]))
+    family = (prm, half_sum, half_diff, s5bar, c5bar, Px, Py, theta6_ref, tol)
+    theta234, theta6, represented = _wrist_family(*family)
 
     # Steps 3 and 4, the planar chain: arrays (2, 2, 2, n) over (s, e, w)
-    X, Y = steps.wrist1_point(Px, Py, theta234, d5)          # (2, 2, n) over (s, w)
-    X, Y = X[:, None], Y[:, None]                             # (2, 1, 2, n)
-    theta2, theta3, outer, inner, sin3 = steps.elbow_angles(X, Y, a2, a3, _ELBOW)
+    X, Y, theta2, theta3, outer, inner, sin3 = _planar_chain(prm, Px, Py, theta234)
+    # Near the wrist singularity theta234 comes from coefficients of the size of theta5 and
+    # may be off by eps / |theta5|: enough to put the wrist-1 point of a stretched or folded
+    # elbow out of reach. Such rows move within their wrist family to where the forearm
+    # reaches (and are checked by forward kinematics).
+    near = 2.0 * s5bar * c5bar < _NEAR_WRIST                  # (2, 1, n)
+    repair = _out_of_reach(prm, outer, inner, tol) & near if near.any() else near
+    if repair.any():
+        theta234, theta6, represented = _wrist_family(*family, repair=repair)
+        cols = np.flatnonzero(repair.any(axis=(0, 1)))        # the poses concerned
+        chain = (X, Y, theta2, theta3, outer, inner, sin3)
+        for whole, part in zip(chain, _planar_chain(prm, Px[..., cols], Py[..., cols],
+                                                    theta234[..., cols]), strict=True):
+            whole[..., cols] = part
     # theta4 = theta234 - theta2 - theta3, with theta234 in (-pi, pi]: in (-3 pi, 3 pi]
-    theta4 = _shift(theta234)[:, None] - theta2
-    theta4 -= theta3
-    theta4 = _shift(theta4)
+    theta4 = wrap_angle(wrap_angle(theta234)[:, None] - theta2 - theta3)
+    solutions = _joint_vectors((theta1[:, None, None, :], theta2, theta3, theta4,
+                                theta5[:, None], wrap_angle(theta6)[:, None]),
+                               prm["offsets"], n, out)
+    return _Branches(solutions=solutions, h=h, h2=h2, s5bar=s5bar, c5bar=c5bar, X=X, Y=Y,
+                     sin3=sin3, outer=outer, inner=inner, represented=represented)
 
-    # the joint vectors, written through a (6, 2, 2, 2, n) view of the (n, 8, 6) output
-    out = sol.transpose(2, 1, 0).reshape(6, 2, 2, 2, n)      # a view: sol is C-ordered
-    if out.base is None:  # pragma: no cover -- reshape had to copy
-        st_n, st_k, st_j = sol.strides
-        out = np.lib.stride_tricks.as_strided(
-            sol, (6, 2, 2, 2, n), (st_j, 4 * st_k, 2 * st_k, st_k, st_n), writeable=True)
-    out[0] = theta1[:, None, None, :]
-    out[1] = theta2
-    out[2] = theta3
-    out[3] = theta4
-    out[4] = theta5[:, None]
-    out[5] = _shift(theta6)[:, None]                         # theta6 in [-2 pi, 2 pi]
-    if any(prm["offsets"]):
-        sol[...] = steps.wrap_angle(sol - np.array(prm["offsets"]))
 
-    # residuals, arrays (8, n)
-    if residuals == "fk":
-        pe, re = _fk_residuals(robot, sol, Q, T, tool, robot_tool)
-        pe, re = pe.T, re.T
-    else:
-        # distance lost by clipping: shoulder (normal to the arm plane) and elbow (in it)
-        re = np.zeros((8, n))
-        if h2.min() >= 0.0 and outer.min() >= 0.0 and inner.min() >= 0.0:
-            pe = np.zeros((8, n))                             # nothing was clipped
-        else:
-            e1 = np.maximum(-h2, 0.0) / (d4 + np.sqrt(x5 * x5 + y5 * y5))      # (n,)
-            r_out, r_in = abs(a2 + a3), abs(a2 - a3)
-            rho = np.sqrt(X * X + Y * Y)
-            e2 = np.maximum(np.maximum(rho - r_out, r_in - rho), 0.0)          # (2, 1, 2, n)
-            pe = np.empty((2, 2, 2, n))
-            pe[...] = np.sqrt(e1 * e1 + e2 * e2)
-            pe = pe.reshape(8, n)
-        if any_rep:
-            rows = np.broadcast_to(rep[:, None], (2, 2, 2, n)).reshape(8, n).T   # (n, 8)
-            rows_pe, rows_re = _fk_residuals(robot, sol[rows][:, None, :], None,
-                                             _rows_target(Q, T, rows), tool, robot_tool)
-            pe.T[rows] = rows_pe[:, 0]
-            re.T[rows] = rows_re[:, 0]
-    ok = (pe <= tol) & (re <= tol)                            # (8, n)
-    position_error[...] = pe.T
-    rotation_error[...] = re.T
-    valid[...] = ok.T
-    if not ok.all():
-        sol[~valid] = 0.0
+def _wrist_family(prm, half_sum, half_diff, s5bar, c5bar, Px, Py, theta6_ref, tol, repair=None):
+    """theta234 and theta6 (2, 2, n) from the half sum and difference; at a wrist
+    singularity, where only theta234 -+ theta6 is fixed, the member of the family whose
+    theta6 is nearest ``theta6_ref`` among those the arm can reach; for the rows in
+    ``repair`` (near the singularity), the member nearest the computed theta234 that the arm
+    can reach. Also returns the mask of the rows so chosen (None when there is none)."""
+    theta234 = half_sum + half_diff
+    theta6 = half_sum - half_diff
+    rep_tol = tol / (8.0 * max(1.0, abs(prm["d6"])))
+    exact = (s5bar <= rep_tol) | (c5bar <= rep_tol)           # (2, 1, n)
+    if not (exact.any() or (repair is not None and repair.any())):
+        return theta234, theta6, None
+    shape = theta234.shape
+    n = shape[-1]
+    exact = np.broadcast_to(exact, shape)
+    rep = exact if repair is None else exact | repair
+    rep0 = np.broadcast_to(s5bar <= c5bar, shape)    # theta5 near 0: theta234 + theta6 fixed
+    ref = np.zeros(n) if theta6_ref is None else theta6_ref
+    ref = np.broadcast_to(ref + prm["offsets"][5], shape)
+    full_sum = np.broadcast_to(2.0 * half_sum, shape)
+    full_diff = 2.0 * half_diff
+    want = np.where(exact, np.where(rep0, full_sum - ref, full_diff + ref), theta234)[rep]
+    got = steps.feasible_theta234(np.broadcast_to(Px, shape)[rep],
+                                  np.broadcast_to(Py, shape)[rep], want,
+                                  prm["a2"], prm["a3"], prm["d5"])
+    theta234 = theta234.copy()
+    theta6 = theta6.copy()
+    theta234[rep] = steps.wrap_angle(got)
+    theta6[rep] = steps.wrap_angle(np.where(rep0[rep], full_sum[rep] - got,
+                                            got - full_diff[rep]))
+    return theta234, theta6, rep
 
-    # flags, over the valid rows
+
+def _out_of_reach(prm, outer, inner, tol):
+    """Rows (2, 2, n) over (s, w) whose wrist-1 point lies more than tol / 2 beyond the
+    forearm's reach on some elbow branch."""
+    r_out, r_in = abs(prm["a2"] + prm["a3"]), abs(prm["a2"] - prm["a3"])
+    far = (outer < -tol * r_out) | (inner < -tol * r_in)     # (2, 1 or 2, 2, n)
+    return far.any(axis=1)
+
+
+def _planar_chain(prm, Px, Py, theta234):
+    """Steps 3 and 4: the wrist-1 point (2, 1, 2, n) and the elbow angles (2, 2, 2, n)."""
+    X, Y = steps.wrist1_point(Px, Py, theta234, prm["d5"])   # (2, 2, n) over (s, w)
+    X, Y = X[:, None], Y[:, None]                             # (2, 1, 2, n)
+    theta2, theta3, outer, inner, sin3 = steps.elbow_angles(X, Y, prm["a2"], prm["a3"], _ELBOW)
+    return X, Y, theta2, theta3, outer, inner, sin3
+
+
+def _joint_vectors(thetas, offsets, n, out=None):
+    """The (n, 8, 6) joint vectors from the six angle arrays over (s, e, w, n), row
+    k = 4 s + 2 e + w, joint offsets removed (in ``out`` when given, a C-ordered array)."""
+    solutions = np.empty((n, 8, 6)) if out is None else out
+    # written through a (6, 2, 2, 2, n) view of the (n, 8, 6) array
+    view = solutions.transpose(2, 1, 0).reshape(6, 2, 2, 2, n)
+    if view.base is None:  # pragma: no cover -- reshape had to copy
+        st_n, st_k, st_j = solutions.strides
+        view = np.lib.stride_tricks.as_strided(
+            solutions, (6, 2, 2, 2, n), (st_j, 4 * st_k, 2 * st_k, st_k, st_n),
+            writeable=True)
+    for j, theta in enumerate(thetas):
+        view[j] = theta
+    if any(offsets):
+        solutions[...] = steps.wrap_angle(solutions - np.array(offsets))
+    return solutions
+
+
+def _errors(robot, prm, flange, branches, targets, options):
+    """Position and rotation errors (8, n) of every row: from the clipping of the steps
+    (``residuals="equations"``) or by forward kinematics (``"fk"``)."""
+    if options.residuals == "fk":
+        pe, re = _fk_errors(robot, branches.solutions, targets.transforms[:, None],
+                            options.tool_fix)
+        return pe.T, re.T
+    re = np.zeros(branches.solutions.shape[1::-1])
+    pe = _clipping_distance(prm, flange, branches)
+    if branches.represented is not None:
+        n = branches.solutions.shape[0]
+        rows = np.broadcast_to(branches.represented[:, None], (2, 2, 2, n))
+        rows = rows.reshape(8, n).T                                           # (n, 8)
+        X_rows = np.broadcast_to(targets.transforms[:, None], rows.shape + (4, 4))[rows]
+        rows_pe, rows_re = _fk_errors(robot, branches.solutions[rows], X_rows,
+                                      options.tool_fix)
+        pe.T[rows] = rows_pe
+        re.T[rows] = rows_re
+    return pe, re
+
+
+def _clipping_distance(prm, flange, branches):
+    """Distance (8, n) a row misses the pose by, from the clipping of steps 1 and 4: the
+    wrist centre inside the shoulder cylinder (normal to the arm plane) and the wrist-1 point
+    out of the forearm's reach (in it)."""
+    n = flange.q.shape[1]
+    if (branches.h2.min() >= 0.0 and branches.outer.min() >= 0.0
+            and branches.inner.min() >= 0.0):
+        return np.zeros((8, n))                               # nothing was clipped
+    e1 = _shoulder_gap(prm, flange, branches)                 # (n,)
+    a2, a3 = prm["a2"], prm["a3"]
+    r_out, r_in = abs(a2 + a3), abs(a2 - a3)
+    X, Y = branches.X, branches.Y
+    rho = np.sqrt(X * X + Y * Y)
+    e2 = np.maximum(np.maximum(rho - r_out, r_in - rho), 0.0)                 # (2, 1, 2, n)
+    pe = np.empty((2, 2, 2, n))
+    pe[...] = np.sqrt(e1 * e1 + e2 * e2)
+    return pe.reshape(8, n)
+
+
+def _shoulder_gap(prm, flange, branches):
+    """How far (n,) the wrist centre lies inside the shoulder cylinder (0 outside)."""
+    x5, y5 = flange.p5[0], flange.p5[1]
+    return np.maximum(-branches.h2, 0.0) / (prm["d4"] + np.sqrt(x5 * x5 + y5 * y5))
+
+
+def _fk_errors(robot, solutions, X_target, tool_fix):
+    """pose_errors of robot.fk of joint vectors (..., 6) against X_target (..., 4, 4),
+    with the tool changed by ``tool_fix`` when not None."""
+    X = robot.fk(solutions)
+    if tool_fix is not None:
+        X = X @ tool_fix
+    return pose_errors(X, X_target)
+
+
+def _flags(prm, branches, ok, any_valid, singular_tol):
+    """The singularity and reach flags (n,) of a block, over its valid rows."""
+    n = ok.shape[1]
     ok4 = ok.reshape(2, 2, 2, n)
-    sin5 = 2.0 * s5bar * c5bar                                # (2, 1, n) over (s, w)
-    any_valid = ok.any(axis=0)
+    sin5 = 2.0 * branches.s5bar * branches.c5bar               # (2, 1, n) over (s, w)
+    flags = {"wrist_singular": np.zeros(n, dtype=bool),
+             "shoulder_singular": any_valid & (branches.h < singular_tol * prm["d4"]),
+             "elbow_singular": np.zeros(n, dtype=bool),
+             "unreachable": ~any_valid}
     if sin5.min() < singular_tol:
-        flags["wrist_singular"][...] = (
-            ok4 & (sin5 < singular_tol)[:, None]).reshape(8, n).any(0)
-    else:
-        flags["wrist_singular"][...] = False
-    flags["shoulder_singular"][...] = any_valid & (h < singular_tol * d4)
-    if sin3.min() < singular_tol:
-        flags["elbow_singular"][...] = (ok4 & (sin3 < singular_tol)).reshape(8, n).any(0)
-    else:
-        flags["elbow_singular"][...] = False
-    flags["unreachable"][...] = ~any_valid
-    if not any_valid.all():
-        beyond = (outer < 0).all(axis=(0, 1, 2))
-        inside = (inner < 0).all(axis=(0, 1, 2))
-        either = ((outer < 0) | (inner < 0)).all(axis=(0, 1, 2))
-        none = ~any_valid
-        reason[none] = _REASON_TOL
-        reason[none & either] = _REASON_REACH
-        reason[none & inside] = _REASON_INNER
-        reason[none & beyond] = _REASON_OUTER
-        shoulder_gap = np.maximum(-h2, 0.0) / (d4 + np.sqrt(x5 * x5 + y5 * y5))
-        reason[none & (shoulder_gap > tol)] = _REASON_SHOULDER
+        flags["wrist_singular"] = (ok4 & (sin5 < singular_tol)[:, None]).reshape(8, n).any(0)
+    if branches.sin3.min() < singular_tol:
+        flags["elbow_singular"] = (ok4 & (branches.sin3 < singular_tol)).reshape(8, n).any(0)
+    return flags
 
 
-def _rows_target(Q, T, rows):
-    r"""The target of each selected row, as 4x4, shape (m, 4, 4)."""
-    if T is None:
-        from ..dualquat import transform_from_dual_quaternion
+def _reasons(prm, flange, branches, any_valid, tol):
+    """Why each pose of a block without a valid row has none (n,): the first step that
+    fails on every branch."""
+    reason = np.full(any_valid.shape, "", dtype=object)
+    if any_valid.all():
+        return reason
+    none = ~any_valid
+    outer, inner = branches.outer < 0, branches.inner < 0
+    reason[none] = REASON_TOL
+    reason[none & (outer | inner).all(axis=(0, 1, 2))] = REASON_REACH
+    reason[none & inner.all(axis=(0, 1, 2))] = REASON_INNER
+    reason[none & outer.all(axis=(0, 1, 2))] = REASON_OUTER
+    reason[none & (_shoulder_gap(prm, flange, branches) > tol)] = REASON_SHOULDER
+    return reason
 
-        T = transform_from_dual_quaternion(Q, tol=np.inf)
-    return np.broadcast_to(T[..., None, :, :], rows.shape + (4, 4))[rows]
 
-
-def distinct_solutions(result, atol=1e-9):
+def distinct_solutions(result: IKResult, atol: float = 1e-9) -> NDArray[np.bool_]:
     r"""Mark the first valid row of each group of equal solutions (angles compared mod 2 pi).
 
     Parameters
@@ -638,7 +723,8 @@ def distinct_solutions(result, atol=1e-9):
     return valid & ~np.any(same & earlier, axis=-1)
 
 
-def equivalent_solutions(q, limits=(-2 * np.pi, 2 * np.pi)):
+def equivalent_solutions(q: ArrayLike, limits: ArrayLike = (-2 * np.pi, 2 * np.pi)
+                         ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
     r"""All :math:`2\pi`-equivalents of joint vectors within the joint limits.
 
     A UR joint turns :math:`\pm 360` degrees, so each angle in :math:`(-\pi, \pi]` has one
@@ -671,9 +757,16 @@ def equivalent_solutions(q, limits=(-2 * np.pi, 2 * np.pi)):
     >>> cands[1].round(4)
     array([-5.7832, -3.    ,  0.    ,  1.    ,  2.    , -1.    ])
     """
-    q = np.asarray(q, dtype=float)
+    q = as_float_array(q, "q")
+    if q.ndim == 0:
+        raise ValueError("q must have shape (..., n), a joint vector or a batch of them")
     n = q.shape[-1]
-    limits = np.asarray(limits, dtype=float)
+    if n > _MAX_EQUIVALENT_JOINTS:
+        raise ValueError(f"equivalent_solutions lists 2**n candidates: at most "
+                         f"{_MAX_EQUIVALENT_JOINTS} joints, got {n}")
+    limits = as_float_array(limits, "limits")
+    if limits.shape not in ((2,), (n, 2)):
+        raise ValueError(f"limits must have shape (2,) or ({n}, 2), got {limits.shape}")
     lo = np.broadcast_to(limits[..., 0], (n,))
     hi = np.broadcast_to(limits[..., 1], (n,))
     if np.any(hi - lo > 4 * np.pi + 1e-12):
@@ -685,7 +778,8 @@ def equivalent_solutions(q, limits=(-2 * np.pi, 2 * np.pi)):
     return cands, within
 
 
-def closest_solution(result, q_ref, limits=(-2 * np.pi, 2 * np.pi)):
+def closest_solution(result: IKResult, q_ref: ArrayLike,
+                     limits: ArrayLike = (-2 * np.pi, 2 * np.pi)) -> NDArray[np.float64]:
     r"""The valid solution nearest ``q_ref``, unwrapped to the equivalent nearest ``q_ref``.
 
     The branch is chosen exactly as :meth:`~dqlab.ik.result.IKResult.best` does (joint-wise
@@ -719,7 +813,7 @@ def closest_solution(result, q_ref, limits=(-2 * np.pi, 2 * np.pi)):
     array([ 3., -1.,  1., -2.,  1.,  6.])
     """
     best = result.best(q_ref)
-    q_ref = np.asarray(q_ref, dtype=float)
+    q_ref = as_float_array(q_ref, "q_ref")
     cands, within = equivalent_solutions(best, limits)
     dist = np.abs(cands - q_ref[..., None, :]).sum(axis=-1)
     dist = np.where(within, dist, np.inf)

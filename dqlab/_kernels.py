@@ -1,0 +1,233 @@
+r"""Unchecked component formulas shared by every layer of dqlab.
+
+Each function here is one formula written on *components*: its arguments are the entries of
+quaternions, dual quaternions, vectors or matrices, either Python floats (one value, the
+fast path) or numpy arrays of one common shape (a batch, column by column). Nothing is
+checked: the public functions of :mod:`dqlab.quaternion`, :mod:`dqlab.rotations`,
+:mod:`dqlab.dualquat` and :mod:`dqlab.robot` validate their arguments once (with
+:mod:`dqlab._checks`) and then call these.
+
+Conventions: quaternions ``(w, x, y, z)`` with the Hamilton product, dual quaternions
+``(q_r, q_d)`` as eight numbers, matrices row by row.
+
+>>> quaternion_mul(0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0)     # i j = k
+(0.0, 0.0, 0.0, 1.0)
+"""
+
+import math
+
+import numpy as np
+
+# --------------------------------------------------------------------------------------
+# Quaternions
+
+
+def quaternion_mul(aw, ax, ay, az, bw, bx, by, bz):
+    r"""Hamilton product :math:`a b`, component by component.
+
+    >>> quaternion_mul(0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0)   # j i = -k
+    (0.0, 0.0, 0.0, -1.0)
+    """
+    return (aw * bw - ax * bx - ay * by - az * bz,
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw)
+
+
+def quaternion_rotate(w, x, y, z, vx, vy, vz):
+    r"""The vector :math:`q\,v\,q^*` for a unit quaternion :math:`q = (w, \mathbf u)`.
+
+    With :math:`\mathbf t = 2\,\mathbf u \times \mathbf v`:
+    :math:`\mathbf v' = \mathbf v + w\,\mathbf t + \mathbf u \times \mathbf t`.
+
+    >>> quaternion_rotate(0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0)     # half turn about z
+    (-1.0, 0.0, 0.0)
+    """
+    tx = 2.0 * (y * vz - z * vy)
+    ty = 2.0 * (z * vx - x * vz)
+    tz = 2.0 * (x * vy - y * vx)
+    return (vx + w * tx + (y * tz - z * ty),
+            vy + w * ty + (z * tx - x * tz),
+            vz + w * tz + (x * ty - y * tx))
+
+
+def matrix_entries_from_quaternion(w, x, y, z):
+    """The nine entries (row by row) of the rotation matrix of a unit quaternion.
+
+    >>> matrix_entries_from_quaternion(1.0, 0.0, 0.0, 0.0)
+    (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+    """
+    xx, yy, zz = x * x, y * y, z * z
+    xy, xz, yz = x * y, x * z, y * z
+    wx, wy, wz = w * x, w * y, w * z
+    return (1.0 - 2.0 * (yy + zz), 2.0 * (xy - wz), 2.0 * (xz + wy),
+            2.0 * (xy + wz), 1.0 - 2.0 * (xx + zz), 2.0 * (yz - wx),
+            2.0 * (xz - wy), 2.0 * (yz + wx), 1.0 - 2.0 * (xx + yy))
+
+
+# Positions of the rows of K = 4 q q^T in the tuple returned by shepperd_terms.
+_K_ROWS = ((0, 4, 5, 6), (4, 1, 7, 8), (5, 7, 2, 9), (6, 8, 9, 3))
+
+
+def shepperd_terms(r00, r01, r02, r10, r11, r12, r20, r21, r22):
+    """The ten distinct entries of :math:`K = 4 q q^T` written with the entries of R.
+
+    The diagonal :math:`4w^2, 4x^2, 4y^2, 4z^2`, then :math:`4wx, 4wy, 4wz, 4xy, 4xz, 4yz`
+    (active convention).
+
+    >>> shepperd_terms(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)[:4]
+    (4.0, 0.0, 0.0, 0.0)
+    """
+    tr = r00 + r11 + r22
+    return (1.0 + tr, 1.0 + r00 - r11 - r22, 1.0 - r00 + r11 - r22, 1.0 - r00 - r11 + r22,
+            r21 - r12, r02 - r20, r10 - r01, r01 + r10, r02 + r20, r12 + r21)
+
+
+def quaternion_from_matrix_entries(r00, r01, r02, r10, r11, r12, r20, r21, r22):
+    """Unit quaternion (``w >= 0``) of a rotation matrix given by its nine entries.
+
+    Row k of :math:`K` divided by :math:`2\\sqrt{K_{kk}}` is q, for any k; Shepperd's method
+    takes the row of the largest diagonal entry (it divides by the largest component of q).
+
+    >>> quaternion_from_matrix_entries(-1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0)
+    (0.0, 0.0, 0.0, 1.0)
+    """
+    K = shepperd_terms(r00, r01, r02, r10, r11, r12, r20, r21, r22)
+    if not isinstance(r00, np.ndarray):
+        k = 0
+        for j in (1, 2, 3):
+            if K[j] > K[k]:
+                k = j
+        w, x, y, z = (K[i] for i in _K_ROWS[k])
+        s = 0.5 / math.sqrt(K[k])
+        if w < 0.0:
+            s = -s  # canonical sign: w >= 0
+        return (w * s, x * s, y * s, z * s)
+    best, row = K[0], [K[i] for i in _K_ROWS[0]]
+    for k in (1, 2, 3):
+        larger = K[k] > best
+        best = np.where(larger, K[k], best)
+        row = [np.where(larger, K[i], r) for i, r in zip(_K_ROWS[k], row, strict=True)]
+    s = 0.5 / np.sqrt(best)
+    s = np.where(row[0] < 0.0, -s, s)
+    return tuple(c * s for c in row)
+
+
+# --------------------------------------------------------------------------------------
+# Rotation matrices
+
+
+def orthonormality(a, b, c):
+    """Largest entry of :math:`|R^T R - I|` and :math:`\\det R`, R given by its rows.
+
+    The entries are floats (one matrix) or arrays (a batch: the largest error over the batch
+    and the smallest determinant are returned).
+
+    >>> orthonormality((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, -1.0))
+    (0.0, -1.0)
+    """
+    a0, a1, a2 = a[0], a[1], a[2]
+    b0, b1, b2 = b[0], b[1], b[2]
+    c0, c1, c2 = c[0], c[1], c[2]
+    errs = (abs(a0 * a0 + b0 * b0 + c0 * c0 - 1.0),
+            abs(a1 * a1 + b1 * b1 + c1 * c1 - 1.0),
+            abs(a2 * a2 + b2 * b2 + c2 * c2 - 1.0),
+            abs(a0 * a1 + b0 * b1 + c0 * c1),
+            abs(a0 * a2 + b0 * b2 + c0 * c2),
+            abs(a1 * a2 + b1 * b2 + c1 * c2))
+    det = a0 * (b1 * c2 - b2 * c1) - a1 * (b0 * c2 - b2 * c0) + a2 * (b0 * c1 - b1 * c0)
+    if isinstance(det, np.ndarray):
+        return (float(max(e.max(initial=0.0) for e in errs)),
+                float(det.min(initial=1.0)))
+    return max(errs), det
+
+
+# --------------------------------------------------------------------------------------
+# Dual quaternions
+
+
+def dual_quaternion_mul(a, b):
+    r""":math:`(a_r + \varepsilon a_d)(b_r + \varepsilon b_d) = a_r b_r + \varepsilon (a_r b_d
+    + a_d b_r)` on the eight components of ``a`` and ``b``.
+
+    >>> dual_quaternion_mul((1.0, 0, 0, 0, 0, 0.5, 0, 0), (1.0, 0, 0, 0, 0, 0, 1.0, 0))
+    (1.0, 0.0, 0.0, 0.0, 0.0, 0.5, 1.0, 0.0)
+    """
+    arw, arx, ary, arz, adw, adx, ady, adz = a
+    brw, brx, bry, brz, bdw, bdx, bdy, bdz = b
+    rw, rx, ry, rz = quaternion_mul(arw, arx, ary, arz, brw, brx, bry, brz)
+    d1w, d1x, d1y, d1z = quaternion_mul(arw, arx, ary, arz, bdw, bdx, bdy, bdz)
+    d2w, d2x, d2y, d2z = quaternion_mul(adw, adx, ady, adz, brw, brx, bry, brz)
+    return rw, rx, ry, rz, d1w + d2w, d1x + d2x, d1y + d2y, d1z + d2z
+
+
+def dual_quaternion_mul_z_screw(a, c, s, h):
+    r"""``a`` times the screw about the z axis.
+
+    The screw turns by :math:`\theta` about z and moves by :math:`2h` along it,
+    :math:`J = r + \varepsilon\, h k r` with :math:`r = c + s k`,
+    :math:`(c, s) = (\cos\frac\theta2, \sin\frac\theta2)`. As :math:`k` and :math:`r`
+    commute, :math:`a J = a_r r + \varepsilon\,(a_d r + h\, (a_r r)\, k)`: the same as
+    ``dual_quaternion_mul(a, (c, 0, 0, s, -h s, 0, 0, h c))`` without the products by zero.
+
+    >>> dual_quaternion_mul_z_screw((1.0, 0, 0, 0, 0, 0, 0, 0), 1.0, 0.0, 0.5)
+    (1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.5)
+    """
+    arw, arx, ary, arz, adw, adx, ady, adz = a
+    # p r with r = c + s k is (c w - s z, c x + s y, c y - s x, c z + s w)
+    rw, rx, ry, rz = c * arw - s * arz, c * arx + s * ary, c * ary - s * arx, c * arz + s * arw
+    dw, dx, dy, dz = c * adw - s * adz, c * adx + s * ady, c * ady - s * adx, c * adz + s * adw
+    # p k is (-z, y, -x, w)
+    return rw, rx, ry, rz, dw - h * rz, dx + h * ry, dy - h * rx, dz + h * rw
+
+
+def screw_entries(lx, ly, lz, mx, my, mz, c, s, h):
+    r"""The unit dual quaternion of the screw about the line :math:`(\mathbf l, \mathbf m)`.
+
+    ``c, s`` are the cosine and sine of half the angle, ``h`` half the displacement along
+    the axis (see :func:`dqlab.dualquat.dual_quaternion_from_screw`).
+
+    >>> screw_entries(0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.5)
+    (1.0, 0.0, 0.0, 0.0, -0.0, 0.0, 0.0, 0.5)
+    """
+    hc = h * c
+    return (c, s * lx, s * ly, s * lz,
+            -h * s, s * mx + hc * lx, s * my + hc * ly, s * mz + hc * lz)
+
+
+def translation_from_dual_quaternion_entries(rw, rx, ry, rz, dw, dx, dy, dz):
+    r"""The translation :math:`\mathbf t` of a unit dual quaternion, :math:`(0, \mathbf t) =
+    2\, q_d\, q_r^*`, as three components.
+
+    >>> translation_from_dual_quaternion_entries(1.0, 0, 0, 0, 0, 0.5, 1.0, 1.5)
+    (1.0, 2.0, 3.0)
+    """
+    _, tx, ty, tz = quaternion_mul(dw, dx, dy, dz, rw, -rx, -ry, -rz)
+    return 2.0 * tx, 2.0 * ty, 2.0 * tz
+
+
+# --------------------------------------------------------------------------------------
+# Norms
+
+
+def norm_last_axis(a):
+    r"""Euclidean norm over the last axis of an array, without overflow or underflow.
+
+    :math:`\sqrt{\sum a_i^2}` directly where the sum of squares is a normal number (the
+    result is then exactly that of the plain formula), and as
+    :math:`m \sqrt{\sum (a_i / m)^2}` with :math:`m = \max |a_i|` elsewhere (entries near
+    1e±154 and beyond, whose squares overflow or underflow).
+
+    >>> norm_last_axis(np.array([3e200, 4e200])), norm_last_axis(np.array([3e-200, 4e-200]))
+    (array(5.e+200), array(5.e-200))
+    """
+    with np.errstate(over="ignore", under="ignore"):
+        n2 = np.sum(a * a, axis=-1)
+    n = np.array(np.sqrt(n2))
+    risky = ~((n2 > 1e-290) & (n2 < 1e290))
+    if risky.any():
+        sub = a[risky]
+        m = np.max(np.abs(sub), axis=-1)
+        safe = np.where(m > 0.0, m, 1.0)
+        n[risky] = m * np.sqrt(np.sum((sub / safe[..., None]) ** 2, axis=-1))
+    return n

@@ -1,0 +1,227 @@
+r"""Numerical inverse kinematics by damped least squares (Levenberg--Marquardt).
+
+Works for any :class:`~dqlab.robot.Robot`: full pose (position and orientation) or position
+only, one target or a batch solved together (every iteration is one vectorised step for
+the whole batch). The UR3 report solves its circular path this way, each point warm-started
+from the previous solution.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .._checks import check_tolerance
+from ..robot import Robot
+from .result import IKResult, finish, target_reasons
+from .targets import parse_targets, pose_errors
+
+__all__ = ["numerical", "pose_errors"]
+
+
+def _rotation_vector(R_err):
+    """Rotation vectors (axis times angle) of rotation matrices, shape (..., 3)."""
+    from ..quaternion import axis_angle_from_quaternion, quaternion_from_matrix
+
+    axis, angle = axis_angle_from_quaternion(quaternion_from_matrix(R_err))
+    return axis * angle[..., None]
+
+
+def _residual(X, X_target, position_only):
+    """Error vector (..., 3) or (..., 6): position, then rotation vector, world frame."""
+    e_p = X_target[..., :3, 3] - X[..., :3, 3]
+    if position_only:
+        return e_p
+    R_err = X_target[..., :3, :3] @ np.swapaxes(X[..., :3, :3], -1, -2)
+    return np.concatenate([e_p, _rotation_vector(R_err)], axis=-1)
+
+
+def numerical(robot: Robot, target: ArrayLike, q0: ArrayLike, *, position_only: bool = False,
+              tol: float = 1e-10, rotation_tol: float | None = None, max_iter: int = 100,
+              damping: float = 1e-2, min_damping: float = 1e-9, max_damping: float = 1e6,
+              max_step: float = 0.5) -> IKResult:
+    r"""Inverse kinematics by damped least squares, from a warm start ``q0``.
+
+    Each iteration linearises the forward kinematics at :math:`q` with the geometric
+    Jacobian :math:`J` (:func:`dqlab.jacobian.geometric_jacobian`) and takes the
+    Levenberg--Marquardt step
+
+    .. math::
+
+       \Delta q = \left(J^\top J + \lambda^2 I\right)^{-1} J^\top e,
+       \qquad e = \begin{pmatrix} p^\ast - p \\ \log(R^\ast R^\top)^\vee \end{pmatrix}
+
+    (only the position rows with ``position_only``). A step that lowers :math:`\lVert e
+    \rVert` is accepted and :math:`\lambda` shrinks (towards Gauss--Newton, quadratic
+    convergence); a step that does not is rejected and :math:`\lambda` grows (towards small
+    gradient steps). Joints are clipped to their limits after every step, steps are capped
+    at ``max_step`` per joint.
+
+    Parameters
+    ----------
+    robot : Robot
+    target : array_like, shape (..., 4, 4), (..., 8) or (..., 3)
+        Targets :math:`X_{WT}^\ast` as transforms or unit dual quaternions, or positions
+        (with ``position_only=True``).
+    q0 : array_like, shape (..., n)
+        Initial guesses, broadcast against the targets.
+    position_only : bool, optional
+        Solve for the TCP position only (the report's path following).
+    tol : float, optional
+        Position tolerance in metres.
+    rotation_tol : float, optional
+        Rotation tolerance in radians (default: ``tol``).
+    max_iter : int, optional
+        Largest number of iterations.
+    damping : float, optional
+        Initial :math:`\lambda`.
+    min_damping, max_damping : float, optional
+        Bounds of :math:`\lambda`; reaching ``max_damping`` means the solver is stuck
+        (target out of reach, or a local minimum) and it stops for that target.
+    max_step : float, optional
+        Largest change of one joint per iteration (radians or metres).
+
+    Returns
+    -------
+    IKResult
+        ``solutions`` of shape (..., 1, n); ``valid`` (..., 1) True where the tolerances
+        are met; ``position_error`` and ``rotation_error`` of the last iterate (also when
+        it failed); ``flags["not_converged"]``; ``reason`` says how far from the target a
+        failed solve stopped. ``rotation_error`` is 0 when only a position was given.
+
+    Raises
+    ------
+    ValueError
+        On malformed targets or initial guesses.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dqlab.models import ur3
+    >>> robot = ur3()
+    >>> q_true = np.array([0.3, -1.2, 1.0, -0.5, 1.1, 0.2])
+    >>> result = numerical(robot, robot.fk(q_true), q_true + 0.1)
+    >>> result.valid
+    array([ True])
+    >>> np.allclose(result.solutions[0], q_true)
+    True
+    >>> bool(result.position_error[0] < 1e-10)
+    True
+
+    A target out of reach fails, and says so:
+
+    >>> far = robot.fk(q_true)
+    >>> far[:3, 3] = [2.0, 0.0, 0.0]
+    >>> result = numerical(robot, far, q_true)
+    >>> result.valid
+    array([False])
+    >>> print(result.reason)
+    stalled (damping above 1e+06) after ... iterations: position error 1.49 m, rotation error
+    ... rad (tolerances 1e-10 m, 1e-10 rad)
+    """
+    tol = check_tolerance(tol, "tol")
+    rotation_tol = tol if rotation_tol is None else check_tolerance(rotation_tol, "rotation_tol")
+    for value, label in ((damping, "damping"), (min_damping, "min_damping"),
+                         (max_damping, "max_damping"), (max_step, "max_step")):
+        check_tolerance(value, label)
+    targets = parse_targets(target, position=position_only)
+    q0 = robot.check_joints(q0, limits="none", name="q0")
+    batch = np.broadcast_shapes(targets.batch, q0.shape[:-1])
+    n = robot.n
+    X_target = np.broadcast_to(targets.transforms, batch + (4, 4)).reshape(-1, 4, 4)
+    q = np.clip(np.broadcast_to(q0, batch + (n,)).reshape(-1, n), *robot.limits.T)
+    options = _Options(position_only, tol, rotation_tol, int(max_iter), float(damping),
+                       min_damping, max_damping, max_step)
+    q, X, iterations, stuck = _iterate(robot, q, X_target, options)
+
+    position_error, rotation_error = pose_errors(X, X_target)
+    if not targets.has_rotation:
+        rotation_error = np.zeros_like(rotation_error)
+    valid = options.met(position_error, rotation_error)
+
+    def explain(index):
+        (b,) = index
+        why = (f"stalled (damping above {max_damping:g}) after {iterations[b]} iterations"
+               if stuck[b] else f"did not converge after {iterations[b]} iterations")
+        text = f"{why}: position error {position_error[b]:.3g} m"
+        if targets.has_rotation:
+            text += f", rotation error {rotation_error[b]:.3g} rad"
+        text += f" (tolerances {tol:g} m"
+        return text + (")" if position_only else f", {rotation_tol:g} rad)")
+
+    return finish(q.reshape(batch + (1, n)), valid.reshape(batch + (1,)),
+                  position_error.reshape(batch + (1,)), rotation_error.reshape(batch + (1,)),
+                  {"not_converged": (~valid).reshape(batch),
+                   "stalled": (stuck & ~valid).reshape(batch)},
+                  target_reasons(~valid, explain).reshape(batch))
+
+
+@dataclass
+class _Options:
+    """The solver's settings (see :func:`numerical`)."""
+
+    position_only: bool
+    tol: float
+    rotation_tol: float
+    max_iter: int
+    damping: float
+    min_damping: float
+    max_damping: float
+    max_step: float
+
+    def met(self, position_error, rotation_error):
+        """Where the tolerances are met."""
+        done = position_error <= self.tol
+        if not self.position_only:
+            done &= rotation_error <= self.rotation_tol
+        return done
+
+
+def _iterate(robot, q, X_target, options):
+    """Levenberg--Marquardt iterations from ``q`` (B, n) towards ``X_target`` (B, 4, 4),
+    every target that has not converged or stalled moved together. Returns the last
+    iterates ``q`` and their poses ``X``, the number of iterations and whether the damping
+    ran away (stalled), per target."""
+    B = q.shape[0]
+    lam = np.full(B, options.damping)
+    X = robot.fk(q)
+    e = _residual(X, X_target, options.position_only)
+    cost = np.sum(e * e, axis=-1)
+    iterations = np.zeros(B, dtype=int)
+    stuck = np.zeros(B, dtype=bool)
+    active = ~options.met(*pose_errors(X, X_target))
+    for _ in range(options.max_iter):
+        idx = np.flatnonzero(active)
+        if idx.size == 0:
+            break
+        q_try = _step(robot, q[idx], e[idx], lam[idx], options)
+        X_try = robot.fk(q_try)
+        e_try = _residual(X_try, X_target[idx], options.position_only)
+        cost_try = np.sum(e_try * e_try, axis=-1)
+        better = cost_try < cost[idx]
+        acc = idx[better]
+        q[acc], X[acc], e[acc], cost[acc] = (q_try[better], X_try[better], e_try[better],
+                                             cost_try[better])
+        lam[idx] = np.where(better, np.maximum(lam[idx] / 3.0, options.min_damping),
+                            lam[idx] * 5.0)
+        iterations[idx] += 1
+        stuck[idx] = lam[idx] > options.max_damping
+        active[idx] = ~options.met(*pose_errors(X[idx], X_target[idx])) & ~stuck[idx]
+    return q, X, iterations, stuck
+
+
+def _step(robot, q, e, lam, options):
+    r"""The damped least-squares step :math:`(J^\top J + \lambda^2 I)^{-1} J^\top e` from
+    ``q`` (b, n), capped at ``max_step`` per joint and clipped to the joint limits."""
+    rows = slice(0, 3) if options.position_only else slice(0, 6)
+    J = robot.jacobian(q)[:, rows, :]                                 # (b, m, n)
+    Jt = np.swapaxes(J, -1, -2)
+    A = Jt @ J + (lam ** 2)[:, None, None] * np.eye(q.shape[-1])
+    g = (Jt @ e[..., None])[..., 0]
+    try:
+        step = np.linalg.solve(A, g[..., None])[..., 0]
+    except np.linalg.LinAlgError:   # an exactly singular system: least-squares step
+        step = (np.linalg.pinv(A) @ g[..., None])[..., 0]
+    biggest = np.max(np.abs(step), axis=-1, keepdims=True)
+    step *= np.minimum(1.0, options.max_step / np.maximum(biggest, 1e-300))
+    return np.clip(q + step, *robot.limits.T)

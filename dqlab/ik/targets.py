@@ -1,0 +1,236 @@
+r"""Targets of inverse kinematics: parsed and checked once, and the one pose-error measure.
+
+Every solver of :mod:`dqlab.ik` takes its targets the same way: rigid transforms
+``(..., 4, 4)`` or unit dual quaternions ``(..., 8)`` (told apart by the trailing shape),
+and, for the solvers that place a point, positions ``(..., 3)``. :func:`parse_targets`
+checks them in one pass and keeps the form it was given; the other form is computed when a
+solver asks for it. :func:`pose_errors` is how every solver measures how far a pose is from
+its target.
+"""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._checks import as_float_array, check_tolerance, real_array
+from ..dualquat import (
+    check_unit_dual_quaternion,
+    dual_quaternion_from_transform,
+    dual_quaternion_normalize,
+    transform_from_dual_quaternion,
+)
+
+__all__ = ["Targets", "parse_targets", "pose_errors"]
+
+#: The tolerance of a rigid pose; a looser ``tol`` in :func:`parse_targets` replaces each pose
+#: by the nearest rigid one.
+RIGID_TOL = 1e-9
+
+_KINDS = {(4, 4): "transform", (8,): "dual_quaternion", (3,): "position"}
+
+
+@dataclass
+class Targets:
+    """Checked targets, in the form they were given; the other form on demand.
+
+    Attributes
+    ----------
+    kind : {"transform", "dual_quaternion", "position"}
+        The form of the targets as given (a transform checked with a loosened tolerance
+        is held as its normalised dual quaternion).
+    batch : tuple of int
+        Their leading shape.
+    """
+
+    kind: str
+    batch: tuple
+    _transforms: np.ndarray = field(default=None, repr=False)
+    _dual_quaternions: np.ndarray = field(default=None, repr=False)
+
+    def reshape(self, batch):
+        """The same targets with the leading shape ``batch``."""
+        return Targets(self.kind, tuple(batch), *(
+            None if a is None else a.reshape(tuple(batch) + a.shape[len(self.batch):])
+            for a in (self._transforms, self._dual_quaternions)))
+
+    def __getitem__(self, index):
+        """A part of a one-dimensional batch of targets (``index`` a slice)."""
+        parts = [None if a is None else a[index]
+                 for a in (self._transforms, self._dual_quaternions)]
+        batch = next(a for a in parts if a is not None).shape[:1]
+        return Targets(self.kind, batch, *parts)
+
+    @property
+    def has_rotation(self):
+        """False for positions (a position-only problem)."""
+        return self.kind != "position"
+
+    @property
+    def transforms(self):
+        """The targets as rigid transforms :math:`X_{WT}^*`, shape (..., 4, 4); positions
+        get the identity rotation."""
+        if self._transforms is None:
+            self._transforms = transform_from_dual_quaternion(self._dual_quaternions,
+                                                              tol=np.inf)
+        return self._transforms
+
+    @property
+    def dual_quaternions(self):
+        """The targets as unit dual quaternions, shape (..., 8)."""
+        if self._dual_quaternions is None:
+            self._dual_quaternions = dual_quaternion_from_transform(self._transforms,
+                                                                    tol=np.inf)
+        return self._dual_quaternions
+
+    @property
+    def positions(self):
+        """The target positions, shape (..., 3)."""
+        return self.transforms[..., :3, 3]
+
+
+def parse_targets(target: ArrayLike, *, position: bool | str = False, tol: float = RIGID_TOL,
+                  name: str = "target") -> Targets:
+    r"""Check IK targets once and return them as :class:`Targets`.
+
+    Parameters
+    ----------
+    target : array_like, shape (..., 4, 4), (..., 8) or (..., 3)
+        Rigid transforms, unit dual quaternions ``(q_r, q_d)`` or (with ``position``)
+        positions, told apart by the trailing shape.
+    position : bool or "only"
+        Whether positions are accepted (``True``), required (``"only"``) or refused
+        (``False``).
+    tol : float
+        Tolerance of the rigidity check. Above the default (poses read from rounded
+        numbers), each pose is replaced by the rigid pose of its normalised dual quaternion.
+    name : str
+        Name of the argument in error messages.
+
+    Returns
+    -------
+    Targets
+
+    Raises
+    ------
+    ValueError
+        Naming ``name``: a wrong trailing shape, NaN or infinity, a transform that is not
+        rigid, a dual quaternion that is not unit.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> targets = parse_targets(np.eye(4))
+    >>> targets.kind, targets.dual_quaternions
+    ('transform', array([1., 0., 0., 0., 0., 0., 0., 0.]))
+    >>> parse_targets([0.1, 0.2, 0.3], position="only").positions
+    array([0.1, 0.2, 0.3])
+    >>> parse_targets(np.zeros(5))
+    Traceback (most recent call last):
+    ...
+    ValueError: target must have shape (..., 4, 4) (a transform) or (..., 8) (a unit dual ...
+    """
+    a = real_array(target, name)
+    tol = check_tolerance(tol, "pose_tol" if name == "target" else "tol")
+    kind = _kind(a, position, name)
+    if kind == "position":
+        a = as_float_array(a, name, (3,))
+        X = np.broadcast_to(np.eye(4), a.shape[:-1] + (4, 4)).copy()
+        X[..., :3, 3] = a
+        return Targets(kind, a.shape[:-1], _transforms=X)
+    if kind == "transform":
+        Q = dual_quaternion_from_transform(a, tol=tol, name=name)   # checks while converting
+        targets = Targets(kind, a.shape[:-2], _transforms=a, _dual_quaternions=Q)
+    else:
+        Q = check_unit_dual_quaternion(a, tol, name=name)
+        targets = Targets(kind, a.shape[:-1], _dual_quaternions=Q)
+    if tol > RIGID_TOL:
+        targets = Targets("dual_quaternion", targets.batch,
+                          _dual_quaternions=dual_quaternion_normalize(Q))
+    return targets
+
+
+def _kind(a, position, name):
+    kind = next((k for trailing, k in _KINDS.items()
+                 if a.ndim >= len(trailing) and a.shape[a.ndim - len(trailing):] == trailing),
+                None)
+    if position == "only":
+        if kind == "position":
+            return kind
+        want = "(..., 3) (a position)"
+    elif kind == "position" and not position:
+        want = ("(..., 4, 4) (a transform) or (..., 8) (a unit dual quaternion), got shape "
+                f"{a.shape}: a position, which only a position-only solve accepts "
+                "(position_only=True where the solver has one)")
+        raise ValueError(f"{name} must have shape {want}")
+    elif kind is not None:
+        return kind
+    else:
+        want = "(..., 4, 4) (a transform) or (..., 8) (a unit dual quaternion)"
+        if position:
+            want = ("(..., 4, 4) (a transform), (..., 8) (a unit dual quaternion) or "
+                    "(..., 3) (a position)")
+    raise ValueError(f"{name} must have shape {want}, got shape {a.shape}")
+
+
+def pose_errors(X: ArrayLike, X_target: ArrayLike
+                ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    r"""Position and rotation errors between poses: the one error measure of :mod:`dqlab.ik`.
+
+    .. math::
+
+       e_p = \lVert p - p^\ast \rVert, \qquad
+       e_R = \angle\bigl(R\, R^{\ast\top}\bigr)
+           = \operatorname{atan2}\bigl(\lVert (M - M^\top)^\vee \rVert,\;
+             \operatorname{tr} M - 1\bigr) \in [0, \pi],\quad M = R\, R^{\ast\top},
+
+    the angle read from the sine (the vector part) and the cosine (the trace) together,
+    accurate for tiny errors as well as near a half turn.
+
+    Parameters
+    ----------
+    X, X_target : array_like, shape (..., 4, 4)
+        Poses; leading axes broadcast.
+
+    Returns
+    -------
+    position_error : ndarray, shape (...)
+        Metres.
+    rotation_error : ndarray, shape (...)
+        Radians.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dqlab.rotations import rot_z
+    >>> X = np.eye(4)
+    >>> Y = np.eye(4)
+    >>> Y[:3, :3] = rot_z(1e-12)
+    >>> Y[0, 3] = 3e-3
+    >>> pose_errors(X, Y)
+    (array(0.003), array(1.e-12))
+    """
+    X = as_float_array(X, "X", (4, 4))
+    X_target = as_float_array(X_target, "X_target", (4, 4))
+    dp = X[..., :3, 3] - X_target[..., :3, 3]
+    with np.errstate(over="ignore", invalid="ignore"):
+        position_error = np.sqrt(np.einsum("...i,...i->...", dp, dp))
+    # M = R R*^T: M_ij is the dot product of row i of R with row j of R*
+    A = [X[..., i, :3] for i in range(3)]
+    B = [X_target[..., i, :3] for i in range(3)]
+
+    def dot(u, v):
+        return np.einsum("...k,...k->...", u, v)
+
+    with np.errstate(over="ignore", invalid="ignore"):
+        vx = dot(A[1], B[2]) - dot(A[2], B[1])
+        vy = dot(A[2], B[0]) - dot(A[0], B[2])
+        vz = dot(A[0], B[1]) - dot(A[1], B[0])
+    with np.errstate(over="ignore", invalid="ignore"):
+        sin2 = np.sqrt(vx * vx + vy * vy + vz * vz)
+        rotation_error = np.arctan2(sin2, dot(A[0], B[0]) + dot(A[1], B[1])
+                                    + dot(A[2], B[2]) - 1.0)
+    if not (np.isfinite(position_error).all() and np.isfinite(rotation_error).all()):
+        raise ValueError("X and X_target are too large for their errors (overflow): they "
+                         "must be rigid transforms")
+    return np.asarray(position_error), np.asarray(rotation_error)

@@ -1,0 +1,136 @@
+"""The package's structure: public names between modules, no import cycle, a numpy-only core,
+no function that shadows a module of its package."""
+
+import ast
+import importlib
+import pkgutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import dqlab
+
+PACKAGE = Path(dqlab.__file__).resolve().parent
+SOURCES = sorted(PACKAGE.rglob("*.py"))
+
+
+def module_name(path):
+    parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def is_package(path):
+    return path.name == "__init__.py"
+
+
+def imports(path):
+    """``(module, names)`` of every import statement in ``path`` (anywhere in the file,
+    function-level imports included), with relative imports resolved."""
+    tree = ast.parse(path.read_text())
+    here = module_name(path)
+    package = here if is_package(path) else here.rpartition(".")[0]
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                yield alias.name, ()
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.rsplit(".", node.level - 1)[0] if node.level > 1 else package
+                target = f"{base}.{node.module}" if node.module else base
+            else:
+                target = node.module
+            yield target, tuple(alias.name for alias in node.names)
+
+
+MODULES = {module_name(p): p for p in SOURCES}
+
+
+def dqlab_edges(path):
+    """The dqlab modules that ``path`` imports (``from pkg import submodule`` counts as an
+    import of the submodule)."""
+    for target, names in imports(path):
+        if target.split(".")[0] != "dqlab":
+            continue
+        subs = [f"{target}.{n}" for n in names if f"{target}.{n}" in MODULES]
+        if subs:
+            yield from subs
+        else:
+            yield target
+
+
+@pytest.mark.parametrize("path", SOURCES, ids=lambda p: str(p.relative_to(PACKAGE)))
+def test_no_module_imports_another_modules_private_name(path):
+    private = [(target, name) for target, names in imports(path) for name in names
+               if name.startswith("_") and not name.startswith("__")]
+    assert not private, f"{module_name(path)} imports private names {private}"
+
+
+@pytest.mark.parametrize("path", SOURCES, ids=lambda p: str(p.relative_to(PACKAGE)))
+def test_no_reach_into_another_objects_private_attributes(path):
+    """``x._name`` only on ``self`` or ``cls``: objects talk through public methods."""
+    tree = ast.parse(path.read_text())
+    reach = [f"line {node.lineno}: {ast.unparse(node)}" for node in ast.walk(tree)
+             if isinstance(node, ast.Attribute) and node.attr.startswith("_")
+             and not node.attr.startswith("__")
+             and not (isinstance(node.value, ast.Name) and node.value.id in ("self", "cls"))]
+    assert not reach, f"{module_name(path)} reaches into private attributes: {reach}"
+
+
+def test_the_imports_between_dqlab_modules_have_no_cycle():
+    graph = {name: set(dqlab_edges(path)) - {name} for name, path in MODULES.items()}
+    state = {}
+
+    def visit(node, trail):
+        state[node] = "open"
+        for child in sorted(graph.get(node, ())):
+            if state.get(child) == "open":
+                cycle = trail[trail.index(child):] + [child]
+                pytest.fail("import cycle: " + " -> ".join(cycle))
+            if child not in state:
+                visit(child, trail + [child])
+        state[node] = "done"
+
+    for name in sorted(graph):
+        if name not in state:
+            visit(name, [name])
+    # the walk sees the arrows it should (a smoke test of the test itself)
+    assert "dqlab.dualquat" in graph["dqlab.robot"]
+    assert "dqlab.ik.ur_steps" in graph["dqlab.ik.ur_closed_form"]
+
+
+def test_robot_and_jacobian_depend_one_way():
+    assert "dqlab.jacobian" not in set(dqlab_edges(MODULES["dqlab.robot"]))
+
+
+CORE_IMPORT = ("import sys, dqlab, dqlab.models, dqlab.robot, dqlab.ik, dqlab.jacobian; "
+               "import numpy as np; robot = dqlab.models.ur3(); "
+               "dqlab.ik.ur(robot, robot.fk(np.zeros(6))); "
+               "print(sorted(m for m in ('matplotlib', 'meshcat', 'pyquaternion', 'scipy') "
+               "if m in sys.modules))")
+
+
+def test_the_core_imports_numpy_alone():
+    out = subprocess.run([sys.executable, "-c", CORE_IMPORT], capture_output=True, text=True,
+                         check=True, cwd=PACKAGE.parent)
+    assert out.stdout.strip() == "[]", out.stdout + out.stderr
+
+
+@pytest.mark.parametrize("package", ["dqlab", "dqlab.ik", "dqlab.viz"])
+def test_no_attribute_shadows_a_module_of_its_package(package):
+    pkg = importlib.import_module(package)
+    for info in pkgutil.iter_modules(pkg.__path__):
+        importlib.import_module(f"{package}.{info.name}")
+        value = getattr(pkg, info.name, None)
+        assert value is None or value is sys.modules[f"{package}.{info.name}"], (
+            f"{package}.{info.name} is {value!r}, not the module of that name")
+
+
+def test_earlier_ik_module_paths_still_import():
+    from dqlab.ik.numerical import pose_errors
+    from dqlab.ik.ur import ur_parameters
+
+    import dqlab.ik
+    assert ur_parameters is dqlab.ik.ur_parameters and pose_errors is dqlab.ik.pose_errors
+    assert callable(dqlab.ik.ur) and callable(dqlab.ik.numerical)
