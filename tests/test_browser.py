@@ -272,3 +272,57 @@ def test_page_renders(page_path, site, browser):
 def test_artifacts_are_ignored_by_git():
     ignore = (ROOT / ".gitignore").read_text()
     assert re.search(r"^/?test-artifacts/?$", ignore, re.M), "test-artifacts/ must be ignored"
+
+
+def _canvas_png(page):
+    data_url = page.evaluate("() => viewer.capture_image()")
+    return base64.b64decode(data_url.split(",", 1)[1])
+
+
+def _changed_fraction(png_a, png_b):
+    from PIL import Image
+
+    a = np.asarray(Image.open(io.BytesIO(png_a)).convert("RGB"), dtype=float)
+    b = np.asarray(Image.open(io.BytesIO(png_b)).convert("RGB"), dtype=float)
+    return float(np.mean(np.abs(a - b).sum(axis=-1) > 60))
+
+
+def test_joint_sliders_move_the_arm_and_its_jacobian(browser):
+    """The static joint-slider view: six controls; moving one moves the picture, and the
+    redrawn Jacobian columns are robot.jacobian at the new joint vector."""
+    from dqlab.models import ur3
+    from dqlab.viz.joints import JointSliders
+
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    robot = ur3()
+    q = np.array([0.3, -1.2, 1.0, -0.5, 1.1, 0.2])
+    view = JointSliders(robot, q, jacobian=True)
+    page = browser.new_page(viewport={"width": 900, "height": 600})
+    errors = []
+    page.on("pageerror", lambda error: errors.append(str(error)))
+    try:
+        page.set_content(view.document(bundle="inline"), wait_until="load")
+        page.wait_for_function("() => window.dqlabJoints && dqlabJoints.ready", timeout=30_000)
+        assert page.locator("input.dqlab-joint").count() == 6
+        page.wait_for_timeout(300)
+        before = _canvas_png(page)
+        columns = np.array(page.evaluate("() => dqlabJoints.columns"))
+        assert np.allclose(columns, robot.jacobian(q)[:3].T, atol=1e-5)
+
+        q_new = q.copy()
+        q_new[1] = -0.3
+        page.locator("input.dqlab-joint").nth(1).evaluate(
+            "(el, v) => { el.value = v; el.dispatchEvent(new Event('input')); }", q_new[1])
+        page.wait_for_timeout(300)
+        after = _canvas_png(page)
+        (ARTIFACTS / "joint-sliders-before.png").write_bytes(before)
+        (ARTIFACTS / "joint-sliders-after.png").write_bytes(after)
+        assert np.allclose(page.evaluate("() => dqlabJoints.q"), q_new)
+        columns = np.array(page.evaluate("() => dqlabJoints.columns"))
+        assert np.allclose(columns, robot.jacobian(q_new)[:3].T, atol=1e-5)
+        assert _changed_fraction(before, after) > 0.005, "moving a slider left the view still"
+        label = page.locator("#dqlab-joints span.dqlab-joint-value").nth(1).inner_text()
+        assert label == "-0.30 rad"
+    finally:
+        page.close()
+    assert not errors, errors
