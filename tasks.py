@@ -108,7 +108,9 @@ def task_clean():
 
 
 TASKS = {"book": task_book, "test": task_test, "lab": task_lab, "serve": task_serve,
-         "clean": task_clean}
+         "clean": task_clean,
+         "student": lambda: run(sys.executable, ROOT / "tools" / "editions.py"),
+         "pdf": lambda: (ensure_environment(), run(PYTHON, ROOT / "tools" / "pdf.py"))}
 
 if __name__ == "__main__":
     if len(sys.argv) != 2 or sys.argv[1] not in TASKS:
