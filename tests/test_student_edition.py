@@ -141,10 +141,10 @@ def test_a_pasted_solution_passes_its_automatic_check(out, monkeypatch):
     chapter = next(c for c in CHAPTERS if c.name.startswith("09-"))
     original, student = _original_and_student(out, chapter)
     code, _ = _solution_cells(original)
-    answer = next(source for source in code if "def my_jacobian" in source)
+    answer = next(source for source in code if "def dls_by_svd" in source)
     answer = answer.split("worst = check_function")[0]      # the student's part only
     cell = next(c for c in student["cells"]
                 if "".join(c["source"]).startswith("# Exercise ch9-ex1: your answer here"))
     cell["source"] = [answer]
     printed = _outputs(_run(student, ROOT / "book"))
-    assert "my_jacobian agrees with the reference on 100 random inputs" in printed
+    assert "dls_by_svd agrees with the reference on 200 random inputs" in printed
