@@ -21,7 +21,7 @@ each clip's time separately: one range slider per joint, no kernel needed. With
 columns, :math:`z_i \times (p - o_i)`, from the tool point whenever a slider moves.
 
 In a live notebook, :meth:`JointSliders.set_joints` poses the arm from Python (mirrored to
-the live meshcat server by :meth:`dqlab.viz.Scene.live`) and :meth:`JointSliders.widgets`
+the live meshcat server by :meth:`dqlab.viz.scene.Scene.live`) and :meth:`JointSliders.widgets`
 returns ``ipywidgets`` sliders that call it.
 """
 
@@ -312,7 +312,7 @@ class JointSliders:
         return head + panel + "</body>" + tail
 
     def html(self, *, height=460, bundle="auto", title="3D view with joint sliders"):
-        """An ``<iframe>`` of the view, like :meth:`dqlab.viz.Scene.html`."""
+        """An ``<iframe>`` of the view, like :meth:`dqlab.viz.scene.Scene.html`."""
         doc = self.document(bundle=bundle)
         escaped = doc.replace("&", "&amp;").replace('"', "&quot;")
         count = len(self.scene.commands())
