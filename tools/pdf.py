@@ -76,6 +76,21 @@ class _Quiet(http.server.SimpleHTTPRequestHandler):
         pass
 
 
+def _root_level_page(html_dir):
+    """The single page, as a file at the root of ``html_dir``; returns its name.
+
+    Jupyter Book writes the single page under the name of the book's first document
+    (``book/preface.html``, with ``index.html`` redirecting to it), but with links relative
+    to the root (``_static/...``). A copy at the root makes every link resolve.
+    """
+    index = (html_dir / "index.html").read_text(encoding="utf-8")
+    match = re.search(r'http-equiv="Refresh" content="0; url=([^"]+)"', index)
+    if match is None:
+        return "index.html"
+    shutil.copyfile(html_dir / match[1], html_dir / "dqlab-single.html")
+    return "dqlab-single.html"
+
+
 def print_pdf(html_dir=SINGLE, pdf=PDF, *, browser=None, settle_ms=1500):
     """Print ``html_dir/index.html`` to ``pdf``; return ``(pages, math_status)``.
 
@@ -103,7 +118,8 @@ def print_pdf(html_dir=SINGLE, pdf=PDF, *, browser=None, settle_ms=1500):
                                                          args=CHROMIUM_ARGS)
         page = browser.new_page(viewport={"width": 1100, "height": 1400})
         try:
-            page.goto(f"http://127.0.0.1:{server.server_address[1]}/index.html",
+            name = _root_level_page(html_dir)
+            page.goto(f"http://127.0.0.1:{server.server_address[1]}/{name}",
                       wait_until="load", timeout=120_000)
             page.wait_for_function(_MATHJAX_DONE, timeout=120_000)
             # let the 3D views replay their scenes before the page is printed

@@ -1,15 +1,20 @@
 """Sphinx extension: let the single-page HTML builder render what the HTML builder renders.
 
-myst-nb registers the HTML of its "hide input" cells for the builder named ``html`` only, so
-``jupyter-book build . --builder singlehtml`` (the page that ``tools/pdf.py`` prints) stops at
-the first hidden cell. This registers the same HTML for ``singlehtml``.
+Sphinx looks up the HTML of an extension's nodes under the builder's name and falls back to
+its format (``html``) only when no extension registered anything for that name. Some do for
+``singlehtml``, so the nodes registered for ``html`` alone (myst-nb's hidden cells,
+sphinx-proof's boxes...) would be unknown to ``jupyter-book build . --builder singlehtml``,
+the page that ``tools/pdf.py`` prints. This copies every missing one over.
 """
 
 
-def setup(app):
-    from myst_nb.sphinx_ import HideCodeCellNode, depart_HideCellInput, visit_HideCellInput
+def _share_html_handlers(app):
+    handlers = app.registry.translation_handlers
+    single = handlers.setdefault("singlehtml", {})
+    for node, functions in handlers.get("html", {}).items():
+        single.setdefault(node, functions)
 
-    app.add_node(HideCodeCellNode, override=True,
-                 html=(visit_HideCellInput, depart_HideCellInput),
-                 singlehtml=(visit_HideCellInput, depart_HideCellInput))
+
+def setup(app):
+    app.connect("builder-inited", _share_html_handlers)
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}
