@@ -326,3 +326,67 @@ def test_joint_sliders_move_the_arm_and_its_jacobian(browser):
     finally:
         page.close()
     assert not errors, errors
+
+
+SINGLE = Path(os.environ.get("DQLAB_BOOK_SINGLEHTML", ROOT / "_build" / "singlehtml"))
+
+#: The printed book must be the whole book: each chapter is several A4 pages.
+MIN_PDF_PAGES = 100
+
+
+def test_equations_scroll_inside_their_box_on_a_phone(site, browser):
+    """On a 390 px wide screen a wide equation scrolls sideways inside its own box; the
+    page itself does not get wider than the screen."""
+    page = browser.new_page(viewport={"width": 390, "height": 844})
+    try:
+        page.goto(f"{site}/book/09-differential-kinematics.html", wait_until="load")
+        page.wait_for_function(_MATHJAX_DONE, timeout=30_000)
+        report = page.evaluate("""() => {
+          const wide = Array.from(document.querySelectorAll('mjx-container[display="true"]'))
+            .filter(m => m.scrollWidth > m.clientWidth + 1);
+          return {page: document.documentElement.scrollWidth,
+                  wide: wide.length,
+                  overflow: wide.map(m => getComputedStyle(m).overflowX)};
+        }""")
+        ARTIFACTS.mkdir(parents=True, exist_ok=True)
+        page.screenshot(path=str(ARTIFACTS / "phone-390-chapter9.png"))
+    finally:
+        page.close()
+    assert report["wide"] > 0, "no equation is wider than a phone: the check checks nothing"
+    assert set(report["overflow"]) == {"auto"}
+    assert report["page"] <= 391, f"the page is {report['page']} px wide on a 390 px screen"
+
+
+def test_download_menu_offers_the_book_pdf(site, browser):
+    page = browser.new_page(viewport={"width": 1280, "height": 900})
+    try:
+        page.goto(f"{site}/book/05-dual-quaternions.html", wait_until="load")
+        link = page.locator("a.dqlab-book-pdf")
+        assert link.count() == 1
+        href = link.get_attribute("href")
+    finally:
+        page.close()
+    assert href.endswith("dqlab.pdf") and (HTML / "book").exists()
+
+
+def test_the_whole_book_prints_to_a_pdf(browser):
+    """The single-page build, printed by Chromium: many pages, every equation typeset.
+
+    Without a single-page build (``python3 tasks.py pdf`` makes one) the test makes it; the
+    chapters' execution cache of the HTML build makes that a matter of a minute or two.
+    """
+    import sys
+
+    sys.path.insert(0, str(ROOT / "tools"))
+    import pdf
+
+    if not (SINGLE / "index.html").exists():
+        if SINGLE != pdf.SINGLE:
+            pytest.fail(f"no single-page build in {SINGLE}")
+        pdf.build_single_page()
+
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    pages, math = pdf.print_pdf(SINGLE, ARTIFACTS / "dqlab.pdf", browser=browser)
+    assert pages >= MIN_PDF_PAGES, f"the PDF has {pages} pages"
+    assert math["maths"] > 500 and math["untypeset"] == 0 and math["errors"] == 0, math
+    assert (ARTIFACTS / "dqlab.pdf").read_bytes().startswith(b"%PDF")
