@@ -11,6 +11,8 @@
     python3 tasks.py lab     open the chapters in JupyterLab
     python3 tasks.py serve   serve the built book on http://127.0.0.1:8000
     python3 tasks.py clean   remove the build directory
+    python3 tasks.py student write solution-free student notebooks and an answer key
+    python3 tasks.py pdf     print the whole book to a PDF (after 'book')
 
 Each task creates the virtual environment ``.venv`` on first use and installs the package
 with everything the book and the tests need; later runs reuse it and only reinstall when
@@ -121,8 +123,20 @@ def task_clean():
     say("removed _build")
 
 
+def task_student():
+    """Write the solution-free student notebooks and the answer key."""
+    run(sys.executable, ROOT / "tools" / "editions.py")
+
+
+def task_pdf():
+    """Print the single-page build to a PDF with headless Chromium."""
+    ensure_environment()
+    run(PYTHON, ROOT / "tools" / "pdf.py")
+
+
 TASKS = {"book": task_book, "test": task_test, "fast": task_fast, "lint": task_lint,
-         "lab": task_lab, "serve": task_serve, "clean": task_clean}
+         "lab": task_lab, "serve": task_serve, "clean": task_clean,
+         "student": task_student, "pdf": task_pdf}
 
 if __name__ == "__main__":
     if len(sys.argv) != 2 or sys.argv[1] not in TASKS:

@@ -313,3 +313,168 @@ def scara_is_singular(robot: Robot, q: ArrayLike, tol: float = 1e-6) -> NDArray[
     """
     l1, l2 = _scara_lengths(robot)
     return np.abs(scara_jacobian_determinant(robot, q)) < tol * l1 * l2
+
+
+# --------------------------------------------------------------------------------------
+# Analytic Jacobians: rates of orientation coordinates instead of the angular velocity
+
+__all__ += ["rpy_rate_matrix", "quaternion_rate_matrix", "analytic_jacobian"]
+
+
+def rpy_rate_matrix(rpy):
+    r"""The matrix :math:`E` with :math:`\omega = E(\phi)\, \dot\phi` for roll, pitch, yaw.
+
+    For Craig's angles :math:`\phi = (\gamma, \beta, \alpha)`,
+    :math:`R = R_z(\alpha) R_y(\beta) R_x(\gamma)` (see
+    :func:`dqlab.rotations.matrix_from_rpy`), each rate turns about its own axis as it sits
+    at that moment: :math:`\dot\alpha` about :math:`z`, :math:`\dot\beta` about
+    :math:`R_z(\alpha)\,y`, :math:`\dot\gamma` about :math:`R_z(\alpha) R_y(\beta)\,x`:
+
+    .. math::
+
+        E(\phi) = \begin{pmatrix}
+        c_\alpha c_\beta & -s_\alpha & 0 \\
+        s_\alpha c_\beta & c_\alpha & 0 \\
+        -s_\beta & 0 & 1
+        \end{pmatrix},
+        \qquad \det E = \cos\beta .
+
+    It is singular at :math:`\beta = \pm\pi/2`, the gimbal lock of these angles.
+
+    Parameters
+    ----------
+    rpy : array_like, shape (..., 3)
+        :math:`(\gamma, \beta, \alpha)` in radians.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> E = rpy_rate_matrix([0.0, 0.0, 0.0])
+    >>> np.allclose(E, np.eye(3))
+    True
+    >>> bool(np.isclose(np.linalg.det(rpy_rate_matrix([0.3, 0.4, 0.5])), np.cos(0.4)))
+    True
+    """
+    rpy = as_float_array(rpy, "rpy", (3,))
+    beta, alpha = rpy[..., 1], rpy[..., 2]
+    ca, sa, cb, sb = np.cos(alpha), np.sin(alpha), np.cos(beta), np.sin(beta)
+    E = np.zeros(rpy.shape[:-1] + (3, 3))
+    E[..., 0, 0], E[..., 1, 0], E[..., 2, 0] = ca * cb, sa * cb, -sb
+    E[..., 0, 1], E[..., 1, 1] = -sa, ca
+    E[..., 2, 2] = 1.0
+    return E
+
+
+def quaternion_rate_matrix(q):
+    r"""The matrix :math:`G` with :math:`\dot q = G(q)\, \omega` for a unit quaternion.
+
+    From :math:`\dot q = \tfrac12 (0, \omega)\, q` with :math:`q = (w, \mathbf v)`:
+
+    .. math::
+
+        G(q) = \frac12 \begin{pmatrix} -\mathbf v^\top \\
+        w I - [\mathbf v]_\times \end{pmatrix}
+        = \frac12 \begin{pmatrix}
+        -x & -y & -z \\ w & z & -y \\ -z & w & x \\ y & -x & w
+        \end{pmatrix},
+        \qquad G^\top G = \tfrac14 I ,
+
+    so the world-frame angular velocity is read back as :math:`\omega = 4\, G(q)^\top \dot q`.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+        Unit quaternions ``(w, x, y, z)`` (not checked: the formula holds for any ``q``,
+        the inverse :math:`4G^\top` only for unit ones).
+
+    Returns
+    -------
+    ndarray, shape (..., 4, 3)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> G = quaternion_rate_matrix([1, 0, 0, 0])
+    >>> G @ [0, 0, 2.0]
+    array([0., 0., 0., 1.])
+    >>> q = np.array([0.5, 0.5, -0.5, 0.5])
+    >>> np.allclose(quaternion_rate_matrix(q).T @ quaternion_rate_matrix(q), np.eye(3) / 4)
+    True
+    """
+    q = as_float_array(q, "q", (4,))
+    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    rows = [[-x, -y, -z], [w, z, -y], [-z, w, x], [y, -x, w]]
+    return 0.5 * np.stack([np.stack(row, axis=-1) for row in rows], axis=-2)
+
+
+def analytic_jacobian(robot, q, *, orientation="rpy", tol=1e-9):
+    r"""Analytic Jacobian: rates of the tool's position and orientation coordinates.
+
+    The geometric Jacobian gives :math:`(\dot p, \omega) = J(q)\,\dot q`. With orientation
+    coordinates :math:`\phi` whose rates map to :math:`\omega` by a matrix,
+    :math:`\omega = E(\phi)\,\dot\phi` for roll-pitch-yaw (:func:`rpy_rate_matrix`) and
+    :math:`\dot r = G(r)\,\omega` for the unit quaternion :math:`r` of the tool
+    (:func:`quaternion_rate_matrix`), the analytic Jacobian is
+
+    .. math::
+
+        J_{\mathrm{rpy}} = \begin{pmatrix} I & 0 \\ 0 & E(\phi)^{-1} \end{pmatrix} J ,
+        \qquad
+        J_{\mathrm{quat}} = \begin{pmatrix} I & 0 \\ 0 & G(r) \end{pmatrix} J .
+
+    Parameters
+    ----------
+    robot : Robot
+    q : array_like, shape (..., n)
+        Joint vectors.
+    orientation : {"rpy", "quaternion"}
+        The orientation coordinates: roll, pitch, yaw (Craig,
+        :func:`dqlab.rotations.rpy_from_matrix`), or the quaternion of
+        :func:`dqlab.quaternion.quaternion_from_matrix`.
+    tol : float
+        For ``"rpy"``: the smallest accepted :math:`|\cos\beta|`; closer to the gimbal lock
+        the rates of the angles are unbounded and a ``ValueError`` is raised.
+
+    Returns
+    -------
+    ndarray, shape (..., 6, n) or (..., 7, n)
+        Rows :math:`(\dot x, \dot y, \dot z, \dot\gamma, \dot\beta, \dot\alpha)` or
+        :math:`(\dot x, \dot y, \dot z, \dot r_w, \dot r_x, \dot r_y, \dot r_z)`.
+
+    Raises
+    ------
+    ValueError
+        An unknown ``orientation``, or a configuration in the gimbal lock of the angles.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dqlab.models import ur3
+    >>> robot, q = ur3(), np.array([0.3, -1.2, 1.0, -0.5, 1.1, 0.2])
+    >>> J_rpy = analytic_jacobian(robot, q)
+    >>> J_rpy.shape
+    (6, 6)
+    >>> np.allclose(J_rpy[:3], robot.jacobian(q)[:3])
+    True
+    """
+    from .quaternion import quaternion_from_matrix
+    from .rotations import rpy_from_matrix
+
+    J = geometric_jacobian(robot, q)
+    R = robot.fk(q)[..., :3, :3]
+    if orientation == "rpy":
+        rpy = rpy_from_matrix(R)
+        cos_beta = np.cos(rpy[..., 1])
+        if np.any(np.abs(cos_beta) < tol):
+            raise ValueError(f"q puts the tool in the gimbal lock of roll-pitch-yaw "
+                             f"(|cos pitch| < tol = {tol:g}): the angle rates are unbounded")
+        angular = np.linalg.solve(rpy_rate_matrix(rpy), J[..., 3:, :])
+    elif orientation == "quaternion":
+        angular = quaternion_rate_matrix(quaternion_from_matrix(R)) @ J[..., 3:, :]
+    else:
+        raise ValueError(f"orientation must be 'rpy' or 'quaternion', got {orientation!r}")
+    return np.concatenate([J[..., :3, :], angular], axis=-2)

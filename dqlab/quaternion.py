@@ -918,3 +918,119 @@ class Quaternion(ArrayWrapper):
         w, x, y, z = self.array.tolist()
         return f"{w:.6g} {x:+.6g}i {y:+.6g}j {z:+.6g}k"
 
+
+
+# --------------------------------------------------------------------------------------
+# Rates: the derivative of a moving rotation (chapter "Differential kinematics")
+
+__all__ += ["quaternion_rate", "angular_velocity_from_quaternion_rate"]
+
+
+def quaternion_rate(q, omega, *, frame="world", tol=1e-9):
+    r"""Time derivative of a unit quaternion turning at the angular velocity ``omega``.
+
+    With :math:`\omega` in the world (fixed) frame, or :math:`\omega_b` in the body
+    (moving) frame, both as pure quaternions :math:`(0, \omega)`:
+
+    .. math::
+
+        \dot q = \tfrac12\, \omega\, q
+        \qquad\text{or}\qquad
+        \dot q = \tfrac12\, q\, \omega_b ,
+
+    since over a short time :math:`h` the rotation becomes
+    :math:`\exp(\tfrac h2 \omega)\, q \approx (1 + \tfrac h2 \omega)\, q`.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+        Unit quaternions ``(w, x, y, z)``.
+    omega : array_like, shape (..., 3)
+        Angular velocities in rad/s; broadcast with the leading axes of ``q``.
+    frame : {"world", "body"}
+        Frame in which ``omega`` is expressed.
+    tol : float
+        Accepted deviation of :math:`|q|` from 1.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        :math:`\dot q`, orthogonal to :math:`q` in :math:`\mathbb R^4`.
+
+    Raises
+    ------
+    ValueError
+        ``q`` not a unit quaternion, ``omega`` of the wrong shape or not finite, or an
+        unknown ``frame``.
+
+    See Also
+    --------
+    angular_velocity_from_quaternion_rate : the inverse map.
+
+    Examples
+    --------
+    Turning about z at 2 rad/s from the identity:
+
+    >>> quaternion_rate([1, 0, 0, 0], [0, 0, 2])
+    array([0., 0., 0., 1.])
+    """
+    q = check_unit_quaternion(q, tol)
+    omega = as_float_array(omega, "omega", _V)
+    w = np.concatenate([np.zeros(omega.shape[:-1] + (1,)), omega], axis=-1)
+    if frame == "world":
+        return 0.5 * quaternion_product(w, q)
+    if frame == "body":
+        return 0.5 * quaternion_product(q, w)
+    raise ValueError(f"frame must be 'world' or 'body', got {frame!r}")
+
+
+def angular_velocity_from_quaternion_rate(q, q_dot, *, frame="world", tol=1e-9):
+    r"""Angular velocity of a unit quaternion moving at the rate ``q_dot``.
+
+    The inverse of :func:`quaternion_rate`:
+
+    .. math::
+
+        \omega = 2\, \dot q\, q^* \qquad\text{or}\qquad \omega_b = 2\, q^* \dot q .
+
+    Only the part of :math:`\dot q` tangent to the unit sphere counts: the real part of
+    :math:`2\dot q q^*`, which is :math:`\tfrac{d}{dt}|q|^2`, is dropped.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+        Unit quaternions.
+    q_dot : array_like, shape (..., 4)
+        Their time derivatives.
+    frame : {"world", "body"}
+        Frame in which to express the result.
+    tol : float
+        Accepted deviation of :math:`|q|` from 1.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        :math:`\omega` in rad/s (per unit of the time of ``q_dot``).
+
+    Raises
+    ------
+    ValueError
+        ``q`` not a unit quaternion, ``q_dot`` of the wrong shape or not finite, or an
+        unknown ``frame``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> q = quaternion_from_axis_angle([1, 0, 0], 0.3)
+    >>> omega = [0.1, -0.2, 0.5]
+    >>> np.allclose(angular_velocity_from_quaternion_rate(q, quaternion_rate(q, omega)),
+    ...             omega)
+    True
+    """
+    q = check_unit_quaternion(q, tol)
+    q_dot = as_float_array(q_dot, "q_dot", _Q)
+    if frame == "world":
+        return 2.0 * quaternion_product(q_dot, quaternion_conjugate(q))[..., 1:]
+    if frame == "body":
+        return 2.0 * quaternion_product(quaternion_conjugate(q), q_dot)[..., 1:]
+    raise ValueError(f"frame must be 'world' or 'body', got {frame!r}")

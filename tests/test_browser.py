@@ -272,3 +272,121 @@ def test_page_renders(page_path, site, browser):
 def test_artifacts_are_ignored_by_git():
     ignore = (ROOT / ".gitignore").read_text()
     assert re.search(r"^/?test-artifacts/?$", ignore, re.M), "test-artifacts/ must be ignored"
+
+
+def _canvas_png(page):
+    data_url = page.evaluate("() => viewer.capture_image()")
+    return base64.b64decode(data_url.split(",", 1)[1])
+
+
+def _changed_fraction(png_a, png_b):
+    from PIL import Image
+
+    a = np.asarray(Image.open(io.BytesIO(png_a)).convert("RGB"), dtype=float)
+    b = np.asarray(Image.open(io.BytesIO(png_b)).convert("RGB"), dtype=float)
+    return float(np.mean(np.abs(a - b).sum(axis=-1) > 60))
+
+
+def test_joint_sliders_move_the_arm_and_its_jacobian(browser):
+    """The static joint-slider view: six controls; moving one moves the picture, and the
+    redrawn Jacobian columns are robot.jacobian at the new joint vector."""
+    from dqlab.models import ur3
+    from dqlab.viz.joints import JointSliders
+
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    robot = ur3()
+    q = np.array([0.3, -1.2, 1.0, -0.5, 1.1, 0.2])
+    view = JointSliders(robot, q, jacobian=True)
+    page = browser.new_page(viewport={"width": 900, "height": 600})
+    errors = []
+    page.on("pageerror", lambda error: errors.append(str(error)))
+    try:
+        page.set_content(view.document(bundle="inline"), wait_until="load")
+        page.wait_for_function("() => window.dqlabJoints && dqlabJoints.ready", timeout=30_000)
+        assert page.locator("input.dqlab-joint").count() == 6
+        page.wait_for_timeout(300)
+        before = _canvas_png(page)
+        columns = np.array(page.evaluate("() => dqlabJoints.columns"))
+        assert np.allclose(columns, robot.jacobian(q)[:3].T, atol=1e-5)
+
+        q_new = q.copy()
+        q_new[1] = -0.3
+        page.locator("input.dqlab-joint").nth(1).evaluate(
+            "(el, v) => { el.value = v; el.dispatchEvent(new Event('input')); }", q_new[1])
+        page.wait_for_timeout(300)
+        after = _canvas_png(page)
+        (ARTIFACTS / "joint-sliders-before.png").write_bytes(before)
+        (ARTIFACTS / "joint-sliders-after.png").write_bytes(after)
+        assert np.allclose(page.evaluate("() => dqlabJoints.q"), q_new)
+        columns = np.array(page.evaluate("() => dqlabJoints.columns"))
+        assert np.allclose(columns, robot.jacobian(q_new)[:3].T, atol=1e-5)
+        assert _changed_fraction(before, after) > 0.005, "moving a slider left the view still"
+        label = page.locator("#dqlab-joints span.dqlab-joint-value").nth(1).inner_text()
+        assert label == "-0.30 rad"
+    finally:
+        page.close()
+    assert not errors, errors
+
+
+SINGLE = Path(os.environ.get("DQLAB_BOOK_SINGLEHTML", ROOT / "_build" / "singlehtml"))
+
+#: The printed book must be the whole book: each chapter is several A4 pages.
+MIN_PDF_PAGES = 100
+
+
+def test_equations_scroll_inside_their_box_on_a_phone(site, browser):
+    """On a 390 px wide screen a wide equation scrolls sideways inside its own box; the
+    page itself does not get wider than the screen."""
+    page = browser.new_page(viewport={"width": 390, "height": 844})
+    try:
+        page.goto(f"{site}/book/09-differential-kinematics.html", wait_until="load")
+        page.wait_for_function(_MATHJAX_DONE, timeout=30_000)
+        report = page.evaluate("""() => {
+          const wide = Array.from(document.querySelectorAll('mjx-container[display="true"]'))
+            .filter(m => m.scrollWidth > m.clientWidth + 1);
+          return {page: document.documentElement.scrollWidth,
+                  wide: wide.length,
+                  overflow: wide.map(m => getComputedStyle(m).overflowX)};
+        }""")
+        ARTIFACTS.mkdir(parents=True, exist_ok=True)
+        page.screenshot(path=str(ARTIFACTS / "phone-390-chapter9.png"))
+    finally:
+        page.close()
+    assert report["wide"] > 0, "no equation is wider than a phone: the check checks nothing"
+    assert set(report["overflow"]) == {"auto"}
+    assert report["page"] <= 391, f"the page is {report['page']} px wide on a 390 px screen"
+
+
+def test_download_menu_offers_the_book_pdf(site, browser):
+    page = browser.new_page(viewport={"width": 1280, "height": 900})
+    try:
+        page.goto(f"{site}/book/05-dual-quaternions.html", wait_until="load")
+        link = page.locator("a.dqlab-book-pdf")
+        assert link.count() == 1
+        href = link.get_attribute("href")
+    finally:
+        page.close()
+    assert href.endswith("dqlab.pdf") and (HTML / "book").exists()
+
+
+def test_the_whole_book_prints_to_a_pdf(browser):
+    """The single-page build, printed by Chromium: many pages, every equation typeset.
+
+    Without a single-page build (``python3 tasks.py pdf`` makes one) the test makes it; the
+    chapters' execution cache of the HTML build makes that a matter of a minute or two.
+    """
+    import sys
+
+    sys.path.insert(0, str(ROOT / "tools"))
+    import pdf
+
+    if not (SINGLE / "index.html").exists():
+        if SINGLE != pdf.SINGLE:
+            pytest.fail(f"no single-page build in {SINGLE}")
+        pdf.build_single_page()
+
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    pages, math = pdf.print_pdf(SINGLE, ARTIFACTS / "dqlab.pdf", browser=browser)
+    assert pages >= MIN_PDF_PAGES, f"the PDF has {pages} pages"
+    assert math["maths"] > 500 and math["untypeset"] == 0 and math["errors"] == 0, math
+    assert (ARTIFACTS / "dqlab.pdf").read_bytes().startswith(b"%PDF")

@@ -1,0 +1,270 @@
+#!/usr/bin/env python3
+"""Student edition and answer key of the chapters. Needs nothing but Python >= 3.10.
+
+    python3 tools/editions.py [OUT]      (or: python3 tasks.py student)
+
+writes, from ``book/NN-*.ipynb``,
+
+* ``OUT/student/NN-*.ipynb``: the chapters without their solutions. Every solution dropdown
+  (``{solution}`` blocks and everything between ``{solution-start}`` and
+  ``{solution-end}``, text and code) is removed. A solution's code cell is replaced by an
+  empty cell for the student's answer and, when the solution ended in an automatic check
+  (``check_function(...)``), by that check, which waits until the functions the exercise
+  asks for are defined. The notebooks run top to bottom as they are.
+* ``OUT/answer-key/NN-*.md``: for every exercise, its statement and its full solution (text
+  and code), for the instructor.
+
+``OUT`` defaults to ``_build/editions``.
+"""
+
+import ast
+import copy
+import json
+import re
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+BOOK = ROOT / "book"
+DEFAULT_OUT = ROOT / "_build" / "editions"
+
+_DIRECTIVE = re.compile(r"^(?P<fence>`{3,}|:{3,})\{(?P<name>[a-z-]+)\}\s*(?P<arg>.*)$")
+
+
+def chapters(book=BOOK):
+    """The numbered chapters, ``book/NN-*.ipynb``, in order."""
+    return sorted(p for p in Path(book).glob("[0-9][0-9]-*.ipynb"))
+
+
+def _source(cell):
+    source = cell.get("source", "")
+    return "".join(source) if isinstance(source, list) else source
+
+
+def _set_source(cell, text):
+    lines = text.split("\n")
+    cell["source"] = [line + "\n" for line in lines[:-1]] + ([lines[-1]] if lines[-1] else [])
+
+
+def _code_cell(text, tags=()):
+    cell = {"cell_type": "code", "execution_count": None, "metadata": {}, "outputs": [],
+            "source": []}
+    if tags:
+        cell["metadata"]["tags"] = list(tags)
+    _set_source(cell, text)
+    return cell
+
+
+class _Exercise:
+    def __init__(self, label, title, statement):
+        self.label, self.title, self.statement = label, title, statement
+        self.solution = []           # ("markdown" | "code", text)
+
+
+def _split_markdown(text, state, exercises):
+    """Remove the solution parts of one markdown cell.
+
+    ``state`` carries, across cells, the label of the solution being skipped (between
+    ``{solution-start}`` and ``{solution-end}``) or None. Returns the text the student keeps.
+    """
+    lines = text.split("\n")
+    kept, i = [], 0
+    while i < len(lines):
+        line = lines[i]
+        match = _DIRECTIVE.match(line.strip())
+        name = match["name"] if match else None
+        if match and name in ("exercise", "exercise-start"):
+            fence, label, title, body = match["fence"], None, match["arg"].strip(), []
+            j = i + 1
+            while j < len(lines) and lines[j].strip() != fence:
+                option = re.match(r"^:label:\s*(\S+)", lines[j].strip())
+                if option:
+                    label = option[1]
+                elif not lines[j].startswith(":"):
+                    body.append(lines[j])
+                j += 1
+            if label:
+                exercises[label] = _Exercise(label, title, "\n".join(body).strip())
+            kept.extend(lines[i:j + 1])
+            i = j + 1
+            continue
+        if match and name in ("solution", "solution-start", "solution-end"):
+            fence, label = match["fence"], match["arg"].strip()
+            j = i + 1
+            while j < len(lines) and lines[j].strip() != fence:
+                j += 1
+            content = [x for x in lines[i + 1:j] if not x.startswith(":")]
+            if name == "solution":
+                if label in exercises:
+                    exercises[label].solution.append(("markdown", "\n".join(content).strip()))
+            elif name == "solution-start":
+                state["inside"] = label
+            else:
+                state["inside"] = None
+            i = j + 1
+            continue
+        if state["inside"] is not None:
+            exercise = exercises.get(state["inside"])
+            if exercise is not None:
+                if exercise.solution and exercise.solution[-1][0] == "markdown":
+                    exercise.solution[-1] = ("markdown", exercise.solution[-1][1] + "\n" + line)
+                else:
+                    exercise.solution.append(("markdown", line))
+        else:
+            kept.append(line)
+        i += 1
+    return "\n".join(kept)
+
+
+def _names(node):
+    return {n.id for n in ast.walk(node) if isinstance(n, ast.Name)}
+
+
+def _is_check(statement):
+    value = getattr(statement, "value", None)
+    if not isinstance(value, ast.Call):
+        return False
+    func = value.func
+    return (isinstance(func, ast.Name) and func.id == "check_function") or (
+        isinstance(func, ast.Attribute) and func.attr == "check_function")
+
+
+def auto_check(code, label, asked):
+    """The student's automatic check, built from a solution cell (None if it has none).
+
+    The check keeps the solution's imports, the ``check_function`` calls, the helpers they
+    use (samplers, references) and the asserts on their results; it leaves out every
+    function the exercise asks for (``asked``: names written in its statement) and runs only
+    once those are defined.
+    """
+    try:
+        tree = ast.parse(code)
+    except SyntaxError:
+        return None
+    body = tree.body
+    checks = [k for k, s in enumerate(body) if _is_check(s)]
+    if not checks:
+        return None
+    defined = {}
+    for k, statement in enumerate(body):
+        if isinstance(statement, (ast.FunctionDef, ast.ClassDef)):
+            defined.setdefault(statement.name, k)
+        elif isinstance(statement, ast.Assign):
+            for target in statement.targets:
+                for name in _names(target):
+                    defined.setdefault(name, k)
+    candidates = []
+    for k in checks:
+        first = body[k].value.args[0] if body[k].value.args else None
+        if isinstance(first, ast.Name):
+            candidates.append(first.id)
+    student = [name for name in defined if name in asked or name in candidates]
+    needed, queue = set(), [n for k in checks for n in _names(body[k].value)]
+    while queue:
+        name = queue.pop()
+        if name in needed or name in student or name not in defined:
+            continue
+        needed.add(name)
+        queue.extend(_names(body[defined[name]]))
+    setup = [s for k, s in enumerate(body)
+             if isinstance(s, (ast.Import, ast.ImportFrom))
+             or (k not in checks and k in {defined[n] for n in needed})]
+    results = {n for k in checks for t in getattr(body[k], "targets", []) for n in _names(t)}
+    after = [s for s in body[checks[-1] + 1:]
+             if isinstance(s, ast.Assert) and _names(s) <= results | {"np", "abs", "len"}]
+    waiting_for = [n for n in student if any(n in _names(body[k].value) for k in checks)]
+    lines = [f"# Automatic check of exercise {label}: run it once you have defined "
+             + ", ".join(f"`{n}`" for n in waiting_for) + " above."]
+    lines += [ast.unparse(s) for s in setup]
+    condition = " and ".join(f'"{n}" in globals()' for n in waiting_for) or "True"
+    lines.append(f"if {condition}:")
+    for statement in [body[k] for k in checks] + after:
+        lines += ["    " + x for x in ast.unparse(statement).split("\n")]
+    lines.append("else:")
+    lines.append(f'    print("exercise {label}: define '
+                 + ", ".join(waiting_for) + ' above, then run this cell again")')
+    return "\n".join(lines)
+
+
+def split_notebook(nb):
+    """(student notebook, exercises) from a chapter notebook (a dict)."""
+    student = copy.deepcopy(nb)
+    cells, exercises, state = [], {}, {"inside": None}
+    for cell in nb["cells"]:
+        if cell["cell_type"] == "markdown":
+            text = _split_markdown(_source(cell), state, exercises)
+            if text.strip():
+                new = copy.deepcopy(cell)
+                _set_source(new, text.strip("\n"))
+                cells.append(new)
+            continue
+        label = state["inside"]
+        if label is None or cell["cell_type"] != "code":
+            cells.append(copy.deepcopy(cell))
+            continue
+        code = _source(cell)
+        exercise = exercises.get(label)
+        if exercise is not None:
+            exercise.solution.append(("code", code))
+        asked = set(re.findall(r"`([A-Za-z_][A-Za-z0-9_]*)\(", exercise.statement)) if (
+            exercise) else set()
+        cells.append(_code_cell(f"# Exercise {label}: your answer here\n"))
+        check = auto_check(code, label, asked)
+        if check:
+            cells.append(_code_cell(check))
+    for k, cell in enumerate(cells):           # cell ids stay unique (nbformat >= 4.5)
+        cell["id"] = f"student-{k:03d}"
+    student["cells"] = cells
+    return student, list(exercises.values())
+
+
+def answer_key(title, exercises):
+    """The answer key of one chapter as Markdown."""
+    parts = [f"# Answer key: {title}", ""]
+    for exercise in exercises:
+        parts += [f"## {exercise.title} ({exercise.label})", "", exercise.statement, "",
+                  "**Solution.**", ""]
+        for kind, text in exercise.solution:
+            text = text.strip()
+            if not text:
+                continue
+            parts += ([text, ""] if kind == "markdown" else ["```python", text, "```", ""])
+    return "\n".join(parts).rstrip() + "\n"
+
+
+def _title(nb, path):
+    for cell in nb["cells"]:
+        if cell["cell_type"] == "markdown":
+            for line in _source(cell).split("\n"):
+                if line.startswith("# "):
+                    return line[2:].strip()
+    return path.stem
+
+
+def write_editions(out=DEFAULT_OUT, book=BOOK):
+    """Write the student notebooks and the answer key; return their paths."""
+    out = Path(out)
+    written = []
+    for path in chapters(book):
+        nb = json.loads(path.read_text(encoding="utf-8"))
+        student, exercises = split_notebook(nb)
+        target = out / "student" / path.name
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_text(json.dumps(student, indent=1, ensure_ascii=False) + "\n",
+                          encoding="utf-8")
+        key = out / "answer-key" / (path.stem + ".md")
+        key.parent.mkdir(parents=True, exist_ok=True)
+        key.write_text(answer_key(_title(nb, path), exercises), encoding="utf-8")
+        written += [target, key]
+    return written
+
+
+def main(argv):
+    out = Path(argv[1]) if len(argv) > 1 else DEFAULT_OUT
+    written = write_editions(out)
+    print(f"wrote {len(written) // 2} student notebooks to {out / 'student'} "
+          f"and the answer key to {out / 'answer-key'}")
+
+
+if __name__ == "__main__":
+    main(sys.argv)
