@@ -123,7 +123,7 @@ def link_placements(robot):
     return placements, corners[-1] @ robot.tool, corners
 
 
-def _num(x):
+def xml_number(x):
     """A float as MJCF text: the shortest repr that reads back exactly; rounding noise of
     the constant products below 1e-15 (for instance 5e-18 m left by a quarter turn) is
     written as 0."""
@@ -131,14 +131,15 @@ def _num(x):
     return "0" if abs(x) < 1e-15 else repr(x)
 
 
-def _vec(v):
-    return " ".join(_num(x) for x in v)
+def xml_vector(v):
+    """A vector as MJCF/URDF text: its entries written by :func:`xml_number`, space-separated."""
+    return " ".join(xml_number(x) for x in v)
 
 
 def _pos_quat(X):
     """MJCF ``pos`` and ``quat`` (MuJoCo's order is also w, x, y, z) of a 4x4 transform."""
     quat = quaternion_from_matrix(X[:3, :3])
-    return f'pos="{_vec(X[:3, 3])}" quat="{_vec(quat)}"'
+    return f'pos="{xml_vector(X[:3, 3])}" quat="{xml_vector(quat)}"'
 
 
 def _segments(points, eps=1e-4):
@@ -278,8 +279,8 @@ def mjcf_from_robot(robot, *, masses=None, payload=0.0, radius=None, damping=0.1
     lines = [
         f"<mujoco model={model_name}>",
         '  <compiler angle="radian" autolimits="true"/>',
-        f'  <option timestep="{_num(timestep)}" integrator="{integrator}" '
-        f'gravity="0 0 {_num(-gravity)}"/>',
+        f'  <option timestep="{xml_number(timestep)}" integrator="{integrator}" '
+        f'gravity="0 0 {xml_number(-gravity)}"/>',
         "  <default>",
         '    <geom contype="0" conaffinity="0"/>',
         "  </default>",
@@ -300,19 +301,19 @@ def mjcf_from_robot(robot, *, masses=None, payload=0.0, radius=None, damping=0.1
         lo, hi = link.limits
         limit = ""
         if math.isfinite(lo) and math.isfinite(hi):
-            limit = f' range="{_num(lo)} {_num(hi)}"'
+            limit = f' range="{xml_number(lo)} {xml_number(hi)}"'
         lines.append(f'{inner}<joint name="joint{i + 1}" type="{kind}" axis="0 0 1"{limit} '
-                     f'damping="{_num(damping[i])}" armature="{_num(armature[i])}"/>')
+                     f'damping="{xml_number(damping[i])}" armature="{xml_number(armature[i])}"/>')
         lines += _housing_and_path(inner, f"link{i + 1}", masses[i], radius, paths[i],
                                    _LINK_COLOR)
         depth = inner
-    lines.append(f'{depth}<site name="flange" {_pos_quat(X_BnT)} size="{_num(radius / 4)}"/>')
+    lines.append(f'{depth}<site name="flange" {_pos_quat(X_BnT)} size="{xml_number(radius / 4)}"/>')
     r_payload = radius * 0.8
     lines.append(f'{depth}<body name="payload" {_pos_quat(X_BnT)}>')
     # The payload is a solid sphere of radius r_payload; a tiny mass when there is none
     # (MuJoCo wants a positive mass in every body), set exactly by ArmSimulation.payload.
-    lines.append(f'{depth}  <geom name="payload" type="sphere" size="{_num(r_payload)}" '
-                 f'mass="{_num(max(payload, 1e-9))}" rgba="{_PAYLOAD_COLOR}"/>')
+    lines.append(f'{depth}  <geom name="payload" type="sphere" size="{xml_number(r_payload)}" '
+                 f'mass="{xml_number(max(payload, 1e-9))}" rgba="{_PAYLOAD_COLOR}"/>')
     lines.append(f"{depth}</body>")
     for i in range(n, 0, -1):
         lines.append(indent + "  " * i + "</body>")
@@ -331,10 +332,10 @@ def _housing_and_path(indent, name, mass, radius, path, color):
     total = sum(lengths)
     housing_mass = mass if total == 0 else 0.3 * mass
     out = [f'{indent}<geom name="{name}_housing" type="cylinder" '
-           f'size="{_num(radius * 1.1)} {_num(radius)}" mass="{_num(housing_mass)}" '
+           f'size="{xml_number(radius * 1.1)} {xml_number(radius)}" mass="{xml_number(housing_mass)}" '
            f'rgba="{_HOUSING_COLOR}"/>']
     for k, ((a, b), length) in enumerate(zip(path, lengths, strict=True)):
         out.append(f'{indent}<geom name="{name}_segment{k + 1}" type="capsule" '
-                   f'fromto="{_vec(a)} {_vec(b)}" size="{_num(radius)}" '
-                   f'mass="{_num(0.7 * mass * length / total)}" rgba="{color}"/>')
+                   f'fromto="{xml_vector(a)} {xml_vector(b)}" size="{xml_number(radius)}" '
+                   f'mass="{xml_number(0.7 * mass * length / total)}" rgba="{color}"/>')
     return out

@@ -17,13 +17,13 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from ..rotations import rpy_from_matrix
-from .mjcf import _num, _vec, default_masses, link_placements
+from .mjcf import default_masses, link_placements, xml_number, xml_vector
 
 __all__ = ["urdf_from_robot"]
 
 
 def _origin(X):
-    return f'<origin xyz="{_vec(X[:3, 3])}" rpy="{_vec(rpy_from_matrix(X[:3, :3]))}"/>'
+    return f'<origin xyz="{xml_vector(X[:3, 3])}" rpy="{xml_vector(rpy_from_matrix(X[:3, :3]))}"/>'
 
 
 def urdf_from_robot(robot, *, masses=None, name=None):
@@ -65,9 +65,9 @@ def urdf_from_robot(robot, *, masses=None, name=None):
         m = float(masses[i - 1])
         inertia = 0.4 * m * 0.05**2
         lines += [f'  <link name="link{i}">', "    <inertial>",
-                  f'      <mass value="{_num(m)}"/>',
-                  f'      <inertia ixx="{_num(inertia)}" ixy="0" ixz="0" '
-                  f'iyy="{_num(inertia)}" iyz="0" izz="{_num(inertia)}"/>',
+                  f'      <mass value="{xml_number(m)}"/>',
+                  f'      <inertia ixx="{xml_number(inertia)}" ixy="0" ixz="0" '
+                  f'iyy="{xml_number(inertia)}" iyz="0" izz="{xml_number(inertia)}"/>',
                   "    </inertial>", "  </link>"]
         lo, hi = link.limits
         bounded = math.isfinite(lo) and math.isfinite(hi)
@@ -78,7 +78,7 @@ def urdf_from_robot(robot, *, masses=None, name=None):
                   '    <axis xyz="0 0 1"/>']
         if kind != "continuous":
             lo, hi = (lo, hi) if bounded else (-1e3, 1e3)
-            lines.append(f'    <limit lower="{_num(lo)}" upper="{_num(hi)}" effort="1000" '
+            lines.append(f'    <limit lower="{xml_number(lo)}" upper="{xml_number(hi)}" effort="1000" '
                          'velocity="10"/>')
         lines.append("  </joint>")
         parent = f"link{i}"
