@@ -332,7 +332,8 @@ def _housing_and_path(indent, name, mass, radius, path, color):
     total = sum(lengths)
     housing_mass = mass if total == 0 else 0.3 * mass
     out = [f'{indent}<geom name="{name}_housing" type="cylinder" '
-           f'size="{xml_number(radius * 1.1)} {xml_number(radius)}" mass="{xml_number(housing_mass)}" '
+           f'size="{xml_number(radius * 1.1)} {xml_number(radius)}" '
+           f'mass="{xml_number(housing_mass)}" '
            f'rgba="{_HOUSING_COLOR}"/>']
     for k, ((a, b), length) in enumerate(zip(path, lengths, strict=True)):
         out.append(f'{indent}<geom name="{name}_segment{k + 1}" type="capsule" '

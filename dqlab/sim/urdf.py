@@ -78,8 +78,8 @@ def urdf_from_robot(robot, *, masses=None, name=None):
                   '    <axis xyz="0 0 1"/>']
         if kind != "continuous":
             lo, hi = (lo, hi) if bounded else (-1e3, 1e3)
-            lines.append(f'    <limit lower="{xml_number(lo)}" upper="{xml_number(hi)}" effort="1000" '
-                         'velocity="10"/>')
+            lines.append(f'    <limit lower="{xml_number(lo)}" upper="{xml_number(hi)}" '
+                         'effort="1000" velocity="10"/>')
         lines.append("  </joint>")
         parent = f"link{i}"
     lines += ['  <link name="flange"/>', '  <joint name="flange_joint" type="fixed">',
