@@ -5,7 +5,8 @@ point, then switch the suction cup on (1) or off (0); ``q3`` turns the cup about
 vertical. This module turns such a list into a timed joint trajectory that a robot may be
 sent, in three steps (chapter 12):
 
-1. :func:`joint_targets` -- every point to a joint target by :func:`dqlab.ik.arm3.desk_arm`,
+1. :func:`joint_targets` -- every point to a joint target by
+   :func:`dqlab.ik.desk_arm_closed_form.desk_arm`,
    always on the same branch (the arm facing the point, elbow up, by default); a point that
    is out of reach or whose solution breaks a joint limit is refused with the step's index;
 2. :func:`plan_pick_place` -- rest-to-rest segments between consecutive targets with the
@@ -33,7 +34,7 @@ from .trajectory import Trajectory, joint_trajectory
 __all__ = ["PickPlaceTask", "PickPlacePlan", "task_from_lab", "joint_targets",
            "cup_poses", "plan_pick_place", "animate_pick_place", "BRANCH_NAMES"]
 
-#: The rows of :func:`dqlab.ik.arm3.desk_arm`'s solutions, by name.
+#: The rows of :func:`dqlab.ik.desk_arm_closed_form.desk_arm`'s solutions, by name.
 BRANCH_NAMES = ("facing, elbow up", "facing, elbow down", "turned away, elbow up",
                 "turned away, elbow down")
 
@@ -126,8 +127,8 @@ def _check_wrist_limits(wrist_limits):
 def joint_targets(robot, task, *, branch=0, wrist_limits=(-math.pi, math.pi), tol=1e-9):
     r"""Joint targets of every step of a task, on one branch of the closed-form solution.
 
-    Each position goes through :func:`dqlab.ik.arm3.desk_arm`; the target is the row ``branch``
-    of its solutions (``0``: facing the point with the elbow up, see
+    Each position goes through :func:`dqlab.ik.desk_arm_closed_form.desk_arm`; the target is
+    the row ``branch`` of its solutions (``0``: facing the point with the elbow up, see
     :data:`BRANCH_NAMES`), followed by the step's wrist angle. Keeping one branch keeps
     the arm in one posture for the whole task, so that no segment flips the elbow or
     swings the base half a turn.

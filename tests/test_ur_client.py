@@ -5,7 +5,7 @@ import pytest
 
 import dqlab
 from dqlab.ur import HOME, KinematicBackend, StepClock, URClient, URState
-from dqlab.ur.client import ROBOT_MODE_RUNNING, _trapezoid, trapezoid_duration
+from dqlab.ur.client import ROBOT_MODE_RUNNING, trapezoid_duration, trapezoid_law
 from dqlab.ur.script import UnsafeTargetError
 
 
@@ -59,8 +59,8 @@ def test_trapezoid_law():
     D, a, v = 1.0, 2.0, 1.0
     T = trapezoid_duration(D, a, v)
     ts = np.linspace(0, T, 2001)
-    s = np.array([_trapezoid(t, D, a, v)[0] for t in ts])
-    sd = np.array([_trapezoid(t, D, a, v)[1] for t in ts])
+    law = trapezoid_law(D, a, v)
+    s, sd = law.position(ts) / D, law.speed(ts) / D
     assert s[0] == 0 and s[-1] == 1 and np.all(np.diff(s) >= 0)
     assert np.max(sd) * D == pytest.approx(v)
     np.testing.assert_allclose(np.gradient(s, ts), sd, atol=2e-3)

@@ -2,8 +2,8 @@ r"""Following a Cartesian path with a robot: joint positions, speeds and acceler
 
 Two ways, as chapter 11 of the book compares them:
 
-- :func:`follow_path_ur` -- the closed-form UR solver (:func:`dqlab.ik.ur`) on the whole
-  path at once, with **branch tracking**: keep the same shoulder/elbow/wrist row along the
+- :func:`follow_path_ur` -- the closed-form UR solver (:func:`dqlab.ik.ur_closed_form.ur`) on
+  the whole path at once, with **branch tracking**: keep the same shoulder/elbow/wrist row along the
   path, take for each joint the :math:`2\pi`-equivalent nearest the previous point, and
   report every place where the row must change (a singularity crossed, or a jump);
 - :func:`follow_path_numerical` -- the UR3 report's method: numerical inverse kinematics of
@@ -93,7 +93,7 @@ def ur_singularity_margins(robot, q):
       in metres, the distance of the wrist centre :math:`p_5` (base frame) from the
       cylinder about the base axis where the shoulder is singular; :math:`h = c_1 x_5 +
       s_1 y_5 = a_2 c_2 + a_3 c_{23} + d_5 s_{234}` is the wrist centre's coordinate along
-      the arm, the quantity :func:`dqlab.ik.ur` tests.
+      the arm, the quantity :func:`dqlab.ik.ur_closed_form.ur` tests.
 
     All four come from the joint angles, without forward kinematics.
 
@@ -141,8 +141,8 @@ class BranchSwitch:
     time : float
         Its instant, seconds.
     from_row, to_row : int
-        Rows of :data:`dqlab.ik.ur.SOLUTION_ORDER` before and after (equal for a jump that no
-        row avoids).
+        Rows of :data:`dqlab.ik.ur_closed_form.SOLUTION_ORDER` before and after (equal for a
+        jump that no row avoids).
     step : float
         Largest joint change from the previous point, radians.
     kind : str
@@ -231,8 +231,8 @@ def _check_path(path):
 def track_branches(result, *, q_start=None, branch=None, max_step=0.1, t=None):
     r"""Follow one solution branch through a batch of closed-form IK results.
 
-    Given the eight rows of :func:`dqlab.ik.ur` at consecutive points of a path, keep the
-    starting row, unwrap its angles (each joint takes the :math:`2\pi`-equivalent nearest
+    Given the eight rows of :func:`dqlab.ik.ur_closed_form.ur` at consecutive points of a path,
+    keep the starting row, unwrap its angles (each joint takes the :math:`2\pi`-equivalent nearest
     its previous value, :math:`q_k = q_{k-1} + \operatorname{wrap}(\theta_k - q_{k-1})`),
     and where that row is invalid or would move a joint by more than ``max_step``, continue
     with the valid row nearest the previous point, recording a :class:`BranchSwitch`. The
@@ -241,12 +241,12 @@ def track_branches(result, *, q_start=None, branch=None, max_step=0.1, t=None):
     Parameters
     ----------
     result : IKResult
-        Of :func:`dqlab.ik.ur` for N consecutive poses: ``solutions`` (N, 8, 6).
+        Of :func:`dqlab.ik.ur_closed_form.ur` for N consecutive poses: ``solutions`` (N, 8, 6).
     q_start : array_like, shape (6,), optional
         Where the arm starts: picks the starting row (nearest modulo :math:`2\pi`) and the
         equivalents of the first point.
     branch : int or tuple of str, optional
-        Starting row, ``4 s + 2 e + w`` or a label of :data:`dqlab.ik.ur.SOLUTION_ORDER`
+        Starting row, ``4 s + 2 e + w`` or a label of :data:`dqlab.ik.ur_closed_form.SOLUTION_ORDER`
         (default: the row nearest ``q_start``, else the first valid row).
     max_step : float
         Largest joint change between consecutive points that counts as continuous (rad).
@@ -341,8 +341,8 @@ def follow_path_ur(robot, path, *, q_start=None, branch=None, max_step=0.1, damp
                    tol=1e-9):
     r"""Follow a Cartesian path with the closed-form UR solver and branch tracking.
 
-    1. Every pose of the path is solved at once by :func:`dqlab.ik.ur` (all eight rows).
-    2. The starting row is ``branch``, or the valid row nearest ``q_start`` (modulo
+    1. Every pose of the path is solved at once by :func:`dqlab.ik.ur_closed_form.ur` (all
+    eight rows). 2. The starting row is ``branch``, or the valid row nearest ``q_start`` (modulo
        :math:`2\pi`), or the first valid row.
     3. Along the path the same row is kept and unwrapped: each joint takes the
        :math:`2\pi`-equivalent nearest its previous value,
@@ -373,7 +373,7 @@ def follow_path_ur(robot, path, *, q_start=None, branch=None, max_step=0.1, damp
     damping : float
         :math:`\lambda` of :func:`joint_velocities` (0: the exact inverse).
     tol : float
-        Passed to :func:`dqlab.ik.ur`: every point reproduces its pose to ``tol``.
+        Passed to :func:`dqlab.ik.ur_closed_form.ur`: every point reproduces its pose to ``tol``.
 
     Returns
     -------
@@ -436,7 +436,8 @@ def follow_path_numerical(robot, path, q_start, *, damping=0.0, tol=1e-10, max_i
     r"""Follow the positions of a path as the UR3 report does: numerical IK, warm start.
 
     For each point :math:`k`, :math:`q_k` solves :math:`p(q_k) = p_k` by damped least
-    squares (:func:`dqlab.ik.numerical`, position only) starting from :math:`q_{k-1}`
+    squares (:func:`dqlab.ik.damped_least_squares.numerical`, position only) starting from
+    :math:`q_{k-1}`
     (from ``q_start`` for the first point); then :math:`\dot q_k = J_v(q_k)^+ \dot p_k`
     (:func:`joint_velocities` with the three linear rows, optionally damped) and
     :math:`\ddot q` is the central difference of :math:`\dot q`. The orientation of the

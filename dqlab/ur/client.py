@@ -14,7 +14,6 @@ end implements; :class:`URClient` checks every target and drives any back end:
 
 import collections
 import importlib
-import math
 import socket
 import time
 import typing
@@ -24,6 +23,7 @@ import numpy as np
 
 from ..ik import closest_solution
 from ..quaternion import quaternion_distance, slerp
+from ..trajectory import trapezoidal
 from . import script
 from .poses import (
     check_pose,
@@ -37,7 +37,7 @@ from .script import UnsafeTargetError, as_safety_limits, check_joint_targets
 
 __all__ = ["URState", "Backend", "ROBOT_MODE_RUNNING", "HOME", "URClient",
            "KinematicBackend", "StepClock", "SecondaryInterfaceBackend", "RTDEBackend",
-           "closest_joints", "trapezoid_duration"]
+           "closest_joints", "trapezoid_duration", "trapezoid_law"]
 
 #: The thesis's home joints (arm straight up), rad.
 HOME = np.array([0.0, -np.pi / 2, 0.0, -np.pi / 2, 0.0, 0.0])
@@ -382,7 +382,8 @@ class URClient:
 def closest_joints(robot, pose, q_ref, joint_limits):
     r"""The inverse-kinematics solution of a UR pose closest to the joints ``q_ref``.
 
-    Solves with :func:`dqlab.ik.ur.ur`, then takes :func:`dqlab.ik.ur.closest_solution`:
+    Solves with :func:`dqlab.ik.ur_closed_form.ur`, then takes
+    :func:`dqlab.ik.ur_closed_form.closest_solution`:
     the branch nearest ``q_ref`` (joint-wise, modulo :math:`2\pi`), each joint replaced by
     its :math:`2\pi`-equivalent nearest ``q_ref`` within the joint limits (an unlimited
     joint is searched within :math:`\pm 2\pi`).
@@ -426,6 +427,23 @@ def closest_joints(robot, pose, q_ref, joint_limits):
     return closest_solution(result, q_ref, limits=lim)
 
 
+def trapezoid_law(distance, a, v):
+    r"""The rest-to-rest trapezoid the arm follows over ``distance`` within ``a`` and ``v``.
+
+    The time law of :func:`dqlab.trajectory.trapezoidal` with ``v_max=v`` and ``a_max=a``
+    (triangular when the cruise speed is not reached); ``None`` for no motion.
+
+    Examples
+    --------
+    >>> trapezoid_law(1.0, 1.0, 0.5).duration, trapezoid_law(1.0, 1.0, 2.0).duration
+    (2.5, 2.0)
+    >>> trapezoid_law(0.0, 1.0, 1.0) is None
+    True
+    """
+    distance = float(distance)
+    return trapezoidal(distance, v_max=v, a_max=a) if distance > 0.0 else None
+
+
 def trapezoid_duration(distance, a, v):
     r"""Duration of a rest-to-rest move over ``distance`` with peak acceleration ``a``, speed ``v``.
 
@@ -439,36 +457,15 @@ def trapezoid_duration(distance, a, v):
     >>> trapezoid_duration(1.0, 1.0, 0.5), trapezoid_duration(1.0, 1.0, 2.0)
     (2.5, 2.0)
     """
-    distance = float(distance)
-    if distance <= 0.0:
-        return 0.0
-    if distance * a >= v * v:
-        return distance / v + v / a
-    return 2.0 * math.sqrt(distance / a)
+    law = trapezoid_law(distance, a, v)
+    return 0.0 if law is None else law.duration
 
 
-def _trapezoid(tau, distance, a, v):
-    """(position, speed) at time ``tau`` of the rest-to-rest trapezoid, as fractions of D."""
-    if distance <= 0.0:
+def _fraction(law, tau):
+    """(s, s') of ``law`` at time ``tau`` as fractions of its distance (1, 0 for no motion)."""
+    if law is None:
         return 1.0, 0.0
-    if distance * a >= v * v:
-        ta, vp = v / a, v
-    else:
-        ta = math.sqrt(distance / a)
-        vp = a * ta
-    T = 2.0 * ta + (distance - vp * ta) / vp
-    if tau <= 0.0:
-        return 0.0, 0.0
-    if tau < ta:
-        d, dd = 0.5 * a * tau * tau, a * tau
-    elif tau < T - ta:
-        d, dd = 0.5 * a * ta * ta + vp * (tau - ta), vp
-    elif tau < T:
-        rest = T - tau
-        d, dd = distance - 0.5 * a * rest * rest, a * rest
-    else:
-        return 1.0, 0.0
-    return d / distance, dd / distance
+    return float(law.position(tau)) / law.distance, float(law.speed(tau)) / law.distance
 
 
 class _Segment:
@@ -500,8 +497,8 @@ class _JointMove(_Segment):
     def __init__(self, t0, q_start, q_end, a, v, t):
         self.delta = q_end - q_start
         self.dist = float(np.max(np.abs(self.delta)))
-        self.a, self.v = a, v
-        natural = trapezoid_duration(self.dist, a, v)
+        self.law = trapezoid_law(self.dist, a, v)
+        natural = 0.0 if self.law is None else self.law.duration
         duration = t if t > 0 else natural
         self.scale = natural / duration if duration > 0 else 1.0
         super().__init__(t0, duration, q_start, q_end)
@@ -509,7 +506,7 @@ class _JointMove(_Segment):
     def at(self, now):
         if now >= self.t_end:
             return self.q_end.copy(), np.zeros_like(self.q_end)
-        s, sd = _trapezoid((now - self.t0) * self.scale, self.dist, self.a, self.v)
+        s, sd = _fraction(self.law, (now - self.t0) * self.scale)
         return self.q_start + s * self.delta, sd * self.scale * self.delta
 
 
@@ -536,8 +533,8 @@ class _LineMove(_Segment):
         dist = float(np.linalg.norm(self.p1[:3] - self.p0[:3]))
         if dist < 1e-12:  # a pure rotation: a and v are read as rad/s^2 and rad/s
             dist = float(quaternion_distance(self.r0, self.r1))
-        self.dist, self.a, self.v = dist, a, v
-        natural = trapezoid_duration(dist, a, v)
+        self.law = trapezoid_law(dist, a, v)
+        natural = 0.0 if self.law is None else self.law.duration
         duration = t if t > 0 else natural
         self.scale = natural / duration if duration > 0 else 1.0
         q_end = solve.closest(self.p1, q_start)
@@ -557,7 +554,7 @@ class _LineMove(_Segment):
         if now >= self.t_end:
             return self.q_end.copy(), np.zeros_like(self.q_end)
         tau = (now - self.t0) * self.scale
-        s, sd = _trapezoid(tau, self.dist, self.a, self.v)
+        s, sd = _fraction(self.law, tau)
         h = 1e-6
         q = self._q(s)
         q_ahead = self._q(min(s + h, 1.0))
