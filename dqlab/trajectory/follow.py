@@ -342,7 +342,8 @@ def follow_path_ur(robot, path, *, q_start=None, branch=None, max_step=0.1, damp
     r"""Follow a Cartesian path with the closed-form UR solver and branch tracking.
 
     1. Every pose of the path is solved at once by :func:`dqlab.ik.ur_closed_form.ur` (all
-    eight rows). 2. The starting row is ``branch``, or the valid row nearest ``q_start`` (modulo
+       eight rows).
+    2. The starting row is ``branch``, or the valid row nearest ``q_start`` (modulo
        :math:`2\pi`), or the first valid row.
     3. Along the path the same row is kept and unwrapped: each joint takes the
        :math:`2\pi`-equivalent nearest its previous value,
