@@ -430,7 +430,7 @@ def closest_joints(robot, pose, q_ref, joint_limits):
 def trapezoid_law(distance, a, v):
     r"""The rest-to-rest trapezoid the arm follows over ``distance`` within ``a`` and ``v``.
 
-    The time law of :func:`dqlab.trajectory.trapezoidal` with ``v_max=v`` and ``a_max=a``
+    The time law of :func:`dqlab.trajectory.time_laws.trapezoidal` with ``v_max=v`` and ``a_max=a``
     (triangular when the cruise speed is not reached); ``None`` for no motion.
 
     Examples
