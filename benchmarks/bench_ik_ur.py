@@ -24,9 +24,6 @@ machine the two agree.
 """
 
 import argparse
-import contextlib
-import os
-import sys
 import time
 import timeit
 
@@ -35,6 +32,7 @@ import numpy as np
 from dqlab.dualquat import dual_quaternion_from_transform
 from dqlab.ik import ur
 from dqlab.models import ur3
+from dqlab.testing import quiet_stdout
 
 
 def best_time(f, number, repeat):
@@ -42,20 +40,6 @@ def best_time(f, number, repeat):
     timer = timeit.Timer(f, timer=time.process_time)
     return min(timer.repeat(number=number, repeat=repeat)) / number
 
-
-@contextlib.contextmanager
-def quiet_stdout():
-    """ur_analytic_ik prints to C stdout for each candidate its FK filter rejects."""
-    sys.stdout.flush()
-    fd = os.dup(1)
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    os.dup2(devnull, 1)
-    try:
-        yield
-    finally:
-        os.dup2(fd, 1)
-        os.close(devnull)
-        os.close(fd)
 
 
 def main():

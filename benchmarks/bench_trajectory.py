@@ -22,9 +22,6 @@ times of this process (``time.process_time``, best of several runs). This is not
 """
 
 import argparse
-import contextlib
-import os
-import sys
 import time
 import timeit
 
@@ -33,6 +30,7 @@ import numpy as np
 from dqlab import rot_x
 from dqlab.ik import ur
 from dqlab.models import ur3
+from dqlab.testing import quiet_stdout
 from dqlab.trajectory import (
     circle_three_phase,
     follow_path_numerical,
@@ -49,20 +47,6 @@ def best_time(f, number, repeat):
     timer = timeit.Timer(f, timer=time.process_time)
     return min(timer.repeat(number=number, repeat=repeat)) / number
 
-
-@contextlib.contextmanager
-def quiet_stdout():
-    """ur_analytic_ik prints to C stdout for each candidate its FK filter rejects."""
-    sys.stdout.flush()
-    fd = os.dup(1)
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    os.dup2(devnull, 1)
-    try:
-        yield
-    finally:
-        os.dup2(fd, 1)
-        os.close(devnull)
-        os.close(fd)
 
 
 def main():

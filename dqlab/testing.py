@@ -1,4 +1,9 @@
-"""Helpers for checking a reader's own function against dqlab, as the book's exercises do."""
+"""Helpers for checks: a reader's own function against dqlab, as the book's exercises do, and
+a silencer for compiled oracles that print."""
+
+import contextlib
+import os
+import sys
 
 import numpy as np
 
@@ -62,3 +67,29 @@ def check_function(candidate, reference, sample, *, n=100, seed=0, atol=1e-9, na
     print(f"{label} agrees with the reference on {n} random inputs "
           f"(largest difference {worst:.2g})")
     return worst
+
+
+@contextlib.contextmanager
+def quiet_stdout():
+    """Silence the C-level standard output for the duration of the block.
+
+    ``ur_analytic_ik``, used as an independent oracle in the tests and benchmarks, prints a
+    line to the C ``stdout`` (file descriptor 1) for every candidate its forward-kinematics
+    filter rejects; ``contextlib.redirect_stdout`` cannot catch it, so descriptor 1 is
+    pointed at ``os.devnull`` and restored afterwards.
+
+    Examples
+    --------
+    >>> with quiet_stdout():
+    ...     _ = os.write(1, b"not shown")
+    """
+    sys.stdout.flush()
+    saved = os.dup(1)
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, 1)
+    try:
+        yield
+    finally:
+        os.dup2(saved, 1)
+        os.close(devnull)
+        os.close(saved)

@@ -8,9 +8,6 @@ standard DH chain (z along the last joint axis); no tool. ``ur_analytic_ik``'s
 So the two solvers answer the same question without any frame conversion.
 """
 
-import contextlib
-import os
-import sys
 
 import numpy as np
 import pytest
@@ -19,6 +16,7 @@ from dqlab.ik import IKResult, ur
 from dqlab.ik import ur_closed_form as urmod
 from dqlab.models import ur3
 from dqlab.robot import Link, Robot
+from dqlab.testing import quiet_stdout
 
 try:
     import ur_analytic_ik as uik
@@ -35,20 +33,6 @@ UR3 = dict(d1=0.1519, a2=-0.24365, a3=-0.21325, d4=0.11235, d5=0.08535, d6=0.081
 def robot():
     return ur3()
 
-
-@contextlib.contextmanager
-def quiet_stdout():
-    """ur_analytic_ik prints a warning line to C stdout for each candidate it rejects."""
-    sys.stdout.flush()
-    fd = os.dup(1)
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    os.dup2(devnull, 1)
-    try:
-        yield
-    finally:
-        os.dup2(fd, 1)
-        os.close(devnull)
-        os.close(fd)
 
 
 def uik_solutions(module, poses):

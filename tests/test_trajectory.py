@@ -5,9 +5,6 @@ finite differences of the sampled arrays, scipy (quadrature, the clamped cubic s
 pytransform3d (ScLERP), the robot's forward kinematics and ur_analytic_ik (UR3 IK).
 """
 
-import contextlib
-import os
-import sys
 
 import numpy as np
 import pytest
@@ -17,6 +14,7 @@ from hypothesis import strategies as st
 from dqlab import quaternion_conjugate, quaternion_product, rot_x, rot_y, rot_z, transform_from
 from dqlab.ik import ur
 from dqlab.models import ur3
+from dqlab.testing import quiet_stdout
 from dqlab.trajectory import (
     CartesianPath,
     TimeLaw,
@@ -511,20 +509,6 @@ def test_cartesian_path_validation():
 # --------------------------------------------------------------------------------------
 # following
 
-
-@contextlib.contextmanager
-def quiet_stdout():
-    """ur_analytic_ik prints to C stdout for each candidate its FK filter rejects."""
-    sys.stdout.flush()
-    fd = os.dup(1)
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    os.dup2(devnull, 1)
-    try:
-        yield
-    finally:
-        os.dup2(fd, 1)
-        os.close(devnull)
-        os.close(fd)
 
 
 @pytest.fixture(scope="module")
