@@ -208,6 +208,26 @@ def dual_quaternion_mul_z_screw(a, c, s, h):
     return rw, rx, ry, rz, dw - h * rz, dx + h * ry, dy - h * rx, dz + h * rw
 
 
+def dual_quaternion_mul_x_screw(a, c, s, h):
+    r"""``a`` times the screw about the x axis (a DH link's constant factor
+    :math:`T_x(a) R_x(\alpha)`).
+
+    As :func:`dual_quaternion_mul_z_screw` with :math:`i` for :math:`k`:
+    :math:`J = r + \varepsilon\, h i r`, :math:`r = c + s i`,
+    :math:`(c, s) = (\cos\frac\alpha2, \sin\frac\alpha2)`, :math:`h = a / 2`, and
+    :math:`a J = a_r r + \varepsilon\,(a_d r + h\, (a_r r)\, i)`.
+
+    >>> dual_quaternion_mul_x_screw((1.0, 0, 0, 0, 0, 0, 0, 0), 1.0, 0.0, 0.5)
+    (1.0, 0.0, 0.0, 0.0, 0.0, 0.5, 0.0, 0.0)
+    """
+    arw, arx, ary, arz, adw, adx, ady, adz = a
+    # p r with r = c + s i is (c w - s x, c x + s w, c y + s z, c z - s y)
+    rw, rx, ry, rz = c * arw - s * arx, c * arx + s * arw, c * ary + s * arz, c * arz - s * ary
+    dw, dx, dy, dz = c * adw - s * adx, c * adx + s * adw, c * ady + s * adz, c * adz - s * ady
+    # p i is (-x, w, z, -y)
+    return rw, rx, ry, rz, dw - h * rx, dx + h * rw, dy + h * rz, dz - h * ry
+
+
 def screw_entries(lx, ly, lz, mx, my, mz, c, s, h):
     r"""The unit dual quaternion of the screw about the line :math:`(\mathbf l, \mathbf m)`.
 

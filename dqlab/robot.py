@@ -43,7 +43,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._checks import as_float_array, batched, real_array
-from ._kernels import dual_quaternion_mul, dual_quaternion_mul_z_screw, screw_entries
+from ._kernels import (
+    dual_quaternion_mul,
+    dual_quaternion_mul_x_screw,
+    dual_quaternion_mul_z_screw,
+    screw_entries,
+)
 from .dualquat import dual_quaternion_from_transform
 
 __all__ = ["Link", "Robot", "REVOLUTE", "PRISMATIC"]
@@ -322,6 +327,10 @@ class Robot:
                                 if K[i, k, j] != 0.0) for j in range(4)]
                          for i in range(n + 1)]
         self._K_dual_quaternions = dual_quaternion_from_transform(K).tolist()
+        # which K_i are screws about x (every one between two DH links is: Tx(a) Rx(alpha)),
+        # with (cos alpha, sin alpha, a) and the halves for the dual quaternions
+        self._K_x_screws = [_x_screw_constants(K[i], self._K_dual_quaternions[i])
+                            for i in range(n + 1)]
         # the zero pose: joint axes in the world frame and the TCP (fk_dq_screw's constants)
         zero = [0.0] * n
         X0, before, _ = self._product(zero, record=True)
@@ -395,6 +404,18 @@ class Robot:
                 f"joint {j + 1} ({lk.joint}) = {value:.6g} is beyond its limits "
                 f"[{lk.limits[0]:.6g}, {lk.limits[1]:.6g}]")
         return q
+
+    def _joint_floats(self, q):
+        """One joint vector as a list of Python floats, checked as :meth:`check_joints`
+        checks it, for the float path of a single call; None when ``q`` is anything but a
+        float64 array of shape (n,) of a robot without prismatic joints, or when the check
+        fails (:meth:`check_joints` then says why)."""
+        if not (type(q) is np.ndarray and q.shape == (self.n,) and q.dtype == np.float64
+                and self._prismatic_idx.size == 0):
+            return None
+        floats = q.tolist()
+        total = sum(floats)            # NaN or inf in q make it NaN or inf
+        return floats if total - total == 0.0 else None
 
     def _link_parameters(self, q):
         """Joint angles theta and offsets d of every link, shape (..., n) each."""
@@ -481,6 +502,10 @@ class Robot:
         >>> ur3().fk(np.zeros((5, 6)), all_frames=True).shape
         (5, 7, 4, 4)
         """
+        if not all_frames:
+            floats = self._joint_floats(q)
+            if floats is not None:
+                return np.array(self._pose_entries(floats)).reshape(4, 4)
         q = self.check_joints(q)
         if not all_frames:
             return _on_components(self._pose_entries, q, (4, 4))
@@ -517,7 +542,11 @@ class Robot:
             if record:
                 before.append(X)
                 after.append(Y)
-            X = _constant_step(Y, self._K_terms[i + 1])
+            x_screw = self._K_x_screws[i + 1]
+            if x_screw is None:
+                X = _constant_step(Y, self._K_terms[i + 1])
+            else:
+                X = _x_screw_step(Y, *x_screw[:3])
         return (X, before, after) if record else X
 
     def _pose_entries(self, q):
@@ -623,6 +652,9 @@ class Robot:
         >>> np.allclose(dualquat.transform_from_dual_quaternion(Q), robot.fk(q))
         True
         """
+        floats = self._joint_floats(q)
+        if floats is not None:
+            return np.array(self._fk_dq_parts(floats))
         return _on_components(self._fk_dq_parts, self.check_joints(q), (8,))
 
     def _fk_dq_parts(self, q):
@@ -641,7 +673,11 @@ class Robot:
             else:
                 half, h = 0.5 * theta0, 0.5 * (q[i] + d0)
             Q = dual_quaternion_mul_z_screw(Q, cos(half), sin(half), h)
-            Q = dual_quaternion_mul(Q, K[i + 1])
+            x_screw = self._K_x_screws[i + 1]
+            if x_screw is None:
+                Q = dual_quaternion_mul(Q, K[i + 1])
+            else:
+                Q = dual_quaternion_mul_x_screw(Q, *x_screw[3:])
         return Q
 
     def zero_pose_screws(self
@@ -877,8 +913,41 @@ def _joint_step(X, c, s, d):
         return ((c * x0[0] + s * x1[0], c * x0[1] + s * x1[1], c * x0[2] + s * x1[2]),
                 (c * x1[0] - s * x0[0], c * x1[1] - s * x0[1], c * x1[2] - s * x0[2]),
                 x2,
-                (d * x2[0] + x3[0], d * x2[1] + x3[1], d * x2[2] + x3[2]))
-    return (c * x0 + s * x1, c * x1 - s * x0, x2, d * x2 + x3)
+                x3 if d == 0.0 else (d * x2[0] + x3[0], d * x2[1] + x3[1], d * x2[2] + x3[2]))
+    return (c * x0 + s * x1, c * x1 - s * x0, x2,
+            x3 if type(d) is float and d == 0.0 else d * x2 + x3)
+
+
+def _x_screw_constants(K, K_dual_quaternion):
+    r"""``(cos alpha, sin alpha, a, cos alpha/2, sin alpha/2, a/2)`` when the constant
+    factor ``K`` is a screw about x, :math:`T_x(a) R_x(\alpha)` (the factor between two
+    links in either DH convention), else None."""
+    (k00, k01, k02, a), (k10, c, k12, k13), (k20, s, k22, k23), _ = K.tolist()
+    if not (k00 == 1.0 and k01 == k02 == k10 == k20 == k13 == k23 == 0.0
+            and k22 == c and k12 == -s):
+        return None
+    cw, cx, cy, cz, *_ = K_dual_quaternion
+    if not cy == cz == 0.0:  # pragma: no cover -- Shepperd's quaternion of Rx is (c, s, 0, 0)
+        return None
+    return c, s, a, cw, cx, 0.5 * a
+
+
+def _x_screw_step(Y, c, s, a):
+    """The columns of ``Y @ Tx(a) Rx(alpha)`` (``c, s`` the cosine and sine of alpha):
+    column 0 stays, columns 1 and 2 turn, column 3 moves by ``a`` times column 0."""
+    y0, y1, y2, y3 = Y
+    if type(y0) is tuple:
+        if s != 0.0 or c != 1.0:
+            y1, y2 = ((c * y1[0] + s * y2[0], c * y1[1] + s * y2[1], c * y1[2] + s * y2[2]),
+                      (c * y2[0] - s * y1[0], c * y2[1] - s * y1[1], c * y2[2] - s * y1[2]))
+        if a != 0.0:
+            y3 = (a * y0[0] + y3[0], a * y0[1] + y3[1], a * y0[2] + y3[2])
+        return y0, y1, y2, y3
+    if s != 0.0 or c != 1.0:
+        y1, y2 = c * y1 + s * y2, c * y2 - s * y1
+    if a != 0.0:
+        y3 = a * y0 + y3
+    return y0, y1, y2, y3
 
 
 def _constant_step(Y, terms):

@@ -329,3 +329,25 @@ def test_random_chains_fk_dual_quaternions_and_jacobian_agree(links, convention,
         dq[j] = h
         v = (robot.fk(q + dq)[:, :3, 3] - robot.fk(q - dq)[:, :3, 3]) / (2 * h)
         np.testing.assert_allclose(J[:, :3, j], v, atol=1e-6)
+
+
+@pytest.mark.parametrize("name", ["ur3", "ur3_mdh", "desk_arm", "six_r", "scara_rsm5"])
+def test_one_joint_vector_on_floats_equals_the_batch(name):
+    """A single float64 joint vector goes through Python floats, a batch through numpy:
+    the same formulas, the same numbers (to the last bit for fk)."""
+    import dqlab.models as models
+
+    robot = getattr(models, name)()
+    rng = np.random.default_rng(8)
+    lo, hi = robot.limits.T
+    q = rng.uniform(np.maximum(lo, -np.pi), np.minimum(hi, np.pi), (200, robot.n))
+    X, Q = robot.fk(q), robot.fk_dq(q)
+    for i, row in enumerate(q):
+        np.testing.assert_array_equal(robot.fk(row), X[i])
+        np.testing.assert_allclose(robot.fk_dq(row), Q[i], rtol=0, atol=1e-16)
+        np.testing.assert_array_equal(robot.fk(row.tolist()), X[i])
+    bad = q[0].copy()
+    bad[1] = np.nan
+    for method in (robot.fk, robot.fk_dq):
+        with pytest.raises(ValueError, match="NaN or infinity"):
+            method(bad)
