@@ -8,9 +8,8 @@ dqlab is faster).
 Goals: ``ur3().fk(q)`` and ``ur3().fk_dq(q)`` for one joint vector at most 3 times
 ur_analytic_ik's single call in the same run (one joint vector is computed on Python
 floats), under 1 microsecond per configuration for a batch of 100,000. The rows ``fk_dq``
-(product of
-per-link dual quaternions) and ``fk_dq_screw`` (product of base-frame screws) are the two
-dual-quaternion constructions of the thesis; their ratios are to ``fk``.
+(product of per-link dual quaternions) and ``fk_dq_screw`` (product of base-frame screws)
+are the two dual-quaternion constructions of the thesis; their ratios are to ``fk``.
 
 - ``ur_analytic_ik`` (C++ with Python bindings) takes one configuration per call; its batch
   column is a Python loop over the configurations (timed on 10,000 of them).
