@@ -805,11 +805,18 @@ class Robot:
         array([-0.49781088, -0.08817691,  0.        ,  0.        ,  0.        ,  1.        ])
         """
         points, axes, p_T = self._axes_and_tcp_position(self.check_joints(q))
-        revolute = self._revolute[:, None]
-        linear = np.where(revolute, np.cross(axes, p_T[..., None, :] - points), axes)
-        angular = np.where(revolute, axes, 0.0)
-        return np.concatenate([np.swapaxes(linear, -1, -2), np.swapaxes(angular, -1, -2)],
-                              axis=-2)
+        r = p_T[..., None, :] - points                              # (..., n, 3)
+        z = axes
+        J = np.empty(axes.shape[:-2] + (6, self.n))
+        # z x r, component by component (np.cross is slow on small arrays)
+        J[..., 0, :] = z[..., 1] * r[..., 2] - z[..., 2] * r[..., 1]
+        J[..., 1, :] = z[..., 2] * r[..., 0] - z[..., 0] * r[..., 2]
+        J[..., 2, :] = z[..., 0] * r[..., 1] - z[..., 1] * r[..., 0]
+        J[..., 3:, :] = np.swapaxes(z, -1, -2)
+        if self._prismatic_idx.size:
+            J[..., :3, self._prismatic_idx] = np.swapaxes(z[..., self._prismatic_idx, :], -1, -2)
+            J[..., 3:, self._prismatic_idx] = 0.0
+        return J
 
     # -- printing -------------------------------------------------------------------------
     def dh_table(self) -> str:

@@ -152,3 +152,25 @@ def test_an_exactly_singular_step_falls_back_to_least_squares(monkeypatch):
     monkeypatch.setattr(np.linalg, "solve", singular)
     result = numerical(robot, robot.fk(q_true), q_true + 0.05)
     assert result.success
+
+
+def test_history_records_every_iteration():
+    """With history=True the solver records, per iteration, the errors it stops on and the
+    damping; the last row is the returned solution's error, rows are non-increasing in the
+    residual (rejected steps keep the iterate)."""
+    robot = ur3()
+    rng = np.random.default_rng(12)
+    q_true = rng.uniform(-2.0, 2.0, (3, 6))
+    T = robot.fk(q_true)
+    result = numerical(robot, T, q_true + 0.1, history=True)
+    h = result.history
+    assert set(h) == {"position_error", "rotation_error", "damping"}
+    k = h["position_error"].shape[0]
+    assert k >= 3 and all(a.shape == (k, 3) for a in h.values())
+    total = h["position_error"] ** 2 + h["rotation_error"] ** 2
+    assert np.all(np.diff(total, axis=0) <= 1e-30)
+    assert result.valid.all()
+    np.testing.assert_allclose(h["position_error"][-1], result.position_error[:, 0],
+                               rtol=1e-6, atol=1e-14)
+    assert np.all(h["position_error"][0] > 1e-2)
+    assert numerical(robot, T, q_true + 0.1).history is None

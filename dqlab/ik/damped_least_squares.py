@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._checks import check_tolerance
+from .._kernels import quaternion_from_matrix_entries
 from ..robot import Robot
 from .result import IKResult, finish, target_reasons
 from .targets import parse_targets, pose_errors
@@ -20,11 +21,18 @@ __all__ = ["numerical", "pose_errors"]
 
 
 def _rotation_vector(R_err):
-    """Rotation vectors (axis times angle) of rotation matrices, shape (..., 3)."""
-    from ..quaternion import axis_angle_from_quaternion, quaternion_from_matrix
-
-    axis, angle = axis_angle_from_quaternion(quaternion_from_matrix(R_err))
-    return axis * angle[..., None]
+    r"""Rotation vectors (axis times angle) of rotation matrices (B, 3, 3), shape (B, 3):
+    the unit quaternion :math:`(w, \mathbf v)` of each (Shepperd, :math:`w \ge 0`), then
+    :math:`\theta \mathbf u = 2 \operatorname{atan2}(\lVert \mathbf v \rVert, w)\,
+    \mathbf v / \lVert \mathbf v \rVert` (0 for the identity)."""
+    r = R_err.reshape(-1, 9)
+    # one target: Python floats (numpy's per-call overhead would dominate); a batch: columns
+    w, x, y, z = (np.array([c]) for c in quaternion_from_matrix_entries(*r[0].tolist())) \
+        if len(r) == 1 else quaternion_from_matrix_entries(*r.T)
+    norm_v = np.sqrt(x * x + y * y + z * z)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        scale = np.where(norm_v > 0.0, 2.0 * np.arctan2(norm_v, w) / norm_v, 2.0)
+    return np.stack([x * scale, y * scale, z * scale], axis=-1)
 
 
 def _residual(X, X_target, position_only):
@@ -39,7 +47,7 @@ def _residual(X, X_target, position_only):
 def numerical(robot: Robot, target: ArrayLike, q0: ArrayLike, *, position_only: bool = False,
               tol: float = 1e-10, rotation_tol: float | None = None, max_iter: int = 100,
               damping: float = 1e-2, min_damping: float = 1e-9, max_damping: float = 1e6,
-              max_step: float = 0.5) -> IKResult:
+              max_step: float = 0.5, history: bool = False) -> IKResult:
     r"""Inverse kinematics by damped least squares, from a warm start ``q0``.
 
     Each iteration linearises the forward kinematics at :math:`q` with the geometric
@@ -80,6 +88,9 @@ def numerical(robot: Robot, target: ArrayLike, q0: ArrayLike, *, position_only: 
         (target out of reach, or a local minimum) and it stops for that target.
     max_step : float, optional
         Largest change of one joint per iteration (radians or metres).
+    history : bool, optional
+        Also record, for every iteration, each target's errors and damping (the
+        convergence plot of the inverse-kinematics chapter).
 
     Returns
     -------
@@ -88,6 +99,11 @@ def numerical(robot: Robot, target: ArrayLike, q0: ArrayLike, *, position_only: 
         are met; ``position_error`` and ``rotation_error`` of the last iterate (also when
         it failed); ``flags["not_converged"]``; ``reason`` says how far from the target a
         failed solve stopped. ``rotation_error`` is 0 when only a position was given.
+        With ``history``, ``result.history`` is a dict of arrays of shape (k + 1, ...),
+        row 0 at ``q0`` and row i after iteration i: ``"position_error"`` and
+        ``"rotation_error"`` (the norms of the two parts of :math:`e`, metres and radians)
+        and ``"damping"`` (:math:`\lambda` used next); a target that has stopped keeps
+        its last values.
 
     Raises
     ------
@@ -132,7 +148,7 @@ def numerical(robot: Robot, target: ArrayLike, q0: ArrayLike, *, position_only: 
     q = np.clip(np.broadcast_to(q0, batch + (n,)).reshape(-1, n), *robot.limits.T)
     options = _Options(position_only, tol, rotation_tol, int(max_iter), float(damping),
                        min_damping, max_damping, max_step)
-    q, X, iterations, stuck = _iterate(robot, q, X_target, options)
+    q, X, iterations, stuck, record = _iterate(robot, q, X_target, options, history)
 
     position_error, rotation_error = pose_errors(X, X_target)
     if not targets.has_rotation:
@@ -149,11 +165,15 @@ def numerical(robot: Robot, target: ArrayLike, q0: ArrayLike, *, position_only: 
         text += f" (tolerances {tol:g} m"
         return text + (")" if position_only else f", {rotation_tol:g} rad)")
 
-    return finish(q.reshape(batch + (1, n)), valid.reshape(batch + (1,)),
-                  position_error.reshape(batch + (1,)), rotation_error.reshape(batch + (1,)),
-                  {"not_converged": (~valid).reshape(batch),
-                   "stalled": (stuck & ~valid).reshape(batch)},
-                  target_reasons(~valid, explain).reshape(batch))
+    result = finish(q.reshape(batch + (1, n)), valid.reshape(batch + (1,)),
+                    position_error.reshape(batch + (1,)), rotation_error.reshape(batch + (1,)),
+                    {"not_converged": (~valid).reshape(batch),
+                     "stalled": (stuck & ~valid).reshape(batch)},
+                    target_reasons(~valid, explain).reshape(batch))
+    if history:
+        result.history = {name: np.array(rows).reshape((len(rows),) + batch)
+                          for name, rows in record.items()}
+    return result
 
 
 @dataclass
@@ -176,12 +196,22 @@ class _Options:
             done &= rotation_error <= self.rotation_tol
         return done
 
+    def errors(self, e):
+        """The position and rotation errors (norms of the two parts of the residual ``e``:
+        the distance, and the angle of the rotation vector)."""
+        position_error = np.sqrt(np.sum(e[:, :3] * e[:, :3], axis=-1))
+        if self.position_only:
+            return position_error, np.zeros_like(position_error)
+        return position_error, np.sqrt(np.sum(e[:, 3:] * e[:, 3:], axis=-1))
 
-def _iterate(robot, q, X_target, options):
+
+def _iterate(robot, q, X_target, options, history=False):
     """Levenberg--Marquardt iterations from ``q`` (B, n) towards ``X_target`` (B, 4, 4),
     every target that has not converged or stalled moved together. Returns the last
     iterates ``q`` and their poses ``X``, the number of iterations and whether the damping
-    ran away (stalled), per target."""
+    ran away (stalled), per target, and the history (a dict of lists, empty without
+    ``history``). The stopping test reads the errors from the residual; the caller measures
+    the final errors with :func:`~dqlab.ik.targets.pose_errors`."""
     B = q.shape[0]
     lam = np.full(B, options.damping)
     X = robot.fk(q)
@@ -189,25 +219,39 @@ def _iterate(robot, q, X_target, options):
     cost = np.sum(e * e, axis=-1)
     iterations = np.zeros(B, dtype=int)
     stuck = np.zeros(B, dtype=bool)
-    active = ~options.met(*pose_errors(X, X_target))
+    errors = options.errors(e)
+    active = ~options.met(*errors)
+    record = {"position_error": [], "rotation_error": [], "damping": []}
+
+    def remember():
+        if history:
+            for name, value in zip(record, (*errors, lam), strict=True):
+                record[name].append(value.copy())
+
+    remember()
+    everyone = slice(None)
     for _ in range(options.max_iter):
         idx = np.flatnonzero(active)
         if idx.size == 0:
             break
+        if idx.size == B:
+            idx = everyone                       # a view instead of copies, as for one pose
         q_try = _step(robot, q[idx], e[idx], lam[idx], options)
         X_try = robot.fk(q_try)
         e_try = _residual(X_try, X_target[idx], options.position_only)
         cost_try = np.sum(e_try * e_try, axis=-1)
         better = cost_try < cost[idx]
-        acc = idx[better]
+        acc = np.flatnonzero(better) if idx is everyone else idx[better]
         q[acc], X[acc], e[acc], cost[acc] = (q_try[better], X_try[better], e_try[better],
                                              cost_try[better])
         lam[idx] = np.where(better, np.maximum(lam[idx] / 3.0, options.min_damping),
                             lam[idx] * 5.0)
         iterations[idx] += 1
         stuck[idx] = lam[idx] > options.max_damping
-        active[idx] = ~options.met(*pose_errors(X[idx], X_target[idx])) & ~stuck[idx]
-    return q, X, iterations, stuck
+        errors = options.errors(e)
+        active[idx] = ~options.met(errors[0][idx], errors[1][idx]) & ~stuck[idx]
+        remember()
+    return q, X, iterations, stuck, record
 
 
 def _step(robot, q, e, lam, options):

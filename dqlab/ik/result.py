@@ -27,6 +27,9 @@ class IKResult:
         Solver-specific conditions, for example ``"wrist_singular"`` or ``"unreachable"``.
     reason : ndarray of str, shape (...)
         Why a target has no valid solution (empty string when it has one).
+    history : dict of str to ndarray, optional
+        What an iterative solver records per iteration when asked (see
+        :func:`dqlab.ik.numerical`); None otherwise.
     """
 
     solutions: np.ndarray
@@ -35,6 +38,7 @@ class IKResult:
     rotation_error: np.ndarray
     flags: dict = field(default_factory=dict)
     reason: np.ndarray = None
+    history: dict = None
 
     def __post_init__(self):
         if self.reason is None:
