@@ -125,7 +125,8 @@ def quaternion_from_matrix_entries(r00, r01, r02, r10, r11, r12, r20, r21, r22):
         for j in (1, 2, 3):
             if K[j] > K[k]:
                 k = j
-        w, x, y, z = (K[i] for i in _K_ROWS[k])
+        i, j, m, n = _K_ROWS[k]
+        w, x, y, z = K[i], K[j], K[m], K[n]
         s = 0.5 / math.sqrt(K[k])
         if w < 0.0:
             s = -s  # canonical sign: w >= 0

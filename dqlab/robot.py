@@ -295,6 +295,12 @@ class Robot:
         return tuple(link.joint for link in self._links)
 
     @property
+    def bare(self):
+        """True when the robot has neither a base transform nor a tool: its world frame is
+        frame 0 and its TCP is the flange (the frames of a published DH table)."""
+        return self._bare
+
+    @property
     def limits(self):
         """Joint limits as an array of shape (n, 2): lowest, highest."""
         return np.array([link.limits for link in self._links], dtype=float)
@@ -311,6 +317,8 @@ class Robot:
         self._lo = np.array([lk.limits[0] for lk in self._links])
         self._hi = np.array([lk.limits[1] for lk in self._links])
         self._prismatic_idx = np.flatnonzero(~self._revolute)
+        self._bare = bool(np.array_equal(self._base, np.eye(4))
+                          and np.array_equal(self._tool, np.eye(4)))
         # (theta_i offset, d_i offset, revolute?) as Python values for the products
         self._joint_constants = [(lk.theta_offset, lk.d, lk.is_revolute) for lk in self._links]
         self._L, self._R = _link_constants(self._links, self._convention)

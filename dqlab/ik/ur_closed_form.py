@@ -338,9 +338,9 @@ def _single_flange(robot, target, d6, pose_tol):
         z6 = quaternion_rotate(*q, 0.0, 0.0, 1.0)
     else:
         return None
-    if robot.base.tobytes() != _EYE_BYTES or robot.tool.tobytes() != _EYE_BYTES:
+    if not robot.bare:
         return None
-    return q, tuple(pk - d6 * zk for pk, zk in zip(p, z6, strict=True))   # wrist_center
+    return q, (p[0] - d6 * z6[0], p[1] - d6 * z6[1], p[2] - d6 * z6[2])   # wrist_center
 
 
 def _solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref):
@@ -363,7 +363,7 @@ def _solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref):
     r = _HALF_SQRT2_FLOAT
     qD = (r * (qw + qx), r * (qx - qw), r * (qy - qz), r * (qy + qz))
     offsets = prm["offsets"] if any(prm["offsets"]) else None
-    solutions, errors = [0.0] * 48, [0.0] * 8         # (8, 6) row by row; invalid rows
+    solutions, errors = [0.0] * 48, [0.0] * 8     # (8, 6) row by row; rows not valid stay 0
     any_valid = wrist_singular = elbow_singular = False
     for s, shoulder in enumerate((1.0, -1.0)):
         theta1, c1, s1, h, h2 = steps.shoulder_angles(x5, y5, d4, shoulder)
@@ -384,22 +384,20 @@ def _solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref):
             rho = math.sqrt(X * X + Y * Y)
             gap = max(max(rho - r_out, r_in - rho), 0.0)
             error = math.sqrt(gap * gap)
-            valid = error <= tol
+            errors[4 * s + w] = errors[4 * s + 2 + w] = error
+            if error > tol:                     # both rows stay zero, as finish() writes them
+                continue
             triangle = steps.elbow_triangle(X, Y, a2, a3)
-            for e, elbow in enumerate((1.0, -1.0)):
+            for k, elbow in ((4 * s + w, 1.0), (4 * s + 2 + w, -1.0)):   # k = 4 s + 2 e + w
                 theta2, theta3, _, _, sin3 = steps.elbow_angles(X, Y, a2, a3, elbow, triangle)
                 row = [theta1, theta2, theta3, wrapped_angle(theta234 - theta2 - theta3),
                        theta5, theta6]
                 if offsets is not None:
                     row = [wrapped_angle(t - o) for t, o in zip(row, offsets, strict=True)]
-                k = 4 * s + 2 * e + w
-                if valid:                                       # (others stay zero, as
-                    solutions[6 * k:6 * k + 6] = row            # finish() writes them)
-                errors[k] = error
-            if valid:
-                any_valid = True
-                wrist_singular = wrist_singular or sin5 < singular_tol
-                elbow_singular = elbow_singular or sin3 < singular_tol
+                solutions[6 * k:6 * k + 6] = row
+            any_valid = True
+            wrist_singular = wrist_singular or sin5 < singular_tol
+            elbow_singular = elbow_singular or sin3 < singular_tol
     if not any_valid:
         return None
     flags = {"wrist_singular": wrist_singular, "shoulder_singular": h < singular_tol * d4,
