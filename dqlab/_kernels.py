@@ -205,6 +205,8 @@ def dual_quaternion_mul_z_screw(a, c, s, h):
     # p r with r = c + s k is (c w - s z, c x + s y, c y - s x, c z + s w)
     rw, rx, ry, rz = c * arw - s * arz, c * arx + s * ary, c * ary - s * arx, c * arz + s * arw
     dw, dx, dy, dz = c * adw - s * adz, c * adx + s * ady, c * ady - s * adx, c * adz + s * adw
+    if type(h) is float and h == 0.0:                 # a turn alone
+        return rw, rx, ry, rz, dw, dx, dy, dz
     # p k is (-z, y, -x, w)
     return rw, rx, ry, rz, dw - h * rz, dx + h * ry, dy - h * rx, dz + h * rw
 
@@ -225,6 +227,8 @@ def dual_quaternion_mul_x_screw(a, c, s, h):
     # p r with r = c + s i is (c w - s x, c x + s w, c y + s z, c z - s y)
     rw, rx, ry, rz = c * arw - s * arx, c * arx + s * arw, c * ary + s * arz, c * arz - s * ary
     dw, dx, dy, dz = c * adw - s * adx, c * adx + s * adw, c * ady + s * adz, c * adz - s * ady
+    if type(h) is float and h == 0.0:                 # a turn alone
+        return rw, rx, ry, rz, dw, dx, dy, dz
     # p i is (-x, w, z, -y)
     return rw, rx, ry, rz, dw - h * rx, dx + h * rw, dy + h * rz, dz - h * ry
 

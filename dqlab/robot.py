@@ -335,10 +335,14 @@ class Robot:
                                 if K[i, k, j] != 0.0) for j in range(4)]
                          for i in range(n + 1)]
         self._K_dual_quaternions = dual_quaternion_from_transform(K).tolist()
-        # which K_i are screws about x (every one between two DH links is: Tx(a) Rx(alpha)),
-        # with (cos alpha, sin alpha, a) and the halves for the dual quaternions
-        self._K_x_screws = [_x_screw_constants(K[i], self._K_dual_quaternions[i])
-                            for i in range(n + 1)]
+        # which K_i are screws about x (every one between two DH links is: Tx(a) Rx(alpha)):
+        # (cos alpha, sin alpha, a) for the matrices, (cos alpha/2, sin alpha/2, a/2) for the
+        # dual quaternions; None for another K_i, () for the identity
+        screws = [_x_screw_constants(K[i], self._K_dual_quaternions[i]) for i in range(n + 1)]
+        self._K_matrix_screws = [None if c is None else () if c[:3] == (1.0, 0.0, 0.0)
+                                 else c[:3] for c in screws]
+        self._K_dq_screws = [None if c is None else () if c[:3] == (1.0, 0.0, 0.0)
+                             else c[3:] for c in screws]
         # the zero pose: joint axes in the world frame and the TCP (fk_dq_screw's constants)
         zero = [0.0] * n
         X0, before, _ = self._product(zero, record=True)
@@ -550,11 +554,13 @@ class Robot:
             if record:
                 before.append(X)
                 after.append(Y)
-            x_screw = self._K_x_screws[i + 1]
-            if x_screw is None:
+            screw = self._K_matrix_screws[i + 1]
+            if screw:
+                X = _x_screw_step(Y, *screw)
+            elif screw is None:
                 X = _constant_step(Y, self._K_terms[i + 1])
             else:
-                X = _x_screw_step(Y, *x_screw[:3])
+                X = Y                                                 # K_i is the identity
         return (X, before, after) if record else X
 
     def _pose_entries(self, q):
@@ -681,11 +687,11 @@ class Robot:
             else:
                 half, h = 0.5 * theta0, 0.5 * (q[i] + d0)
             Q = dual_quaternion_mul_z_screw(Q, cos(half), sin(half), h)
-            x_screw = self._K_x_screws[i + 1]
-            if x_screw is None:
+            screw = self._K_dq_screws[i + 1]
+            if screw:
+                Q = dual_quaternion_mul_x_screw(Q, *screw)
+            elif screw is None:
                 Q = dual_quaternion_mul(Q, K[i + 1])
-            else:
-                Q = dual_quaternion_mul_x_screw(Q, *x_screw[3:])
         return Q
 
     def zero_pose_screws(self
