@@ -819,6 +819,52 @@ class Robot:
         array([-0.49781088, -0.08817691,  0.        ,  0.        ,  0.        ,  1.        ])
         """
         points, axes, p_T = self._axes_and_tcp_position(self.check_joints(q))
+        return self._jacobian_from_axes(points, axes, p_T)
+
+    def fk_with_jacobian(self, q: ArrayLike
+                         ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        r""":meth:`fk` and :meth:`jacobian` at the same joint vectors, from one product.
+
+        The running product of the forward kinematics passes through every joint's frame,
+        which is all the Jacobian needs; a Newton-type solver that wants both at each
+        iterate computes the chain once.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+
+        Returns
+        -------
+        X : ndarray, shape (..., 4, 4)
+            As :meth:`fk`.
+        J : ndarray, shape (..., 6, n)
+            As :meth:`jacobian`.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from dqlab.models import ur3
+        >>> robot = ur3()
+        >>> q = np.array([0.3, -1.2, 1.1, -0.4, 0.9, 0.2])
+        >>> X, J = robot.fk_with_jacobian(q)
+        >>> bool(np.array_equal(X, robot.fk(q)) and np.array_equal(J, robot.jacobian(q)))
+        True
+        """
+        n = self.n
+        flat = _on_components(self._pose_axes_entries, self.check_joints(q), (16 + 6 * n,))
+        X = flat[..., :16].reshape(flat.shape[:-1] + (4, 4))
+        points_axes = flat[..., 16:].reshape(flat.shape[:-1] + (n, 2, 3))
+        J = self._jacobian_from_axes(points_axes[..., 0, :], points_axes[..., 1, :],
+                                     X[..., :3, 3])
+        return X, J
+
+    def _pose_axes_entries(self, q):
+        X, before, _ = self._product(q, record=True)
+        return _entries(X) + sum((tuple(B[3]) + tuple(B[2]) for B in before), ())
+
+    def _jacobian_from_axes(self, points, axes, p_T):
+        """The geometric Jacobian (..., 6, n) from the joint axes (..., n, 3) and the TCP
+        position (..., 3)."""
         r = p_T[..., None, :] - points                              # (..., n, 3)
         z = axes
         J = np.empty(axes.shape[:-2] + (6, self.n))

@@ -174,3 +174,30 @@ def test_history_records_every_iteration():
                                rtol=1e-6, atol=1e-14)
     assert np.all(h["position_error"][0] > 1e-2)
     assert numerical(robot, T, q_true + 0.1).history is None
+
+
+@pytest.mark.parametrize("position_only", [False, True])
+def test_one_target_iterates_as_in_a_batch(position_only):
+    """One target runs the loop with its bookkeeping on Python numbers; a batch on arrays.
+    The iterates are the same: solutions, errors, flags, reasons and history, including a
+    target that stalls out of reach."""
+    robot = ur3()
+    rng = np.random.default_rng(13)
+    q_true = rng.uniform(-2.0, 2.0, (6, 6))
+    T = robot.fk(q_true)
+    T[5, :3, 3] = [2.0, 0.0, 0.5]                       # out of reach: stalls
+    target = T[:, :3, 3] if position_only else T
+    q0 = q_true + rng.uniform(-0.3, 0.3, q_true.shape)
+    batch = numerical(robot, target, q0, position_only=position_only, history=True)
+    assert batch.valid[:5].any() and not batch.valid[5, 0]
+    for i in range(len(T)):
+        one = numerical(robot, target[i], q0[i], position_only=position_only, history=True)
+        np.testing.assert_array_equal(one.valid, batch.valid[i])
+        np.testing.assert_allclose(one.solutions, batch.solutions[i], rtol=0, atol=1e-15)
+        np.testing.assert_allclose(one.position_error, batch.position_error[i], atol=1e-15)
+        assert one.reason == batch.reason[i]
+        for name, flag in batch.flags.items():
+            assert one.flags[name] == flag[i]
+        k = one.history["damping"].shape[0]
+        for name, rows in batch.history.items():
+            np.testing.assert_allclose(one.history[name], rows[:k, i], rtol=0, atol=1e-15)

@@ -145,10 +145,12 @@ def numerical(robot: Robot, target: ArrayLike, q0: ArrayLike, *, position_only: 
     batch = np.broadcast_shapes(targets.batch, q0.shape[:-1])
     n = robot.n
     X_target = np.broadcast_to(targets.transforms, batch + (4, 4)).reshape(-1, 4, 4)
-    q = np.clip(np.broadcast_to(q0, batch + (n,)).reshape(-1, n), *robot.limits.T)
+    lower, upper = robot.limits.T
+    q = np.clip(np.broadcast_to(q0, batch + (n,)).reshape(-1, n), lower, upper)
     options = _Options(position_only, tol, rotation_tol, int(max_iter), float(damping),
-                       min_damping, max_damping, max_step)
-    q, X, iterations, stuck, record = _iterate(robot, q, X_target, options, history)
+                       min_damping, max_damping, max_step, lower, upper, np.eye(n))
+    iterate = _iterate_one if q.shape[0] == 1 else _iterate
+    q, X, iterations, stuck, record = iterate(robot, q, X_target, options, history)
 
     position_error, rotation_error = pose_errors(X, X_target)
     if not targets.has_rotation:
@@ -188,6 +190,9 @@ class _Options:
     min_damping: float
     max_damping: float
     max_step: float
+    lower: np.ndarray          # the joint limits
+    upper: np.ndarray
+    eye: np.ndarray            # the identity of the normal equations
 
     def met(self, position_error, rotation_error):
         """Where the tolerances are met."""
@@ -214,7 +219,7 @@ def _iterate(robot, q, X_target, options, history=False):
     the final errors with :func:`~dqlab.ik.targets.pose_errors`."""
     B = q.shape[0]
     lam = np.full(B, options.damping)
-    X = robot.fk(q)
+    X, J = robot.fk_with_jacobian(q)
     e = _residual(X, X_target, options.position_only)
     cost = np.sum(e * e, axis=-1)
     iterations = np.zeros(B, dtype=int)
@@ -236,14 +241,14 @@ def _iterate(robot, q, X_target, options, history=False):
             break
         if idx.size == B:
             idx = everyone                       # a view instead of copies, as for one pose
-        q_try = _step(robot, q[idx], e[idx], lam[idx], options)
-        X_try = robot.fk(q_try)
+        q_try = _step(J[idx], q[idx], e[idx], lam[idx], options)
+        X_try, J_try = robot.fk_with_jacobian(q_try)
         e_try = _residual(X_try, X_target[idx], options.position_only)
         cost_try = np.sum(e_try * e_try, axis=-1)
         better = cost_try < cost[idx]
         acc = np.flatnonzero(better) if idx is everyone else idx[better]
-        q[acc], X[acc], e[acc], cost[acc] = (q_try[better], X_try[better], e_try[better],
-                                             cost_try[better])
+        q[acc], X[acc], J[acc], e[acc], cost[acc] = (
+            q_try[better], X_try[better], J_try[better], e_try[better], cost_try[better])
         lam[idx] = np.where(better, np.maximum(lam[idx] / 3.0, options.min_damping),
                             lam[idx] * 5.0)
         iterations[idx] += 1
@@ -254,13 +259,47 @@ def _iterate(robot, q, X_target, options, history=False):
     return q, X, iterations, stuck, record
 
 
-def _step(robot, q, e, lam, options):
+def _iterate_one(robot, q, X_target, options, history=False):
+    """:func:`_iterate` for one target (``q`` (1, n), ``X_target`` (1, 4, 4)): the same
+    iterates, with the bookkeeping (cost, damping, stopping tests) on Python numbers, which
+    is several times cheaper than numpy's on arrays of one element."""
+    lam = options.damping
+    X, J = robot.fk_with_jacobian(q)
+    e = _residual(X, X_target, options.position_only)
+    cost = float(np.sum(e * e))
+    errors = options.errors(e)
+    record = {"position_error": [], "rotation_error": [], "damping": []}
+    iterations, stuck = 0, False
+    while iterations < options.max_iter and not (stuck or options.met(*errors)[0]):
+        if history:
+            for name, value in zip(record, (*errors, np.array([lam])), strict=True):
+                record[name].append(value)
+        q_try = _step(J, q, e, np.array([lam]), options)
+        X_try, J_try = robot.fk_with_jacobian(q_try)
+        e_try = _residual(X_try, X_target, options.position_only)
+        cost_try = float(np.sum(e_try * e_try))
+        if cost_try < cost:
+            q, X, J, e, cost = q_try, X_try, J_try, e_try, cost_try
+            lam = max(lam / 3.0, options.min_damping)
+            errors = options.errors(e)
+        else:
+            lam = lam * 5.0
+        iterations += 1
+        stuck = lam > options.max_damping
+    if history:
+        for name, value in zip(record, (*errors, np.array([lam])), strict=True):
+            record[name].append(value)
+    return q, X, np.array([iterations]), np.array([stuck]), record
+
+
+def _step(J, q, e, lam, options):
     r"""The damped least-squares step :math:`(J^\top J + \lambda^2 I)^{-1} J^\top e` from
-    ``q`` (b, n), capped at ``max_step`` per joint and clipped to the joint limits."""
-    rows = slice(0, 3) if options.position_only else slice(0, 6)
-    J = robot.jacobian(q)[:, rows, :]                                 # (b, m, n)
+    ``q`` (b, n) with the Jacobian ``J`` (b, 6, n) there, capped at ``max_step`` per joint
+    and clipped to the joint limits."""
+    if options.position_only:
+        J = J[:, :3, :]                                               # (b, m, n)
     Jt = np.swapaxes(J, -1, -2)
-    A = Jt @ J + (lam ** 2)[:, None, None] * np.eye(q.shape[-1])
+    A = Jt @ J + (lam ** 2)[:, None, None] * options.eye
     g = (Jt @ e[..., None])[..., 0]
     try:
         step = np.linalg.solve(A, g[..., None])[..., 0]
@@ -268,4 +307,4 @@ def _step(robot, q, e, lam, options):
         step = (np.linalg.pinv(A) @ g[..., None])[..., 0]
     biggest = np.max(np.abs(step), axis=-1, keepdims=True)
     step *= np.minimum(1.0, options.max_step / np.maximum(biggest, 1e-300))
-    return np.clip(q + step, *robot.limits.T)
+    return np.clip(q + step, options.lower, options.upper)
