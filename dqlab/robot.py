@@ -818,8 +818,11 @@ class Robot:
         >>> J[:, 0].round(8)
         array([-0.49781088, -0.08817691,  0.        ,  0.        ,  0.        ,  1.        ])
         """
-        points, axes, p_T = self._axes_and_tcp_position(self.check_joints(q))
-        return self._jacobian_from_axes(points, axes, p_T)
+        n = self.n
+        floats = self._joint_floats(q)
+        if floats is not None:
+            return np.array(self._jacobian_entries(floats)).reshape(6, n)
+        return _on_components(self._jacobian_entries, self.check_joints(q), (6, n))
 
     def fk_with_jacobian(self, q: ArrayLike
                          ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -851,32 +854,39 @@ class Robot:
         True
         """
         n = self.n
-        flat = _on_components(self._pose_axes_entries, self.check_joints(q), (16 + 6 * n,))
-        X = flat[..., :16].reshape(flat.shape[:-1] + (4, 4))
-        points_axes = flat[..., 16:].reshape(flat.shape[:-1] + (n, 2, 3))
-        J = self._jacobian_from_axes(points_axes[..., 0, :], points_axes[..., 1, :],
-                                     X[..., :3, 3])
-        return X, J
+        floats = self._joint_floats(q)
+        if floats is not None:
+            flat = np.array(self._pose_jacobian_entries(floats))
+        else:
+            flat = _on_components(self._pose_jacobian_entries, self.check_joints(q),
+                                  (16 + 6 * n,))
+        lead = flat.shape[:-1]
+        return flat[..., :16].reshape(lead + (4, 4)), flat[..., 16:].reshape(lead + (6, n))
 
-    def _pose_axes_entries(self, q):
+    def _jacobian_entries(self, q):
         X, before, _ = self._product(q, record=True)
-        return _entries(X) + sum((tuple(B[3]) + tuple(B[2]) for B in before), ())
+        return self._jacobian_of(before, X[3])
 
-    def _jacobian_from_axes(self, points, axes, p_T):
-        """The geometric Jacobian (..., 6, n) from the joint axes (..., n, 3) and the TCP
-        position (..., 3)."""
-        r = p_T[..., None, :] - points                              # (..., n, 3)
-        z = axes
-        J = np.empty(axes.shape[:-2] + (6, self.n))
-        # z x r, component by component (np.cross is slow on small arrays)
-        J[..., 0, :] = z[..., 1] * r[..., 2] - z[..., 2] * r[..., 1]
-        J[..., 1, :] = z[..., 2] * r[..., 0] - z[..., 0] * r[..., 2]
-        J[..., 2, :] = z[..., 0] * r[..., 1] - z[..., 1] * r[..., 0]
-        J[..., 3:, :] = np.swapaxes(z, -1, -2)
-        if self._prismatic_idx.size:
-            J[..., :3, self._prismatic_idx] = np.swapaxes(z[..., self._prismatic_idx, :], -1, -2)
-            J[..., 3:, self._prismatic_idx] = 0.0
-        return J
+    def _pose_jacobian_entries(self, q):
+        X, before, _ = self._product(q, record=True)
+        return _entries(X) + self._jacobian_of(before, X[3])
+
+    def _jacobian_of(self, before, p):
+        """The 6 n entries of the Jacobian, row by row, from the running products before
+        each joint (whose columns 2 and 3 are the joint's axis z_i and a point o_i on it)
+        and the TCP position ``p``: the column is (z_i x (p - o_i), z_i) for a revolute
+        joint, (z_i, 0) for a prismatic one."""
+        px, py, pz = p
+        columns = []
+        for (_, _, (zx, zy, zz), (ox, oy, oz)), (_, _, revolute) in zip(
+                before, self._joint_constants, strict=True):
+            if revolute:
+                rx, ry, rz = px - ox, py - oy, pz - oz
+                columns.append((zy * rz - zz * ry, zz * rx - zx * rz, zx * ry - zy * rx,
+                                zx, zy, zz))
+            else:
+                columns.append((zx, zy, zz, 0.0, 0.0, 0.0))
+        return sum(zip(*columns), ())                      # row by row
 
     # -- printing -------------------------------------------------------------------------
     def dh_table(self) -> str:

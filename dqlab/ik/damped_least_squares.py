@@ -11,8 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._checks import check_tolerance
-from .._kernels import quaternion_from_matrix_entries
+from .._checks import check_tolerance, components, stack_components
+from .._kernels import rotation_vector_from_matrix_entries
 from ..robot import Robot
 from .result import IKResult, finish, target_reasons
 from .targets import parse_targets, pose_errors
@@ -20,28 +20,20 @@ from .targets import parse_targets, pose_errors
 __all__ = ["numerical", "pose_errors"]
 
 
-def _rotation_vector(R_err):
-    r"""Rotation vectors (axis times angle) of rotation matrices (B, 3, 3), shape (B, 3):
-    the unit quaternion :math:`(w, \mathbf v)` of each (Shepperd, :math:`w \ge 0`), then
-    :math:`\theta \mathbf u = 2 \operatorname{atan2}(\lVert \mathbf v \rVert, w)\,
-    \mathbf v / \lVert \mathbf v \rVert` (0 for the identity)."""
-    r = R_err.reshape(-1, 9)
-    # one target: Python floats (numpy's per-call overhead would dominate); a batch: columns
-    w, x, y, z = (np.array([c]) for c in quaternion_from_matrix_entries(*r[0].tolist())) \
-        if len(r) == 1 else quaternion_from_matrix_entries(*r.T)
-    norm_v = np.sqrt(x * x + y * y + z * z)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        scale = np.where(norm_v > 0.0, 2.0 * np.arctan2(norm_v, w) / norm_v, 2.0)
-    return np.stack([x * scale, y * scale, z * scale], axis=-1)
-
-
 def _residual(X, X_target, position_only):
-    """Error vector (..., 3) or (..., 6): position, then rotation vector, world frame."""
-    e_p = X_target[..., :3, 3] - X[..., :3, 3]
-    if position_only:
-        return e_p
-    R_err = X_target[..., :3, :3] @ np.swapaxes(X[..., :3, :3], -1, -2)
-    return np.concatenate([e_p, _rotation_vector(R_err)], axis=-1)
+    r"""Error vectors (..., 3) or (..., 6) of poses ``X`` towards ``X_target`` (..., 4, 4):
+    :math:`p^\ast - p`, then the rotation vector of :math:`R^\ast R^\top`, in the world
+    frame. Written on components: Python floats for one pose, columns for a batch."""
+    lead = X.shape[:-2]
+    a = components(X.reshape(lead + (16,)))
+    b = components(X_target.reshape(lead + (16,)))
+    e = [b[3] - a[3], b[7] - a[7], b[11] - a[11]]
+    if not position_only:
+        # (R* R^T)_ij: row i of R* dotted with row j of R
+        e.extend(rotation_vector_from_matrix_entries(*(
+            b[4 * i] * a[4 * j] + b[4 * i + 1] * a[4 * j + 1] + b[4 * i + 2] * a[4 * j + 2]
+            for i in range(3) for j in range(3))))
+    return stack_components(e)
 
 
 def numerical(robot: Robot, target: ArrayLike, q0: ArrayLike, *, position_only: bool = False,
@@ -148,7 +140,7 @@ def numerical(robot: Robot, target: ArrayLike, q0: ArrayLike, *, position_only: 
     lower, upper = robot.limits.T
     q = np.clip(np.broadcast_to(q0, batch + (n,)).reshape(-1, n), lower, upper)
     options = _Options(position_only, tol, rotation_tol, int(max_iter), float(damping),
-                       min_damping, max_damping, max_step, lower, upper, np.eye(n))
+                       min_damping, max_damping, max_step, lower, upper)
     iterate = _iterate_one if q.shape[0] == 1 else _iterate
     q, X, iterations, stuck, record = iterate(robot, q, X_target, options, history)
 
@@ -192,7 +184,6 @@ class _Options:
     max_step: float
     lower: np.ndarray          # the joint limits
     upper: np.ndarray
-    eye: np.ndarray            # the identity of the normal equations
 
     def met(self, position_error, rotation_error):
         """Where the tolerances are met."""
@@ -203,11 +194,13 @@ class _Options:
 
     def errors(self, e):
         """The position and rotation errors (norms of the two parts of the residual ``e``:
-        the distance, and the angle of the rotation vector)."""
-        position_error = np.sqrt(np.sum(e[:, :3] * e[:, :3], axis=-1))
+        the distance, and the angle of the rotation vector): floats for one residual,
+        arrays for a batch."""
+        c = components(e)
+        position_error = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) ** 0.5
         if self.position_only:
-            return position_error, np.zeros_like(position_error)
-        return position_error, np.sqrt(np.sum(e[:, 3:] * e[:, 3:], axis=-1))
+            return position_error, 0.0 * position_error
+        return position_error, (c[3] * c[3] + c[4] * c[4] + c[5] * c[5]) ** 0.5
 
 
 def _iterate(robot, q, X_target, options, history=False):
@@ -221,7 +214,7 @@ def _iterate(robot, q, X_target, options, history=False):
     lam = np.full(B, options.damping)
     X, J = robot.fk_with_jacobian(q)
     e = _residual(X, X_target, options.position_only)
-    cost = np.sum(e * e, axis=-1)
+    cost = _cost(e)
     iterations = np.zeros(B, dtype=int)
     stuck = np.zeros(B, dtype=bool)
     errors = options.errors(e)
@@ -244,7 +237,7 @@ def _iterate(robot, q, X_target, options, history=False):
         q_try = _step(J[idx], q[idx], e[idx], lam[idx], options)
         X_try, J_try = robot.fk_with_jacobian(q_try)
         e_try = _residual(X_try, X_target[idx], options.position_only)
-        cost_try = np.sum(e_try * e_try, axis=-1)
+        cost_try = _cost(e_try)
         better = cost_try < cost[idx]
         acc = np.flatnonzero(better) if idx is everyone else idx[better]
         q[acc], X[acc], J[acc], e[acc], cost[acc] = (
@@ -261,23 +254,25 @@ def _iterate(robot, q, X_target, options, history=False):
 
 def _iterate_one(robot, q, X_target, options, history=False):
     """:func:`_iterate` for one target (``q`` (1, n), ``X_target`` (1, 4, 4)): the same
-    iterates, with the bookkeeping (cost, damping, stopping tests) on Python numbers, which
-    is several times cheaper than numpy's on arrays of one element."""
+    iterates, computed without the batch axis (the forward kinematics, Jacobian and
+    residual then run on Python floats) and with the bookkeeping (cost, damping, stopping
+    tests) on Python numbers, several times cheaper than numpy's on one-element arrays."""
+    q, X_target = q[0], X_target[0]
     lam = options.damping
     X, J = robot.fk_with_jacobian(q)
     e = _residual(X, X_target, options.position_only)
-    cost = float(np.sum(e * e))
+    cost = _cost(e)
     errors = options.errors(e)
     record = {"position_error": [], "rotation_error": [], "damping": []}
     iterations, stuck = 0, False
-    while iterations < options.max_iter and not (stuck or options.met(*errors)[0]):
+    while iterations < options.max_iter and not (stuck or options.met(*errors)):
         if history:
-            for name, value in zip(record, (*errors, np.array([lam])), strict=True):
-                record[name].append(value)
-        q_try = _step(J, q, e, np.array([lam]), options)
+            for name, value in zip(record, (*errors, lam), strict=True):
+                record[name].append(np.array([value]))
+        q_try = _step(J, q, e, lam, options)
         X_try, J_try = robot.fk_with_jacobian(q_try)
         e_try = _residual(X_try, X_target, options.position_only)
-        cost_try = float(np.sum(e_try * e_try))
+        cost_try = _cost(e_try)
         if cost_try < cost:
             q, X, J, e, cost = q_try, X_try, J_try, e_try, cost_try
             lam = max(lam / 3.0, options.min_damping)
@@ -287,19 +282,30 @@ def _iterate_one(robot, q, X_target, options, history=False):
         iterations += 1
         stuck = lam > options.max_damping
     if history:
-        for name, value in zip(record, (*errors, np.array([lam])), strict=True):
-            record[name].append(value)
-    return q, X, np.array([iterations]), np.array([stuck]), record
+        for name, value in zip(record, (*errors, lam), strict=True):
+            record[name].append(np.array([value]))
+    return q[None], X[None], np.array([iterations]), np.array([stuck]), record
+
+
+def _cost(e):
+    """The squared norm of residuals ``e`` (..., m), summed in order (a float for one)."""
+    c = components(e)
+    total = c[0] * c[0]
+    for x in c[1:]:
+        total = total + x * x
+    return total
 
 
 def _step(J, q, e, lam, options):
     r"""The damped least-squares step :math:`(J^\top J + \lambda^2 I)^{-1} J^\top e` from
-    ``q`` (b, n) with the Jacobian ``J`` (b, 6, n) there, capped at ``max_step`` per joint
-    and clipped to the joint limits."""
+    ``q`` (..., n) with the Jacobian ``J`` (..., 6, n) there (``lam`` of shape (...)),
+    capped at ``max_step`` per joint and clipped to the joint limits."""
     if options.position_only:
-        J = J[:, :3, :]                                               # (b, m, n)
+        J = J[..., :3, :]                                             # (..., m, n)
     Jt = np.swapaxes(J, -1, -2)
-    A = Jt @ J + (lam ** 2)[:, None, None] * options.eye
+    A = Jt @ J
+    n = A.shape[-1]
+    A.reshape(A.shape[:-2] + (n * n,))[..., ::n + 1] += np.asarray(lam)[..., None] ** 2
     g = (Jt @ e[..., None])[..., 0]
     try:
         step = np.linalg.solve(A, g[..., None])[..., 0]

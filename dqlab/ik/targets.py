@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._checks import as_float_array, check_tolerance, real_array
+from .._checks import as_float_array, check_tolerance, components, real_array
 from ..dualquat import (
     check_unit_dual_quaternion,
     dual_quaternion_from_transform,
@@ -212,25 +212,29 @@ def pose_errors(X: ArrayLike, X_target: ArrayLike
     """
     X = as_float_array(X, "X", (4, 4))
     X_target = as_float_array(X_target, "X_target", (4, 4))
-    dp = X[..., :3, 3] - X_target[..., :3, 3]
+    if X.shape != X_target.shape:
+        X, X_target = np.broadcast_arrays(X, X_target)
+    lead = X.shape[:-2]
+    # on components: Python floats for one pose (whatever its leading shape), columns for
+    # a batch
+    one = X.size == 16
+    a = components(X.reshape(16 if one else lead + (16,)))
+    b = components(X_target.reshape(16 if one else lead + (16,)))
     with np.errstate(over="ignore", invalid="ignore"):
-        position_error = np.sqrt(np.einsum("...i,...i->...", dp, dp))
-    # M = R R*^T: M_ij is the dot product of row i of R with row j of R*
-    A = [X[..., i, :3] for i in range(3)]
-    B = [X_target[..., i, :3] for i in range(3)]
+        dx, dy, dz = a[3] - b[3], a[7] - b[7], a[11] - b[11]
+        position_error = np.sqrt(dx * dx + dy * dy + dz * dz)
 
-    def dot(u, v):
-        return np.einsum("...k,...k->...", u, v)
+        def dot(i, j):            # M_ij = R_i . R*_j: row i of R dotted with row j of R*
+            return a[4 * i] * b[4 * j] + a[4 * i + 1] * b[4 * j + 1] + a[4 * i + 2] * b[4 * j + 2]
 
-    with np.errstate(over="ignore", invalid="ignore"):
-        vx = dot(A[1], B[2]) - dot(A[2], B[1])
-        vy = dot(A[2], B[0]) - dot(A[0], B[2])
-        vz = dot(A[0], B[1]) - dot(A[1], B[0])
-    with np.errstate(over="ignore", invalid="ignore"):
+        vx = dot(1, 2) - dot(2, 1)
+        vy = dot(2, 0) - dot(0, 2)
+        vz = dot(0, 1) - dot(1, 0)
         sin2 = np.sqrt(vx * vx + vy * vy + vz * vz)
-        rotation_error = np.arctan2(sin2, dot(A[0], B[0]) + dot(A[1], B[1])
-                                    + dot(A[2], B[2]) - 1.0)
+        rotation_error = np.arctan2(sin2, dot(0, 0) + dot(1, 1) + dot(2, 2) - 1.0)
     if not (np.isfinite(position_error).all() and np.isfinite(rotation_error).all()):
         raise ValueError("X and X_target are too large for their errors (overflow): they "
                          "must be rigid transforms")
+    if one:
+        return np.full(lead, position_error), np.full(lead, rotation_error)
     return np.asarray(position_error), np.asarray(rotation_error)
