@@ -886,7 +886,7 @@ class Robot:
                                 zx, zy, zz))
             else:
                 columns.append((zx, zy, zz, 0.0, 0.0, 0.0))
-        return sum(zip(*columns), ())                      # row by row
+        return sum(zip(*columns, strict=True), ())         # row by row
 
     # -- printing -------------------------------------------------------------------------
     def dh_table(self) -> str:
