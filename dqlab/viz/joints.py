@@ -262,8 +262,8 @@ class JointSliders:
 
         Moving a slider calls :meth:`set_joints` with the values of all the sliders, so the
         arm (and, with ``jacobian=True``, the Jacobian's columns) moves on the live meshcat
-        view that ``view.scene.live()`` opens. The sliders span :attr:`ranges`, start at the
-        current joint vector :attr:`q` and step by 0.01 rad (1 mm for a prismatic joint).
+        view that ``view.scene.live()`` opens. The sliders span the view's ``ranges``, start at its
+        current joint vector ``q`` and step by 0.01 rad (1 mm for a prismatic joint).
         Building them needs no kernel; they move the arm only in a running notebook.
 
         Returns
