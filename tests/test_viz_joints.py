@@ -1,6 +1,8 @@
 """Tests for dqlab.viz.joints: the nested drawing of JointSliders poses every body like the
 forward kinematics, one animation clip per joint, and the control panel of the static view."""
 
+import sys
+
 import numpy as np
 import pytest
 import umsgpack
@@ -84,12 +86,38 @@ def test_bad_arguments_are_named():
         view.set_joints([0.0])
 
 
-def test_widgets_explain_a_missing_ipywidgets():
-    view = JointSliders(ur3())
-    try:
-        import ipywidgets  # noqa: F401
-    except ImportError:
-        with pytest.raises(ImportError, match="pip install ipywidgets"):
-            view.widgets()
-    else:
-        assert len(view.widgets().children) == 6
+def test_widgets_explain_a_missing_ipywidgets(monkeypatch):
+    monkeypatch.setitem(sys.modules, "ipywidgets", None)      # as if it were not installed
+    with pytest.raises(ImportError, match="pip install ipywidgets"):
+        JointSliders(ur3()).widgets()
+
+
+def test_widgets_are_built_without_a_kernel_and_pose_the_arm():
+    ipywidgets = pytest.importorskip("ipywidgets")
+    q = np.array([0.3, -1.2, 1.0, -0.5, 1.1, 0.2])
+    view = JointSliders(ur3(), q, jacobian=True)
+    box = view.widgets()
+    assert isinstance(box, ipywidgets.VBox) and len(box.children) == 6
+    for i, slider in enumerate(box.children):
+        assert isinstance(slider, ipywidgets.FloatSlider)
+        assert slider.description == f"q{i + 1}" and slider.value == q[i]
+        assert (slider.min, slider.max) == tuple(view.ranges[i])
+    # moving one slider poses the arm at all the sliders' values, Jacobian included
+    box.children[2].value = 0.25
+    q_moved = q.copy()
+    q_moved[2] = 0.25
+    assert np.array_equal(view.q, q_moved)
+    commands = {(c["type"], c.get("path")): c for c in view.scene.commands()}
+    X = np.array(commands[("set_transform", f"/meshcat/{view.paths[2]}")]["matrix"])
+    assert np.allclose(X.reshape(4, 4).T[:2, :2], [[np.cos(0.25), -np.sin(0.25)],
+                                                   [np.sin(0.25), np.cos(0.25)]], atol=1e-7)
+    assert np.allclose(view.body_poses(view.q), ur3().fk(q_moved, all_frames=True))
+
+
+def test_widgets_of_a_prismatic_joint_step_by_a_millimetre():
+    pytest.importorskip("ipywidgets")
+    view = JointSliders(scara_rsm5())
+    slider = view.widgets().children[2]                      # the vertical slide
+    assert slider.step == 0.001 and (slider.min, slider.max) == tuple(view.ranges[2])
+    slider.value = 0.1
+    assert np.isclose(view.q[2], 0.1)

@@ -22,7 +22,7 @@ columns, :math:`z_i \times (p - o_i)`, from the tool point whenever a slider mov
 
 In a live notebook, :meth:`JointSliders.set_joints` poses the arm from Python (mirrored to
 the live meshcat server by :meth:`dqlab.viz.scene.Scene.live`) and :meth:`JointSliders.widgets`
-returns ``ipywidgets`` sliders that call it.
+returns ``ipywidgets`` sliders that call it (``ipywidgets`` comes with the ``viz`` extra).
 """
 
 import json
@@ -258,26 +258,52 @@ class JointSliders:
         return np.array(X)
 
     def widgets(self):
-        """``ipywidgets`` sliders that pose the arm on the live meshcat view (a kernel).
+        """``ipywidgets`` sliders that pose the arm from Python, one per joint.
 
-        Call ``view.scene.live()`` first to open the live view.
+        Moving a slider calls :meth:`set_joints` with the values of all the sliders, so the
+        arm (and, with ``jacobian=True``, the Jacobian's columns) moves on the live meshcat
+        view that ``view.scene.live()`` opens. The sliders span the view's ``ranges``, start at its
+        current joint vector ``q`` and step by 0.01 rad (1 mm for a prismatic joint).
+        Building them needs no kernel; they move the arm only in a running notebook.
+
+        Returns
+        -------
+        ipywidgets.VBox
+            The sliders ``q1 ... qn``, in joint order, as its ``children``.
 
         Raises
         ------
         ImportError
-            With an explanation, when ipywidgets is not installed.
+            With an explanation, when ipywidgets is not installed (it comes with the ``viz``
+            extra: ``pip install dqlab[viz]``).
+
+        Examples
+        --------
+        In a running notebook, one cell opens the live view (embedded, with its address
+        for a browser tab) and the next shows the sliders that move it::
+
+            view = JointSliders(ur3(), q_home)
+            view.scene.live()
+
+            view.widgets()
         """
         try:
             import ipywidgets
         except ImportError:
             raise ImportError("JointSliders.widgets needs ipywidgets: pip install ipywidgets "
-                              "(the static view's sliders need nothing)") from None
-        sliders = [ipywidgets.FloatSlider(value=float(v), min=float(lo), max=float(hi),
-                                          step=0.01, description=f"q{i + 1}")
-                   for i, (v, (lo, hi)) in enumerate(zip(self.q, self.ranges, strict=True))]
+                              "(it comes with dqlab[viz]; the static view's sliders need "
+                              "nothing)") from None
+        sliders = []
+        for i, (value, (lo, hi), prismatic) in enumerate(
+                zip(self.q, self.ranges, self.prismatic, strict=True)):
+            sliders.append(ipywidgets.FloatSlider(
+                value=float(value), min=float(lo), max=float(hi),
+                step=0.001 if prismatic else 0.01,
+                readout_format=".3f" if prismatic else ".2f",
+                description=f"q{i + 1}", continuous_update=True))
 
         def update(_change):
-            self.set_joints([s.value for s in sliders])
+            self.set_joints([slider.value for slider in sliders])
 
         for slider in sliders:
             slider.observe(update, names="value")
