@@ -12,8 +12,12 @@ ur_analytic_ik's time to each method's (above 1: faster than ur_analytic_ik).
 - ``ur_analytic_ik`` (C++ with Python bindings): one call per pose in a Python loop, the
   only way it is offered;
 - ``dqlab.ik.numerical`` (damped least squares, one solution per pose, warm-started 0.1 rad
-  from the answer), batch and single (the single loop on the first 500 poses only, at a
-  few milliseconds each), when the module is there.
+  from the answer), batch and single (the single loop on the first 500 poses only);
+- ``roboticstoolbox-python``'s ``ik_LM`` (Levenberg--Marquardt in C++), when it is installed
+  (optional; not a dependency of dqlab): the same 500 poses from the same warm starts, with
+  its tolerance set to the same residual (``tol = 5e-21`` on half the squared error norm, that
+  is an error norm of at most 1e-10) and no random restarts; the success counts of both are
+  printed.
 
 Before timing, the solution counts of dqlab and ur_analytic_ik are compared. Goals, as
 ratios to ur_analytic_ik in the same run: a single pose at most 2 times its single call
@@ -119,7 +123,32 @@ def main():
                 numerical(robot, X, g)
 
         rows.append((f"dqlab.ik.numerical single pose, in a loop ({n_single})",
-                     best_time(numerical_loop, 1, 1) / n_single))
+                     best_time(numerical_loop, 1, loop_repeat) / n_single))
+        ours = [numerical(robot, X, g) for X, g in zip(T[:n_single], q0[:n_single],
+                                                        strict=True)]
+        print(f"dqlab.ik.numerical: {sum(bool(r.valid[0]) for r in ours)} of {n_single} "
+              "single poses solved to 1e-10 m and rad")
+        try:
+            import roboticstoolbox as rtb
+        except Exception:  # not installed, or fails to import  # noqa: BLE001
+            rtb = None
+            print("roboticstoolbox is not installed: its ik_LM column is left out")
+        if rtb is not None:
+            peer_robot = rtb.models.DH.UR3()
+            assert np.abs(peer_robot.fkine(q[0]).A - T[0]).max() < 1e-12   # same frames
+
+            def peer_numerical():
+                return [peer_robot.ik_LM(X, q0=g, tol=5e-21, slimit=1)
+                        for X, g in zip(T[:n_single], q0[:n_single], strict=True)]
+
+            rows.append((f"roboticstoolbox ik_LM single pose, in a loop ({n_single})",
+                         best_time(peer_numerical, 1, loop_repeat) / n_single))
+            solved = peer_numerical()
+            found = np.array([s.q for s in solved])
+            good = [bool(s.success) for s in solved]
+            err = np.abs(robot.fk(found) - T[:n_single]).max(axis=(-1, -2))
+            print(f"roboticstoolbox ik_LM: {sum(good)} of {n_single} reported solved; "
+                  f"{int(np.sum(err[good] < 1e-9))} of those within 1e-9 of the pose")
     else:
         print("dqlab.ik.numerical is not available: skipped")
 
