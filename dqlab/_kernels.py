@@ -163,6 +163,32 @@ def rotation_vector_from_matrix_entries(r00, r01, r02, r10, r11, r12, r20, r21, 
     return x * scale, y * scale, z * scale
 
 
+def pose_error_entries(a, b):
+    r"""Position and rotation errors between two poses given by their 16 entries, row by row
+    (see :func:`dqlab.ik.targets.pose_errors`): :math:`\lVert p - p^\ast \rVert` and the
+    angle :math:`\operatorname{atan2}(\lVert (M - M^\top)^\vee\rVert, \operatorname{tr}M - 1)`
+    of :math:`M = R R^{\ast\top}`.
+
+    >>> pose_error_entries([1.0, 0, 0, 0.3, 0, 1.0, 0, 0, 0, 0, 1.0, 0, 0, 0, 0, 1.0],
+    ...                    [1.0, 0, 0, 0.0, 0, 1.0, 0, 0, 0, 0, 1.0, 0, 0, 0, 0, 1.0])
+    (0.3, 0.0)
+    """
+    dx, dy, dz = a[3] - b[3], a[7] - b[7], a[11] - b[11]
+
+    def dot(i, j):            # M_ij = R_i . R*_j: row i of R dotted with row j of R*
+        return a[4 * i] * b[4 * j] + a[4 * i + 1] * b[4 * j + 1] + a[4 * i + 2] * b[4 * j + 2]
+
+    vx = dot(1, 2) - dot(2, 1)
+    vy = dot(2, 0) - dot(0, 2)
+    vz = dot(0, 1) - dot(1, 0)
+    trace = dot(0, 0) + dot(1, 1) + dot(2, 2)
+    if type(dx) is float:
+        return (math.sqrt(dx * dx + dy * dy + dz * dz),
+                math.atan2(math.sqrt(vx * vx + vy * vy + vz * vz), trace - 1.0))
+    return (np.sqrt(dx * dx + dy * dy + dz * dz),
+            np.arctan2(np.sqrt(vx * vx + vy * vy + vz * vz), trace - 1.0))
+
+
 # --------------------------------------------------------------------------------------
 # Rotation matrices
 

@@ -12,7 +12,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._checks import check_tolerance, components, stack_components
-from .._kernels import rotation_vector_from_matrix_entries
+from .._kernels import pose_error_entries, rotation_vector_from_matrix_entries
 from ..robot import Robot
 from .result import IKResult, finish, target_reasons
 from .targets import parse_targets, pose_errors
@@ -144,7 +144,11 @@ def numerical(robot: Robot, target: ArrayLike, q0: ArrayLike, *, position_only: 
     iterate = _iterate_one if q.shape[0] == 1 else _iterate
     q, X, iterations, stuck, record = iterate(robot, q, X_target, options, history)
 
-    position_error, rotation_error = pose_errors(X, X_target)
+    if X.shape[0] == 1:        # pose_errors without its checks: both are rigid transforms
+        position_error, rotation_error = (np.array([v]) for v in pose_error_entries(
+            X.ravel().tolist(), X_target.ravel().tolist()))
+    else:
+        position_error, rotation_error = pose_errors(X, X_target)
     if not targets.has_rotation:
         rotation_error = np.zeros_like(rotation_error)
     valid = options.met(position_error, rotation_error)

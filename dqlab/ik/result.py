@@ -100,7 +100,8 @@ def finish(solutions: np.ndarray, valid: np.ndarray, position_error: np.ndarray,
     array([[0., 0., 0.],
            [0., 0., 0.]])
     """
-    solutions[~valid] = 0.0
+    if not valid.all():
+        solutions[~valid] = 0.0
     return IKResult(solutions=solutions, valid=valid, position_error=position_error,
                     rotation_error=rotation_error, flags=flags, reason=reason)
 

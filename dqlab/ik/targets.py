@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._checks import as_float_array, check_tolerance, components, real_array
+from .._kernels import pose_error_entries
 from ..dualquat import (
     check_unit_dual_quaternion,
     dual_quaternion_from_transform,
@@ -218,20 +219,10 @@ def pose_errors(X: ArrayLike, X_target: ArrayLike
     # on components: Python floats for one pose (whatever its leading shape), columns for
     # a batch
     one = X.size == 16
-    a = components(X.reshape(16 if one else lead + (16,)))
-    b = components(X_target.reshape(16 if one else lead + (16,)))
     with np.errstate(over="ignore", invalid="ignore"):
-        dx, dy, dz = a[3] - b[3], a[7] - b[7], a[11] - b[11]
-        position_error = np.sqrt(dx * dx + dy * dy + dz * dz)
-
-        def dot(i, j):            # M_ij = R_i . R*_j: row i of R dotted with row j of R*
-            return a[4 * i] * b[4 * j] + a[4 * i + 1] * b[4 * j + 1] + a[4 * i + 2] * b[4 * j + 2]
-
-        vx = dot(1, 2) - dot(2, 1)
-        vy = dot(2, 0) - dot(0, 2)
-        vz = dot(0, 1) - dot(1, 0)
-        sin2 = np.sqrt(vx * vx + vy * vy + vz * vz)
-        rotation_error = np.arctan2(sin2, dot(0, 0) + dot(1, 1) + dot(2, 2) - 1.0)
+        position_error, rotation_error = pose_error_entries(
+            components(X.reshape(16 if one else lead + (16,))),
+            components(X_target.reshape(16 if one else lead + (16,))))
     if not (np.isfinite(position_error).all() and np.isfinite(rotation_error).all()):
         raise ValueError("X and X_target are too large for their errors (overflow): they "
                          "must be rigid transforms")
