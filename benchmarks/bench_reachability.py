@@ -18,12 +18,18 @@ orientations reachable, the mean branch count, the median manipulability).
 - dask: a ``distributed.LocalCluster`` of 1 worker, then of 2 workers (one process and one
   thread each: ``processes=True, threads_per_worker=1``), ``reachability_map(...,
   scheduler=client)``; or the cluster at ``--address``, the same call with the address.
-  Each worker first imports dqlab and solves a small map (not timed).
+  Each worker first imports dqlab and solves a small map (not timed). The local workers
+  start without distributed's default ``MALLOC_TRIM_THRESHOLD_=65536``: with it, glibc
+  hands every freed temporary above 64 kiB back to the system and the next one faults its
+  pages in again, which made the map's numpy code a third slower (CPU time) in a worker
+  than in this process. A cluster at ``--address`` runs with its own settings.
 
 Every dask map is compared with the numpy one (they must be equal number for number). The
 table gives wall-clock times (``time.perf_counter``, one run each: the full map takes
-minutes), poses per second and the speed-up from 1 to 2 workers. numpy and BLAS run
-single-threaded, so one worker is one core. This is not a test.
+minutes), poses per second, the speed-up from 1 to 2 workers in wall-clock time, and the CPU
+time spent (this process for numpy, the worker processes for dask): on a machine shared
+with other work, a wall time above the CPU time per worker means the workers waited for a
+core. numpy and BLAS run single-threaded, so one worker uses one core. This is not a test.
 
 The stored map of chapter 11, ``book/data/ur3_reachability.npz``, was written by
 
@@ -75,6 +81,19 @@ def timed(f):
     return out, time.perf_counter() - start
 
 
+def cpu_seconds():
+    """CPU time of the calling process (run on the workers by ``client.run``)."""
+    return time.process_time()
+
+
+def timed_on(client, f):
+    """``f()``'s result, wall time and the CPU time the client's workers spent on it."""
+    before = client.run(cpu_seconds)
+    out, seconds = timed(f)
+    after = client.run(cpu_seconds)
+    return out, seconds, sum(after[w] - before[w] for w in before if w in after)
+
+
 def warm_up(robot, orientations, scheduler, workers):
     """Import dqlab on every worker and solve a little (not timed)."""
     few = np.zeros((4 * workers, 3)) + [0.0, -0.3, 0.3]
@@ -82,14 +101,17 @@ def warm_up(robot, orientations, scheduler, workers):
 
 
 def on_local_cluster(robot, positions, orientations, chunk, workers):
+    import dask
     import distributed
-    with distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster, \
+    no_trim = {"distributed.nanny.pre-spawn-environ": {"MALLOC_TRIM_THRESHOLD_": None}}
+    with dask.config.set(no_trim), \
+            distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                     dashboard_address=None) as cluster, \
             distributed.Client(cluster, set_as_default=False) as client:
         client.wait_for_workers(workers)
         warm_up(robot, orientations, client, workers)
-        return timed(lambda: reachability_map(robot, positions, orientations, chunk=chunk,
-                                              scheduler=client))
+        return timed_on(client, lambda: reachability_map(robot, positions, orientations,
+                                                         chunk=chunk, scheduler=client))
 
 
 def on_cluster_at(address, robot, positions, orientations, chunk):
@@ -98,10 +120,11 @@ def on_cluster_at(address, robot, positions, orientations, chunk):
         info = client.scheduler_info()["workers"].values()
         workers = len(info)
         threads = sum(w.get("nthreads", 1) for w in info)
-    warm_up(robot, orientations, address, workers)
-    rmap, seconds = timed(lambda: reachability_map(robot, positions, orientations,
-                                                   chunk=chunk, scheduler=address))
-    return rmap, seconds, workers, threads
+        warm_up(robot, orientations, client, workers)
+        # the map connects to the address itself, as a user's call would
+        rmap, seconds, cpu = timed_on(client, lambda: reachability_map(
+            robot, positions, orientations, chunk=chunk, scheduler=address))
+    return rmap, seconds, cpu, workers, threads
 
 
 def main():
@@ -127,25 +150,27 @@ def main():
           f"{samples:,} poses, {chunk} positions ({chunk * k:,} poses) per task, "
           f"{tasks} tasks; {os.cpu_count()} CPUs")
 
-    rows = []                          # (what, workers, seconds)
+    rows = []                          # (what, workers, wall seconds, CPU seconds)
     reference = None
     if not args.no_numpy:
+        cpu = time.process_time()
         reference, seconds = timed(lambda: reachability_statistics(robot, positions,
                                                                    orientations))
-        rows.append(("numpy, in this process", 1, seconds))
+        rows.append(("numpy, in this process", 1, seconds, time.process_time() - cpu))
         print(f"numpy done in {seconds:.1f} s")
     maps = {}
     if args.address:
-        rmap, seconds, workers, threads = on_cluster_at(args.address, robot, positions,
-                                                        orientations, chunk)
-        rows.append((f"dask, {args.address}", workers, seconds))
+        rmap, seconds, cpu, workers, threads = on_cluster_at(args.address, robot, positions,
+                                                             orientations, chunk)
+        rows.append((f"dask, {args.address}", workers, seconds, cpu))
         print(f"dask on the cluster at {args.address} ({workers} workers, {threads} "
               f"threads) done in {seconds:.1f} s")
         maps[workers] = rmap
     else:
         for workers in args.workers:
-            rmap, seconds = on_local_cluster(robot, positions, orientations, chunk, workers)
-            rows.append(("dask, LocalCluster", workers, seconds))
+            rmap, seconds, cpu = on_local_cluster(robot, positions, orientations, chunk,
+                                                  workers)
+            rows.append(("dask, LocalCluster", workers, seconds, cpu))
             maps[workers] = rmap
             print(f"dask on {workers} worker(s) done in {seconds:.1f} s")
     if reference is not None:
@@ -155,13 +180,14 @@ def main():
             if not equal:
                 sys.exit("the dask and numpy maps differ")
 
-    one = next((s for what, w, s in rows if w == 1 and what.startswith("dask")), None)
-    width = max(len(what) for what, _, _ in rows) + 2
-    print(f"\n{'run':<{width}}{'workers':>8}{'wall (s)':>10}{'poses/s':>12}{'speed-up':>10}")
-    for what, workers, seconds in rows:
+    one = next((s for what, w, s, _ in rows if w == 1 and what.startswith("dask")), None)
+    width = max(len(what) for what, *_ in rows) + 2
+    print(f"\n{'run':<{width}}{'workers':>8}{'wall (s)':>10}{'poses/s':>12}{'speed-up':>10}"
+          f"{'CPU (s)':>10}")
+    for what, workers, seconds, cpu in rows:
         speedup = f"{one / seconds:.2f}" if one and what.startswith("dask") else ""
         print(f"{what:<{width}}{workers:>8}{seconds:>10.1f}{samples / seconds:>12,.0f}"
-              f"{speedup:>10}")
+              f"{speedup:>10}{cpu:>10.1f}")
 
     rmap = next(iter(maps.values()), reference)
     fraction = rmap.fraction
@@ -176,9 +202,10 @@ def main():
                 + " ".join(sys.argv[1:]),
                 "samples": samples, "cpus": os.cpu_count(), "chunk": chunk,
                 "dask_version": dask.__version__, "dqlab_version": dqlab.__version__}
-        for what, workers, seconds in rows:
-            key = "seconds_numpy" if what.startswith("numpy") else f"seconds_{workers}_workers"
-            meta[key] = round(seconds, 2)
+        for what, workers, seconds, cpu in rows:
+            key = "numpy" if what.startswith("numpy") else f"{workers}_workers"
+            meta["seconds_" + key] = round(seconds, 2)
+            meta["cpu_seconds_" + key] = round(cpu, 2)
         rmap.save(args.save, **meta)
         print(f"wrote {args.save} ({os.path.getsize(args.save) / 1e3:.0f} kB)")
 

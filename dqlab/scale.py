@@ -745,6 +745,16 @@ def reachability_map(robot: Robot, positions: ArrayLike, orientations: ArrayLike
         Without dask, or without ``distributed`` for an address (install the extra:
         ``pip install 'dqlab[scale]'``).
 
+    Notes
+    -----
+    The work is numpy code on many temporaries of a few hundred kilobytes. dask's worker
+    processes start by default with ``MALLOC_TRIM_THRESHOLD_=65536``, which makes glibc
+    return each of them to the system and fault it in again, and measurably slowed this code
+    (by about a third, in CPU time, in ``benchmarks/bench_reachability.py``); the benchmark
+    starts its workers with ``dask.config.set({"distributed.nanny.pre-spawn-environ":
+    {"MALLOC_TRIM_THRESHOLD_": None}})``. Threads (``scheduler="threads"``) give little
+    here: the many small numpy operations hold the GIL between them.
+
     Examples
     --------
     Two positions of chapter 11's board, one out of reach, 16 orientations:
