@@ -378,7 +378,8 @@ def _solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref):
                 return None
             theta234 = half_sum + half_diff
             theta6 = wrapped_angle(half_sum - half_diff)
-            X, Y = steps.wrist1_point(Px, Py, theta234, d5)
+            X, Y = steps.wrist1_point(Px, Py, theta234, d5,
+                                      steps.theta234_sine_cosine(L, sigma, c5bar, s5bar))
             theta234 = wrapped_angle(theta234)
             # the distance of _clipping_distance, sqrt(e1^2 + e2^2) with e1 = 0 (h2 >= 0)
             rho = math.sqrt(X * X + Y * Y)
@@ -629,9 +630,15 @@ def _branches(prm, flange, theta6_ref, tol, out=None):
     Px = Px[:, None, :]                                       # (2, 1, n)
     family = (prm, half_sum, half_diff, s5bar, c5bar, Px, Py, theta6_ref, tol)
     theta234, theta6, represented = _wrist_family(*family)
+    with np.errstate(divide="ignore", invalid="ignore"):      # 0/0 only in the family
+        sine_cosine = steps.theta234_sine_cosine(L, _SIGMA, c5bar, s5bar)    # (2, 2, n)
+    if represented is not None:      # a member of a wrist family: its own sine and cosine
+        for part, f in zip(sine_cosine, (np.sin, np.cos), strict=True):
+            part[represented] = f(theta234[represented])
 
     # Steps 3 and 4, the planar chain: arrays (2, 2, 2, n) over (s, e, w)
-    X, Y, theta2, theta3, outer, inner, sin3 = _planar_chain(prm, Px, Py, theta234)
+    X, Y, theta2, theta3, outer, inner, sin3 = _planar_chain(prm, Px, Py, theta234,
+                                                             sine_cosine)
     # Near the wrist singularity theta234 comes from coefficients of the size of theta5 and
     # may be off by eps / |theta5|: enough to put the wrist-1 point of a stretched or folded
     # elbow out of reach. Such rows move within their wrist family to where the forearm
@@ -695,9 +702,9 @@ def _out_of_reach(prm, outer, inner, tol):
     return far.any(axis=1)
 
 
-def _planar_chain(prm, Px, Py, theta234):
+def _planar_chain(prm, Px, Py, theta234, sine_cosine=None):
     """Steps 3 and 4: the wrist-1 point (2, 1, 2, n) and the elbow angles (2, 2, 2, n)."""
-    X, Y = steps.wrist1_point(Px, Py, theta234, prm["d5"])   # (2, 2, n) over (s, w)
+    X, Y = steps.wrist1_point(Px, Py, theta234, prm["d5"], sine_cosine)   # (2, 2, n), (s, w)
     X, Y = X[:, None], Y[:, None]                             # (2, 1, 2, n)
     theta2, theta3, outer, inner, sin3 = steps.elbow_angles(X, Y, prm["a2"], prm["a3"], _ELBOW)
     return X, Y, theta2, theta3, outer, inner, sin3

@@ -46,6 +46,7 @@ class _Functions(NamedTuple):
     cos: object
     clip0: object          # max(x, 0)
     no_minus_pi: object    # -pi -> pi, other angles unchanged
+    cos_sin: object        # (x, y) / |(x, y)|: cos and sin of atan2(y, x), (1, 0) at 0
 
 
 def _float_no_minus_pi(theta):
@@ -56,10 +57,25 @@ def _array_no_minus_pi(theta):
     return np.where(theta == -np.pi, np.pi, theta)
 
 
+def _float_cos_sin(x, y):
+    r = math.sqrt(x * x + y * y)
+    return (x / r, y / r) if r > 0.0 else (1.0, 0.0)
+
+
+def _array_cos_sin(x, y):
+    r = np.sqrt(x * x + y * y)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        c, s = x / r, y / r
+    zero = r == 0.0
+    if zero.any():
+        c[zero], s[zero] = 1.0, 0.0
+    return c, s
+
+
 _FLOAT = _Functions(math.sqrt, math.atan2, math.sin, math.cos, lambda x: x if x > 0.0 else 0.0,
-                    _float_no_minus_pi)
+                    _float_no_minus_pi, _float_cos_sin)
 _ARRAY = _Functions(np.sqrt, np.arctan2, np.sin, np.cos, lambda x: np.maximum(x, 0.0),
-                    _array_no_minus_pi)
+                    _array_no_minus_pi, _array_cos_sin)
 
 
 # Each step picks ``math``'s functions for a Python float (one pose, one branch at a time)
@@ -150,7 +166,8 @@ def shoulder_angles(x5: Array, y5: Array, d4: float, sign: ArrayLike | None = No
     num_c = x5 * hpm - y5 * d4
     num_s = y5 * hpm + x5 * d4
     theta1 = f.atan2(num_s + 0.0, num_c)    # + 0.0 turns -0.0 into 0.0: never -pi
-    return theta1, f.cos(theta1), f.sin(theta1), h, h2
+    c1, s1 = f.cos_sin(num_c, num_s)         # the same direction, without trigonometry
+    return theta1, c1, s1, h, h2
 
 
 def relative_rotation_coefficients(q: tuple, half1: Array
@@ -279,7 +296,41 @@ def arm_plane_wrist(p5: tuple, c1: Array, s1: Array, d1: float) -> tuple[Array, 
     return c1 * x5 + s1 * y5, z5 - d1
 
 
-def wrist1_point(Px: Array, Py: Array, theta234: Array, d5: float) -> tuple[Array, Array]:
+def theta234_sine_cosine(L: tuple, sigma: ArrayLike, c5bar: Array, s5bar: Array
+                         ) -> tuple[Array, Array]:
+    r""":math:`\sin\theta_{234}` and :math:`\cos\theta_{234}` from the coefficients of
+    :func:`wrist_angles`, without trigonometry.
+
+    :math:`\theta_{234} = \frac{\Sigma}{2} + \frac{\Delta}{2}`, whose cosines and sines are
+    :math:`(L_w, -L_y) / \bar c_5` and :math:`(-\sigma L_z, \sigma L_x) / \bar s_5`; the
+    angle-addition formulas give
+
+    .. math::
+
+        \sin\theta_{234} = \sigma\,\frac{L_w L_x + L_y L_z}{\bar c_5 \bar s_5},\qquad
+        \cos\theta_{234} = \sigma\,\frac{L_x L_y - L_w L_z}{\bar c_5 \bar s_5}
+
+    (the two numerators have the squared sum :math:`\bar c_5^2 \bar s_5^2`). Undefined at
+    the wrist singularity, :math:`\bar c_5 \bar s_5 = 0`, where :math:`\theta_{234}` is
+    chosen from its family instead (:func:`feasible_theta234`) and its sine and cosine
+    taken directly.
+
+    Examples
+    --------
+    >>> L = (math.cos(0.3) * math.cos(0.1), math.sin(0.3) * math.sin(0.2),
+    ...      -math.cos(0.3) * math.sin(0.1), -math.sin(0.3) * math.cos(0.2))
+    >>> theta5, half_sum, half_diff, c5bar, s5bar = wrist_angles(L, 1.0)
+    >>> s, c = theta234_sine_cosine(L, 1.0, c5bar, s5bar)
+    >>> round(s - math.sin(0.3), 15), round(c - math.cos(0.3), 15)
+    (0.0, 0.0)
+    """
+    Lw, Lx, Ly, Lz = L
+    k = sigma / (c5bar * s5bar)
+    return k * (Lw * Lx + Ly * Lz), k * (Lx * Ly - Lw * Lz)
+
+
+def wrist1_point(Px: Array, Py: Array, theta234: Array, d5: float,
+                 sine_cosine: tuple | None = None) -> tuple[Array, Array]:
     r"""Wrist-1 point in the arm plane, :math:`(X, Y) = P - d_5 (s_{234}, -c_{234})`.
 
     The wrist-2 axis :math:`z_4 = (c_1 s_{234},\, s_1 s_{234},\, -c_{234})` carries the
@@ -296,9 +347,15 @@ def wrist1_point(Px: Array, Py: Array, theta234: Array, d5: float) -> tuple[Arra
     >>> X, Y = wrist1_point(0.0, 0.54235, -np.pi, 0.08535)
     >>> round(float(X), 12), round(float(Y), 12)
     (0.0, 0.457)
+
+    ``sine_cosine``, when given, is :math:`(\sin\theta_{234}, \cos\theta_{234})`
+    already known (:func:`theta234_sine_cosine`).
     """
-    f = _FLOAT if type(theta234) is float else _ARRAY
-    return Px - d5 * f.sin(theta234), Py + d5 * f.cos(theta234)
+    if sine_cosine is None:
+        f = _FLOAT if type(theta234) is float else _ARRAY
+        sine_cosine = f.sin(theta234), f.cos(theta234)
+    s234, c234 = sine_cosine
+    return Px - d5 * s234, Py + d5 * c234
 
 
 def elbow_triangle(X: Array, Y: Array, a2: float, a3: float
