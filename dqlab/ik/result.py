@@ -29,7 +29,7 @@ class IKResult:
         Why a target has no valid solution (empty string when it has one).
     history : dict of str to ndarray, optional
         What an iterative solver records per iteration when asked (see
-        :func:`dqlab.ik.numerical`); None otherwise.
+        :func:`dqlab.ik.damped_least_squares.numerical`); None otherwise.
     """
 
     solutions: np.ndarray
