@@ -19,6 +19,33 @@ import math
 import numpy as np
 
 # --------------------------------------------------------------------------------------
+# Angles
+
+_TWO_PI = 2.0 * math.pi
+
+
+def wrapped_angle(theta):
+    r"""``theta`` wrapped to :math:`(-\pi, \pi]`: :math:`\theta - 2\pi k` with
+    :math:`k = \operatorname{rint}(\theta / 2\pi)` (exact when :math:`|\theta| < \pi`),
+    then -pi and the roundings of :math:`\theta / 2\pi` moved inside.
+
+    >>> wrapped_angle(-math.pi), wrapped_angle(7.0)
+    (3.141592653589793, 0.7168146928204138)
+    """
+    if type(theta) is float:
+        if -math.pi < theta <= math.pi:
+            return theta
+        w = theta - _TWO_PI * round(theta * (1.0 / _TWO_PI))    # round: half to even, as rint
+        if not abs(w) < math.pi:
+            w = w - _TWO_PI if w > math.pi else (w + _TWO_PI if w <= -math.pi else w)
+        return w
+    w = theta - _TWO_PI * np.rint(theta * (1.0 / _TWO_PI))
+    if w.size and not np.abs(w).max() < np.pi:   # -pi, or a rounding of theta / (2 pi)
+        w = np.where(w > np.pi, w - _TWO_PI, np.where(w <= -np.pi, w + _TWO_PI, w))
+    return w
+
+
+# --------------------------------------------------------------------------------------
 # Quaternions
 
 

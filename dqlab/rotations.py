@@ -12,7 +12,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._checks import as_float_array, components, real_array, rotation_or_raise
-from ._kernels import norm_last_axis, orthonormality
+from ._kernels import norm_last_axis, orthonormality, wrapped_angle
 
 __all__ = [
     "rot_x", "rot_y", "rot_z", "matrix_from_euler_zxz", "euler_zxz_from_matrix",
@@ -20,7 +20,6 @@ __all__ = [
     "rodrigues", "check_rotation_matrix", "skew", "wrap_angle",
 ]
 
-_TWO_PI = 2.0 * np.pi
 
 
 def _elementary(theta, i, j):
@@ -324,11 +323,7 @@ def wrap_angle(theta: ArrayLike) -> NDArray[np.float64]:
     >>> wrap_angle([np.pi, -np.pi, 3 * np.pi / 2, 0.5])
     array([ 3.14159265,  3.14159265, -1.57079633,  0.5       ])
     """
-    theta = real_array(theta, "theta")
-    w = theta - _TWO_PI * np.rint(theta * (1.0 / _TWO_PI))    # exact when |theta| < pi
-    if w.size and not np.abs(w).max() < np.pi:   # -pi, or a rounding of theta / (2 pi)
-        w = np.where(w > np.pi, w - _TWO_PI, np.where(w <= -np.pi, w + _TWO_PI, w))
-    return w
+    return wrapped_angle(real_array(theta, "theta"))
 
 
 def matrix_from_rpy(rpy: ArrayLike) -> NDArray[np.float64]:

@@ -488,8 +488,71 @@ def test_batch_shapes_match_single(robot, lead):
     assert all(f.shape == lead for f in result.flags.values())
     for idx in np.ndindex(*lead):
         single = ur(robot, T[idx])
-        np.testing.assert_array_equal(single.solutions, result.solutions[idx])
+        # one pose goes through math's sin and cos, a batch through numpy's: the last bit
+        # may differ (see test_single_pose_path_equals_the_batch_path)
+        np.testing.assert_allclose(single.solutions, result.solutions[idx], rtol=0, atol=1e-12)
         np.testing.assert_array_equal(single.valid, result.valid[idx])
+
+
+def offset_ur3():
+    """The UR3 with joint offsets (as a controller with another zero would have)."""
+    links = [Link(a=lk.a, alpha=lk.alpha, d=lk.d, theta_offset=off)
+             for lk, off in zip(ur3().links, [0.1, -np.pi / 2, 0.0, -np.pi / 2, 0.3, np.pi],
+                                strict=True)]
+    return Robot(links, name="UR3 with offsets")
+
+
+def poses_of_every_kind(robot):
+    """Regular, singular (wrist, elbow, shoulder, the thesis's pose), near-singular and
+    unreachable poses (beyond reach, inside the shoulder cylinder) of one robot."""
+    rng = np.random.default_rng(41)
+    q = rng.uniform(-np.pi, np.pi, (600, 6))
+    q[100:150, 4] = rng.choice([0.0, np.pi, 1e-5, np.pi - 1e-4, 2e-3], 50)   # wrist
+    q[150:200, 2] = rng.choice([0.0, np.pi, 1e-9, 3e-7], 50)                  # elbow
+    v = -(UR3["a2"] * np.cos(q[200:250, 1]) + UR3["a3"] * np.cos(q[200:250, 1]
+                                                                  + q[200:250, 2])) / UR3["d5"]
+    q[200:250, 3] = np.arcsin(np.clip(v, -1, 1)) - q[200:250, 1] - q[200:250, 2]  # shoulder
+    q[250] = THESIS_Q
+    q -= [lk.theta_offset for lk in robot.links]          # the DH angles above, as joints
+    T = robot.fk(q)
+    T[250:260, :3, 3] *= 5.0                                       # beyond reach
+    T[260:270, :3, 3] = [0.0, 0.0, 0.3]                            # wrist centre near the axis
+    T[260:270, :3, :3] = np.eye(3)
+    return T
+
+
+@pytest.mark.parametrize("which", ["ur3", "offsets", "dual quaternions", "q_ref"])
+def test_single_pose_path_equals_the_batch_path(which):
+    """One pose at a time runs the steps on Python floats (math), a batch on arrays
+    (numpy); poses that need the batch path's extra work (the wrist family, reasons) are
+    handed to it. Both must give the same result on every kind of pose."""
+    from dqlab.dualquat import dual_quaternion_from_transform
+
+    robot = offset_ur3() if which == "offsets" else ur3()
+    T = poses_of_every_kind(robot)
+    poses = dual_quaternion_from_transform(T) if which == "dual quaternions" else T
+    kw = {"q_ref": [0.0, 0.0, 0.0, 0.0, 0.0, 1.0]} if which == "q_ref" else {}
+    batch = ur(robot, poses, **kw)
+    assert batch.flags["wrist_singular"].sum() > 10 and batch.flags["elbow_singular"].sum() > 10
+    assert batch.flags["shoulder_singular"].sum() > 10 and batch.flags["unreachable"].sum() >= 20
+    fast = 0
+    for i, pose in enumerate(poses):
+        single = ur(robot, pose, **kw)
+        fast += urmod._solve_single(robot, urmod._parameters(robot), pose, 1e-9, 5e-7, 1e-9,
+                                    None) is not None
+        np.testing.assert_array_equal(single.valid, batch.valid[i])
+        # math's and numpy's sin and cos may differ in the last bit, which the elbow angles
+        # amplify by 1 / |sin theta3| near a straight or folded elbow
+        sin3 = np.maximum(np.abs(np.sin(batch.solutions[i, :, 2])), 1e-9)
+        assert np.all(np.abs(single.solutions - batch.solutions[i])
+                      <= 1e-12 + 4e-15 / sin3[:, None])
+        np.testing.assert_allclose(single.position_error, batch.position_error[i], rtol=0,
+                                   atol=1e-15)
+        np.testing.assert_array_equal(single.rotation_error, batch.rotation_error[i])
+        for name, flag in batch.flags.items():
+            assert single.flags[name].shape == () and single.flags[name] == flag[i], name
+        assert single.reason.shape == () and single.reason == batch.reason[i]
+    assert 450 < fast < len(poses)            # most poses take the float path, not all
 
 
 def test_dual_quaternion_input_matches_matrix_input(robot):

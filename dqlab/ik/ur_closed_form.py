@@ -102,12 +102,20 @@ but:
 """
 
 import math
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._checks import as_float_array, check_tolerance
+from .._checks import as_float_array, check_tolerance, unit_dual_quaternion_or_raise
+from .._kernels import (
+    orthonormality,
+    quaternion_from_matrix_entries,
+    quaternion_rotate,
+    translation_from_dual_quaternion_entries,
+    wrapped_angle,
+)
 from ..dualquat import (
     dual_quaternion_conjugate,
     dual_quaternion_from_transform,
@@ -122,12 +130,13 @@ from ..rotations import wrap_angle
 from ..transforms import transform_inverse
 from . import ur_steps as steps
 from .result import IKResult, finish
-from .targets import parse_targets, pose_errors
+from .targets import RIGID_TOL, parse_targets, pose_errors
 
 __all__ = ["ur", "ur_parameters", "equivalent_solutions", "closest_solution",
            "distinct_solutions", "SOLUTION_ORDER"]
 
 _HALF_SQRT2 = np.sqrt(0.5)
+_HALF_SQRT2_FLOAT = math.sqrt(0.5)
 _CHUNK = 1024                               # poses per block: temporaries of 64 kB at most
 _FLAGS = ("wrist_singular", "shoulder_singular", "elbow_singular", "unreachable")
 _EYE_BYTES = np.eye(4).tobytes()
@@ -149,6 +158,19 @@ REASON_INNER = ("elbow: the wrist-1 point is closer to the shoulder than ||a2| -
                 "every branch")
 REASON_REACH = "elbow: the wrist-1 point is out of the forearm's reach on every branch"
 REASON_TOL = "no branch reproduces the pose within tol"
+
+
+_CHECKED = weakref.WeakKeyDictionary()    # robot -> its parameters (links are immutable)
+
+
+def _parameters(robot):
+    """:func:`ur_parameters` of a robot, checked once per robot."""
+    try:
+        return _CHECKED[robot]
+    except (KeyError, TypeError):
+        prm = ur_parameters(robot)
+        _CHECKED[robot] = prm
+        return prm
 
 
 def ur_parameters(robot: Robot, *, atol: float = 1e-12) -> dict:
@@ -292,6 +314,102 @@ def _theta6_reference(q_ref, batch):
                          f"poses' leading shape {batch}") from None
 
 
+def _single_flange(robot, target, d6, pose_tol):
+    """The rotation quaternion and the wrist centre of one flange pose as floats, checked
+    as :func:`~dqlab.ik.targets.parse_targets` checks it; None when the pose is not a
+    plain (4, 4) or (8,) one, the robot has a base or a tool, or the check fails (the batch
+    path then raises its message)."""
+    if target.shape == (4, 4):
+        a, b, c, d = target.tolist()
+        err, det = orthonormality(a, b, c)         # NaN or inf in R fail this test too
+        t = a[3] + b[3] + c[3]
+        if not (err <= pose_tol and det > 0.0 and t - t == 0.0 and d == [0.0, 0.0, 0.0, 1.0]):
+            return None
+        q = quaternion_from_matrix_entries(a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2])
+        p, z6 = (a[3], b[3], c[3]), (a[2], b[2], c[2])
+    elif target.shape == (8,):
+        Q = target.tolist()
+        try:
+            unit_dual_quaternion_or_raise(Q, "target", pose_tol)
+        except ValueError:
+            return None
+        q = tuple(Q[:4])
+        p = translation_from_dual_quaternion_entries(*Q)
+        z6 = quaternion_rotate(*q, 0.0, 0.0, 1.0)
+    else:
+        return None
+    if robot.base.tobytes() != _EYE_BYTES or robot.tool.tobytes() != _EYE_BYTES:
+        return None
+    return q, tuple(pk - d6 * zk for pk, zk in zip(p, z6, strict=True))   # wrist_center
+
+
+def _solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref):
+    """One pose on Python floats: the steps of a batch, one branch at a time.
+
+    Returns the :class:`IKResult` of the pose, the same as the batch path's, or None when
+    the pose needs what only the batch path does: a wrist near its singularity (the wrist
+    family), a wrist centre inside the shoulder cylinder or no valid row (the reasons), a
+    base or tool, or a target that fails its check (the error message).
+    """
+    flange = _single_flange(robot, target, prm["d6"], pose_tol)
+    if flange is None:
+        return None
+    if q_ref is not None:
+        _theta6_reference(q_ref, ())               # checked; it matters only at the wrist
+    (qw, qx, qy, qz), p5 = flange
+    x5, y5, _ = p5
+    d1, a2, a3, d4, d5 = prm["d1"], prm["a2"], prm["a3"], prm["d4"], prm["d5"]
+    r_out, r_in = abs(a2 + a3), abs(a2 - a3)
+    r = _HALF_SQRT2_FLOAT
+    qD = (r * (qw + qx), r * (qx - qw), r * (qy - qz), r * (qy + qz))
+    offsets = prm["offsets"] if any(prm["offsets"]) else None
+    solutions, errors = [0.0] * 48, [0.0] * 8         # (8, 6) row by row; invalid rows
+    any_valid = wrist_singular = elbow_singular = False
+    for s, shoulder in enumerate((1.0, -1.0)):
+        theta1, c1, s1, h, h2 = steps.shoulder_angles(x5, y5, d4, shoulder)
+        if h2 < 0.0:
+            return None
+        L = steps.relative_rotation_coefficients(qD, 0.5 * theta1)
+        Px, Py = steps.arm_plane_wrist(p5, c1, s1, d1)
+        for w, sigma in enumerate((1.0, -1.0)):
+            theta5, half_sum, half_diff, c5bar, s5bar = steps.wrist_angles(L, sigma)
+            sin5 = 2.0 * s5bar * c5bar
+            if sin5 < _NEAR_WRIST:
+                return None
+            theta234 = half_sum + half_diff
+            theta6 = wrapped_angle(half_sum - half_diff)
+            X, Y = steps.wrist1_point(Px, Py, theta234, d5)
+            theta234 = wrapped_angle(theta234)
+            # the distance of _clipping_distance, sqrt(e1^2 + e2^2) with e1 = 0 (h2 >= 0)
+            rho = math.sqrt(X * X + Y * Y)
+            gap = max(max(rho - r_out, r_in - rho), 0.0)
+            error = math.sqrt(gap * gap)
+            valid = error <= tol
+            triangle = steps.elbow_triangle(X, Y, a2, a3)
+            for e, elbow in enumerate((1.0, -1.0)):
+                theta2, theta3, _, _, sin3 = steps.elbow_angles(X, Y, a2, a3, elbow, triangle)
+                row = [theta1, theta2, theta3, wrapped_angle(theta234 - theta2 - theta3),
+                       theta5, theta6]
+                if offsets is not None:
+                    row = [wrapped_angle(t - o) for t, o in zip(row, offsets, strict=True)]
+                k = 4 * s + 2 * e + w
+                if valid:                                       # (others stay zero, as
+                    solutions[6 * k:6 * k + 6] = row            # finish() writes them)
+                errors[k] = error
+            if valid:
+                any_valid = True
+                wrist_singular = wrist_singular or sin5 < singular_tol
+                elbow_singular = elbow_singular or sin3 < singular_tol
+    if not any_valid:
+        return None
+    flags = {"wrist_singular": wrist_singular, "shoulder_singular": h < singular_tol * d4,
+             "elbow_singular": elbow_singular, "unreachable": False}
+    errors = np.array(errors)
+    return IKResult(np.array(solutions).reshape(8, 6), errors <= tol, errors, np.zeros(8),
+                    {name: np.array(flag) for name, flag in flags.items()},
+                    np.array("", dtype=object))
+
+
 def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | None = None,
        q_ref: ArrayLike | None = None, singular_tol: float = 5e-7, pose_tol: float = 1e-9,
        residuals: str = "equations") -> IKResult:
@@ -429,9 +547,15 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     """
     tol = check_tolerance(tol, "tol")
     singular_tol = check_tolerance(singular_tol, "singular_tol")
+    pose_tol = check_tolerance(pose_tol, "pose_tol")
     if residuals not in ("fk", "equations"):
         raise ValueError(f"residuals must be 'fk' or 'equations', got {residuals!r}")
-    prm = ur_parameters(robot)
+    prm = _parameters(robot)
+    if (tool is None and residuals == "equations" and type(target) is np.ndarray
+            and target.dtype == np.float64 and pose_tol <= RIGID_TOL):
+        result = _solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref)
+        if result is not None:
+            return result
     targets = parse_targets(target, tol=pose_tol)
     tool, tool_dq, tool_fix = _tool(robot, tool, pose_tol)
     batch = targets.batch

@@ -2,10 +2,12 @@ r"""The steps of the closed-form UR inverse kinematics, one equation per functio
 
 These are the building blocks of :func:`dqlab.ik.ur_closed_form.ur`; each function solves
 one equation of the derivation (the book's inverse-kinematics chapter, after section 4.3 of
-the thesis) and works on arrays of any shape with plain numpy operations, so that a whole
-batch of poses is solved without a Python loop. Angles are in radians, lengths in metres,
-and the UR's standard Denavit-Hartenberg values are used with their published signs
-(``a2``, ``a3`` are negative).
+the thesis). Each is one formula for two kinds of numbers: numpy arrays of any shape, so
+that a whole batch of poses is solved for all branches at once without a Python loop, and
+plain Python floats with the functions of :mod:`math`, one pose and one branch at a time
+(the fast path of a single pose, where numpy's per-call overhead would dominate). Angles
+are in radians, lengths in metres, and the UR's standard Denavit-Hartenberg values are used
+with their published signs (``a2``, ``a3`` are negative).
 
 Notation. The pose is written relative to the arm's *zero pose* as the product of the six
 joint screws about their zero-pose axes (the thesis's axis-angle dual quaternions
@@ -21,6 +23,9 @@ where :math:`r_u(\theta) = \cos\frac{\theta}{2} + \sin\frac{\theta}{2}\, u` is t
 quaternion of a turn by :math:`\theta` about the unit axis :math:`u`.
 """
 
+import math
+from typing import NamedTuple
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -29,7 +34,36 @@ from ..rotations import wrap_angle  # noqa: F401  (the steps' angle wrapping)
 #: The arrays of the steps: float64 arrays of any shape.
 Array = NDArray[np.float64]
 
-_PLUS_MINUS = np.array([1.0, -1.0])
+_PLUS_MINUS = np.array([[1.0], [-1.0]])
+
+
+class _Functions(NamedTuple):
+    """The elementary functions a step uses, for one kind of number."""
+
+    sqrt: object
+    atan2: object
+    sin: object
+    cos: object
+    clip0: object          # max(x, 0)
+    no_minus_pi: object    # -pi -> pi, other angles unchanged
+
+
+def _float_no_minus_pi(theta):
+    return math.pi if theta == -math.pi else theta
+
+
+def _array_no_minus_pi(theta):
+    return np.where(theta == -np.pi, np.pi, theta)
+
+
+_FLOAT = _Functions(math.sqrt, math.atan2, math.sin, math.cos, lambda x: x if x > 0.0 else 0.0,
+                    _float_no_minus_pi)
+_ARRAY = _Functions(np.sqrt, np.arctan2, np.sin, np.cos, lambda x: np.maximum(x, 0.0),
+                    _array_no_minus_pi)
+
+
+# Each step picks ``math``'s functions for a Python float (one pose, one branch at a time)
+# and numpy's for arrays (a batch, all branches at once): one formula for both.
 
 
 def wrist_center(p: ArrayLike, z6: ArrayLike, d6: float) -> Array:
@@ -60,7 +94,8 @@ def wrist_center(p: ArrayLike, z6: ArrayLike, d6: float) -> Array:
     return p - d6 * z6
 
 
-def shoulder_angles(x5: Array, y5: Array, d4: float) -> tuple[Array, Array, Array, Array, Array]:
+def shoulder_angles(x5: Array, y5: Array, d4: float, sign: ArrayLike | None = None
+                    ) -> tuple[Array, Array, Array, Array, Array]:
     r"""Both solutions of :math:`\sin\theta_1\, x_5 - \cos\theta_1\, y_5 = d_4` (thesis 4.9).
 
     With :math:`h = \sqrt{x_5^2 + y_5^2 - d_4^2}` the two roots are
@@ -85,12 +120,15 @@ def shoulder_angles(x5: Array, y5: Array, d4: float) -> tuple[Array, Array, Arra
         Wrist-centre coordinates in the base frame.
     d4 : float
         Shoulder offset (distance of the arm plane from the base axis).
+    sign : float, optional
+        The one branch to compute, +1.0 (:math:`h_\pm = +h`) or -1.0, with float inputs;
+        by default both branches, on a new first axis.
 
     Returns
     -------
     theta1, c1, s1 : ndarray, shape (2, n)
         :math:`\theta_1`, :math:`\cos\theta_1`, :math:`\sin\theta_1`; row 0 with
-        :math:`h_\pm = +h`, row 1 with :math:`h_\pm = -h`.
+        :math:`h_\pm = +h`, row 1 with :math:`h_\pm = -h` (floats with ``sign``).
     h : ndarray, shape (n,)
         :math:`h \ge 0` after clipping.
     h2 : ndarray, shape (n,)
@@ -102,14 +140,17 @@ def shoulder_angles(x5: Array, y5: Array, d4: float) -> tuple[Array, Array, Arra
     >>> theta1, c1, s1, h, h2 = shoulder_angles(np.array([0.3]), np.array([-0.11235]), 0.11235)
     >>> np.round(theta1.ravel(), 6), np.round(h, 12)
     (array([0.      , 2.424928]), array([0.3]))
+    >>> round(shoulder_angles(0.3, -0.11235, 0.11235, sign=-1.0)[0], 6)     # one branch
+    2.424928
     """
+    f = _FLOAT if type(x5) is float else _ARRAY
     h2 = x5 * x5 + y5 * y5 - d4 * d4
-    h = np.sqrt(np.maximum(h2, 0.0))
-    hpm = _PLUS_MINUS[:, None] * h
+    h = f.sqrt(f.clip0(h2))
+    hpm = (_PLUS_MINUS if sign is None else sign) * h
     num_c = x5 * hpm - y5 * d4
     num_s = y5 * hpm + x5 * d4
-    theta1 = np.arctan2(num_s + 0.0, num_c)    # + 0.0 turns -0.0 into 0.0: never -pi
-    return theta1, np.cos(theta1), np.sin(theta1), h, h2
+    theta1 = f.atan2(num_s + 0.0, num_c)    # + 0.0 turns -0.0 into 0.0: never -pi
+    return theta1, f.cos(theta1), f.sin(theta1), h, h2
 
 
 def relative_rotation_coefficients(q: tuple, half1: Array
@@ -146,7 +187,8 @@ def relative_rotation_coefficients(q: tuple, half1: Array
     [1.0, 0.0, 0.0, 0.0]
     """
     w, x, y, z = q
-    c, s = np.cos(half1), np.sin(half1)
+    f = _FLOAT if type(half1) is float else _ARRAY
+    c, s = f.cos(half1), f.sin(half1)
     return c * w + s * z, c * x + s * y, c * y - s * x, c * z - s * w
 
 
@@ -199,13 +241,13 @@ def wrist_angles(L: tuple, sigma: ArrayLike) -> tuple[Array, Array, Array, Array
     [0.6, 0.1, 0.2]
     """
     Lw, Lx, Ly, Lz = L
-    c5bar = np.sqrt(Lw * Lw + Ly * Ly)
-    s5bar = np.sqrt(Lx * Lx + Lz * Lz)
+    f = _FLOAT if type(Lw) is float else _ARRAY
+    c5bar = f.sqrt(Lw * Lw + Ly * Ly)
+    s5bar = f.sqrt(Lx * Lx + Lz * Lz)
     # (sigma * sigma = 1 gives c5bar the broadcast shape: atan2 is fastest on equal shapes)
-    theta5 = 2.0 * np.arctan2(sigma * s5bar, (sigma * sigma) * c5bar)
-    theta5 = np.where(theta5 == -np.pi, np.pi, theta5)
-    half_sum = np.arctan2(-Ly, Lw)
-    half_diff = np.arctan2(sigma * Lx, -sigma * Lz)
+    theta5 = f.no_minus_pi(2.0 * f.atan2(sigma * s5bar, (sigma * sigma) * c5bar))
+    half_sum = f.atan2(-Ly, Lw)
+    half_diff = f.atan2(sigma * Lx, -sigma * Lz)
     return theta5, half_sum, half_diff, c5bar, s5bar
 
 
@@ -255,11 +297,58 @@ def wrist1_point(Px: Array, Py: Array, theta234: Array, d5: float) -> tuple[Arra
     >>> round(float(X), 12), round(float(Y), 12)
     (0.0, 0.457)
     """
-    return Px - d5 * np.sin(theta234), Py + d5 * np.cos(theta234)
+    f = _FLOAT if type(theta234) is float else _ARRAY
+    return Px - d5 * f.sin(theta234), Py + d5 * f.cos(theta234)
 
 
-def elbow_angles(X: Array, Y: Array, a2: float, a3: float, elbow_sign: ArrayLike
-                 ) -> tuple[Array, Array, Array, Array, Array]:
+def elbow_triangle(X: Array, Y: Array, a2: float, a3: float
+                   ) -> tuple[Array, Array, Array, Array, Array]:
+    r"""The law of cosines of the planar 2R chain, the part both elbow branches share.
+
+    See :func:`elbow_angles`: with :math:`\rho^2 = X^2 + Y^2`,
+
+    .. math::
+
+        c = \operatorname{sgn}(a_2 a_3)(\rho^2 - a_2^2 - a_3^2) = 2|a_2 a_3|\cos\theta_3,
+        \qquad k = \sqrt{K} = 2|a_2 a_3|\,|\sin\theta_3|,
+
+    with :math:`K` clipped at zero out of reach, and the elbow's magnitude
+    :math:`|\theta_3| = \operatorname{atan2}(k, c)`.
+
+    Parameters
+    ----------
+    X, Y : ndarray or float
+        Wrist-1 point in the arm plane, relative to the shoulder.
+    a2, a3 : float
+
+    Returns
+    -------
+    cos_num, k, outer, inner, angle3 : ndarrays or floats
+        :math:`c`, :math:`k`, the reach margins of :func:`elbow_angles` and
+        :math:`|\theta_3|`.
+
+    Examples
+    --------
+    >>> c, k, outer, inner, angle3 = elbow_triangle(-0.3, 0.2, -0.24365, -0.21325)
+    >>> round(angle3, 6)
+    1.326258
+    """
+    f = _FLOAT if type(X) is float else _ARRAY
+    rho2 = X * X + Y * Y
+    rho = f.sqrt(rho2)
+    r_out = abs(a2 + a3)
+    r_in = abs(a2 - a3)
+    outer = (r_out - rho) * (r_out + rho)
+    inner = (rho - r_in) * (rho + r_in)
+    k = f.sqrt(f.clip0(outer) * f.clip0(inner))
+    cos_num = rho2 - (a2 * a2 + a3 * a3)
+    if a2 * a3 < 0:
+        cos_num = -cos_num
+    return cos_num, k, outer, inner, f.atan2(k, cos_num)
+
+
+def elbow_angles(X: Array, Y: Array, a2: float, a3: float, elbow_sign: ArrayLike,
+                 triangle: tuple | None = None) -> tuple[Array, Array, Array, Array, Array]:
     r"""Planar 2R: :math:`\theta_3` from the law of cosines, :math:`\theta_2` by ``atan2``.
 
     With :math:`\rho^2 = X^2 + Y^2` the law of cosines (thesis 4.37) reads
@@ -293,9 +382,13 @@ def elbow_angles(X: Array, Y: Array, a2: float, a3: float, elbow_sign: ArrayLike
         Wrist-1 point in the arm plane, relative to the shoulder.
     a2, a3 : float
         Upper-arm and forearm lengths (signed, as UR publishes them).
-    elbow_sign : ndarray, shape (2, 1)
+    elbow_sign : ndarray, shape (2, 1), or float
         ``[[1], [-1]]``: the elbow branches (sign of :math:`\sin\theta_3` when
-        :math:`a_2 a_3 > 0`), on the second-last axis.
+        :math:`a_2 a_3 > 0`), on the second-last axis; +1.0 or -1.0 for one branch with
+        float inputs.
+    triangle : tuple, optional
+        :func:`elbow_triangle` of the same point, when already computed (one pose solved
+        branch by branch computes it once for both elbows).
 
     Returns
     -------
@@ -314,28 +407,15 @@ def elbow_angles(X: Array, Y: Array, a2: float, a3: float, elbow_sign: ArrayLike
     >>> np.round(t2.ravel(), 6), np.round(t3.ravel(), 6), bool(outer > 0), bool(inner > 0)
     (array([-1.199206,  0.0232  ]), array([ 1.326258, -1.326258]), True, True)
     """
-    rho2 = X * X + Y * Y
-    rho = np.sqrt(rho2)
-    r_out = abs(a2 + a3)
-    r_in = abs(a2 - a3)
-    outer = (r_out - rho) * (r_out + rho)
-    inner = (rho - r_in) * (rho + r_in)
-    k = np.sqrt(np.maximum(outer, 0.0) * np.maximum(inner, 0.0))
+    f = _FLOAT if type(X) is float else _ARRAY
+    cos_num, k, outer, inner, angle3 = triangle or elbow_triangle(X, Y, a2, a3)
     m = 2.0 * abs(a2 * a3)
-    cos_num = rho2 - (a2 * a2 + a3 * a3)
-    if a2 * a3 < 0:
-        cos_num = -cos_num
-    theta3 = np.arctan2(k, cos_num) * elbow_sign
-    theta3[theta3 == -np.pi] = np.pi           # the folded elbow, t3 = pi on both branches
+    # the folded elbow has theta3 = pi on both branches
+    theta3 = f.no_minus_pi(angle3 * elbow_sign)
     k1 = a2 + (a3 / m) * cos_num
     k2 = (a3 / m) * k
-    Yk1, Xk1, Xk2, Yk2 = Y * k1, X * k1, X * k2, Y * k2
-    num = elbow_sign * Xk2
-    np.subtract(Yk1, num, out=num)
-    num += 0.0                                 # never -0.0, so theta2 is never -pi
-    den = elbow_sign * Yk2
-    den += Xk1
-    theta2 = np.arctan2(num, den)
+    # + 0.0: never -0.0, so theta2 is never -pi
+    theta2 = f.atan2(Y * k1 - elbow_sign * (X * k2) + 0.0, X * k1 + elbow_sign * (Y * k2))
     return theta2, theta3, outer, inner, k / m
 
 
