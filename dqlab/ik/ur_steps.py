@@ -4,7 +4,7 @@ These are the building blocks of :func:`dqlab.ik.ur_closed_form.ur`; each functi
 one equation of the derivation (the book's inverse-kinematics chapter, after section 4.3 of
 the thesis). Each is one formula for two kinds of numbers: numpy arrays of any shape, so
 that a whole batch of poses is solved for all branches at once without a Python loop, and
-plain Python floats with the functions of :mod:`math`, one pose and one branch at a time
+plain Python floats with the functions of ``math``, one pose and one branch at a time
 (the fast path of a single pose, where numpy's per-call overhead would dominate). Angles
 are in radians, lengths in metres, and the UR's standard Denavit-Hartenberg values are used
 with their published signs (``a2``, ``a3`` are negative).
