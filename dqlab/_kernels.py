@@ -272,9 +272,14 @@ def dual_quaternion_mul_x_screw(a, c, s, h):
     (1.0, 0.0, 0.0, 0.0, 0.0, 0.5, 0.0, 0.0)
     """
     arw, arx, ary, arz, adw, adx, ady, adz = a
-    # p r with r = c + s i is (c w - s x, c x + s w, c y + s z, c z - s y)
-    rw, rx, ry, rz = c * arw - s * arx, c * arx + s * arw, c * ary + s * arz, c * arz - s * ary
-    dw, dx, dy, dz = c * adw - s * adx, c * adx + s * adw, c * ady + s * adz, c * adz - s * ady
+    if type(s) is float and s == 0.0 and c == 1.0:     # a shift alone
+        rw, rx, ry, rz, dw, dx, dy, dz = a
+    else:
+        # p r with r = c + s i is (c w - s x, c x + s w, c y + s z, c z - s y)
+        rw, rx, ry, rz = (c * arw - s * arx, c * arx + s * arw, c * ary + s * arz,
+                          c * arz - s * ary)
+        dw, dx, dy, dz = (c * adw - s * adx, c * adx + s * adw, c * ady + s * adz,
+                          c * adz - s * ady)
     if type(h) is float and h == 0.0:                 # a turn alone
         return rw, rx, ry, rz, dw, dx, dy, dz
     # p i is (-x, w, z, -y)

@@ -343,6 +343,11 @@ class Robot:
                                  else c[:3] for c in screws]
         self._K_dq_screws = [None if c is None else () if c[:3] == (1.0, 0.0, 0.0)
                              else c[3:] for c in screws]
+        # per link, what the products read: the joint's constants and the factor after it
+        self._matrix_steps = list(zip(self._joint_constants, self._K_matrix_screws[1:],
+                                      self._K_terms[1:], strict=True))
+        self._dq_steps = list(zip(self._joint_constants, self._K_dq_screws[1:],
+                                  self._K_dual_quaternions[1:], strict=True))
         # the zero pose: joint axes in the world frame and the TCP (fk_dq_screw's constants)
         zero = [0.0] * n
         X0, before, _ = self._product(zero, record=True)
@@ -545,20 +550,20 @@ class Robot:
         cos, sin = (math.cos, math.sin) if single else (np.cos, np.sin)
         X = self._K0_columns if single else [np.array(c)[:, None] for c in self._K0_columns]
         before, after = [], []
-        for i, (theta0, d0, revolute) in enumerate(self._joint_constants):
+        for q_i, ((theta0, d0, revolute), screw, terms) in zip(q, self._matrix_steps,
+                                                               strict=True):
             if revolute:
-                theta, d = q[i] + theta0, d0
+                theta, d = q_i + theta0, d0
             else:
-                theta, d = theta0, q[i] + d0
+                theta, d = theta0, q_i + d0
             Y = _joint_step(X, cos(theta), sin(theta), d)
             if record:
                 before.append(X)
                 after.append(Y)
-            screw = self._K_matrix_screws[i + 1]
             if screw:
                 X = _x_screw_step(Y, *screw)
             elif screw is None:
-                X = _constant_step(Y, self._K_terms[i + 1])
+                X = _constant_step(Y, terms)
             else:
                 X = Y                                                 # K_i is the identity
         return (X, before, after) if record else X
@@ -679,19 +684,17 @@ class Robot:
         quaternions, so the unchecked component kernels of ``dqlab._kernels`` serve.
         """
         cos, sin = (math.cos, math.sin) if type(q[0]) is float else (np.cos, np.sin)
-        K = self._K_dual_quaternions
-        Q = K[0]
-        for i, (theta0, d0, revolute) in enumerate(self._joint_constants):
+        Q = self._K_dual_quaternions[0]
+        for q_i, ((theta0, d0, revolute), screw, K_i) in zip(q, self._dq_steps, strict=True):
             if revolute:
-                half, h = 0.5 * (q[i] + theta0), 0.5 * d0
+                half, h = 0.5 * (q_i + theta0), 0.5 * d0
             else:
-                half, h = 0.5 * theta0, 0.5 * (q[i] + d0)
+                half, h = 0.5 * theta0, 0.5 * (q_i + d0)
             Q = dual_quaternion_mul_z_screw(Q, cos(half), sin(half), h)
-            screw = self._K_dq_screws[i + 1]
             if screw:
                 Q = dual_quaternion_mul_x_screw(Q, *screw)
             elif screw is None:
-                Q = dual_quaternion_mul(Q, K[i + 1])
+                Q = dual_quaternion_mul(Q, K_i)
         return Q
 
     def zero_pose_screws(self
