@@ -268,8 +268,11 @@ def dual_quaternion_mul_x_screw(a, c, s, h):
     :math:`(c, s) = (\cos\frac\alpha2, \sin\frac\alpha2)`, :math:`h = a / 2`, and
     :math:`a J = a_r r + \varepsilon\,(a_d r + h\, (a_r r)\, i)`.
 
-    >>> dual_quaternion_mul_x_screw((1.0, 0, 0, 0, 0, 0, 0, 0), 1.0, 0.0, 0.5)
+    >>> identity = (1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    >>> dual_quaternion_mul_x_screw(identity, 1.0, 0.0, 0.5)        # a shift by 1 along x
     (1.0, 0.0, 0.0, 0.0, 0.0, 0.5, 0.0, 0.0)
+    >>> dual_quaternion_mul_x_screw(identity, 0.0, 1.0, 0.0)        # a half turn about x
+    (0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     """
     arw, arx, ary, arz, adw, adx, ady, adz = a
     if type(s) is float and s == 0.0 and c == 1.0:     # a shift alone
