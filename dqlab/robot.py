@@ -317,6 +317,9 @@ class Robot:
         self._lo = np.array([lk.limits[0] for lk in self._links])
         self._hi = np.array([lk.limits[1] for lk in self._links])
         self._prismatic_idx = np.flatnonzero(~self._revolute)
+        # the shape of a joint vector that the float path takes: none with prismatic joints
+        # (their limits are checked by check_joints)
+        self._float_path_shape = (n,) if self._prismatic_idx.size == 0 else None
         self._bare = bool(np.array_equal(self._base, np.eye(4))
                           and np.array_equal(self._tool, np.eye(4)))
         # (theta_i offset, d_i offset, revolute?) as Python values for the products
@@ -427,8 +430,8 @@ class Robot:
         checks it, for the float path of a single call; None when ``q`` is anything but a
         float64 array of shape (n,) of a robot without prismatic joints, or when the check
         fails (:meth:`check_joints` then says why)."""
-        if not (type(q) is np.ndarray and q.shape == (self.n,) and q.dtype == np.float64
-                and self._prismatic_idx.size == 0):
+        if not (type(q) is np.ndarray and q.shape == self._float_path_shape
+                and q.dtype is _FLOAT64):
             return None
         floats = q.tolist()
         total = sum(floats)            # NaN or inf in q make it NaN or inf
@@ -963,6 +966,7 @@ class Robot:
 
 
 _FEW = 8    # up to this many joint vectors, Python floats beat numpy's per-call overhead
+_FLOAT64 = np.dtype(np.float64)
 
 
 def _on_components(parts, q, trailing):

@@ -137,6 +137,7 @@ __all__ = ["ur", "ur_parameters", "equivalent_solutions", "closest_solution",
 
 _HALF_SQRT2 = np.sqrt(0.5)
 _HALF_SQRT2_FLOAT = math.sqrt(0.5)
+_FLOAT64 = np.dtype(np.float64)
 _CHUNK = 1024                               # poses per block: temporaries of 64 kB at most
 _FLAGS = ("wrist_singular", "shoulder_singular", "elbow_singular", "unreachable")
 _EYE_BYTES = np.eye(4).tobytes()
@@ -169,6 +170,10 @@ def _parameters(robot):
         return _CHECKED[robot]
     except (KeyError, TypeError):
         prm = ur_parameters(robot)
+        a2, a3 = prm["a2"], prm["a3"]
+        # what one pose on floats reads: the lengths, the forearm's reach, the offsets
+        prm["single"] = (prm["d1"], a2, a3, prm["d4"], prm["d5"], abs(a2 + a3),
+                         abs(a2 - a3), prm["offsets"] if any(prm["offsets"]) else None)
         _CHECKED[robot] = prm
         return prm
 
@@ -358,11 +363,9 @@ def _solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref):
         _theta6_reference(q_ref, ())               # checked; it matters only at the wrist
     (qw, qx, qy, qz), p5 = flange
     x5, y5, _ = p5
-    d1, a2, a3, d4, d5 = prm["d1"], prm["a2"], prm["a3"], prm["d4"], prm["d5"]
-    r_out, r_in = abs(a2 + a3), abs(a2 - a3)
+    d1, a2, a3, d4, d5, r_out, r_in, offsets = prm["single"]
     r = _HALF_SQRT2_FLOAT
     qD = (r * (qw + qx), r * (qx - qw), r * (qy - qz), r * (qy + qz))
-    offsets = prm["offsets"] if any(prm["offsets"]) else None
     solutions, errors = [0.0] * 48, [0.0] * 8     # (8, 6) row by row; rows not valid stay 0
     any_valid = wrist_singular = elbow_singular = False
     for s, shoulder in enumerate((1.0, -1.0)):
@@ -551,7 +554,7 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
         raise ValueError(f"residuals must be 'fk' or 'equations', got {residuals!r}")
     prm = _parameters(robot)
     if (tool is None and residuals == "equations" and type(target) is np.ndarray
-            and target.dtype == np.float64 and pose_tol <= RIGID_TOL):
+            and target.dtype is _FLOAT64 and pose_tol <= RIGID_TOL):
         result = _solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref)
         if result is not None:
             return result
