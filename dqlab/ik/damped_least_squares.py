@@ -136,9 +136,14 @@ def numerical(robot: Robot, target: ArrayLike, q0: ArrayLike, *, position_only: 
     q0 = robot.check_joints(q0, limits="none", name="q0")
     batch = np.broadcast_shapes(targets.batch, q0.shape[:-1])
     n = robot.n
-    X_target = np.broadcast_to(targets.transforms, batch + (4, 4)).reshape(-1, 4, 4)
+    X_target = targets.transforms
+    if targets.batch != batch:
+        X_target = np.broadcast_to(X_target, batch + (4, 4))
+    if q0.shape[:-1] != batch:
+        q0 = np.broadcast_to(q0, batch + (n,))
     lower, upper = robot.limits.T
-    q = np.clip(np.broadcast_to(q0, batch + (n,)).reshape(-1, n), lower, upper)
+    X_target = X_target.reshape(-1, 4, 4)
+    q = np.clip(q0.reshape(-1, n), lower, upper)
     options = _Options(position_only, tol, rotation_tol, int(max_iter), float(damping),
                        min_damping, max_damping, max_step, lower, upper)
     iterate = _iterate_one if q.shape[0] == 1 else _iterate
@@ -315,6 +320,6 @@ def _step(J, q, e, lam, options):
         step = np.linalg.solve(A, g[..., None])[..., 0]
     except np.linalg.LinAlgError:   # an exactly singular system: least-squares step
         step = (np.linalg.pinv(A) @ g[..., None])[..., 0]
-    biggest = np.max(np.abs(step), axis=-1, keepdims=True)
+    biggest = np.abs(step).max(axis=-1, keepdims=True)
     step *= np.minimum(1.0, options.max_step / np.maximum(biggest, 1e-300))
     return np.clip(q + step, options.lower, options.upper)

@@ -127,6 +127,8 @@ def target_reasons(failed: np.ndarray, explain) -> np.ndarray:
     array(['', 'target 1 is out of reach'], dtype=object)
     """
     reason = np.full(np.shape(failed), "", dtype=object)
+    if not np.any(failed):
+        return reason
     for index in np.argwhere(failed):
         reason[tuple(index)] = explain(tuple(int(i) for i in index))
     return reason
