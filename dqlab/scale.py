@@ -14,7 +14,7 @@ that way and call the unchanged numpy function on each chunk
 - nothing here schedules anything: the chunks run on whatever dask scheduler is asked for
   or active -- the synchronous one (examples, debugging), threads, processes, a
   ``distributed.LocalCluster`` on one machine, or a cluster whose scheduler listens at an
-  address such as ``"tcp://10.0.0.5:8786"``, with the same code.
+  address such as ``"tcp://scheduler-host:8786"``, with the same code.
 
 :func:`reachability_map` applies this to a question of the book: over a grid of tool
 positions and a set of orientations, how many inverse-kinematics branches reach each pose,
