@@ -6,7 +6,7 @@
                              doctests, every notebook (nbval) and the browser check of the
                              built pages
     python3 tasks.py fast    the inner loop: unit tests and doctests, no book, no slow
-                             sweeps (under a minute)
+                             sweeps (about a minute)
     python3 tasks.py lint    ruff over the package, tests and scripts, then the chapters
     python3 tasks.py lab     open the chapters in JupyterLab
     python3 tasks.py serve   serve the built book on http://127.0.0.1:8000
