@@ -4,6 +4,8 @@ import math
 
 import numpy as np
 
+from ._kernels import orthonormality
+
 _FLOAT64 = np.dtype(np.float64)
 
 
@@ -256,6 +258,24 @@ def _raise_not_unit(subject, n, tol):
     raise ValueError(
         f"{subject} must be a unit quaternion (norm 1 within {tol:g}), got norm {n:.12g}; "
         "normalise it with quaternion_normalize first")
+
+
+def rigid_rows(T, tol):
+    """The top three rows of one (4, 4) float array as lists of Python floats when it is a
+    rigid transform within ``tol`` (finite, orthonormal rotation block with determinant
+    +1, last row ``(0, 0, 0, 1)``); None otherwise, for the caller's full check to say why.
+
+    >>> rigid_rows(np.eye(4), 1e-9)[0]
+    [1.0, 0.0, 0.0, 0.0]
+    >>> rigid_rows(np.diag([1.0, 1.0, -1.0, 1.0]), 1e-9) is None
+    True
+    """
+    a, b, c, d = T.tolist()
+    err, det = orthonormality(a, b, c)  # NaN or inf in R fail this test too
+    t = a[3] + b[3] + c[3]
+    if err <= tol and det > 0.0 and t - t == 0.0 and d == [0.0, 0.0, 0.0, 1.0]:
+        return a, b, c
+    return None
 
 
 def unit_dual_quaternion_or_raise(parts, name, tol):

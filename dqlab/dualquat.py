@@ -27,6 +27,7 @@ from ._checks import (
     components,
     float_array,
     pack,
+    rigid_rows,
     rotation_or_raise,
     stack_components,
     unit_dual_quaternion_or_raise,
@@ -484,12 +485,11 @@ def dual_quaternion_from_transform(T: ArrayLike, *, tol: float = 1e-9, name: str
     """
     T = float_array(T, name, (4, 4))
     if T.ndim == 2:
-        a, b, c, d = T.tolist()
-        err, det = orthonormality(a, b, c)  # NaN or inf in R fail this test too
-        t = a[3] + b[3] + c[3]
-        if not (err <= tol and det > 0.0 and t - t == 0.0 and d == [0.0, 0.0, 0.0, 1.0]):
+        rows = rigid_rows(T, tol)
+        if rows is None:
             check_transform(T, tol, name)  # raises with the right message
             raise ValueError(f"{name} contains NaN or infinity")
+        a, b, c = rows
         qr = quaternion_from_matrix_entries(a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2])
         qd = quaternion_mul(0.0, 0.5 * a[3], 0.5 * b[3], 0.5 * c[3], *qr)
         return np.array(qr + qd)

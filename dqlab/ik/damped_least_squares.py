@@ -273,11 +273,15 @@ def _iterate_one(robot, q, X_target, options, history=False):
     cost = _cost(e)
     errors = options.errors(e)
     record = {"position_error": [], "rotation_error": [], "damping": []}
-    iterations, stuck = 0, False
-    while iterations < options.max_iter and not (stuck or options.met(*errors)):
+
+    def remember():
         if history:
             for name, value in zip(record, (*errors, lam), strict=True):
                 record[name].append(np.array([value]))
+
+    iterations, stuck = 0, False
+    while iterations < options.max_iter and not (stuck or options.met(*errors)):
+        remember()
         q_try = _step(J, q, e, lam, options)
         X_try, J_try = robot.fk_with_jacobian(q_try)
         e_try = _residual(X_try, X_target, options.position_only)
@@ -290,9 +294,7 @@ def _iterate_one(robot, q, X_target, options, history=False):
             lam = lam * 5.0
         iterations += 1
         stuck = lam > options.max_damping
-    if history:
-        for name, value in zip(record, (*errors, lam), strict=True):
-            record[name].append(np.array([value]))
+    remember()
     return q[None], X[None], np.array([iterations]), np.array([stuck]), record
 
 

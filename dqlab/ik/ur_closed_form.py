@@ -108,9 +108,13 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._checks import as_float_array, check_tolerance, unit_dual_quaternion_or_raise
+from .._checks import (
+    as_float_array,
+    check_tolerance,
+    rigid_rows,
+    unit_dual_quaternion_or_raise,
+)
 from .._kernels import (
-    orthonormality,
     quaternion_from_matrix_entries,
     quaternion_rotate,
     translation_from_dual_quaternion_entries,
@@ -135,8 +139,7 @@ from .targets import RIGID_TOL, parse_targets, pose_errors
 __all__ = ["ur", "ur_parameters", "equivalent_solutions", "closest_solution",
            "distinct_solutions", "SOLUTION_ORDER"]
 
-_HALF_SQRT2 = np.sqrt(0.5)
-_HALF_SQRT2_FLOAT = math.sqrt(0.5)
+_HALF_SQRT2 = math.sqrt(0.5)           # a Python float: it serves floats and arrays
 _FLOAT64 = np.dtype(np.float64)
 _CHUNK = 1024                               # poses per block: temporaries of 64 kB at most
 _FLAGS = ("wrist_singular", "shoulder_singular", "elbow_singular", "unreachable")
@@ -325,11 +328,10 @@ def _single_flange(robot, target, d6, pose_tol):
     plain (4, 4) or (8,) one, the robot has a base or a tool, or the check fails (the batch
     path then raises its message)."""
     if target.shape == (4, 4):
-        a, b, c, d = target.tolist()
-        err, det = orthonormality(a, b, c)         # NaN or inf in R fail this test too
-        t = a[3] + b[3] + c[3]
-        if not (err <= pose_tol and det > 0.0 and t - t == 0.0 and d == [0.0, 0.0, 0.0, 1.0]):
+        rows = rigid_rows(target, pose_tol)
+        if rows is None:
             return None
+        a, b, c = rows
         q = quaternion_from_matrix_entries(a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2])
         p, z6 = (a[3], b[3], c[3]), (a[2], b[2], c[2])
     elif target.shape == (8,):
@@ -364,7 +366,7 @@ def _solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref):
     (qw, qx, qy, qz), p5 = flange
     x5, y5, _ = p5
     d1, a2, a3, d4, d5, r_out, r_in, offsets = prm["single"]
-    r = _HALF_SQRT2_FLOAT
+    r = _HALF_SQRT2
     qD = (r * (qw + qx), r * (qx - qw), r * (qy - qz), r * (qy + qz))
     solutions, errors = [0.0] * 48, [0.0] * 8     # (8, 6) row by row; rows not valid stay 0
     any_valid = wrist_singular = elbow_singular = False
