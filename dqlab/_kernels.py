@@ -237,58 +237,6 @@ def dual_quaternion_mul(a, b):
     return rw, rx, ry, rz, d1w + d2w, d1x + d2x, d1y + d2y, d1z + d2z
 
 
-def dual_quaternion_mul_z_screw(a, c, s, h):
-    r"""``a`` times the screw about the z axis.
-
-    The screw turns by :math:`\theta` about z and moves by :math:`2h` along it,
-    :math:`J = r + \varepsilon\, h k r` with :math:`r = c + s k`,
-    :math:`(c, s) = (\cos\frac\theta2, \sin\frac\theta2)`. As :math:`k` and :math:`r`
-    commute, :math:`a J = a_r r + \varepsilon\,(a_d r + h\, (a_r r)\, k)`: the same as
-    ``dual_quaternion_mul(a, (c, 0, 0, s, -h s, 0, 0, h c))`` without the products by zero.
-
-    >>> dual_quaternion_mul_z_screw((1.0, 0, 0, 0, 0, 0, 0, 0), 1.0, 0.0, 0.5)
-    (1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.5)
-    """
-    arw, arx, ary, arz, adw, adx, ady, adz = a
-    # p r with r = c + s k is (c w - s z, c x + s y, c y - s x, c z + s w)
-    rw, rx, ry, rz = c * arw - s * arz, c * arx + s * ary, c * ary - s * arx, c * arz + s * arw
-    dw, dx, dy, dz = c * adw - s * adz, c * adx + s * ady, c * ady - s * adx, c * adz + s * adw
-    if type(h) is float and h == 0.0:                 # a turn alone
-        return rw, rx, ry, rz, dw, dx, dy, dz
-    # p k is (-z, y, -x, w)
-    return rw, rx, ry, rz, dw - h * rz, dx + h * ry, dy - h * rx, dz + h * rw
-
-
-def dual_quaternion_mul_x_screw(a, c, s, h):
-    r"""``a`` times the screw about the x axis (a DH link's constant factor
-    :math:`T_x(a) R_x(\alpha)`).
-
-    As :func:`dual_quaternion_mul_z_screw` with :math:`i` for :math:`k`:
-    :math:`J = r + \varepsilon\, h i r`, :math:`r = c + s i`,
-    :math:`(c, s) = (\cos\frac\alpha2, \sin\frac\alpha2)`, :math:`h = a / 2`, and
-    :math:`a J = a_r r + \varepsilon\,(a_d r + h\, (a_r r)\, i)`.
-
-    >>> identity = (1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-    >>> dual_quaternion_mul_x_screw(identity, 1.0, 0.0, 0.5)        # a shift by 1 along x
-    (1.0, 0.0, 0.0, 0.0, 0.0, 0.5, 0.0, 0.0)
-    >>> dual_quaternion_mul_x_screw(identity, 0.0, 1.0, 0.0)        # a half turn about x
-    (0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-    """
-    arw, arx, ary, arz, adw, adx, ady, adz = a
-    if type(s) is float and s == 0.0 and c == 1.0:     # a shift alone
-        rw, rx, ry, rz, dw, dx, dy, dz = a
-    else:
-        # p r with r = c + s i is (c w - s x, c x + s w, c y + s z, c z - s y)
-        rw, rx, ry, rz = (c * arw - s * arx, c * arx + s * arw, c * ary + s * arz,
-                          c * arz - s * ary)
-        dw, dx, dy, dz = (c * adw - s * adx, c * adx + s * adw, c * ady + s * adz,
-                          c * adz - s * ady)
-    if type(h) is float and h == 0.0:                 # a turn alone
-        return rw, rx, ry, rz, dw, dx, dy, dz
-    # p i is (-x, w, z, -y)
-    return rw, rx, ry, rz, dw - h * rx, dx + h * rw, dy + h * rz, dz - h * ry
-
-
 def screw_entries(lx, ly, lz, mx, my, mz, c, s, h):
     r"""The unit dual quaternion of the screw about the line :math:`(\mathbf l, \mathbf m)`.
 

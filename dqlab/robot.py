@@ -45,8 +45,6 @@ from numpy.typing import ArrayLike, NDArray
 from ._checks import as_float_array, batched, real_array
 from ._kernels import (
     dual_quaternion_mul,
-    dual_quaternion_mul_x_screw,
-    dual_quaternion_mul_z_screw,
     screw_entries,
 )
 from .dualquat import dual_quaternion_from_transform
@@ -332,11 +330,8 @@ class Robot:
         self._K = K
         self._K0_columns = [tuple(K[0, :3, j].tolist()) for j in range(4)]
         self._base_columns = [tuple(self._base[:3, j].tolist()) for j in range(4)]
-        # column j of K_i as the terms (k, K_i[k, j]) of its rows k < 3 that are not zero;
-        # row 3 is (0, 0, 0, 1)
-        self._K_terms = [[tuple((k, float(K[i, k, j])) for k in range(3)
-                                if K[i, k, j] != 0.0) for j in range(4)]
-                         for i in range(n + 1)]
+        # the top three rows of each K_i, for a constant factor that is not a screw about x
+        self._K_rows = [tuple(map(tuple, K[i, :3].tolist())) for i in range(n + 1)]
         self._K_dual_quaternions = dual_quaternion_from_transform(K).tolist()
         # which K_i are screws about x (every one between two DH links is: Tx(a) Rx(alpha)):
         # (cos alpha, sin alpha, a) for the matrices, (cos alpha/2, sin alpha/2, a/2) for the
@@ -348,7 +343,7 @@ class Robot:
                              else c[3:] for c in screws]
         # per link, what the products read: the joint's constants and the factor after it
         self._matrix_steps = list(zip(self._joint_constants, self._K_matrix_screws[1:],
-                                      self._K_terms[1:], strict=True))
+                                      self._K_rows[1:], strict=True))
         self._dq_steps = list(zip(self._joint_constants, self._K_dq_screws[1:],
                                   self._K_dual_quaternions[1:], strict=True))
         # the zero pose: joint axes in the world frame and the TCP (fk_dq_screw's constants)
@@ -538,37 +533,58 @@ class Robot:
     def _product(self, q, record=False):
         r"""The chain's one product, :math:`X_{WT} = K_0 J_1 K_1 \cdots J_n K_n`.
 
-        The top three rows of the running product are kept column by column: the joint
-        motion ``X @ Rz(theta) Tz(d)`` mixes columns 0 and 1 and shifts column 3
-        (:func:`_joint_step`), and the constant ``@ K_i`` adds multiples of columns
-        (:func:`_constant_step`). ``q`` holds the joint values: Python floats (one joint
-        vector; a column is three floats) or arrays of shape (N,) (a batch; a column is an
-        array of shape (3, N)).
+        The top three rows of the running product are kept as four columns
+        :math:`(u, v, w, p)`, entry by entry: the joint motion ``X @ Rz(theta) Tz(d)``
+        turns :math:`u, v` and moves :math:`p` along :math:`w`; the constant factor between
+        two DH links, ``@ Tx(a) Rx(alpha)``, turns :math:`v, w` and moves :math:`p` along
+        :math:`u`; any other constant factor (a base or a tool) adds multiples of columns.
+        ``q`` holds the joint values: Python floats (one joint vector; an entry is a float)
+        or arrays of shape (N,) (a batch; an entry is an array of shape (N,) or a constant
+        float), one formula for both.
 
         Returns the four columns of :math:`X_{WT}`; with ``record``, also the running
         products before and after each joint motion (lists of n column sets): before joint
         i it is the frame whose z axis is joint i's axis.
         """
-        single = type(q[0]) is float
-        cos, sin = (math.cos, math.sin) if single else (np.cos, np.sin)
-        X = self._K0_columns if single else [np.array(c)[:, None] for c in self._K0_columns]
+        cos, sin = (math.cos, math.sin) if type(q[0]) is float else (np.cos, np.sin)
+        (ux, uy, uz), (vx, vy, vz), (wx, wy, wz), (px, py, pz) = self._K0_columns
         before, after = [], []
-        for q_i, ((theta0, d0, revolute), screw, terms) in zip(q, self._matrix_steps,
-                                                               strict=True):
-            if revolute:
-                theta, d = q_i + theta0, d0
-            else:
-                theta, d = theta0, q_i + d0
-            Y = _joint_step(X, cos(theta), sin(theta), d)
+        for q_i, ((theta0, d0, revolute), screw, K) in zip(q, self._matrix_steps, strict=True):
             if record:
-                before.append(X)
-                after.append(Y)
-            if screw:
-                X = _x_screw_step(Y, *screw)
-            elif screw is None:
-                X = _constant_step(Y, terms)
+                before.append(((ux, uy, uz), (vx, vy, vz), (wx, wy, wz), (px, py, pz)))
+            if revolute:
+                c, s = cos(q_i + theta0), sin(q_i + theta0)
+                d = d0
             else:
-                X = Y                                                 # K_i is the identity
+                c, s = cos(theta0), sin(theta0)
+                d = q_i + d0
+            # @ Rz(theta) Tz(d)
+            ux, uy, uz, vx, vy, vz = (c * ux + s * vx, c * uy + s * vy, c * uz + s * vz,
+                                      c * vx - s * ux, c * vy - s * uy, c * vz - s * uz)
+            if revolute is False or d != 0.0:
+                px, py, pz = px + d * wx, py + d * wy, pz + d * wz
+            if record:
+                after.append(((ux, uy, uz), (vx, vy, vz), (wx, wy, wz), (px, py, pz)))
+            if screw:                                   # @ Tx(a) Rx(alpha)
+                ca, sa, a = screw
+                if sa != 0.0 or ca != 1.0:
+                    vx, vy, vz, wx, wy, wz = (ca * vx + sa * wx, ca * vy + sa * wy,
+                                              ca * vz + sa * wz, ca * wx - sa * vx,
+                                              ca * wy - sa * vy, ca * wz - sa * vz)
+                if a != 0.0:
+                    px, py, pz = px + a * ux, py + a * uy, pz + a * uz
+            elif screw is None:                         # @ K, any rigid transform
+                (k00, k01, k02, k03), (k10, k11, k12, k13), (k20, k21, k22, k23) = K
+                ux, uy, uz, vx, vy, vz, wx, wy, wz, px, py, pz = (
+                    k00 * ux + k10 * vx + k20 * wx, k00 * uy + k10 * vy + k20 * wy,
+                    k00 * uz + k10 * vz + k20 * wz,
+                    k01 * ux + k11 * vx + k21 * wx, k01 * uy + k11 * vy + k21 * wy,
+                    k01 * uz + k11 * vz + k21 * wz,
+                    k02 * ux + k12 * vx + k22 * wx, k02 * uy + k12 * vy + k22 * wy,
+                    k02 * uz + k12 * vz + k22 * wz,
+                    k03 * ux + k13 * vx + k23 * wx + px, k03 * uy + k13 * vy + k23 * wy + py,
+                    k03 * uz + k13 * vz + k23 * wz + pz)
+        X = ((ux, uy, uz), (vx, vy, vz), (wx, wy, wz), (px, py, pz))
         return (X, before, after) if record else X
 
     def _pose_entries(self, q):
@@ -680,25 +696,54 @@ class Robot:
         return _on_components(self._fk_dq_parts, self.check_joints(q), (8,))
 
     def _fk_dq_parts(self, q):
-        """The product K_0 J_1 K_1 ... J_n K_n on components.
+        r"""The product :math:`\hat K_0 \hat J_1 \hat K_1 \cdots \hat J_n \hat K_n` on the
+        eight components :math:`(r, d)` of the running product :math:`\hat Q = r +
+        \varepsilon d`.
+
+        Both factors of a link are screws, about z (the joint) and about x (the constant
+        factor between two DH links), and multiplying by a screw skips the zeros of the
+        general product. With :math:`(c, s)` the cosine and sine of half the angle and
+        :math:`h` half the displacement, the screw about the unit axis :math:`u = k` or
+        :math:`i` is :math:`\hat S = \rho + \varepsilon\, h u \rho`, :math:`\rho = c + s u`;
+        since :math:`u` and :math:`\rho` commute,
+
+        .. math::
+
+            \hat Q \hat S = r \rho + \varepsilon\,\bigl(d \rho + h\, (r \rho)\, u\bigr),
+
+        where, for :math:`p = (w, x, y, z)`, :math:`p\,(c + s k) = (c w - s z, c x + s y,
+        c y - s x, c z + s w)`, :math:`p k = (-z, y, -x, w)`, :math:`p\,(c + s i) = (c w - s x,
+        c x + s w, c y + s z, c z - s y)` and :math:`p i = (-x, w, z, -y)`.
 
         ``q`` holds the joint values one per joint: Python floats (one joint vector) or
-        arrays of shape (N,) (a batch). The products are those of validated unit dual
-        quaternions, so the unchecked component kernels of ``dqlab._kernels`` serve.
+        arrays of shape (N,) (a batch), one formula for both. The factors are validated unit
+        dual quaternions, so nothing is checked here.
         """
         cos, sin = (math.cos, math.sin) if type(q[0]) is float else (np.cos, np.sin)
-        Q = self._K_dual_quaternions[0]
-        for q_i, ((theta0, d0, revolute), screw, K_i) in zip(q, self._dq_steps, strict=True):
+        rw, rx, ry, rz, dw, dx, dy, dz = self._K_dual_quaternions[0]
+        for q_i, ((theta0, d0, revolute), screw, K) in zip(q, self._dq_steps, strict=True):
             if revolute:
                 half, h = 0.5 * (q_i + theta0), 0.5 * d0
             else:
                 half, h = 0.5 * theta0, 0.5 * (q_i + d0)
-            Q = dual_quaternion_mul_z_screw(Q, cos(half), sin(half), h)
-            if screw:
-                Q = dual_quaternion_mul_x_screw(Q, *screw)
-            elif screw is None:
-                Q = dual_quaternion_mul(Q, K_i)
-        return Q
+            c, s = cos(half), sin(half)                 # the joint, a screw about z
+            rw, rx, ry, rz, dw, dx, dy, dz = (
+                c * rw - s * rz, c * rx + s * ry, c * ry - s * rx, c * rz + s * rw,
+                c * dw - s * dz, c * dx + s * dy, c * dy - s * dx, c * dz + s * dw)
+            if revolute is False or h != 0.0:
+                dw, dx, dy, dz = dw - h * rz, dx + h * ry, dy - h * rx, dz + h * rw
+            if screw:                                   # the constant, a screw about x
+                c, s, h = screw
+                if s != 0.0 or c != 1.0:
+                    rw, rx, ry, rz, dw, dx, dy, dz = (
+                        c * rw - s * rx, c * rx + s * rw, c * ry + s * rz, c * rz - s * ry,
+                        c * dw - s * dx, c * dx + s * dw, c * dy + s * dz, c * dz - s * dy)
+                if h != 0.0:
+                    dw, dx, dy, dz = dw - h * rx, dx + h * rw, dy + h * rz, dz - h * ry
+            elif screw is None:                         # any other rigid transform
+                rw, rx, ry, rz, dw, dx, dy, dz = dual_quaternion_mul(
+                    (rw, rx, ry, rz, dw, dx, dy, dz), K)
+        return rw, rx, ry, rz, dw, dx, dy, dz
 
     def zero_pose_screws(self
                          ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
@@ -990,18 +1035,6 @@ def _on_components(parts, q, trailing):
     return batched(kernel, [(q, 1)], trailing)
 
 
-def _joint_step(X, c, s, d):
-    """The columns of ``X @ Rz(theta) Tz(d)`` (``c, s`` the cosine and sine of theta)."""
-    x0, x1, x2, x3 = X
-    if type(x0) is tuple:
-        return ((c * x0[0] + s * x1[0], c * x0[1] + s * x1[1], c * x0[2] + s * x1[2]),
-                (c * x1[0] - s * x0[0], c * x1[1] - s * x0[1], c * x1[2] - s * x0[2]),
-                x2,
-                x3 if d == 0.0 else (d * x2[0] + x3[0], d * x2[1] + x3[1], d * x2[2] + x3[2]))
-    return (c * x0 + s * x1, c * x1 - s * x0, x2,
-            x3 if type(d) is float and d == 0.0 else d * x2 + x3)
-
-
 def _x_screw_constants(K, K_dual_quaternion):
     r"""``(cos alpha, sin alpha, a, cos alpha/2, sin alpha/2, a/2)`` when the constant
     factor ``K`` is a screw about x, :math:`T_x(a) R_x(\alpha)` (the factor between two
@@ -1014,48 +1047,6 @@ def _x_screw_constants(K, K_dual_quaternion):
     if not cy == cz == 0.0:  # pragma: no cover -- Shepperd's quaternion of Rx is (c, s, 0, 0)
         return None
     return c, s, a, cw, cx, 0.5 * a
-
-
-def _x_screw_step(Y, c, s, a):
-    """The columns of ``Y @ Tx(a) Rx(alpha)`` (``c, s`` the cosine and sine of alpha):
-    column 0 stays, columns 1 and 2 turn, column 3 moves by ``a`` times column 0."""
-    y0, y1, y2, y3 = Y
-    if type(y0) is tuple:
-        if s != 0.0 or c != 1.0:
-            y1, y2 = ((c * y1[0] + s * y2[0], c * y1[1] + s * y2[1], c * y1[2] + s * y2[2]),
-                      (c * y2[0] - s * y1[0], c * y2[1] - s * y1[1], c * y2[2] - s * y1[2]))
-        if a != 0.0:
-            y3 = (a * y0[0] + y3[0], a * y0[1] + y3[1], a * y0[2] + y3[2])
-        return y0, y1, y2, y3
-    if s != 0.0 or c != 1.0:
-        y1, y2 = c * y1 + s * y2, c * y2 - s * y1
-    if a != 0.0:
-        y3 = a * y0 + y3
-    return y0, y1, y2, y3
-
-
-def _constant_step(Y, terms):
-    """The columns of ``Y @ K``: column j is the sum of ``value * Y[k]`` over the terms
-    ``(k, value)`` of column j of K (rows 0 to 2), plus ``Y[3]`` for j = 3 (row 3 of a rigid
-    transform is (0, 0, 0, 1))."""
-    if type(Y[0]) is not tuple:
-        columns = [sum(Y[k] if value == 1.0 else value * Y[k] for k, value in column)
-                   for column in terms]
-        columns[3] = columns[3] + Y[3]
-        return columns
-    columns = []
-    for column in terms:
-        x = y = z = 0.0
-        for k, value in column:
-            a, b, c = Y[k]
-            x += value * a
-            y += value * b
-            z += value * c
-        columns.append((x, y, z))
-    a, b, c = Y[3]
-    x, y, z = columns[3]
-    columns[3] = (x + a, y + b, z + c)
-    return columns
 
 
 def _entries(X):

@@ -548,19 +548,27 @@ def test_screw_round_trip_near_0_and_pi(angle, atol):
         assert same_motion(dual_quaternion_from_screw(l, m, theta, d), Q, atol=atol)
 
 
-def test_product_by_a_screw_about_z_is_the_general_product():
-    """The kernel behind Robot.fk_dq skips the zeros of J; the result is A J all the same."""
-    from dqlab._kernels import dual_quaternion_mul, dual_quaternion_mul_z_screw, screw_entries
+def test_fk_dq_multiplies_by_screws_as_the_general_product():
+    """Robot.fk_dq multiplies by each joint's screw about z and each link's screw about x
+    without the zeros of the general product; the result is the general product of the link
+    dual quaternions all the same (revolute and prismatic joints, both DH conventions, with a
+    base and a tool, one joint vector on floats and a batch on arrays)."""
+    from dqlab.robot import Link, Robot
 
     rng = np.random.default_rng(19)
-    A = random_dq(rng, (50,))
-    theta, d = rng.uniform(-np.pi, np.pi, 50), rng.normal(size=50)
-    J = dual_quaternion_from_screw([0, 0, 1], [0, 0, 0], theta, d)
-    c, s, h = np.cos(theta / 2), np.sin(theta / 2), d / 2
-    np.testing.assert_allclose(np.stack(dual_quaternion_mul_z_screw(list(A.T), c, s, h), axis=-1),
-                               dual_quaternion_product(A, J), atol=1e-15)
-    np.testing.assert_allclose(np.stack(screw_entries(0, 0, 1, 0, 0, 0, c, s, h), axis=-1) + 0.0,
-                               J, atol=0)
-    one = dual_quaternion_mul(A[0].tolist(), J[0].tolist())
-    np.testing.assert_allclose(one, dual_quaternion_mul_z_screw(A[0].tolist(), c[0], s[0], h[0]),
-                               atol=1e-15)
+    for convention in ("dh", "mdh"):
+        links = [Link(a=rng.normal(), alpha=rng.uniform(-np.pi, np.pi), d=rng.normal(),
+                      theta_offset=rng.normal()),
+                 Link(a=rng.normal(), alpha=rng.uniform(-np.pi, np.pi), d=rng.normal(),
+                      theta_offset=rng.normal(), joint="prismatic", limits=(-5.0, 5.0)),
+                 Link(a=0.0, alpha=np.pi / 2, d=0.0)]
+        base = transform_from_dual_quaternion(random_dq(rng))
+        tool = transform_from_dual_quaternion(random_dq(rng))
+        robot = Robot(links, convention=convention, base=base, tool=tool)
+        q = rng.uniform(-1.0, 1.0, (50, 3))
+        expected = dual_quaternion_from_transform(base)
+        for X in np.moveaxis(robot.link_transforms(q), -3, 0):
+            expected = dual_quaternion_product(expected, dual_quaternion_from_transform(X))
+        expected = dual_quaternion_product(expected, dual_quaternion_from_transform(tool))
+        assert same_motion(robot.fk_dq(q), expected, atol=1e-13)
+        assert same_motion(robot.fk_dq(q[7]), expected[7], atol=1e-13)
