@@ -16,7 +16,8 @@ axes and :math:`\mathbf p_{AB}` is B's origin, both written in A. Composition re
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._checks import as_float_array, batch_shape
+from ._checks import as_float_array, batch_shape, components, rotation_or_raise
+from ._kernels import orthonormality
 from .rotations import check_rotation_matrix
 
 __all__ = [
@@ -65,7 +66,14 @@ def check_transform(T: ArrayLike, tol: float = 1e-9, name: str = "T") -> NDArray
     elif np.any(bottom != np.array([0.0, 0.0, 0.0, 1.0])):
         bad = bottom[np.any(bottom != np.array([0.0, 0.0, 0.0, 1.0]), axis=-1)][0]
         raise ValueError(f"{name} must have bottom row (0, 0, 0, 1), got {bad.tolist()}")
-    check_rotation_matrix(T[..., :3, :3], tol, f"the rotation block of {name}")
+    if T.ndim == 2:
+        check_rotation_matrix(T[:3, :3], tol, f"the rotation block of {name}")
+        return T
+    # a batch: the rotation blocks' entries read in place (a C-ordered T is not copied)
+    e = components(T.reshape(T.shape[:-2] + (16,)))
+    err, det = orthonormality(e[0:3], e[4:7], e[8:11])
+    if not (err <= tol and det > 0.0):
+        rotation_or_raise(f"the rotation block of {name}", err, det, tol)
     return T
 
 

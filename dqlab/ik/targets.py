@@ -21,6 +21,7 @@ from ..dualquat import (
     dual_quaternion_normalize,
     transform_from_dual_quaternion,
 )
+from ..transforms import check_transform
 
 __all__ = ["Targets", "parse_targets", "pose_errors"]
 
@@ -139,16 +140,16 @@ def parse_targets(target: ArrayLike, *, position: bool | str = False, tol: float
         X = np.broadcast_to(np.eye(4), a.shape[:-1] + (4, 4)).copy()
         X[..., :3, 3] = a
         return Targets(kind, a.shape[:-1], _transforms=X)
+    if kind == "transform" and tol <= RIGID_TOL:   # checked; converted when a solver asks
+        return Targets(kind, a.shape[:-2], _transforms=check_transform(a, tol, name))
     if kind == "transform":
         Q = dual_quaternion_from_transform(a, tol=tol, name=name)   # checks while converting
-        targets = Targets(kind, a.shape[:-2], _transforms=a, _dual_quaternions=Q)
     else:
         Q = check_unit_dual_quaternion(a, tol, name=name)
-        targets = Targets(kind, a.shape[:-1], _dual_quaternions=Q)
-    if tol > RIGID_TOL:
-        targets = Targets("dual_quaternion", targets.batch,
-                          _dual_quaternions=dual_quaternion_normalize(Q))
-    return targets
+        if tol <= RIGID_TOL:
+            return Targets(kind, a.shape[:-1], _dual_quaternions=Q)
+    # a loosened tolerance: the rigid pose of the normalised dual quaternion
+    return Targets("dual_quaternion", Q.shape[:-1], _dual_quaternions=dual_quaternion_normalize(Q))
 
 
 def _kind(a, position, name):

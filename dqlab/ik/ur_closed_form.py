@@ -111,6 +111,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._checks import (
     as_float_array,
     check_tolerance,
+    components,
     rigid_rows,
     unit_dual_quaternion_or_raise,
 )
@@ -125,10 +126,8 @@ from ..dualquat import (
     dual_quaternion_from_transform,
     dual_quaternion_inverse,
     dual_quaternion_product,
-    rotation_translation_from_dual_quaternion,
 )
 from ..models import UR_SHAPE
-from ..quaternion import rotate_vector
 from ..robot import Robot
 from ..rotations import wrap_angle
 from ..transforms import transform_inverse
@@ -141,7 +140,7 @@ __all__ = ["ur", "ur_parameters", "equivalent_solutions", "closest_solution",
 
 _HALF_SQRT2 = math.sqrt(0.5)           # a Python float: it serves floats and arrays
 _FLOAT64 = np.dtype(np.float64)
-_CHUNK = 1024                               # poses per block: temporaries of 64 kB at most
+_CHUNK = 2048                    # poses per block: temporaries of 128 kB at most (L2-sized)
 _FLAGS = ("wrist_singular", "shoulder_singular", "elbow_singular", "unreachable")
 _EYE_BYTES = np.eye(4).tobytes()
 _MAX_EQUIVALENT_JOINTS = 12                # 4096 candidates per joint vector
@@ -261,8 +260,10 @@ class _Branches:
 
 @dataclass
 class _Block:
-    """The results of a block of n poses, poses first: ``solutions`` (n, 8, 6), ``valid``,
-    ``position_error``, ``rotation_error`` (n, 8), ``flags`` (n,) each, ``reason`` (n,)."""
+    """The results of n poses, poses first: ``solutions`` (n, 8, 6), ``valid``,
+    ``position_error``, ``rotation_error`` (n, 8), ``flags`` (n,) each, ``reason`` (n,).
+    A block of a batch is a view of the whole batch's arrays (``out[part]``), which
+    :func:`_solve_block` fills."""
 
     solutions: np.ndarray
     valid: np.ndarray
@@ -271,29 +272,44 @@ class _Block:
     flags: dict
     reason: np.ndarray
 
+    @classmethod
+    def empty(cls, n):
+        return cls(np.empty((n, 8, 6)), np.empty((n, 8), dtype=bool), np.empty((n, 8)),
+                   np.empty((n, 8)), {name: np.empty(n, dtype=bool) for name in _FLAGS},
+                   np.full(n, "", dtype=object))
+
+    def __getitem__(self, part):
+        return _Block(self.solutions[part], self.valid[part], self.position_error[part],
+                      self.rotation_error[part],
+                      {name: flag[part] for name, flag in self.flags.items()},
+                      self.reason[part])
+
 
 def _flange(robot, targets, tool, tool_dq, d6):
-    r"""The flange poses :math:`X_{06} = X_{W0}^{-1} X_{WT}^* X_{6T}^{-1}` of the targets."""
-    Q = targets.dual_quaternions
-    base = robot.base
-    moved = base.tobytes() != _EYE_BYTES
+    r"""The flange poses :math:`X_{06} = X_{W0}^{-1} X_{WT}^* X_{6T}^{-1}` of the targets,
+    read on components (the targets are checked)."""
+    moved = robot.base.tobytes() != _EYE_BYTES
     tooled = tool.tobytes() != _EYE_BYTES
+    n = math.prod(targets.batch)
     if targets.kind == "transform" and not (moved or tooled):
-        T = targets.transforms
-        q, p, z6 = Q[..., :4], T[..., :3, 3], T[..., :3, 2]
+        # Shepperd's quaternion of the rotation block; the position and z axis read off
+        e = components(targets.transforms.reshape(n, 16))
+        q = quaternion_from_matrix_entries(*e[0:3], *e[4:7], *e[8:11])
+        p, z6 = e[3:12:4], e[2:11:4]
     else:
+        Q = targets.dual_quaternions
         if moved:
             Q = dual_quaternion_product(
-                dual_quaternion_conjugate(dual_quaternion_from_transform(base)), Q)
+                dual_quaternion_conjugate(dual_quaternion_from_transform(robot.base)), Q)
         if tooled:
             if tool_dq is None:
                 tool_dq = dual_quaternion_from_transform(tool)
             Q = dual_quaternion_product(Q, dual_quaternion_inverse(tool_dq))
-        q, p = rotation_translation_from_dual_quaternion(Q, tol=np.inf)
-        z6 = rotate_vector(q, np.array([0.0, 0.0, 1.0]), tol=np.inf)
-    n = math.prod(targets.batch)
-    return _Flange(q=np.ascontiguousarray(q.reshape(n, 4).T),
-                   p5=np.ascontiguousarray(steps.wrist_center(p, z6, d6).reshape(n, 3).T))
+        c = components(Q.reshape(n, 8))
+        q = c[:4]
+        p = translation_from_dual_quaternion_entries(*c)
+        z6 = quaternion_rotate(*q, 0.0, 0.0, 1.0)
+    return _Flange(q=np.array(q), p5=steps.wrist_center(np.array(p), np.array(z6), d6))
 
 
 def _tool(robot, tool, pose_tol):
@@ -408,8 +424,9 @@ def _solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref):
         return None
     flags = {"wrist_singular": wrist_singular, "shoulder_singular": h < singular_tol * d4,
              "elbow_singular": elbow_singular, "unreachable": False}
-    errors = np.array(errors)
-    return IKResult(np.array(solutions).reshape(8, 6), errors <= tol, errors, np.zeros(8),
+    numbers = np.array(solutions + errors)            # one array: (8, 6) solutions, 8 errors
+    errors = numbers[48:]
+    return IKResult(numbers[:48].reshape(8, 6), errors <= tol, errors, np.zeros(8),
                     {name: np.array(flag) for name, flag in flags.items()},
                     np.array("", dtype=object))
 
@@ -569,48 +586,37 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     targets = targets.reshape((n,))
     options = _Options(tol, singular_tol, residuals, tool_fix)
     # The batch axis goes last, (branch axes..., n), so that every operation runs over long
-    # contiguous rows; big batches are cut into blocks whose temporaries stay small.
-    solutions = np.empty((n, 8, 6))
-    if 0 < n <= _CHUNK:
-        blocks = [_solve_block(robot, prm, flange, targets, theta6_ref, options, solutions)]
-    else:
-        blocks = [_solve_block(robot, prm, flange[part], targets[part],
-                               None if theta6_ref is None else theta6_ref[part], options,
-                               out=solutions[part])
-                  for part in (slice(start, start + _CHUNK) for start in range(0, n, _CHUNK))]
-    out = _joined(blocks, n)
-    return finish(solutions.reshape(batch + (8, 6)), out.valid.reshape(batch + (8,)),
+    # contiguous rows; big batches are cut into blocks whose temporaries stay small, each
+    # written into its part of the batch's arrays.
+    out = _Block.empty(n)
+    for start in range(0, n, _CHUNK):
+        part = slice(start, start + _CHUNK)
+        if n <= _CHUNK:
+            _solve_block(robot, prm, flange, targets, theta6_ref, options, out)
+        else:
+            _solve_block(robot, prm, flange[part], targets[part],
+                         None if theta6_ref is None else theta6_ref[part], options, out[part])
+    return finish(out.solutions.reshape(batch + (8, 6)), out.valid.reshape(batch + (8,)),
                   out.position_error.reshape(batch + (8,)),
                   out.rotation_error.reshape(batch + (8,)),
                   {name: f.reshape(batch) for name, f in out.flags.items()},
                   out.reason.reshape(batch))
 
 
-def _joined(blocks, n):
-    """The results of consecutive blocks as one (their solutions share one array)."""
-    if len(blocks) == 1:
-        return blocks[0]
-    if not blocks:
-        return _Block(None, np.empty((n, 8), dtype=bool), np.empty((n, 8)), np.empty((n, 8)),
-                      {name: np.empty(n, dtype=bool) for name in _FLAGS},
-                      np.full(n, "", dtype=object))
-    return _Block(None, *(np.concatenate([getattr(b, name) for b in blocks])
-                          for name in ("valid", "position_error", "rotation_error")),
-                  {name: np.concatenate([b.flags[name] for b in blocks]) for name in _FLAGS},
-                  np.concatenate([b.reason for b in blocks]))
-
-
-def _solve_block(robot, prm, flange, targets, theta6_ref, options, out=None):
-    """Every branch of a block of n poses (batch axis last), checked and flagged; the
-    solutions are written into ``out`` (n, 8, 6) when given."""
-    branches = _branches(prm, flange, theta6_ref, options.tol, out)
+def _solve_block(robot, prm, flange, targets, theta6_ref, options, out):
+    """Every branch of a block of n poses (batch axis last), checked and flagged, written
+    into ``out`` (a :class:`_Block` of n poses)."""
+    branches = _branches(prm, flange, theta6_ref, options.tol, out.solutions)
     pe, re = _errors(robot, prm, flange, branches, targets, options)       # (8, n) each
     ok = (pe <= options.tol) & (re <= options.tol)
     any_valid = ok.any(axis=0)                                              # (n,)
-    return _Block(solutions=branches.solutions, valid=ok.T, position_error=pe.T,
-                  rotation_error=re.T,
-                  flags=_flags(prm, branches, ok, any_valid, options.singular_tol),
-                  reason=_reasons(prm, flange, branches, any_valid, options.tol))
+    out.valid[...] = ok.T
+    out.position_error[...] = pe.T
+    out.rotation_error[...] = re.T
+    for name, flag in _flags(prm, branches, ok, any_valid, options.singular_tol).items():
+        out.flags[name][...] = flag
+    if not any_valid.all():
+        out.reason[...] = _reasons(prm, flange, branches, any_valid, options.tol)
 
 
 def _branches(prm, flange, theta6_ref, tol, out=None):
