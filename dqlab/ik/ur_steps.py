@@ -54,7 +54,8 @@ def _float_no_minus_pi(theta):
 
 
 def _array_no_minus_pi(theta):
-    return np.where(theta == -np.pi, np.pi, theta)
+    at = theta == -np.pi
+    return np.where(at, np.pi, theta) if at.any() else theta
 
 
 def _float_cos_sin(x, y):
