@@ -16,14 +16,16 @@ ur_analytic_ik's time to each method's (above 1: faster than ur_analytic_ik).
 - ``roboticstoolbox-python``'s ``ik_LM`` (Levenberg--Marquardt in C++), when it is installed
   (optional; not a dependency of dqlab): the same 500 poses from the same warm starts, with
   its tolerance set to the same residual (``tol = 5e-21`` on half the squared error norm, that
-  is an error norm of at most 1e-10) and no random restarts; the success counts of both are
-  printed.
+  is an error norm of at most 1e-10) and no random restarts; the success counts and mean
+  iteration counts of both are printed (ik_LM counts its forward kinematics, one more than
+  its steps; the steps are printed).
 
 Before timing, the solution counts of dqlab and ur_analytic_ik are compared. Goals, as
 ratios to ur_analytic_ik in the same run: a single pose at most 2 times its single call
 (one pose is solved on Python floats, see :mod:`dqlab.ik.ur_steps`); a batch at least 25
 times faster per pose than its loop; the numerical solver's single pose at most 60 times its
-closed-form single call. This is not a test. Times are the CPU time
+closed-form single call, and at most half the time of ik_LM with as many poses solved. This
+is not a test. Times are the CPU time
 of this process (``time.process_time``, best of several runs), which other load on the
 machine disturbs less than wall-clock time; numpy runs single-threaded here, so on an idle
 machine the two agree.
@@ -116,6 +118,8 @@ def main():
         q0 = q + rng.uniform(-0.1, 0.1, q.shape)
         rows.append(("dqlab.ik.numerical batch (1 solution)",
                      best_time(lambda: numerical(robot, T, q0), 1, 1) / n))
+        print(f"dqlab.ik.numerical batch: {int(numerical(robot, T, q0).valid.sum())} of {n} "
+              "poses solved")
         n_single = min(n, 500)              # about 4 ms each: the first 500 poses
 
         def numerical_loop():
@@ -124,10 +128,12 @@ def main():
 
         rows.append((f"dqlab.ik.numerical single pose, in a loop ({n_single})",
                      best_time(numerical_loop, 1, loop_repeat) / n_single))
-        ours = [numerical(robot, X, g) for X, g in zip(T[:n_single], q0[:n_single],
-                                                        strict=True)]
+        ours = [numerical(robot, X, g, history=True)
+                for X, g in zip(T[:n_single], q0[:n_single], strict=True)]
+        steps = [len(r.history["damping"]) - 1 for r in ours]
         print(f"dqlab.ik.numerical: {sum(bool(r.valid[0]) for r in ours)} of {n_single} "
-              "single poses solved to 1e-10 m and rad")
+              f"single poses solved to 1e-10 m and rad, {np.mean(steps):.2f} iterations on "
+              f"average (at most {max(steps)})")
         try:
             import roboticstoolbox as rtb
         except Exception:  # not installed, or fails to import  # noqa: BLE001
@@ -147,8 +153,10 @@ def main():
             found = np.array([s.q for s in solved])
             good = [bool(s.success) for s in solved]
             err = np.abs(robot.fk(found) - T[:n_single]).max(axis=(-1, -2))
+            steps = [s.iterations - 1 for s in solved]
             print(f"roboticstoolbox ik_LM: {sum(good)} of {n_single} reported solved; "
-                  f"{int(np.sum(err[good] < 1e-9))} of those within 1e-9 of the pose")
+                  f"{int(np.sum(err[good] < 1e-9))} of those within 1e-9 of the pose; "
+                  f"{np.mean(steps):.2f} iterations on average (at most {max(steps)})")
     else:
         print("dqlab.ik.numerical is not available: skipped")
 
@@ -161,6 +169,11 @@ def main():
         ratio = f"{reference / seconds:21.2f}" if reference else f"{'-':>21}"
         inverse = f"{seconds / reference:21.2f}" if reference else f"{'-':>21}"
         print(f"{label:<{width}}  {seconds * 1e6:9.2f}  {ratio}  {inverse}")
+    single = [seconds for label, seconds in rows if label.startswith("dqlab.ik.numerical single")]
+    peer = [seconds for label, seconds in rows if label.startswith("roboticstoolbox ik_LM")]
+    if single and peer:
+        print(f"\ndqlab.ik.numerical single / roboticstoolbox ik_LM: {single[0] / peer[0]:.2f} "
+              "(goal: at most 0.5)")
 
 
 if __name__ == "__main__":

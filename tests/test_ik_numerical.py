@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from dqlab import dualquat
-from dqlab.ik import numerical, pose_errors
+from dqlab.ik import damped_least_squares, numerical, pose_errors
+from dqlab.ik.damped_least_squares import _cholesky_solve
 from dqlab.models import desk_arm, scara_rsm5, ur3
 from dqlab.robot import Link, Robot
 
@@ -143,15 +144,93 @@ def test_broadcasting_and_input_errors():
 
 
 def test_an_exactly_singular_step_falls_back_to_least_squares(monkeypatch):
+    """The batch solves with numpy, one target with its own Cholesky factorisation; both
+    fall back to the least-squares step when their factorisation fails."""
     robot = ur3()
     q_true = np.array([0.3, -1.2, 1.0, -0.5, 1.1, 0.2])
+    X = robot.fk(q_true)
 
     def singular(*args, **kwargs):
         raise np.linalg.LinAlgError("Singular matrix")
 
     monkeypatch.setattr(np.linalg, "solve", singular)
-    result = numerical(robot, robot.fk(q_true), q_true + 0.05)
-    assert result.success
+    monkeypatch.setattr(damped_least_squares, "_cholesky_solve", lambda A, b: None)
+    batch = numerical(robot, np.stack([X, X]), np.stack([q_true + 0.05, q_true - 0.05]))
+    assert batch.success.all()
+    assert numerical(robot, X, q_true + 0.05).success
+
+
+def test_cholesky_solve_agrees_with_numpy_and_refuses_a_singular_matrix():
+    rng = np.random.default_rng(14)
+    for n in (1, 3, 4, 6, 7):
+        J = rng.normal(size=(6, n))
+        A = J.T @ J + 1e-3 * np.eye(n)
+        b = rng.normal(size=n)
+        x = _cholesky_solve(A.tolist(), b.tolist())
+        assert type(x) is list and len(x) == n
+        np.testing.assert_allclose(x, np.linalg.solve(A, b), rtol=1e-12, atol=1e-14)
+    # only the lower triangle is read
+    A = np.array([[4.0, 99.0], [2.0, 5.0]])
+    assert _cholesky_solve(A.tolist(), [2.0, 5.0]) == [0.0, 1.0]
+    # exactly singular or indefinite: None
+    for A in ([[1.0, 2.0], [2.0, 4.0]], [[1.0, 0.0], [0.0, -1.0]], [[0.0, 0.0], [0.0, 0.0]]):
+        assert _cholesky_solve(A, [1.0, 1.0]) is None
+    # then the step is the least-squares one: a Jacobian with a zero column (a joint that
+    # does not move the tool) and no damping
+    robot = ur3()
+    q = np.array([0.3, -1.2, 1.0, -0.5, 1.1, 0.2])
+    _, J = robot.fk_with_jacobian(q)
+    J[:, 2] = 0.0
+    e = [1e-3, -2e-3, 5e-4, 1e-3, 0.0, -1e-3]
+    options = damped_least_squares._Options(False, 1e-10, 1e-10, 100, 0.0, 0.0, 0.0, 1e6, 0.5,
+                                            *robot.limits.T)
+    step = np.array(damped_least_squares._step_one(J, q.tolist(), e, 0.0, options)) - q
+    np.testing.assert_allclose(step, np.linalg.pinv(J) @ e, rtol=0, atol=1e-12)
+    assert step[2] == 0.0
+
+
+@pytest.mark.parametrize("n_poses", [2000, 10000])
+def test_every_warm_started_pose_of_the_benchmark_is_solved(n_poses):
+    """The 500 poses that benchmarks/bench_ik_ur.py solves one at a time (drawn as it draws
+    them, with ``--n 2000`` and with its default): every one is solved, alone and in a batch,
+    in a few iterations. Pose 111 is near the wrist singularity (sin q5 = 1.4e-3), where
+    plain Levenberg--Marquardt damping that starts at 1e-2 takes 72 iterations."""
+    robot = ur3()
+    rng = np.random.default_rng(2026)
+    q = rng.uniform(-np.pi, np.pi, (n_poses, 6))
+    T = np.ascontiguousarray(robot.fk(q))
+    q0 = q + rng.uniform(-0.1, 0.1, q.shape)
+    T, q0 = T[:500], q0[:500]
+    batch = numerical(robot, T, q0)
+    assert batch.valid.all()
+    iterations = []
+    for X, g in zip(T, q0, strict=True):
+        one = numerical(robot, X, g, history=True)
+        assert one.success
+        iterations.append(len(one.history["damping"]) - 1)
+    assert np.mean(iterations) < 4.5 and max(iterations) <= 15
+    if n_poses == 2000:
+        assert abs(np.sin(q[111, 4])) < 1.5e-3 and iterations[111] <= 8
+
+
+def test_near_the_wrist_singularity_a_step_may_raise_the_error(monkeypatch):
+    """Poses within 1e-4 to 3e-3 rad of the wrist singularity (q5 near 0 or pi), warm-started
+    0.1 rad away: all are solved, some after steps that raised the error E (the
+    non-monotone test takes a step below the largest E of the last five iterates). With a
+    test that requires every step to lower E, some are not solved within 100 iterations."""
+    robot = ur3()
+    rng = np.random.default_rng(7)
+    q = rng.uniform(-np.pi, np.pi, (300, 6))
+    q[:, 4] = (rng.choice([0.0, np.pi, -np.pi], 300)
+               + rng.choice([-1.0, 1.0], 300) * 10 ** rng.uniform(-4, -2.5, 300))
+    T = robot.fk(q)
+    q0 = q + rng.uniform(-0.1, 0.1, q.shape)
+    result = numerical(robot, T, q0, history=True)
+    assert result.valid.all()
+    E = result.history["position_error"] ** 2 + result.history["rotation_error"] ** 2
+    assert np.any(np.diff(E, axis=0) > 0)
+    monkeypatch.setattr(damped_least_squares, "_WINDOW", 1)
+    assert not numerical(robot, T, q0).valid.all()
 
 
 def test_history_records_every_iteration():
@@ -167,8 +246,11 @@ def test_history_records_every_iteration():
     assert set(h) == {"position_error", "rotation_error", "damping"}
     k = h["position_error"].shape[0]
     assert k >= 3 and all(a.shape == (k, 3) for a in h.values())
+    # a step is taken only below the largest error of the last five iterates (rejected
+    # steps keep the iterate)
     total = h["position_error"] ** 2 + h["rotation_error"] ** 2
-    assert np.all(np.diff(total, axis=0) <= 1e-30)
+    for i in range(1, k):
+        assert np.all(total[i] <= total[max(0, i - 5):i].max(axis=0) * (1 + 1e-12))
     assert result.valid.all()
     np.testing.assert_allclose(h["position_error"][-1], result.position_error[:, 0],
                                rtol=1e-6, atol=1e-14)
@@ -178,9 +260,14 @@ def test_history_records_every_iteration():
 
 @pytest.mark.parametrize("position_only", [False, True])
 def test_one_target_iterates_as_in_a_batch(position_only):
-    """One target runs the loop with its bookkeeping on Python numbers; a batch on arrays.
-    The iterates are the same: solutions, errors, flags, reasons and history, including a
-    target that stalls out of reach."""
+    """One target runs the loop on Python floats and solves each step by its own Cholesky
+    factorisation; a batch runs on arrays and solves with numpy (LU). The two solve the same
+    equations with different roundings, so the iterates agree to rounding, not bit for bit:
+    the converging targets take the same number of iterations, with the same flags, reasons
+    and history, to the same solutions within 1e-12 rad. The target out of reach stalls in
+    both, at the same point; but once its error has settled at the local minimum, whether
+    a step lowers it is decided by rounding, so the number of iterations before the
+    damping runs away may differ."""
     robot = ur3()
     rng = np.random.default_rng(13)
     q_true = rng.uniform(-2.0, 2.0, (6, 6))
@@ -189,15 +276,22 @@ def test_one_target_iterates_as_in_a_batch(position_only):
     target = T[:, :3, 3] if position_only else T
     q0 = q_true + rng.uniform(-0.3, 0.3, q_true.shape)
     batch = numerical(robot, target, q0, position_only=position_only, history=True)
-    assert batch.valid[:5].any() and not batch.valid[5, 0]
+    assert batch.valid[:5].all() and not batch.valid[5, 0]
     for i in range(len(T)):
         one = numerical(robot, target[i], q0[i], position_only=position_only, history=True)
         np.testing.assert_array_equal(one.valid, batch.valid[i])
-        np.testing.assert_allclose(one.solutions, batch.solutions[i], rtol=0, atol=1e-15)
-        np.testing.assert_allclose(one.position_error, batch.position_error[i], atol=1e-15)
-        assert one.reason == batch.reason[i]
         for name, flag in batch.flags.items():
             assert one.flags[name] == flag[i]
         k = one.history["damping"].shape[0]
-        for name, rows in batch.history.items():
-            np.testing.assert_allclose(one.history[name], rows[:k, i], rtol=0, atol=1e-15)
+        if i == 5:
+            assert one.flags["stalled"] and str(one.reason).startswith("stalled")
+            assert abs(one.position_error[0] - batch.position_error[i, 0]) < 1e-6
+            np.testing.assert_allclose(one.history["position_error"][:20],
+                                       batch.history["position_error"][:20, i], rtol=1e-9)
+            continue
+        np.testing.assert_allclose(one.solutions, batch.solutions[i], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(one.position_error, batch.position_error[i], atol=1e-15)
+        assert one.reason == batch.reason[i] == ""
+        for name, rows in batch.history.items():       # the same number of iterations:
+            np.testing.assert_allclose(one.history[name], rows[:k, i], rtol=1e-9, atol=1e-15)
+            assert np.all(rows[k:, i] == rows[k - 1, i])  # the batch stopped there too
