@@ -25,15 +25,15 @@ ratios to ur_analytic_ik in the same run: a single pose at most 2 times its sing
 (one pose is solved on Python floats, see :mod:`dqlab.ik.ur_steps`); a batch at least 25
 times faster per pose than its loop; the numerical solver's single pose at most 60 times its
 closed-form single call, and at most half the time of ik_LM with as many poses solved. This
-is not a test. Times are the CPU time
-of this process (``time.process_time``, best of several runs), which other load on the
-machine disturbs less than wall-clock time; numpy runs single-threaded here, so on an idle
-machine the two agree.
+is not a test. Times are the CPU time of this process (``time.process_time``), the best of
+several rounds in which every method runs once in turn (a slow spell of the machine then
+touches all of them alike), which other load on the machine disturbs less than wall-clock
+time; numpy runs single-threaded here, so on an idle machine the two agree.
 """
 
 import argparse
+import math
 import time
-import timeit
 
 import numpy as np
 
@@ -43,11 +43,17 @@ from dqlab.models import ur3
 from dqlab.testing import quiet_stdout
 
 
-def best_time(f, number, repeat):
-    """Best CPU time per call, in seconds, over ``repeat`` runs of ``number`` calls."""
-    timer = timeit.Timer(f, timer=time.process_time)
-    return min(timer.repeat(number=number, repeat=repeat)) / number
-
+def interleaved_best(jobs, repeat):
+    """Best CPU time per pose of each job ``(label, function, poses per call)`` over
+    ``repeat`` rounds; every round runs every job once, in turn, so that a slow spell of
+    the machine touches all of them alike and the ratios stay fair."""
+    best = [math.inf] * len(jobs)
+    for _ in range(repeat):
+        for k, (_, f, poses) in enumerate(jobs):
+            start = time.process_time()
+            f()
+            best[k] = min(best[k], (time.process_time() - start) / poses)
+    return [(label, seconds) for (label, _, _), seconds in zip(jobs, best, strict=True)]
 
 
 def main():
@@ -86,13 +92,10 @@ def main():
         print(f"ur_analytic_ik: same number of solutions on "
               f"{np.mean(counts == result.count):.4%} of the poses")
 
-    rows = []   # (label, seconds per pose)
-    rows.append(("dqlab.ik.ur batch, 4x4 poses",
-                 best_time(lambda: ur(robot, T), 1, repeat) / n))
-    rows.append(("dqlab.ik.ur batch, dual quaternions",
-                 best_time(lambda: ur(robot, Q), 1, repeat) / n))
-    rows.append(("dqlab.ik.ur batch, residuals='fk'",
-                 best_time(lambda: ur(robot, T, residuals="fk"), 1, repeat) / n))
+    jobs = []   # (label, function, poses per call), timed together at the end
+    jobs.append(("dqlab.ik.ur batch, 4x4 poses", lambda: ur(robot, T), n))
+    jobs.append(("dqlab.ik.ur batch, dual quaternions", lambda: ur(robot, Q), n))
+    jobs.append(("dqlab.ik.ur batch, residuals='fk'", lambda: ur(robot, T, residuals="fk"), n))
 
     def single_loop(poses, **kw):
         def run():
@@ -100,11 +103,9 @@ def main():
                 ur(robot, X, **kw)
         return run
 
-    loop_repeat = repeat                    # best of several: single calls are short
-    rows.append(("dqlab.ik.ur single pose, in a loop",
-                 best_time(single_loop(T[:n_loop]), 1, loop_repeat) / n_loop))
-    rows.append(("dqlab.ik.ur single pose, residuals='fk'",
-                 best_time(single_loop(T[:n_loop], residuals="fk"), 1, loop_repeat) / n_loop))
+    jobs.append(("dqlab.ik.ur single pose, in a loop", single_loop(T[:n_loop]), n_loop))
+    jobs.append(("dqlab.ik.ur single pose, residuals='fk'",
+                 single_loop(T[:n_loop], residuals="fk"), n_loop))
     if ur_analytic_ik is not None:
         ik = ur_analytic_ik.ur3.inverse_kinematics
 
@@ -113,11 +114,10 @@ def main():
                 for X in T[:n_loop]:
                     ik(X)
 
-        rows.append(("ur_analytic_ik, in a loop", best_time(peer, 1, loop_repeat) / n_loop))
+        jobs.append(("ur_analytic_ik, in a loop", peer, n_loop))
     if numerical is not None:
         q0 = q + rng.uniform(-0.1, 0.1, q.shape)
-        rows.append(("dqlab.ik.numerical batch (1 solution)",
-                     best_time(lambda: numerical(robot, T, q0), 1, 1) / n))
+        jobs.append(("dqlab.ik.numerical batch (1 solution)", lambda: numerical(robot, T, q0), n))
         print(f"dqlab.ik.numerical batch: {int(numerical(robot, T, q0).valid.sum())} of {n} "
               "poses solved")
         n_single = min(n, 500)              # about 4 ms each: the first 500 poses
@@ -126,8 +126,8 @@ def main():
             for X, g in zip(T[:n_single], q0[:n_single], strict=True):
                 numerical(robot, X, g)
 
-        rows.append((f"dqlab.ik.numerical single pose, in a loop ({n_single})",
-                     best_time(numerical_loop, 1, loop_repeat) / n_single))
+        jobs.append((f"dqlab.ik.numerical single pose, in a loop ({n_single})", numerical_loop,
+                     n_single))
         ours = [numerical(robot, X, g, history=True)
                 for X, g in zip(T[:n_single], q0[:n_single], strict=True)]
         steps = [len(r.history["damping"]) - 1 for r in ours]
@@ -147,8 +147,8 @@ def main():
                 return [peer_robot.ik_LM(X, q0=g, tol=5e-21, slimit=1)
                         for X, g in zip(T[:n_single], q0[:n_single], strict=True)]
 
-            rows.append((f"roboticstoolbox ik_LM single pose, in a loop ({n_single})",
-                         best_time(peer_numerical, 1, loop_repeat) / n_single))
+            jobs.append((f"roboticstoolbox ik_LM single pose, in a loop ({n_single})",
+                         peer_numerical, n_single))
             solved = peer_numerical()
             found = np.array([s.q for s in solved])
             good = [bool(s.success) for s in solved]
@@ -160,6 +160,7 @@ def main():
     else:
         print("dqlab.ik.numerical is not available: skipped")
 
+    rows = interleaved_best(jobs, repeat)      # (label, seconds per pose)
     reference = dict(rows).get("ur_analytic_ik, in a loop")
     width = max(len(label) for label, _ in rows)
     print()
