@@ -23,8 +23,8 @@ reported).
 """
 
 import argparse
+import math
 import time
-import timeit
 
 import numpy as np
 
@@ -35,14 +35,20 @@ N_BATCH = 100_000
 N_LOOP = 10_000  # configurations for the one-at-a-time peers
 
 
-def best_time(f, number, repeat):
-    """Best CPU time per call, in seconds, over ``repeat`` runs of ``number`` calls.
-
-    CPU time of this process (``time.process_time``) rather than wall time, so that other
-    programs running on a shared machine inflate the numbers less.
-    """
-    timer = timeit.Timer(f, timer=time.process_time)
-    return min(timer.repeat(number=number, repeat=repeat)) / number
+def interleaved_best(jobs, repeat):
+    """Best CPU time per item of each job ``name: (function, calls per run, items per
+    call)`` over ``repeat`` rounds, every round running every job in turn (a slow spell of
+    the machine then touches all of them alike, and the ratios stay fair). CPU time of this
+    process (``time.process_time``) rather than wall time, so that other programs running on
+    a shared machine inflate the numbers less."""
+    best = dict.fromkeys(jobs, math.inf)
+    for _ in range(repeat):
+        for name, (f, calls, items) in jobs.items():
+            start = time.process_time()
+            for _ in range(calls):
+                f()
+            best[name] = min(best[name], (time.process_time() - start) / (calls * items))
+    return best
 
 
 def optional_peers():
@@ -84,25 +90,25 @@ def main(quick=False):
         theirs = np.array([T.A for T in peers["roboticstoolbox"].fkine(Q[:100])])
         assert np.abs(X - theirs).max() < 1e-9, "roboticstoolbox disagrees"
 
-    rows = []
-    single = best_time(lambda: robot.fk(q), number, repeat)
-    batch = best_time(lambda: robot.fk(Q), bnumber, brepeat) / N_BATCH
-    rows.append(("dqlab ur3().fk", single, batch, "vectorised"))
-    for method in (robot.fk_dq, robot.fk_dq_screw):
-        s = best_time(lambda m=method: m(q), number, repeat)
-        b = best_time(lambda m=method: m(Q), bnumber, brepeat) / N_BATCH
-        rows.append((f"dqlab ur3().{method.__name__}", s, b, "vectorised"))
+    singles, batches, how = {}, {}, {}      # name: (function, calls per run, items per call)
+    for method in (robot.fk, robot.fk_dq, robot.fk_dq_screw):
+        name = f"dqlab ur3().{method.__name__}"
+        singles[name] = (lambda m=method: m(q), number, 1)
+        batches[name] = (lambda m=method: m(Q), bnumber, N_BATCH)
+        how[name] = "vectorised"
     if "ur_analytic_ik" in peers:
         fk = peers["ur_analytic_ik"]
-        s = best_time(lambda: fk(*q), number, repeat)
         sub = Q[:N_LOOP]
-        b = best_time(lambda: [fk(*row) for row in sub], 1, brepeat) / N_LOOP
-        rows.append(("ur_analytic_ik", s, b, "Python loop"))
+        singles["ur_analytic_ik"] = (lambda: fk(*q), number, 1)
+        batches["ur_analytic_ik"] = (lambda: [fk(*row) for row in sub], 1, N_LOOP)
+        how["ur_analytic_ik"] = "Python loop"
     if "roboticstoolbox" in peers:
         model = peers["roboticstoolbox"]
-        s = best_time(lambda: model.fkine(q), number // 10, repeat)
-        b = best_time(lambda: model.fkine(Q), 1, brepeat) / N_BATCH
-        rows.append(("roboticstoolbox fkine", s, b, "(N, 6) array"))
+        singles["roboticstoolbox fkine"] = (lambda: model.fkine(q), number // 10, 1)
+        batches["roboticstoolbox fkine"] = (lambda: model.fkine(Q), 1, N_BATCH)
+        how["roboticstoolbox fkine"] = "(N, 6) array"
+    single, batch = interleaved_best(singles, repeat), interleaved_best(batches, brepeat)
+    rows = [(name, single[name], batch[name], by) for name, by in how.items()]
 
     ref_single, ref_batch = rows[0][1], rows[0][2]
     print(f"UR3 forward kinematics: one call, and a batch of {N_BATCH:,} configurations "
