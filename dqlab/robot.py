@@ -561,7 +561,7 @@ class Robot:
             # @ Rz(theta) Tz(d)
             ux, uy, uz, vx, vy, vz = (c * ux + s * vx, c * uy + s * vy, c * uz + s * vz,
                                       c * vx - s * ux, c * vy - s * uy, c * vz - s * uz)
-            if revolute is False or d != 0.0:
+            if not revolute or d != 0.0:
                 px, py, pz = px + d * wx, py + d * wy, pz + d * wz
             if record:
                 after.append(((ux, uy, uz), (vx, vy, vz), (wx, wy, wz), (px, py, pz)))
@@ -730,7 +730,7 @@ class Robot:
             rw, rx, ry, rz, dw, dx, dy, dz = (
                 c * rw - s * rz, c * rx + s * ry, c * ry - s * rx, c * rz + s * rw,
                 c * dw - s * dz, c * dx + s * dy, c * dy - s * dx, c * dz + s * dw)
-            if revolute is False or h != 0.0:
+            if not revolute or h != 0.0:
                 dw, dx, dy, dz = dw - h * rz, dx + h * ry, dy - h * rx, dz + h * rw
             if screw:                                   # the constant, a screw about x
                 c, s, h = screw

@@ -222,19 +222,18 @@ def numerical(robot: Robot, target: ArrayLike, q0: ArrayLike, *, position_only: 
 
 def _one_result(q, position_error, rotation_error, iterations, stuck, record, has_rotation,
                 options, history):
-    """The :class:`IKResult` of one target (as :func:`numerical` assembles it for a batch,
-    and as :func:`~dqlab.ik.result.finish` zeroes a failed row) from what
-    :func:`_iterate_one` returns, on floats."""
+    """The :class:`IKResult` of one target (as :func:`numerical` assembles it for a batch)
+    from what :func:`_iterate_one` returns, on floats."""
     if not has_rotation:
         rotation_error = 0.0
     valid = options.met(position_error, rotation_error)
     reason = "" if valid else options.reason(iterations, stuck, position_error,
                                              rotation_error if has_rotation else None)
-    result = IKResult(np.array([q if valid else [0.0] * len(q)]), np.array([valid]),
-                      np.array([position_error]), np.array([rotation_error]),
-                      {"not_converged": np.array(not valid),
-                       "stalled": np.array(stuck and not valid)},
-                      np.array(reason, dtype=object))
+    result = finish(np.array([q]), np.array([valid]), np.array([position_error]),
+                    np.array([rotation_error]),
+                    {"not_converged": np.array(not valid),
+                     "stalled": np.array(stuck and not valid)},
+                    np.array(reason, dtype=object))
     if history:
         result.history = {name: np.array(rows) for name, rows in record.items()}
     return result
@@ -480,15 +479,14 @@ def _step_one(J, q, e, mu, options):
     if biggest > options.max_step:
         scale = options.max_step / biggest
         step = [s * scale for s in step]
-    return _clip(q, options.lower_list, options.upper_list, step)
+    return _clip([v + s for v, s in zip(q, step, strict=True)], options.lower_list,
+                 options.upper_list)
 
 
-def _clip(q, lower, upper, step=None):
-    """The floats ``q`` (plus ``step``) clipped to ``[lower, upper]``, entry by entry, as
-    ``np.clip`` does it."""
-    if step is None:
-        return [min(max(v, lo), hi) for v, lo, hi in zip(q, lower, upper, strict=True)]
-    return [min(max(v + s, lo), hi) for v, s, lo, hi in zip(q, step, lower, upper, strict=True)]
+def _clip(q, lower, upper):
+    """The floats ``q`` clipped to ``[lower, upper]``, entry by entry, as ``np.clip`` does
+    it."""
+    return [min(max(v, lo), hi) for v, lo, hi in zip(q, lower, upper, strict=True)]
 
 
 def _cholesky_solve(A, b):
