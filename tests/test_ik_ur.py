@@ -771,6 +771,39 @@ def test_wrap_angle():
     assert np.allclose(np.exp(1j * w), np.exp(1j * x))
 
 
+def test_wrist_flip_is_the_other_wrist_branch():
+    """wrist_flip(sigma = +1) gives sigma = -1's theta5 and half difference (to a rounding
+    of pi), on arrays and on floats, and the flipped wrist turns the same rotation."""
+    from dqlab.ik.ur_steps import wrist_angles, wrist_flip
+    from dqlab.quaternion import quaternion_from_axis_angle, quaternion_product
+
+    rng = np.random.default_rng(12)
+    L = rng.normal(size=(4, 300))
+    L /= np.linalg.norm(L, axis=0)
+    theta5, half_sum, half_diff, _, _ = wrist_angles(tuple(L), 1.0)
+    flip5, flip_diff = wrist_flip(theta5, half_diff)
+    other5, other_sum, other_diff, _, _ = wrist_angles(tuple(L), -1.0)
+    np.testing.assert_array_equal(flip5, other5)
+    np.testing.assert_array_equal(half_sum, other_sum)
+    assert np.abs(flip_diff - other_diff).max() <= 4.5e-16
+    assert np.all(flip_diff > -np.pi) and np.all(flip_diff <= np.pi)
+    for k in range(5):                                      # floats: the same formula
+        one = wrist_flip(float(theta5[k]), float(half_diff[k]))
+        assert one == (flip5[k], flip_diff[k])
+
+    def wrist(t234, t5, t6):      # r_-y(theta234) r_-z(theta5) r_-y(theta6)
+        minus_y, minus_z = np.array([0.0, -1.0, 0.0]), np.array([0.0, 0.0, -1.0])
+        return quaternion_product(quaternion_product(
+            quaternion_from_axis_angle(minus_y, t234), quaternion_from_axis_angle(minus_z, t5)),
+            quaternion_from_axis_angle(minus_y, t6))
+
+    for k in range(20):
+        a = wrist(half_sum[k] + half_diff[k], theta5[k], half_sum[k] - half_diff[k])
+        b = wrist(half_sum[k] + flip_diff[k], flip5[k], half_sum[k] - flip_diff[k])
+        assert min(np.abs(a - b).max(), np.abs(a + b).max()) < 1e-15
+        np.testing.assert_allclose(np.abs(a), np.abs(L[:, k]), atol=1e-15)
+
+
 # --------------------------------------------------------------------------------------
 # The errata are real: the thesis's formulas, evaluated in floating point
 

@@ -392,20 +392,21 @@ def _solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref):
             return None
         L = steps.relative_rotation_coefficients(qD, 0.5 * theta1)
         Px, Py = steps.arm_plane_wrist(p5, c1, s1, d1)
-        for w, sigma in enumerate((1.0, -1.0)):
-            theta5, half_sum, half_diff, c5bar, s5bar = steps.wrist_angles(L, sigma)
-            sin5 = 2.0 * s5bar * c5bar
-            if sin5 < _NEAR_WRIST:
-                return None
+        theta5, half_sum, half_diff, c5bar, s5bar = steps.wrist_angles(L, 1.0)
+        sin5 = 2.0 * s5bar * c5bar
+        if sin5 < _NEAR_WRIST:
+            return None
+        s234, c234 = steps.theta234_sine_cosine(L, 1.0, c5bar, s5bar)
+        for w in (0, 1):
+            if w == 1:           # the wrist flip, sigma = -1: theta234 and theta6 turn by pi
+                theta5, half_diff = steps.wrist_flip(theta5, half_diff)
+                s234, c234 = -s234, -c234
             theta234 = half_sum + half_diff
             theta6 = wrapped_angle(half_sum - half_diff)
-            X, Y = steps.wrist1_point(Px, Py, theta234, d5,
-                                      steps.theta234_sine_cosine(L, sigma, c5bar, s5bar))
-            theta234 = wrapped_angle(theta234)
+            X, Y = steps.wrist1_point(Px, Py, theta234, d5, (s234, c234))
             # the distance of _clipping_distance, sqrt(e1^2 + e2^2) with e1 = 0 (h2 >= 0)
             rho = math.sqrt(X * X + Y * Y)
-            gap = max(max(rho - r_out, r_in - rho), 0.0)
-            error = math.sqrt(gap * gap)
+            error = rho - r_out if rho > r_out else (r_in - rho if rho < r_in else 0.0)
             errors[4 * s + w] = errors[4 * s + 2 + w] = error
             if error > tol:                     # both rows stay zero, as finish() writes them
                 continue
@@ -422,12 +423,12 @@ def _solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref):
             elbow_singular = elbow_singular or sin3 < singular_tol
     if not any_valid:
         return None
-    flags = {"wrist_singular": wrist_singular, "shoulder_singular": h < singular_tol * d4,
-             "elbow_singular": elbow_singular, "unreachable": False}
-    numbers = np.array(solutions + errors)            # one array: (8, 6) solutions, 8 errors
+    numbers = np.fromiter(solutions + errors, float, 56)    # (8, 6) solutions, 8 errors
     errors = numbers[48:]
-    return IKResult(numbers[:48].reshape(8, 6), errors <= tol, errors, np.zeros(8),
-                    {name: np.array(flag) for name, flag in flags.items()},
+    flags = {"wrist_singular": np.array(wrist_singular),
+             "shoulder_singular": np.array(h < singular_tol * d4),
+             "elbow_singular": np.array(elbow_singular), "unreachable": np.array(False)}
+    return IKResult(numbers[:48].reshape(8, 6), errors <= tol, errors, np.zeros(8), flags,
                     np.array("", dtype=object))
 
 
@@ -634,9 +635,13 @@ def _branches(prm, flange, theta6_ref, tol, out=None):
     qD = (_HALF_SQRT2 * (qw + qx), _HALF_SQRT2 * (qx - qw),
           _HALF_SQRT2 * (qy - qz), _HALF_SQRT2 * (qy + qz))
     L = steps.relative_rotation_coefficients(qD, 0.5 * theta1)
-    # arrays (2, 2, n) over (s, w), the wrist branch sigma = +1, -1
-    L = tuple(c[:, None, :] for c in L)
-    theta5, half_sum, half_diff, c5bar, s5bar = steps.wrist_angles(L, _SIGMA)
+    # arrays (2, 2, n) over (s, w): the wrist branch sigma = +1, and its wrist flip
+    theta5, half_sum, half_diff, c5bar, s5bar = steps.wrist_angles(L, 1.0)
+    theta5, half_diff = (np.stack((a, b), axis=1)
+                         for a, b in zip((theta5, half_diff),
+                                         steps.wrist_flip(theta5, half_diff), strict=True))
+    L, half_sum, c5bar, s5bar = (tuple(c[:, None] for c in L), half_sum[:, None],
+                                 c5bar[:, None], s5bar[:, None])
     Px, Py = steps.arm_plane_wrist((x5, y5, z5), c1, s1, d1)
     Px = Px[:, None, :]                                       # (2, 1, n)
     family = (prm, half_sum, half_diff, s5bar, c5bar, Px, Py, theta6_ref, tol)
@@ -663,8 +668,8 @@ def _branches(prm, flange, theta6_ref, tol, out=None):
         for whole, part in zip(chain, _planar_chain(prm, Px[..., cols], Py[..., cols],
                                                     theta234[..., cols]), strict=True):
             whole[..., cols] = part
-    # theta4 = theta234 - theta2 - theta3, with theta234 in (-pi, pi]: in (-3 pi, 3 pi]
-    theta4 = wrap_angle(wrap_angle(theta234)[:, None] - theta2 - theta3)
+    # theta4 = theta234 - theta2 - theta3, in (-4 pi, 4 pi) before wrapping
+    theta4 = wrap_angle(theta234[:, None] - theta2 - theta3)
     solutions = _joint_vectors((theta1[:, None, None, :], theta2, theta3, theta4,
                                 theta5[:, None], wrap_angle(theta6)[:, None]),
                                prm["offsets"], n, out)

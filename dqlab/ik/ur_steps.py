@@ -24,7 +24,6 @@ quaternion of a turn by :math:`\theta` about the unit axis :math:`u`.
 """
 
 import math
-from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -37,30 +36,26 @@ Array = NDArray[np.float64]
 _PLUS_MINUS = np.array([[1.0], [-1.0]])
 
 
-class _Functions(NamedTuple):
-    """The elementary functions a step uses, for one kind of number."""
-
-    sqrt: object
-    atan2: object
-    sin: object
-    cos: object
-    clip0: object          # max(x, 0)
-    no_minus_pi: object    # -pi -> pi, other angles unchanged
-    cos_sin: object        # (x, y) / |(x, y)|: cos and sin of atan2(y, x), (1, 0) at 0
+def _float_clip0(x):
+    return x if x > 0.0 else 0.0
 
 
 def _float_no_minus_pi(theta):
     return math.pi if theta == -math.pi else theta
 
 
-def _array_no_minus_pi(theta):
-    at = theta == -np.pi
-    return np.where(at, np.pi, theta) if at.any() else theta
-
-
 def _float_cos_sin(x, y):
     r = math.sqrt(x * x + y * y)
     return (x / r, y / r) if r > 0.0 else (1.0, 0.0)
+
+
+def _array_clip0(x):
+    return np.maximum(x, 0.0)
+
+
+def _array_no_minus_pi(theta):
+    at = theta == -np.pi
+    return np.where(at, np.pi, theta) if at.any() else theta
 
 
 def _array_cos_sin(x, y):
@@ -73,10 +68,31 @@ def _array_cos_sin(x, y):
     return c, s
 
 
-_FLOAT = _Functions(math.sqrt, math.atan2, math.sin, math.cos, lambda x: x if x > 0.0 else 0.0,
-                    _float_no_minus_pi, _float_cos_sin)
-_ARRAY = _Functions(np.sqrt, np.arctan2, np.sin, np.cos, lambda x: np.maximum(x, 0.0),
-                    _array_no_minus_pi, _array_cos_sin)
+class _FLOAT:
+    """The elementary functions of the steps for Python floats: ``math``'s. (The class
+    itself is the namespace: its attributes are read without binding.)"""
+
+    sqrt = math.sqrt
+    atan2 = math.atan2
+    sin = math.sin
+    cos = math.cos
+    copysign = math.copysign
+    clip0 = staticmethod(_float_clip0)                # max(x, 0)
+    no_minus_pi = staticmethod(_float_no_minus_pi)    # -pi -> pi, other angles unchanged
+    cos_sin = staticmethod(_float_cos_sin)    # (x, y) / |(x, y)|, (1, 0) at 0: atan2(y, x)'s
+
+
+class _ARRAY:
+    """The same functions for numpy arrays."""
+
+    sqrt = np.sqrt
+    atan2 = np.arctan2
+    sin = np.sin
+    cos = np.cos
+    copysign = np.copysign
+    clip0 = staticmethod(_array_clip0)
+    no_minus_pi = staticmethod(_array_no_minus_pi)
+    cos_sin = staticmethod(_array_cos_sin)
 
 
 # Each step picks ``math``'s functions for a Python float (one pose, one branch at a time)
@@ -237,6 +253,8 @@ def wrist_angles(L: tuple, sigma: ArrayLike) -> tuple[Array, Array, Array, Array
     two directly computed numbers, so :math:`\theta_5` keeps full accuracy near 0 and
     :math:`\pm\pi`. Equivalently :math:`\cos\theta_5 = \bar c_5^2 - \bar s_5^2` is the
     projection of the flange :math:`z` axis on the joint-2 axis.
+    The branch :math:`\sigma = -1` is the wrist flip of :math:`\sigma = +1`
+    (:func:`wrist_flip`), which the solver uses instead of a second call.
 
     Parameters
     ----------
@@ -267,6 +285,42 @@ def wrist_angles(L: tuple, sigma: ArrayLike) -> tuple[Array, Array, Array, Array
     half_sum = f.atan2(-Ly, Lw)
     half_diff = f.atan2(sigma * Lx, -sigma * Lz)
     return theta5, half_sum, half_diff, c5bar, s5bar
+
+
+def wrist_flip(theta5: Array, half_diff: Array) -> tuple[Array, Array]:
+    r"""The other wrist branch from one: :math:`\theta_5 \to -\theta_5`,
+    :math:`\frac{\Delta}{2} \to \frac{\Delta}{2} \mp \pi`.
+
+    Changing the wrist branch :math:`\sigma` of :func:`wrist_angles` negates the ``atan2``
+    of :math:`\theta_5` and turns the direction of :math:`\frac{\Delta}{2}` by
+    :math:`\pi`; :math:`\frac{\Sigma}{2}`, :math:`\bar c_5` and :math:`|\bar s_5|` stay.
+    So :math:`\theta_{234}` and :math:`\theta_6` move by :math:`\mp\pi` and
+    :math:`\pm\pi`: the familiar wrist flip :math:`(\theta_4 + \pi, -\theta_5,
+    \theta_6 + \pi)` (mod :math:`2\pi`). It reaches the same orientation because
+    :math:`r_{-y}(\pi)\, r_{-z}(-\theta_5)\, r_{-y}(-\pi) = (-j)\, r_{-z}(-\theta_5)\, j
+    = r_{-z}(\theta_5)`. Both results stay in :math:`(-\pi, \pi]`, as ``atan2``'s.
+
+    Parameters
+    ----------
+    theta5, half_diff : ndarray or float
+        :math:`\theta_5` and :math:`\frac{\Delta}{2}` of one wrist branch.
+
+    Returns
+    -------
+    theta5, half_diff : ndarrays or floats
+        Those of the other branch.
+
+    Examples
+    --------
+    >>> L = (math.cos(0.3) * math.cos(0.1), math.sin(0.3) * math.sin(0.2),
+    ...      -math.cos(0.3) * math.sin(0.1), -math.sin(0.3) * math.cos(0.2))
+    >>> theta5, half_sum, half_diff, c5bar, s5bar = wrist_angles(L, 1.0)
+    >>> flipped = wrist_angles(L, -1.0)
+    >>> [round(a - b, 15) for a, b in zip(wrist_flip(theta5, half_diff), flipped[::2])]
+    [0.0, 0.0]
+    """
+    f = _FLOAT if type(theta5) is float else _ARRAY
+    return f.no_minus_pi(-theta5), half_diff - f.copysign(math.pi, half_diff)
 
 
 def arm_plane_wrist(p5: tuple, c1: Array, s1: Array, d1: float) -> tuple[Array, Array]:
@@ -398,7 +452,7 @@ def elbow_triangle(X: Array, Y: Array, a2: float, a3: float
     r_in = abs(a2 - a3)
     outer = (r_out - rho) * (r_out + rho)
     inner = (rho - r_in) * (rho + r_in)
-    k = f.sqrt(f.clip0(outer) * f.clip0(inner))
+    k = f.sqrt(f.clip0(outer * inner))      # one factor negative: out of reach, k = 0
     cos_num = rho2 - (a2 * a2 + a3 * a3)
     if a2 * a3 < 0:
         cos_num = -cos_num
