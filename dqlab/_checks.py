@@ -140,7 +140,7 @@ def components(a):
     if a.ndim == 1:
         return a.tolist()
     # one copy to a component-major layout makes every later operation contiguous
-    return list(np.ascontiguousarray(np.moveaxis(a, -1, 0)))
+    return list(np.ascontiguousarray(a.transpose((a.ndim - 1,) + tuple(range(a.ndim - 1)))))
 
 
 def stack_components(parts):

@@ -58,23 +58,29 @@ def check_transform(T: ArrayLike, tol: float = 1e-9, name: str = "T") -> NDArray
     ...
     ValueError: T must have bottom row (0, 0, 0, 1), got [0.0, 0.0, 0.0, 2.0]
     """
+    return checked_transform_entries(T, tol, name)[0]
+
+
+def checked_transform_entries(T, tol, name):
+    """:func:`check_transform`, which also returns the sixteen entries of a batch it read
+    to check it (arrays of the leading shape, row by row; None for one transform), for a
+    caller that goes on with them."""
     T = as_float_array(T, name, (4, 4))
     bottom = T[..., 3, :]
     if T.ndim == 2:
         if bottom.tolist() != [0.0, 0.0, 0.0, 1.0]:
             raise ValueError(f"{name} must have bottom row (0, 0, 0, 1), got {bottom.tolist()}")
-    elif np.any(bottom != np.array([0.0, 0.0, 0.0, 1.0])):
+        check_rotation_matrix(T[:3, :3], tol, f"the rotation block of {name}")
+        return T, None
+    if np.any(bottom != np.array([0.0, 0.0, 0.0, 1.0])):
         bad = bottom[np.any(bottom != np.array([0.0, 0.0, 0.0, 1.0]), axis=-1)][0]
         raise ValueError(f"{name} must have bottom row (0, 0, 0, 1), got {bad.tolist()}")
-    if T.ndim == 2:
-        check_rotation_matrix(T[:3, :3], tol, f"the rotation block of {name}")
-        return T
-    # a batch: the rotation blocks' entries read in place (a C-ordered T is not copied)
+    # a batch: the entries, one copy to a component-major layout
     e = components(T.reshape(T.shape[:-2] + (16,)))
     err, det = orthonormality(e[0:3], e[4:7], e[8:11])
     if not (err <= tol and det > 0.0):
         rotation_or_raise(f"the rotation block of {name}", err, det, tol)
-    return T
+    return T, e
 
 
 def transform_identity(shape=()):

@@ -476,6 +476,48 @@ def test_solution_order(robot):
     assert urmod.SOLUTION_ORDER[5] == ("right", "up", "flip")
 
 
+@pytest.mark.parametrize("layout", ["C", "F", "strided"])
+def test_finish_zeroes_the_invalid_rows_in_any_memory_layout(layout):
+    """finish() zeroes rows by row numbers in C order and with the targets last in memory
+    (the batch UR solver's layout), and by a mask otherwise; NaN rows included."""
+    from dqlab.ik.result import finish
+
+    rng = np.random.default_rng(5)
+    solutions = rng.normal(size=(3, 4, 8, 6))
+    solutions[0, 1, 2] = np.nan
+    valid = rng.random((3, 4, 8)) < 0.6
+    valid[0, 1, 2] = False
+    if layout == "F":
+        solutions, valid = np.asfortranarray(solutions), np.asfortranarray(valid)
+    elif layout == "strided":
+        solutions, valid = solutions[:, ::2], valid[:, ::2]
+    expected = np.where(valid[..., None], solutions, 0.0)
+    result = finish(solutions, valid, np.zeros(valid.shape), np.zeros(valid.shape), {})
+    assert result.solutions is solutions
+    np.testing.assert_array_equal(result.solutions, expected)
+
+
+def test_batch_result_is_the_poses_first_view_of_the_rows():
+    """A batch is solved with the poses last in memory; the result's arrays are poses-first
+    views of those rows (chunked and reshaped), equal to one pose's own result."""
+    robot = ur3()
+    rng = np.random.default_rng(8)
+    n = 7 * (2 * urmod._CHUNK // 7 + 1)                         # three blocks
+    T = robot.fk(rng.uniform(-np.pi, np.pi, (n, 6)))
+    T[5, :3, 3] *= 5.0                                            # no solution
+    result = ur(robot, T.reshape(7, -1, 4, 4))
+    assert result.solutions.shape == (7, n // 7, 8, 6)
+    assert result.solutions.base is not None and result.valid.shape == (7, n // 7, 8)
+    flat = result.solutions.reshape(n, 8, 6)
+    valid = result.valid.reshape(n, 8)
+    assert not valid[5].any() and np.all(flat[5] == 0.0)
+    assert np.all(flat[~valid] == 0.0) and (~valid).sum() > 100
+    for i in (0, 5, urmod._CHUNK, n - 1):
+        one = ur(robot, T[i])
+        np.testing.assert_array_equal(one.valid, valid[i])
+        np.testing.assert_allclose(one.solutions, flat[i], rtol=0, atol=1e-12)
+
+
 @pytest.mark.parametrize("lead", [(), (1,), (7,), (2, 3)])
 def test_batch_shapes_match_single(robot, lead):
     rng = np.random.default_rng(19)

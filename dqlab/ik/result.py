@@ -100,10 +100,13 @@ def finish(solutions: np.ndarray, valid: np.ndarray, position_error: np.ndarray,
     array([[0., 0., 0.],
            [0., 0., 0.]])
     """
-    if not valid.all():
-        if solutions.flags.c_contiguous:      # by row numbers, faster than a 2-d mask
+    if not valid.all():                       # by row numbers, faster than a 2-d mask
+        if solutions.flags.c_contiguous:
             rows = solutions.reshape(-1, solutions.shape[-1])
             rows[np.flatnonzero(~valid.ravel())] = 0.0
+        elif solutions.flags.f_contiguous:    # targets last in memory: rows are columns
+            columns = solutions.T.reshape(solutions.shape[-1], -1)
+            columns[:, np.flatnonzero(~valid.T.ravel())] = 0.0
         else:
             solutions[~valid] = 0.0
     return IKResult(solutions=solutions, valid=valid, position_error=position_error,

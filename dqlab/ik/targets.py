@@ -21,7 +21,7 @@ from ..dualquat import (
     dual_quaternion_normalize,
     transform_from_dual_quaternion,
 )
-from ..transforms import check_transform
+from ..transforms import checked_transform_entries
 
 __all__ = ["Targets", "parse_targets", "pose_errors"]
 
@@ -49,19 +49,24 @@ class Targets:
     batch: tuple
     _transforms: np.ndarray = field(default=None, repr=False)
     _dual_quaternions: np.ndarray = field(default=None, repr=False)
+    _entries: list = field(default=None, repr=False)
 
     def reshape(self, batch):
         """The same targets with the leading shape ``batch``."""
-        return Targets(self.kind, tuple(batch), *(
-            None if a is None else a.reshape(tuple(batch) + a.shape[len(self.batch):])
-            for a in (self._transforms, self._dual_quaternions)))
+        batch = tuple(batch)
+        return Targets(self.kind, batch, *(
+            None if a is None else a.reshape(batch + a.shape[len(self.batch):])
+            for a in (self._transforms, self._dual_quaternions)),
+            None if self._entries is None else [e.reshape(batch) for e in self._entries])
 
     def __getitem__(self, index):
-        """A part of a one-dimensional batch of targets (``index`` a slice)."""
+        """A part of a one-dimensional batch of targets (``index`` a slice or an array of
+        indices)."""
         parts = [None if a is None else a[index]
                  for a in (self._transforms, self._dual_quaternions)]
         batch = next(a for a in parts if a is not None).shape[:1]
-        return Targets(self.kind, batch, *parts)
+        entries = None if self._entries is None else [e[index] for e in self._entries]
+        return Targets(self.kind, batch, *parts, entries)
 
     @property
     def has_rotation(self):
@@ -76,6 +81,14 @@ class Targets:
             self._transforms = transform_from_dual_quaternion(self._dual_quaternions,
                                                               tol=np.inf)
         return self._transforms
+
+    @property
+    def transform_entries(self):
+        """The sixteen entries of the transforms, row by row: arrays of the leading shape
+        (read once, by the check of a batch, or here)."""
+        if self._entries is None:
+            self._entries = components(self.transforms.reshape(self.batch + (16,)))
+        return self._entries
 
     @property
     def dual_quaternions(self):
@@ -141,7 +154,8 @@ def parse_targets(target: ArrayLike, *, position: bool | str = False, tol: float
         X[..., :3, 3] = a
         return Targets(kind, a.shape[:-1], _transforms=X)
     if kind == "transform" and tol <= RIGID_TOL:   # checked; converted when a solver asks
-        return Targets(kind, a.shape[:-2], _transforms=check_transform(a, tol, name))
+        T, entries = checked_transform_entries(a, tol, name)
+        return Targets(kind, a.shape[:-2], _transforms=T, _entries=entries)
     if kind == "transform":
         Q = dual_quaternion_from_transform(a, tol=tol, name=name)   # checks while converting
     else:

@@ -129,7 +129,6 @@ from ..dualquat import (
 )
 from ..models import UR_SHAPE
 from ..robot import Robot
-from ..rotations import wrap_angle
 from ..transforms import transform_inverse
 from . import ur_steps as steps
 from .result import IKResult, finish
@@ -245,7 +244,7 @@ class _Branches:
     """The eight candidate joint vectors of a block of n poses and the intermediate values
     the checks need; arrays over the branch axes (s, e, w) with the poses last."""
 
-    solutions: np.ndarray      # (n, 8, 6), wrapped to (-pi, pi]
+    solutions: np.ndarray      # (6, 8, n), wrapped to (-pi, pi]
     h: np.ndarray              # (n,) sqrt(x5^2 + y5^2 - d4^2), clipped at 0
     h2: np.ndarray             # (n,) x5^2 + y5^2 - d4^2 before clipping (negative: inside)
     s5bar: np.ndarray          # (2, 1, n) |sin(theta5 / 2)|
@@ -260,10 +259,11 @@ class _Branches:
 
 @dataclass
 class _Block:
-    """The results of n poses, poses first: ``solutions`` (n, 8, 6), ``valid``,
-    ``position_error``, ``rotation_error`` (n, 8), ``flags`` (n,) each, ``reason`` (n,).
+    """The results of n poses, poses last: ``solutions`` (6, 8, n), ``valid``,
+    ``position_error``, ``rotation_error`` (8, n), ``flags`` (n,) each, ``reason`` (n,).
     A block of a batch is a view of the whole batch's arrays (``out[part]``), which
-    :func:`_solve_block` fills."""
+    :func:`_solve_block` fills; :meth:`result` gives them to the caller poses first, as
+    transposed views (the arrays are written where the steps compute them, row by row)."""
 
     solutions: np.ndarray
     valid: np.ndarray
@@ -274,26 +274,37 @@ class _Block:
 
     @classmethod
     def empty(cls, n):
-        return cls(np.empty((n, 8, 6)), np.empty((n, 8), dtype=bool), np.empty((n, 8)),
-                   np.empty((n, 8)), {name: np.empty(n, dtype=bool) for name in _FLAGS},
-                   np.full(n, "", dtype=object))
+        reason = np.empty(n, dtype=object)
+        reason.fill("")
+        return cls(np.empty((6, 8, n)), np.empty((8, n), dtype=bool), np.empty((8, n)),
+                   np.empty((8, n)), {name: np.empty(n, dtype=bool) for name in _FLAGS},
+                   reason)
 
     def __getitem__(self, part):
-        return _Block(self.solutions[part], self.valid[part], self.position_error[part],
-                      self.rotation_error[part],
+        return _Block(self.solutions[..., part], self.valid[:, part],
+                      self.position_error[:, part], self.rotation_error[:, part],
                       {name: flag[part] for name, flag in self.flags.items()},
                       self.reason[part])
 
+    def result(self, batch):
+        """The :class:`IKResult` of poses of leading shape ``batch``, poses first."""
+        return finish(self.solutions.T.reshape(batch + (8, 6)),
+                      self.valid.T.reshape(batch + (8,)),
+                      self.position_error.T.reshape(batch + (8,)),
+                      self.rotation_error.T.reshape(batch + (8,)),
+                      {name: f.reshape(batch) for name, f in self.flags.items()},
+                      self.reason.reshape(batch))
+
 
 def _flange(robot, targets, tool, tool_dq, d6):
-    r"""The flange poses :math:`X_{06} = X_{W0}^{-1} X_{WT}^* X_{6T}^{-1}` of the targets,
-    read on components (the targets are checked)."""
+    r"""The flange poses :math:`X_{06} = X_{W0}^{-1} X_{WT}^* X_{6T}^{-1}` of the targets
+    (checked, of leading shape (n,)), read on components."""
     moved = robot.base.tobytes() != _EYE_BYTES
     tooled = tool.tobytes() != _EYE_BYTES
     n = math.prod(targets.batch)
     if targets.kind == "transform" and not (moved or tooled):
         # Shepperd's quaternion of the rotation block; the position and z axis read off
-        e = components(targets.transforms.reshape(n, 16))
+        e = targets.transform_entries
         q = quaternion_from_matrix_entries(*e[0:3], *e[4:7], *e[8:11])
         p, z6 = e[3:12:4], e[2:11:4]
     else:
@@ -583,8 +594,8 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     batch = targets.batch
     n = math.prod(batch)
     theta6_ref = _theta6_reference(q_ref, batch)
-    flange = _flange(robot, targets, tool, tool_dq, prm["d6"])
     targets = targets.reshape((n,))
+    flange = _flange(robot, targets, tool, tool_dq, prm["d6"])
     options = _Options(tol, singular_tol, residuals, tool_fix)
     # The batch axis goes last, (branch axes..., n), so that every operation runs over long
     # contiguous rows; big batches are cut into blocks whose temporaries stay small, each
@@ -597,11 +608,7 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
         else:
             _solve_block(robot, prm, flange[part], targets[part],
                          None if theta6_ref is None else theta6_ref[part], options, out[part])
-    return finish(out.solutions.reshape(batch + (8, 6)), out.valid.reshape(batch + (8,)),
-                  out.position_error.reshape(batch + (8,)),
-                  out.rotation_error.reshape(batch + (8,)),
-                  {name: f.reshape(batch) for name, f in out.flags.items()},
-                  out.reason.reshape(batch))
+    return out.result(batch)
 
 
 def _solve_block(robot, prm, flange, targets, theta6_ref, options, out):
@@ -611,9 +618,9 @@ def _solve_block(robot, prm, flange, targets, theta6_ref, options, out):
     pe, re = _errors(robot, prm, flange, branches, targets, options)       # (8, n) each
     ok = (pe <= options.tol) & (re <= options.tol)
     any_valid = ok.any(axis=0)                                              # (n,)
-    out.valid[...] = ok.T
-    out.position_error[...] = pe.T
-    out.rotation_error[...] = re.T
+    out.valid[...] = ok
+    out.position_error[...] = pe
+    out.rotation_error[...] = re
     for name, flag in _flags(prm, branches, ok, any_valid, options.singular_tol).items():
         out.flags[name][...] = flag
     if not any_valid.all():
@@ -637,9 +644,8 @@ def _branches(prm, flange, theta6_ref, tol, out=None):
     L = steps.relative_rotation_coefficients(qD, 0.5 * theta1)
     # arrays (2, 2, n) over (s, w): the wrist branch sigma = +1, and its wrist flip
     theta5, half_sum, half_diff, c5bar, s5bar = steps.wrist_angles(L, 1.0)
-    theta5, half_diff = (np.stack((a, b), axis=1)
-                         for a, b in zip((theta5, half_diff),
-                                         steps.wrist_flip(theta5, half_diff), strict=True))
+    theta5, half_diff = (_over_wrists(*pair) for pair in zip(
+        (theta5, half_diff), steps.wrist_flip(theta5, half_diff), strict=True))
     L, half_sum, c5bar, s5bar = (tuple(c[:, None] for c in L), half_sum[:, None],
                                  c5bar[:, None], s5bar[:, None])
     Px, Py = steps.arm_plane_wrist((x5, y5, z5), c1, s1, d1)
@@ -669,12 +675,20 @@ def _branches(prm, flange, theta6_ref, tol, out=None):
                                                     theta234[..., cols]), strict=True):
             whole[..., cols] = part
     # theta4 = theta234 - theta2 - theta3, in (-4 pi, 4 pi) before wrapping
-    theta4 = wrap_angle(theta234[:, None] - theta2 - theta3)
+    theta4 = wrapped_angle(theta234[:, None] - theta2 - theta3)
     solutions = _joint_vectors((theta1[:, None, None, :], theta2, theta3, theta4,
-                                theta5[:, None], wrap_angle(theta6)[:, None]),
+                                theta5[:, None], wrapped_angle(theta6)[:, None]),
                                prm["offsets"], n, out)
     return _Branches(solutions=solutions, h=h, h2=h2, s5bar=s5bar, c5bar=c5bar, X=X, Y=Y,
                      sin3=sin3, outer=outer, inner=inner, represented=represented)
+
+
+def _over_wrists(unflipped, flipped):
+    """One array (2, 2, n) over (s, w) from the two wrist branches' arrays (2, n)."""
+    both = np.empty((2, 2, unflipped.shape[-1]))
+    both[:, 0] = unflipped
+    both[:, 1] = flipped
+    return both
 
 
 def _wrist_family(prm, half_sum, half_diff, s5bar, c5bar, Px, Py, theta6_ref, tol, repair=None):
@@ -689,24 +703,26 @@ def _wrist_family(prm, half_sum, half_diff, s5bar, c5bar, Px, Py, theta6_ref, to
     exact = (s5bar <= rep_tol) | (c5bar <= rep_tol)           # (2, 1, n)
     if not (exact.any() or (repair is not None and repair.any())):
         return theta234, theta6, None
-    shape = theta234.shape
-    n = shape[-1]
-    exact = np.broadcast_to(exact, shape)
-    rep = exact if repair is None else exact | repair
-    rep0 = np.broadcast_to(s5bar <= c5bar, shape)    # theta5 near 0: theta234 + theta6 fixed
-    ref = np.zeros(n) if theta6_ref is None else theta6_ref
-    ref = np.broadcast_to(ref + prm["offsets"][5], shape)
-    full_sum = np.broadcast_to(2.0 * half_sum, shape)
-    full_diff = 2.0 * half_diff
-    want = np.where(exact, np.where(rep0, full_sum - ref, full_diff + ref), theta234)[rep]
-    got = steps.feasible_theta234(np.broadcast_to(Px, shape)[rep],
-                                  np.broadcast_to(Py, shape)[rep], want,
+    rep = np.broadcast_to(exact, theta234.shape) if repair is None else exact | repair
+    # the few poses concerned, cols, as arrays (2, 2, m)
+    cols = np.flatnonzero(rep.any(axis=(0, 1)))
+    rep_c = rep[..., cols]
+    shape = rep_c.shape
+    exact = np.broadcast_to(exact[..., cols], shape)
+    rep0 = np.broadcast_to(s5bar[..., cols] <= c5bar[..., cols], shape)   # theta5 near 0:
+    ref = prm["offsets"][5] + (0.0 if theta6_ref is None else theta6_ref[cols])  # sum fixed
+    full_sum = np.broadcast_to(2.0 * half_sum[..., cols], shape)
+    full_diff = 2.0 * half_diff[..., cols]
+    want = np.where(exact, np.where(rep0, full_sum - ref, full_diff + ref),
+                    theta234[..., cols])[rep_c]
+    got = steps.feasible_theta234(np.broadcast_to(Px[..., cols], shape)[rep_c],
+                                  np.broadcast_to(Py[..., cols], shape)[rep_c], want,
                                   prm["a2"], prm["a3"], prm["d5"])
-    theta234 = theta234.copy()
-    theta6 = theta6.copy()
-    theta234[rep] = steps.wrap_angle(got)
-    theta6[rep] = steps.wrap_angle(np.where(rep0[rep], full_sum[rep] - got,
-                                            got - full_diff[rep]))
+    for whole, member in ((theta234, got), (theta6, np.where(rep0[rep_c], full_sum[rep_c] - got,
+                                                             got - full_diff[rep_c]))):
+        part = whole[..., cols]
+        part[rep_c] = steps.wrap_angle(member)
+        whole[..., cols] = part
     return theta234, theta6, rep
 
 
@@ -727,20 +743,15 @@ def _planar_chain(prm, Px, Py, theta234, sine_cosine=None):
 
 
 def _joint_vectors(thetas, offsets, n, out=None):
-    """The (n, 8, 6) joint vectors from the six angle arrays over (s, e, w, n), row
-    k = 4 s + 2 e + w, joint offsets removed (in ``out`` when given, a C-ordered array)."""
-    solutions = np.empty((n, 8, 6)) if out is None else out
-    # written through a (6, 2, 2, 2, n) view of the (n, 8, 6) array
-    view = solutions.transpose(2, 1, 0).reshape(6, 2, 2, 2, n)
-    if view.base is None:  # pragma: no cover -- reshape had to copy
-        st_n, st_k, st_j = solutions.strides
-        view = np.lib.stride_tricks.as_strided(
-            solutions, (6, 2, 2, 2, n), (st_j, 4 * st_k, 2 * st_k, st_k, st_n),
-            writeable=True)
+    """The joint vectors (6, 8, n) -- joint j of row k = 4 s + 2 e + w of pose i at
+    ``[j, k, i]`` -- from the six angle arrays over (s, e, w, n), joint offsets removed (in
+    ``out`` when given)."""
+    solutions = np.empty((6, 8, n)) if out is None else out
+    view = solutions.reshape(6, 2, 2, 2, n)    # splits the row axis: a view of ``out``
     for j, theta in enumerate(thetas):
         view[j] = theta
     if any(offsets):
-        solutions[...] = steps.wrap_angle(solutions - np.array(offsets))
+        solutions[...] = steps.wrap_angle(solutions - np.array(offsets)[:, None, None])
     return solutions
 
 
@@ -748,20 +759,17 @@ def _errors(robot, prm, flange, branches, targets, options):
     """Position and rotation errors (8, n) of every row: from the clipping of the steps
     (``residuals="equations"``) or by forward kinematics (``"fk"``)."""
     if options.residuals == "fk":
-        pe, re = _fk_errors(robot, branches.solutions, targets.transforms[:, None],
+        pe, re = _fk_errors(robot, branches.solutions.T, targets.transforms[:, None],
                             options.tool_fix)
         return pe.T, re.T
-    re = np.zeros(branches.solutions.shape[1::-1])
+    re = np.zeros(branches.solutions.shape[1:])
     pe = _clipping_distance(prm, flange, branches)
     if branches.represented is not None:
-        n = branches.solutions.shape[0]
-        rows = np.broadcast_to(branches.represented[:, None], (2, 2, 2, n))
-        rows = rows.reshape(8, n).T                                           # (n, 8)
-        X_rows = np.broadcast_to(targets.transforms[:, None], rows.shape + (4, 4))[rows]
-        rows_pe, rows_re = _fk_errors(robot, branches.solutions[rows], X_rows,
-                                      options.tool_fix)
-        pe.T[rows] = rows_pe
-        re.T[rows] = rows_re
+        n = branches.solutions.shape[2]
+        rows = np.broadcast_to(branches.represented[:, None], (2, 2, 2, n)).reshape(8, n)
+        k, i = np.nonzero(rows)                               # row k of pose i
+        pe[k, i], re[k, i] = _fk_errors(robot, branches.solutions[:, k, i].T,
+                                        targets[i].transforms, options.tool_fix)
     return pe, re
 
 
