@@ -451,8 +451,8 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     Solves :math:`X_{W0}\, X_{06}(q)\, X_{6T} = X` for the joint vector :math:`q` by the
     dual-quaternion route of the thesis (section 4.3), corrected (see the module's
     "Errata of the source"). A batch of poses is solved with array operations, without a
-    Python loop over the poses (a big batch goes through in blocks of 1024 poses, which keeps
-    the temporaries small and fast).
+    Python loop over the poses (a big batch goes through in blocks of 2048 poses, which keeps
+    the temporaries small and fast). One pose is solved on Python floats, by the same steps.
 
     Parameters
     ----------
@@ -507,7 +507,9 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
         ``"elbow_singular"`` (set when a valid solution is near that singularity) and
         ``"unreachable"`` (no valid solution); ``reason`` (...) says why a pose has no
         solution. Branches that coincide at a singularity are all returned (equal rows);
-        :func:`distinct_solutions` marks the first of each group.
+        :func:`distinct_solutions` marks the first of each group. For a batch, the arrays
+        are stored with the poses last in memory (as the solver computes them) and given as
+        transposed views, shape as above (``np.ascontiguousarray`` gives a C-ordered copy).
 
     Raises
     ------
