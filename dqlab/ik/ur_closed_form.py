@@ -711,8 +711,9 @@ def _wrist_family(prm, half_sum, half_diff, s5bar, c5bar, Px, Py, theta6_ref, to
     rep_c = rep[..., cols]
     shape = rep_c.shape
     exact = np.broadcast_to(exact[..., cols], shape)
-    rep0 = np.broadcast_to(s5bar[..., cols] <= c5bar[..., cols], shape)   # theta5 near 0:
-    ref = prm["offsets"][5] + (0.0 if theta6_ref is None else theta6_ref[cols])  # sum fixed
+    # rep0: theta5 near 0, where theta234 + theta6 is fixed (near pi, theta234 - theta6)
+    rep0 = np.broadcast_to(s5bar[..., cols] <= c5bar[..., cols], shape)
+    ref = prm["offsets"][5] + (0.0 if theta6_ref is None else theta6_ref[cols])
     full_sum = np.broadcast_to(2.0 * half_sum[..., cols], shape)
     full_diff = 2.0 * half_diff[..., cols]
     want = np.where(exact, np.where(rep0, full_sum - ref, full_diff + ref),
@@ -720,8 +721,8 @@ def _wrist_family(prm, half_sum, half_diff, s5bar, c5bar, Px, Py, theta6_ref, to
     got = steps.feasible_theta234(np.broadcast_to(Px[..., cols], shape)[rep_c],
                                   np.broadcast_to(Py[..., cols], shape)[rep_c], want,
                                   prm["a2"], prm["a3"], prm["d5"])
-    for whole, member in ((theta234, got), (theta6, np.where(rep0[rep_c], full_sum[rep_c] - got,
-                                                             got - full_diff[rep_c]))):
+    theta6_got = np.where(rep0[rep_c], full_sum[rep_c] - got, got - full_diff[rep_c])
+    for whole, member in ((theta234, got), (theta6, theta6_got)):
         part = whole[..., cols]
         part[rep_c] = steps.wrap_angle(member)
         whole[..., cols] = part

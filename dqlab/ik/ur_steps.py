@@ -298,7 +298,8 @@ def wrist_flip(theta5: Array, half_diff: Array) -> tuple[Array, Array]:
     :math:`\pm\pi`: the familiar wrist flip :math:`(\theta_4 + \pi, -\theta_5,
     \theta_6 + \pi)` (mod :math:`2\pi`). It reaches the same orientation because
     :math:`r_{-y}(\pi)\, r_{-z}(-\theta_5)\, r_{-y}(-\pi) = (-j)\, r_{-z}(-\theta_5)\, j
-    = r_{-z}(\theta_5)`. Both results stay in :math:`(-\pi, \pi]`, as ``atan2``'s.
+    = r_{-z}(\theta_5)`. The results are those of ``atan2`` with :math:`\sigma` changed:
+    :math:`\theta_5 \in (-\pi, \pi]` and :math:`\frac{\Delta}{2} \in [-\pi, \pi]`.
 
     Parameters
     ----------
