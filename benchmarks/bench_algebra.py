@@ -10,12 +10,12 @@ product, and every batch operation under 0.2 microseconds per element.
 pyquaternion has no dual quaternions and no batches: its column shows what a program
 written with it does (the thesis's style): a dual-quaternion product as three quaternion
 products, a dual quaternion from a 4x4 via ``Quaternion(matrix=R)``, and batches as a
-Python loop (timed on 2,000 elements). This is not a test; timings vary between machines.
+Python loop (timed on 2,000 elements). Times are CPU times, the methods timed in turn in
+rounds (``timing.interleaved_best``). This is not a test; timings vary between machines.
 """
 
 import argparse
 import os
-import timeit
 
 import numpy as np
 import pytransform3d.batch_rotations as pbr
@@ -23,24 +23,12 @@ import pytransform3d.rotations as pr
 import pytransform3d.trajectories as ptr
 import pytransform3d.transformations as pt
 from pyquaternion import Quaternion as PyQuaternion
+from timing import interleaved_best
 
 import dqlab
 
 N_BATCH = 100_000
 N_LOOP = 2_000  # elements for the pyquaternion Python loops
-
-
-def best_times(fs, numbers, repeat):
-    """Best time per call, in seconds, of each function over ``repeat`` rounds.
-
-    The functions are timed in turn within each round, so that a change of machine load
-    during the run affects dqlab and its peers alike.
-    """
-    best = [np.inf] * len(fs)
-    for _ in range(repeat):
-        for i, (f, number) in enumerate(zip(fs, numbers, strict=True)):
-            best[i] = min(best[i], timeit.timeit(f, number=number) / number)
-    return best
 
 
 def unit(rng, shape=()):
@@ -143,7 +131,9 @@ def main(quick=False):
     print(f"{'operation':26s} {'dqlab':>8s} {'pyquaternion':>13s} {'pytransform3d':>14s}"
           f" {'pyq/dqlab':>10s} {'pt3d/dqlab':>11s}")
     for name, (f_dq, f_pq, f_pt) in single.items():
-        t = [x * 1e6 for x in best_times((f_dq, f_pq, f_pt), (number,) * 3, repeat)]
+        best = interleaved_best({"dqlab": (f_dq, number, 1), "pyquaternion": (f_pq, number, 1),
+                                 "pytransform3d": (f_pt, number, 1)}, repeat)
+        t = [x * 1e6 for x in best.values()]
         results[("single", name)] = t
         print(f"{name:26s} {t[0]:8.2f} {t[1]:13.2f} {t[2]:14.2f} {t[1] / t[0]:10.1f}"
               f" {t[2] / t[0]:11.1f}")
@@ -153,8 +143,9 @@ def main(quick=False):
     print(f"{'operation':26s} {'dqlab':>8s} {'pyquaternion':>13s} {'pytransform3d':>14s}"
           f" {'pyq/dqlab':>10s} {'pt3d/dqlab':>11s}")
     for name, (f_dq, f_pq, f_pt) in batch.items():
-        t = best_times((f_dq, f_pq, f_pt), (bnumber, 1, bnumber), brepeat)
-        t = [t[0] / n * 1e6, t[1] / m * 1e6, t[2] / n * 1e6]
+        best = interleaved_best({"dqlab": (f_dq, bnumber, n), "pyquaternion": (f_pq, 1, m),
+                                 "pytransform3d": (f_pt, bnumber, n)}, brepeat)
+        t = [x * 1e6 for x in best.values()]
         results[("batch", name)] = t
         print(f"{name:26s} {t[0]:8.3f} {t[1]:13.3f} {t[2]:14.3f} {t[1] / t[0]:10.1f}"
               f" {t[2] / t[0]:11.1f}")

@@ -23,32 +23,15 @@ reported).
 """
 
 import argparse
-import math
-import time
 
 import numpy as np
+from timing import interleaved_best
 
 from dqlab.dualquat import transform_from_dual_quaternion
 from dqlab.models import ur3
 
 N_BATCH = 100_000
 N_LOOP = 10_000  # configurations for the one-at-a-time peers
-
-
-def interleaved_best(jobs, repeat):
-    """Best CPU time per item of each job ``name: (function, calls per run, items per
-    call)`` over ``repeat`` rounds, every round running every job in turn (a slow spell of
-    the machine then touches all of them alike, and the ratios stay fair). CPU time of this
-    process (``time.process_time``) rather than wall time, so that other programs running on
-    a shared machine inflate the numbers less."""
-    best = dict.fromkeys(jobs, math.inf)
-    for _ in range(repeat):
-        for name, (f, calls, items) in jobs.items():
-            start = time.process_time()
-            for _ in range(calls):
-                f()
-            best[name] = min(best[name], (time.process_time() - start) / (calls * items))
-    return best
 
 
 def optional_peers():

@@ -32,28 +32,14 @@ time; numpy runs single-threaded here, so on an idle machine the two agree.
 """
 
 import argparse
-import math
-import time
 
 import numpy as np
+from timing import interleaved_best
 
 from dqlab.dualquat import dual_quaternion_from_transform
 from dqlab.ik import ur
 from dqlab.models import ur3
 from dqlab.testing import quiet_stdout
-
-
-def interleaved_best(jobs, repeat):
-    """Best CPU time per pose of each job ``(label, function, poses per call)`` over
-    ``repeat`` rounds; every round runs every job once, in turn, so that a slow spell of
-    the machine touches all of them alike and the ratios stay fair."""
-    best = [math.inf] * len(jobs)
-    for _ in range(repeat):
-        for k, (_, f, poses) in enumerate(jobs):
-            start = time.process_time()
-            f()
-            best[k] = min(best[k], (time.process_time() - start) / poses)
-    return [(label, seconds) for (label, _, _), seconds in zip(jobs, best, strict=True)]
 
 
 def main():
@@ -92,10 +78,10 @@ def main():
         print(f"ur_analytic_ik: same number of solutions on "
               f"{np.mean(counts == result.count):.4%} of the poses")
 
-    jobs = []   # (label, function, poses per call), timed together at the end
-    jobs.append(("dqlab.ik.ur batch, 4x4 poses", lambda: ur(robot, T), n))
-    jobs.append(("dqlab.ik.ur batch, dual quaternions", lambda: ur(robot, Q), n))
-    jobs.append(("dqlab.ik.ur batch, residuals='fk'", lambda: ur(robot, T, residuals="fk"), n))
+    jobs = {}   # label: (function, calls per run, poses per call), timed together at the end
+    jobs["dqlab.ik.ur batch, 4x4 poses"] = (lambda: ur(robot, T), 1, n)
+    jobs["dqlab.ik.ur batch, dual quaternions"] = (lambda: ur(robot, Q), 1, n)
+    jobs["dqlab.ik.ur batch, residuals='fk'"] = (lambda: ur(robot, T, residuals="fk"), 1, n)
 
     def single_loop(poses, **kw):
         def run():
@@ -103,9 +89,9 @@ def main():
                 ur(robot, X, **kw)
         return run
 
-    jobs.append(("dqlab.ik.ur single pose, in a loop", single_loop(T[:n_loop]), n_loop))
-    jobs.append(("dqlab.ik.ur single pose, residuals='fk'",
-                 single_loop(T[:n_loop], residuals="fk"), n_loop))
+    jobs["dqlab.ik.ur single pose, in a loop"] = (single_loop(T[:n_loop]), 1, n_loop)
+    jobs["dqlab.ik.ur single pose, residuals='fk'"] = (single_loop(T[:n_loop], residuals="fk"),
+                                                        1, n_loop)
     if ur_analytic_ik is not None:
         ik = ur_analytic_ik.ur3.inverse_kinematics
 
@@ -114,10 +100,10 @@ def main():
                 for X in T[:n_loop]:
                     ik(X)
 
-        jobs.append(("ur_analytic_ik, in a loop", peer, n_loop))
+        jobs["ur_analytic_ik, in a loop"] = (peer, 1, n_loop)
     if numerical is not None:
         q0 = q + rng.uniform(-0.1, 0.1, q.shape)
-        jobs.append(("dqlab.ik.numerical batch (1 solution)", lambda: numerical(robot, T, q0), n))
+        jobs["dqlab.ik.numerical batch (1 solution)"] = (lambda: numerical(robot, T, q0), 1, n)
         print(f"dqlab.ik.numerical batch: {int(numerical(robot, T, q0).valid.sum())} of {n} "
               "poses solved")
         n_single = min(n, 500)              # about 4 ms each: the first 500 poses
@@ -126,8 +112,8 @@ def main():
             for X, g in zip(T[:n_single], q0[:n_single], strict=True):
                 numerical(robot, X, g)
 
-        jobs.append((f"dqlab.ik.numerical single pose, in a loop ({n_single})", numerical_loop,
-                     n_single))
+        jobs[f"dqlab.ik.numerical single pose, in a loop ({n_single})"] = (numerical_loop, 1,
+                                                                            n_single)
         ours = [numerical(robot, X, g, history=True)
                 for X, g in zip(T[:n_single], q0[:n_single], strict=True)]
         steps = [len(r.history["damping"]) - 1 for r in ours]
@@ -147,8 +133,8 @@ def main():
                 return [peer_robot.ik_LM(X, q0=g, tol=5e-21, slimit=1)
                         for X, g in zip(T[:n_single], q0[:n_single], strict=True)]
 
-            jobs.append((f"roboticstoolbox ik_LM single pose, in a loop ({n_single})",
-                         peer_numerical, n_single))
+            jobs[f"roboticstoolbox ik_LM single pose, in a loop ({n_single})"] = (
+                peer_numerical, 1, n_single)
             solved = peer_numerical()
             found = np.array([s.q for s in solved])
             good = [bool(s.success) for s in solved]
@@ -160,7 +146,7 @@ def main():
     else:
         print("dqlab.ik.numerical is not available: skipped")
 
-    rows = interleaved_best(jobs, repeat)      # (label, seconds per pose)
+    rows = list(interleaved_best(jobs, repeat).items())      # (label, seconds per pose)
     reference = dict(rows).get("ur_analytic_ik, in a loop")
     width = max(len(label) for label, _ in rows)
     print()
