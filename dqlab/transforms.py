@@ -16,7 +16,7 @@ axes and :math:`\mathbf p_{AB}` is B's origin, both written in A. Composition re
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._checks import as_float_array, batch_shape, components, rotation_or_raise
+from ._checks import as_float_array, batch_shape, component_rows, rotation_or_raise
 from ._kernels import orthonormality
 from .rotations import check_rotation_matrix
 
@@ -63,8 +63,8 @@ def check_transform(T: ArrayLike, tol: float = 1e-9, name: str = "T") -> NDArray
 
 def checked_transform_entries(T, tol, name):
     """:func:`check_transform`, which also returns the sixteen entries of a batch it read
-    to check it (arrays of the leading shape, row by row; None for one transform), for a
-    caller that goes on with them."""
+    to check it, for a caller that goes on with them: the rows, in the order of the
+    transforms' rows, of a new array (16, ...) (None for one transform)."""
     T = as_float_array(T, name, (4, 4))
     bottom = T[..., 3, :]
     if T.ndim == 2:
@@ -72,11 +72,11 @@ def checked_transform_entries(T, tol, name):
             raise ValueError(f"{name} must have bottom row (0, 0, 0, 1), got {bottom.tolist()}")
         check_rotation_matrix(T[:3, :3], tol, f"the rotation block of {name}")
         return T, None
-    if np.any(bottom != np.array([0.0, 0.0, 0.0, 1.0])):
+    # a batch: the entries, one copy to a component-major layout
+    e = component_rows(T.reshape(T.shape[:-2] + (16,)))
+    if any(e[k].any() for k in (12, 13, 14)) or (e[15] != 1.0).any():   # no NaN: checked
         bad = bottom[np.any(bottom != np.array([0.0, 0.0, 0.0, 1.0]), axis=-1)][0]
         raise ValueError(f"{name} must have bottom row (0, 0, 0, 1), got {bad.tolist()}")
-    # a batch: the entries, one copy to a component-major layout
-    e = components(T.reshape(T.shape[:-2] + (16,)))
     err, det = orthonormality(e[0:3], e[4:7], e[8:11])
     if not (err <= tol and det > 0.0):
         rotation_or_raise(f"the rotation block of {name}", err, det, tol)

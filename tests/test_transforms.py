@@ -1,5 +1,7 @@
 """Tests of dqlab.transforms: building, composing, inverting and applying rigid transforms."""
 
+import re
+
 import numpy as np
 import pytest
 import pytransform3d.transformations as pt
@@ -114,3 +116,19 @@ def test_batch_equals_single(shape):
 def test_bad_input_raises_named_value_error(call, message):
     with pytest.raises(ValueError, match=message):
         call()
+
+
+def test_batch_bottom_row_check_names_the_first_bad_row():
+    """A batch's bottom rows are checked exactly: the first row that is not (0, 0, 0, 1) is
+    named (a signed zero is a zero)."""
+    T = np.tile(np.eye(4), (5, 1, 1))
+    T[1, 3, :3] = -0.0
+    check_transform(T)
+    for row, entry, value in ((3, 2, 1e-300), (2, 3, 1.0 + 2e-16), (0, 0, -1e-3)):
+        bad = T.copy()
+        bad[row, 3, entry] = value
+        bad[4, 3, 1] = 7.0                                   # a later bad row is not named
+        expected = [0.0, 0.0, 0.0, 1.0]
+        expected[entry] = value
+        with pytest.raises(ValueError, match=re.escape(f"got {expected}")):
+            check_transform(bad)
