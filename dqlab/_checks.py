@@ -143,6 +143,17 @@ def components(a):
     return list(np.ascontiguousarray(a.transpose((a.ndim - 1,) + tuple(range(a.ndim - 1)))))
 
 
+def component_rows(a):
+    """The components of ``a`` (its last axis) as the rows of a new C-ordered array: a copy,
+    always, which the caller may overwrite.
+
+    >>> component_rows(np.arange(6.0).reshape(3, 2))
+    array([[0., 2., 4.],
+           [1., 3., 5.]])
+    """
+    return np.moveaxis(a, -1, 0).copy()
+
+
 def stack_components(parts):
     """Inverse of :func:`components`: a new float array with ``parts`` on the last axis.
 

@@ -12,6 +12,7 @@ So the two solvers answer the same question without any frame conversion.
 import numpy as np
 import pytest
 
+from dqlab.dualquat import dual_quaternion_from_transform
 from dqlab.ik import IKResult, ur
 from dqlab.ik import ur_closed_form as urmod
 from dqlab.models import ur3
@@ -844,6 +845,47 @@ def test_wrist_flip_is_the_other_wrist_branch():
         b = wrist(half_sum[k] + flip_diff[k], flip5[k], half_sum[k] - flip_diff[k])
         assert min(np.abs(a - b).max(), np.abs(a + b).max()) < 1e-15
         np.testing.assert_allclose(np.abs(a), np.abs(L[:, k]), atol=1e-15)
+
+
+def test_half_angle_cos_sin_without_trigonometry():
+    """half_angle_cos_sin gives cos and sin of theta / 2 for theta in (-pi, pi], to a
+    rounding, from cos theta and sin theta: on arrays and (bitwise the same) on floats,
+    with cos(theta / 2) >= 0 and sin(pi / 2) = +1 whatever the sign of the zero sine."""
+    from dqlab.ik.ur_steps import half_angle_cos_sin
+
+    rng = np.random.default_rng(13)
+    theta = np.concatenate([rng.uniform(-np.pi, np.pi, 2000),
+                            [np.pi, 0.0, np.pi / 2, -np.pi / 2, np.nextafter(-np.pi, 0.0),
+                             np.nextafter(np.pi / 2, 0.0), np.nextafter(np.pi / 2, 4.0)]])
+    c, s = half_angle_cos_sin(np.cos(theta), np.sin(theta))
+    assert np.abs(c - np.cos(theta / 2)).max() <= 4.5e-16
+    assert np.abs(s - np.sin(theta / 2)).max() <= 4.5e-16
+    assert np.all(c >= 0.0) and np.all(np.hypot(c, s) - 1.0 < 4.5e-16)
+    for k in (0, 1, 2000, 2003, 2004, 2005, 2006):                  # floats: the same formula
+        one = half_angle_cos_sin(float(np.cos(theta[k])), float(np.sin(theta[k])))
+        assert one == (c[k], s[k])
+    for zero in (0.0, -0.0):                                        # theta = pi
+        assert half_angle_cos_sin(-1.0, zero) == (0.0, 1.0)
+        assert [float(v[0]) for v in half_angle_cos_sin(np.array([-1.0]),
+                                                        np.array([zero]))] == [0.0, 1.0]
+
+
+def test_batch_solve_leaves_the_targets_as_they_were():
+    """The flange poses are written over the components the solver reads: always a copy,
+    never the caller's array, also when that is laid out component by component."""
+    robot = ur3()
+    q = np.random.default_rng(14).uniform(-np.pi, np.pi, (50, 6))
+    T = np.ascontiguousarray(np.moveaxis(robot.fk(q), 0, -1))      # (4, 4, n) in memory
+    T_view = np.moveaxis(T, -1, 0)                                  # (n, 4, 4), entries first
+    Q = np.ascontiguousarray(dual_quaternion_from_transform(T_view).T).T    # (n, 8) view
+    kept_T, kept_Q = T.copy(), Q.copy()
+    for target in (T_view, Q):
+        result = ur(robot, target)
+        assert result.count.min() >= 2
+    np.testing.assert_array_equal(T, kept_T)
+    np.testing.assert_array_equal(Q, kept_Q)
+    np.testing.assert_array_equal(ur(robot, T_view).solutions, ur(robot, kept_T.copy().transpose(
+        2, 0, 1)).solutions)
 
 
 # --------------------------------------------------------------------------------------

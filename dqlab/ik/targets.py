@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._checks import as_float_array, check_tolerance, components, real_array
+from .._checks import as_float_array, check_tolerance, component_rows, components, real_array
 from .._kernels import pose_error_entries
 from ..dualquat import (
     check_unit_dual_quaternion,
@@ -49,7 +49,7 @@ class Targets:
     batch: tuple
     _transforms: np.ndarray = field(default=None, repr=False)
     _dual_quaternions: np.ndarray = field(default=None, repr=False)
-    _entries: list = field(default=None, repr=False)
+    _entries: np.ndarray = field(default=None, repr=False)    # (16, ...), see below
 
     def reshape(self, batch):
         """The same targets with the leading shape ``batch``."""
@@ -57,7 +57,7 @@ class Targets:
         return Targets(self.kind, batch, *(
             None if a is None else a.reshape(batch + a.shape[len(self.batch):])
             for a in (self._transforms, self._dual_quaternions)),
-            None if self._entries is None else [e.reshape(batch) for e in self._entries])
+            None if self._entries is None else self._entries.reshape((16,) + batch))
 
     def __getitem__(self, index):
         """A part of a one-dimensional batch of targets (``index`` a slice or an array of
@@ -65,7 +65,7 @@ class Targets:
         parts = [None if a is None else a[index]
                  for a in (self._transforms, self._dual_quaternions)]
         batch = next(a for a in parts if a is not None).shape[:1]
-        entries = None if self._entries is None else [e[index] for e in self._entries]
+        entries = None if self._entries is None else self._entries[:, index]
         return Targets(self.kind, batch, *parts, entries)
 
     @property
@@ -82,13 +82,16 @@ class Targets:
                                                               tol=np.inf)
         return self._transforms
 
-    @property
-    def transform_entries(self):
-        """The sixteen entries of the transforms, row by row: arrays of the leading shape
-        (read once, by the check of a batch, or here)."""
-        if self._entries is None:
-            self._entries = components(self.transforms.reshape(self.batch + (16,)))
-        return self._entries
+    def take_transform_entries(self):
+        """The sixteen entries of the transforms, in the order of their rows, as the rows of
+        an array (16, ...) (the copy the check of a batch read, or one made now). They are
+        handed over: the targets forget them, and the caller may overwrite them (as big as
+        the transforms, they would otherwise stay in memory as long as the targets)."""
+        entries = self._entries
+        if entries is None:
+            entries = component_rows(self.transforms.reshape(self.batch + (16,)))
+        self._entries = None
+        return entries
 
     @property
     def dual_quaternions(self):

@@ -111,7 +111,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._checks import (
     as_float_array,
     check_tolerance,
-    components,
+    component_rows,
     rigid_rows,
     unit_dual_quaternion_or_raise,
 )
@@ -274,11 +274,19 @@ class _Block:
 
     @classmethod
     def empty(cls, n):
+        """The arrays of n poses, the numbers all in one allocation: one large block of
+        memory, which the allocator keeps for the next call more readily than many (memory
+        handed back to the system costs a page fault per 4 kB when it is used again)."""
         reason = np.empty(n, dtype=object)
         reason.fill("")
-        return cls(np.empty((6, 8, n)), np.empty((8, n), dtype=bool), np.empty((8, n)),
-                   np.empty((8, n)), {name: np.empty(n, dtype=bool) for name in _FLAGS},
-                   reason)
+        floats = np.empty(64 * n + -(-12 * n // 8))    # 48 + 8 + 8 floats, 12 booleans
+        solutions = floats[:48 * n].reshape(6, 8, n)
+        pe = floats[48 * n:56 * n].reshape(8, n)
+        re = floats[56 * n:64 * n].reshape(8, n)
+        bools = floats[64 * n:].view(bool)
+        valid = bools[:8 * n].reshape(8, n)
+        flags = {name: bools[(8 + i) * n:(9 + i) * n] for i, name in enumerate(_FLAGS)}
+        return cls(solutions, valid, pe, re, flags, reason)
 
     def __getitem__(self, part):
         return _Block(self.solutions[..., part], self.valid[:, part],
@@ -298,15 +306,16 @@ class _Block:
 
 def _flange(robot, targets, tool, tool_dq, d6):
     r"""The flange poses :math:`X_{06} = X_{W0}^{-1} X_{WT}^* X_{6T}^{-1}` of the targets
-    (checked, of leading shape (n,)), read on components."""
+    (checked, of leading shape (n,)), read on components. They are written over rows of the
+    components read, once used: nothing else of the size of the batch stays in memory."""
     moved = robot.base.tobytes() != _EYE_BYTES
     tooled = tool.tobytes() != _EYE_BYTES
     n = math.prod(targets.batch)
     if targets.kind == "transform" and not (moved or tooled):
         # Shepperd's quaternion of the rotation block; the position and z axis read off
-        e = targets.transform_entries
-        q = quaternion_from_matrix_entries(*e[0:3], *e[4:7], *e[8:11])
-        p, z6 = e[3:12:4], e[2:11:4]
+        e = targets.take_transform_entries()                  # (16, n), ours to overwrite
+        q, p, z6 = e[12:16], e[3:12:4], e[2:11:4]
+        _write_rows(q, quaternion_from_matrix_entries(*e[0:3], *e[4:7], *e[8:11]))  # bottom row
     else:
         Q = targets.dual_quaternions
         if moved:
@@ -316,11 +325,18 @@ def _flange(robot, targets, tool, tool_dq, d6):
             if tool_dq is None:
                 tool_dq = dual_quaternion_from_transform(tool)
             Q = dual_quaternion_product(Q, dual_quaternion_inverse(tool_dq))
-        c = components(Q.reshape(n, 8))
-        q = c[:4]
-        p = translation_from_dual_quaternion_entries(*c)
-        z6 = quaternion_rotate(*q, 0.0, 0.0, 1.0)
-    return _Flange(q=np.array(q), p5=steps.wrist_center(np.array(p), np.array(z6), d6))
+        c = component_rows(Q.reshape(n, 8))                   # (8, n), ours to overwrite
+        q, p = c[:4], c[4:7]
+        z6 = np.array(quaternion_rotate(*q, 0.0, 0.0, 1.0))
+        _write_rows(p, translation_from_dual_quaternion_entries(*c))   # over the dual part
+    p[...] = steps.wrist_center(p, z6, d6)
+    return _Flange(q=q, p5=p)
+
+
+def _write_rows(out, rows):
+    """Write the arrays ``rows`` into the rows of ``out``."""
+    for target, row in zip(out, rows, strict=True):
+        target[...] = row
 
 
 def _tool(robot, tool, pose_tol):
@@ -401,7 +417,7 @@ def _solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref):
         theta1, c1, s1, h, h2 = steps.shoulder_angles(x5, y5, d4, shoulder)
         if h2 < 0.0:
             return None
-        L = steps.relative_rotation_coefficients(qD, 0.5 * theta1)
+        L = steps.relative_rotation_coefficients(qD, steps.half_angle_cos_sin(c1, s1))
         Px, Py = steps.arm_plane_wrist(p5, c1, s1, d1)
         theta5, half_sum, half_diff, c5bar, s5bar = steps.wrist_angles(L, 1.0)
         sin5 = 2.0 * s5bar * c5bar
@@ -617,12 +633,10 @@ def _solve_block(robot, prm, flange, targets, theta6_ref, options, out):
     """Every branch of a block of n poses (batch axis last), checked and flagged, written
     into ``out`` (a :class:`_Block` of n poses)."""
     branches = _branches(prm, flange, theta6_ref, options.tol, out.solutions)
-    pe, re = _errors(robot, prm, flange, branches, targets, options)       # (8, n) each
-    ok = (pe <= options.tol) & (re <= options.tol)
+    pe, re = _errors(robot, prm, flange, branches, targets, options, out)   # (8, n) each
+    ok = np.less_equal(pe, options.tol, out=out.valid)
+    ok &= re <= options.tol
     any_valid = ok.any(axis=0)                                              # (n,)
-    out.valid[...] = ok
-    out.position_error[...] = pe
-    out.rotation_error[...] = re
     for name, flag in _flags(prm, branches, ok, any_valid, options.singular_tol).items():
         out.flags[name][...] = flag
     if not any_valid.all():
@@ -643,7 +657,7 @@ def _branches(prm, flange, theta6_ref, tol, out=None):
     qw, qx, qy, qz = flange.q
     qD = (_HALF_SQRT2 * (qw + qx), _HALF_SQRT2 * (qx - qw),
           _HALF_SQRT2 * (qy - qz), _HALF_SQRT2 * (qy + qz))
-    L = steps.relative_rotation_coefficients(qD, 0.5 * theta1)
+    L = steps.relative_rotation_coefficients(qD, steps.half_angle_cos_sin(c1, s1))
     # arrays (2, 2, n) over (s, w): the wrist branch sigma = +1, and its wrist flip
     theta5, half_sum, half_diff, c5bar, s5bar = steps.wrist_angles(L, 1.0)
     theta5, half_diff = (_over_wrists(*pair) for pair in zip(
@@ -758,15 +772,17 @@ def _joint_vectors(thetas, offsets, n, out=None):
     return solutions
 
 
-def _errors(robot, prm, flange, branches, targets, options):
-    """Position and rotation errors (8, n) of every row: from the clipping of the steps
-    (``residuals="equations"``) or by forward kinematics (``"fk"``)."""
+def _errors(robot, prm, flange, branches, targets, options, out):
+    """Position and rotation errors (8, n) of every row, written into ``out`` (a
+    :class:`_Block`): from the clipping of the steps (``residuals="equations"``) or by
+    forward kinematics (``"fk"``)."""
+    pe, re = out.position_error, out.rotation_error
     if options.residuals == "fk":
-        pe, re = _fk_errors(robot, branches.solutions.T, targets.transforms[:, None],
-                            options.tool_fix)
-        return pe.T, re.T
-    re = np.zeros(branches.solutions.shape[1:])
-    pe = _clipping_distance(prm, flange, branches)
+        pe.T[...], re.T[...] = _fk_errors(robot, branches.solutions.T,
+                                          targets.transforms[:, None], options.tool_fix)
+        return pe, re
+    re[...] = 0.0
+    _clipping_distance(prm, flange, branches, pe)
     if branches.represented is not None:
         n = branches.solutions.shape[2]
         rows = np.broadcast_to(branches.represented[:, None], (2, 2, 2, n)).reshape(8, n)
@@ -776,23 +792,23 @@ def _errors(robot, prm, flange, branches, targets, options):
     return pe, re
 
 
-def _clipping_distance(prm, flange, branches):
+def _clipping_distance(prm, flange, branches, out):
     """Distance (8, n) a row misses the pose by, from the clipping of steps 1 and 4: the
     wrist centre inside the shoulder cylinder (normal to the arm plane) and the wrist-1 point
-    out of the forearm's reach (in it)."""
+    out of the forearm's reach (in it); written into ``out``."""
     n = flange.q.shape[1]
     if (branches.h2.min() >= 0.0 and branches.outer.min() >= 0.0
             and branches.inner.min() >= 0.0):
-        return np.zeros((8, n))                               # nothing was clipped
+        out[...] = 0.0                                        # nothing was clipped
+        return out
     e1 = _shoulder_gap(prm, flange, branches)                 # (n,)
     a2, a3 = prm["a2"], prm["a3"]
     r_out, r_in = abs(a2 + a3), abs(a2 - a3)
     X, Y = branches.X, branches.Y
     rho = np.sqrt(X * X + Y * Y)
     e2 = np.maximum(np.maximum(rho - r_out, r_in - rho), 0.0)                 # (2, 1, 2, n)
-    pe = np.empty((2, 2, 2, n))
-    pe[...] = np.sqrt(e1 * e1 + e2 * e2)
-    return pe.reshape(8, n)
+    out.reshape(2, 2, 2, n)[...] = np.sqrt(e1 * e1 + e2 * e2)   # splits the rows: a view
+    return out
 
 
 def _shoulder_gap(prm, flange, branches):

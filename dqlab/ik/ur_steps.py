@@ -49,6 +49,14 @@ def _float_cos_sin(x, y):
     return (x / r, y / r) if r > 0.0 else (1.0, 0.0)
 
 
+def _float_half_cos_sin(c, s):
+    big = math.sqrt(0.5 + 0.5 * abs(c))
+    other = 0.5 * s / big
+    if c >= 0.0:
+        return big, other
+    return abs(other), (-big if s < 0.0 else big)
+
+
 def _array_clip0(x):
     return np.maximum(x, 0.0)
 
@@ -68,6 +76,14 @@ def _array_cos_sin(x, y):
     return c, s
 
 
+def _array_half_cos_sin(c, s):
+    big = np.sqrt(0.5 + 0.5 * np.abs(c))
+    other = 0.5 * s / big
+    first = c >= 0.0
+    signed_big = np.where(s < 0.0, -big, big)
+    return np.where(first, big, np.abs(other)), np.where(first, other, signed_big)
+
+
 class _FLOAT:
     """The elementary functions of the steps for Python floats: ``math``'s. (The class
     itself is the namespace: its attributes are read without binding.)"""
@@ -80,6 +96,7 @@ class _FLOAT:
     clip0 = staticmethod(_float_clip0)                # max(x, 0)
     no_minus_pi = staticmethod(_float_no_minus_pi)    # -pi -> pi, other angles unchanged
     cos_sin = staticmethod(_float_cos_sin)    # (x, y) / |(x, y)|, (1, 0) at 0: atan2(y, x)'s
+    half_cos_sin = staticmethod(_float_half_cos_sin)  # see half_angle_cos_sin
 
 
 class _ARRAY:
@@ -93,6 +110,7 @@ class _ARRAY:
     clip0 = staticmethod(_array_clip0)
     no_minus_pi = staticmethod(_array_no_minus_pi)
     cos_sin = staticmethod(_array_cos_sin)
+    half_cos_sin = staticmethod(_array_half_cos_sin)
 
 
 # Each step picks ``math``'s functions for a Python float (one pose, one branch at a time)
@@ -187,7 +205,41 @@ def shoulder_angles(x5: Array, y5: Array, d4: float, sign: ArrayLike | None = No
     return theta1, c1, s1, h, h2
 
 
-def relative_rotation_coefficients(q: tuple, half1: Array
+def half_angle_cos_sin(c: Array, s: Array) -> tuple[Array, Array]:
+    r""":math:`\cos\frac{\theta}{2}` and :math:`\sin\frac{\theta}{2}` of an angle
+    :math:`\theta \in (-\pi, \pi]` given by its cosine ``c`` and sine ``s``, without
+    trigonometry.
+
+    The larger of the two is :math:`\sqrt{(1 + |\cos\theta|)/2} \ge 1/\sqrt 2` (the
+    cosine when :math:`\cos\theta \ge 0`, else the sine), and the other follows from
+    :math:`\sin\theta = 2 \sin\frac{\theta}{2} \cos\frac{\theta}{2}`, a division by a
+    number that is never small: both are as accurate as ``c`` and ``s``. On
+    :math:`(-\pi, \pi]`, :math:`\cos\frac{\theta}{2} \ge 0` and
+    :math:`\sin\frac{\theta}{2}` has the sign of :math:`\sin\theta` (positive at
+    :math:`\theta = \pi`, where ``s`` may be :math:`-0`).
+
+    Parameters
+    ----------
+    c, s : ndarray, shape (...)
+        :math:`\cos\theta` and :math:`\sin\theta`, as from :func:`shoulder_angles`.
+
+    Returns
+    -------
+    tuple of two ndarrays
+        :math:`(\cos\frac{\theta}{2}, \sin\frac{\theta}{2})`.
+
+    Examples
+    --------
+    >>> theta = np.array([-2.5, 0.4, np.pi])
+    >>> c, s = half_angle_cos_sin(np.cos(theta), np.sin(theta))
+    >>> bool(np.allclose(c, np.cos(theta / 2)) and np.allclose(s, np.sin(theta / 2)))
+    True
+    """
+    f = _FLOAT if type(c) is float else _ARRAY
+    return f.half_cos_sin(c, s)
+
+
+def relative_rotation_coefficients(q: tuple, half1: Array | tuple[Array, Array]
                                    ) -> tuple[Array, Array, Array, Array]:
     r"""The four coefficients of :math:`L = r_z(\theta_1)^{-1} q_D` (thesis 4.14-4.17).
 
@@ -205,8 +257,8 @@ def relative_rotation_coefficients(q: tuple, half1: Array
     ----------
     q : sequence of four ndarrays, each of shape (...)
         Components :math:`(w, x, y, z)` of the zero-pose-relative rotation :math:`q_D`.
-    half1 : ndarray, shape (...)
-        :math:`\theta_1 / 2`.
+    half1 : ndarray, shape (...), or a pair of them
+        :math:`\theta_1 / 2`, or its cosine and sine (see :func:`half_angle_cos_sin`).
 
     Returns
     -------
@@ -221,8 +273,11 @@ def relative_rotation_coefficients(q: tuple, half1: Array
     [1.0, 0.0, 0.0, 0.0]
     """
     w, x, y, z = q
-    f = _FLOAT if type(half1) is float else _ARRAY
-    c, s = f.cos(half1), f.sin(half1)
+    if type(half1) is tuple:
+        c, s = half1
+    else:
+        f = _FLOAT if type(half1) is float else _ARRAY
+        c, s = f.cos(half1), f.sin(half1)
     return c * w + s * z, c * x + s * y, c * y - s * x, c * z - s * w
 
 
