@@ -21,3 +21,15 @@ def interleaved_best(jobs, repeat):
                 f()
             best[label] = min(best[label], (time.process_time() - start) / (calls * items))
     return best
+
+
+def calls_lasting(f, seconds=0.02):
+    """How many calls of ``f`` last at least ``seconds`` of CPU time, from one timed call.
+
+    A job run this often lasts about as long as a loop of single calls, and the first call
+    after other work (which finds the caches cold: tens of percent slower for a batch call
+    of a few milliseconds) weighs in it no more than in the loop.
+    """
+    start = time.process_time()
+    f()
+    return max(1, math.ceil(seconds / max(time.process_time() - start, 1e-9)))
