@@ -27,8 +27,8 @@ def calls_lasting(f, seconds=0.02):
     """How many calls of ``f`` last at least ``seconds`` of CPU time, from one timed call.
 
     A job run this often lasts about as long as a loop of single calls, and the first call
-    after other work (which finds the caches cold: tens of percent slower for a batch call
-    of a few milliseconds) weighs in it no more than in the loop.
+    after other work (which finds the caches cold: about 10 % slower for a batch call of a
+    few milliseconds) weighs in it no more than in the loop.
     """
     start = time.process_time()
     f()

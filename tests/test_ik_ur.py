@@ -884,8 +884,8 @@ def test_batch_solve_leaves_the_targets_as_they_were():
         assert result.count.min() >= 2
     np.testing.assert_array_equal(T, kept_T)
     np.testing.assert_array_equal(Q, kept_Q)
-    np.testing.assert_array_equal(ur(robot, T_view).solutions, ur(robot, kept_T.copy().transpose(
-        2, 0, 1)).solutions)
+    C_ordered = np.ascontiguousarray(np.moveaxis(kept_T, -1, 0))
+    np.testing.assert_array_equal(ur(robot, T_view).solutions, ur(robot, C_ordered).solutions)
 
 
 # --------------------------------------------------------------------------------------

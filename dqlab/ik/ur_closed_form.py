@@ -621,7 +621,7 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     out = _Block.empty(n)
     for start in range(0, n, _CHUNK):
         part = slice(start, start + _CHUNK)
-        if n <= _CHUNK:
+        if n <= _CHUNK:                                   # one block: no slicing
             _solve_block(robot, prm, flange, targets, theta6_ref, options, out)
         else:
             _solve_block(robot, prm, flange[part], targets[part],
