@@ -30,9 +30,11 @@ several rounds in which every method runs once in turn (a slow spell of the mach
 touches all of them alike), which other load on the machine disturbs less than wall-clock
 time; numpy runs single-threaded here, so on an idle machine the two agree. A batch call
 is repeated within a run so that the run lasts at least 20 ms, about as long as the loops
-of single calls: the first call after the other methods have run finds cold caches (a
-batch call of 10,000 poses then takes 10-15 % longer), which a run that short would report
-as the method's speed.
+of single calls, after one untimed call: the first batch call after the other methods finds
+cold caches and gets its memory back from the system (some 1,300 page faults for 10,000
+poses, which make that call 30-80 % slower than the next ones), a cost that repeated calls
+do not pay and that would otherwise fall on whichever method runs first in a round. The
+best time of those first calls is printed below the table.
 """
 
 import argparse
@@ -85,7 +87,7 @@ def main():
     jobs = {}   # label: (function, calls per run, poses per call), timed together at the end
 
     def batch(f):   # a batch call, repeated to last as long as a loop of single calls
-        return f, calls_lasting(f), n
+        return f, calls_lasting(f), n, 1                      # after one untimed call
 
     jobs["dqlab.ik.ur batch, 4x4 poses"] = batch(lambda: ur(robot, T))
     jobs["dqlab.ik.ur batch, dual quaternions"] = batch(lambda: ur(robot, Q))
@@ -154,7 +156,8 @@ def main():
     else:
         print("dqlab.ik.numerical is not available: skipped")
 
-    rows = list(interleaved_best(jobs, repeat).items())      # (label, seconds per pose)
+    first_calls = {}
+    rows = list(interleaved_best(jobs, repeat, first_calls).items())   # (label, s per pose)
     reference = dict(rows).get("ur_analytic_ik, in a loop")
     width = max(len(label) for label, _ in rows)
     print()
@@ -164,6 +167,9 @@ def main():
         ratio = f"{reference / seconds:21.2f}" if reference else f"{'-':>21}"
         inverse = f"{seconds / reference:21.2f}" if reference else f"{'-':>21}"
         print(f"{label:<{width}}  {seconds * 1e6:9.2f}  {ratio}  {inverse}")
+    print("\nfirst call of a run (untimed above), us/pose: " + "; ".join(
+        f"{label.removeprefix('dqlab.ik.')} {seconds * 1e6:.2f}"
+        for label, seconds in first_calls.items()))
     single = [seconds for label, seconds in rows if label.startswith("dqlab.ik.numerical single")]
     peer = [seconds for label, seconds in rows if label.startswith("roboticstoolbox ik_LM")]
     if single and peer:

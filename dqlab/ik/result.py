@@ -105,8 +105,9 @@ def finish(solutions: np.ndarray, valid: np.ndarray, position_error: np.ndarray,
             rows = solutions.reshape(-1, solutions.shape[-1])
             rows[np.flatnonzero(~valid.ravel())] = 0.0
         elif solutions.flags.f_contiguous:    # targets last in memory: rows are columns
-            columns = solutions.T.reshape(solutions.shape[-1], -1)
-            columns[:, np.flatnonzero(~valid.T.ravel())] = 0.0
+            invalid = np.flatnonzero(~valid.T.ravel())
+            for column in solutions.T.reshape(solutions.shape[-1], -1):   # joint by joint
+                column[invalid] = 0.0
         else:
             solutions[~valid] = 0.0
     return IKResult(solutions=solutions, valid=valid, position_error=position_error,

@@ -247,8 +247,7 @@ class _Branches:
     solutions: np.ndarray      # (6, 8, n), wrapped to (-pi, pi]
     h: np.ndarray              # (n,) sqrt(x5^2 + y5^2 - d4^2), clipped at 0
     h2: np.ndarray             # (n,) x5^2 + y5^2 - d4^2 before clipping (negative: inside)
-    s5bar: np.ndarray          # (2, 1, n) |sin(theta5 / 2)|
-    c5bar: np.ndarray          # (2, 1, n) |cos(theta5 / 2)|
+    sin5: np.ndarray           # (2, 1, n) |sin(theta5)| = 2 |sin(theta5 / 2) cos(theta5 / 2)|
     X: np.ndarray              # (2, 1, 2, n) wrist-1 point in the arm plane
     Y: np.ndarray
     sin3: np.ndarray           # (2, 2, 2, n)
@@ -635,10 +634,10 @@ def _solve_block(robot, prm, flange, targets, theta6_ref, options, out):
     branches = _branches(prm, flange, theta6_ref, options.tol, out.solutions)
     pe, re = _errors(robot, prm, flange, branches, targets, options, out)   # (8, n) each
     ok = np.less_equal(pe, options.tol, out=out.valid)
-    ok &= re <= options.tol
+    if options.residuals == "fk" or branches.represented is not None:   # else re is 0
+        ok &= re <= options.tol
     any_valid = ok.any(axis=0)                                              # (n,)
-    for name, flag in _flags(prm, branches, ok, any_valid, options.singular_tol).items():
-        out.flags[name][...] = flag
+    _flags(prm, branches, ok, any_valid, options.singular_tol, out.flags)
     if not any_valid.all():
         out.reason[...] = _reasons(prm, flange, branches, any_valid, options.tol)
 
@@ -681,7 +680,8 @@ def _branches(prm, flange, theta6_ref, tol, out=None):
     # may be off by eps / |theta5|: enough to put the wrist-1 point of a stretched or folded
     # elbow out of reach. Such rows move within their wrist family to where the forearm
     # reaches (and are checked by forward kinematics).
-    near = 2.0 * s5bar * c5bar < _NEAR_WRIST                  # (2, 1, n)
+    sin5 = 2.0 * s5bar * c5bar                                # (2, 1, n), |sin theta5|
+    near = sin5 < _NEAR_WRIST
     repair = _out_of_reach(prm, outer, inner, tol) & near if near.any() else near
     if repair.any():
         theta234, theta6, represented = _wrist_family(*family, repair=repair)
@@ -695,7 +695,7 @@ def _branches(prm, flange, theta6_ref, tol, out=None):
     solutions = _joint_vectors((theta1[:, None, None, :], theta2, theta3, theta4,
                                 theta5[:, None], wrapped_angle(theta6)[:, None]),
                                prm["offsets"], n, out)
-    return _Branches(solutions=solutions, h=h, h2=h2, s5bar=s5bar, c5bar=c5bar, X=X, Y=Y,
+    return _Branches(solutions=solutions, h=h, h2=h2, sin5=sin5, X=X, Y=Y,
                      sin3=sin3, outer=outer, inner=inner, represented=represented)
 
 
@@ -801,13 +801,15 @@ def _clipping_distance(prm, flange, branches, out):
             and branches.inner.min() >= 0.0):
         out[...] = 0.0                                        # nothing was clipped
         return out
-    e1 = _shoulder_gap(prm, flange, branches)                 # (n,)
     a2, a3 = prm["a2"], prm["a3"]
     r_out, r_in = abs(a2 + a3), abs(a2 - a3)
     X, Y = branches.X, branches.Y
     rho = np.sqrt(X * X + Y * Y)
-    e2 = np.maximum(np.maximum(rho - r_out, r_in - rho), 0.0)                 # (2, 1, 2, n)
-    out.reshape(2, 2, 2, n)[...] = np.sqrt(e1 * e1 + e2 * e2)   # splits the rows: a view
+    e = np.maximum(np.maximum(rho - r_out, r_in - rho), 0.0)                  # (2, 1, 2, n)
+    if branches.h2.min() < 0.0:        # some wrist centre inside the shoulder cylinder
+        e1 = _shoulder_gap(prm, flange, branches)             # (n,)
+        e = np.sqrt(e1 * e1 + e * e)
+    out.reshape(2, 2, 2, n)[...] = e                          # splits the rows: a view
     return out
 
 
@@ -826,20 +828,21 @@ def _fk_errors(robot, solutions, X_target, tool_fix):
     return pose_errors(X, X_target)
 
 
-def _flags(prm, branches, ok, any_valid, singular_tol):
-    """The singularity and reach flags (n,) of a block, over its valid rows."""
+def _flags(prm, branches, ok, any_valid, singular_tol, out):
+    """The singularity and reach flags (n,) of a block, over its valid rows, written into
+    ``out`` (the block's flags)."""
     n = ok.shape[1]
     ok4 = ok.reshape(2, 2, 2, n)
-    sin5 = 2.0 * branches.s5bar * branches.c5bar               # (2, 1, n) over (s, w)
-    flags = {"wrist_singular": np.zeros(n, dtype=bool),
-             "shoulder_singular": any_valid & (branches.h < singular_tol * prm["d4"]),
-             "elbow_singular": np.zeros(n, dtype=bool),
-             "unreachable": ~any_valid}
-    if sin5.min() < singular_tol:
-        flags["wrist_singular"] = (ok4 & (sin5 < singular_tol)[:, None]).reshape(8, n).any(0)
-    if branches.sin3.min() < singular_tol:
-        flags["elbow_singular"] = (ok4 & (branches.sin3 < singular_tol)).reshape(8, n).any(0)
-    return flags
+    shoulder = np.less(branches.h, singular_tol * prm["d4"], out=out["shoulder_singular"])
+    shoulder &= any_valid
+    np.logical_not(any_valid, out=out["unreachable"])
+    # |sin theta5| (2, 1, 1, n) over (s, w) and |sin theta3| (2, 1, 2, n) over (s, w)
+    for name, sine in (("wrist_singular", branches.sin5[:, None]),
+                       ("elbow_singular", branches.sin3)):
+        if sine.min() < singular_tol:
+            (ok4 & (sine < singular_tol)).reshape(8, n).any(axis=0, out=out[name])
+        else:
+            out[name][...] = False
 
 
 def _reasons(prm, flange, branches, any_valid, tol):
