@@ -32,9 +32,9 @@ time; numpy runs single-threaded here, so on an idle machine the two agree. A ba
 is repeated within a run so that the run lasts at least 20 ms, about as long as the loops
 of single calls, after one untimed call: the first batch call after the other methods finds
 cold caches and gets its memory back from the system (some 1,300 page faults for 10,000
-poses, which make that call 30-80 % slower than the next ones), a cost that repeated calls
-do not pay and that would otherwise fall on whichever method runs first in a round. The
-best time of those first calls is printed below the table.
+poses), a cost that repeated calls do not pay and that would otherwise fall on whichever
+method runs first in a round. The best time of those first calls is printed below the
+table.
 """
 
 import argparse
