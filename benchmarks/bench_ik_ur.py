@@ -84,7 +84,8 @@ def main():
         print(f"ur_analytic_ik: same number of solutions on "
               f"{np.mean(counts == result.count):.4%} of the poses")
 
-    jobs = {}   # label: (function, calls per run, poses per call), timed together at the end
+    jobs = {}   # label: (function, calls per run, poses per call[, untimed calls first]),
+    #             timed together at the end
 
     def batch(f):   # a batch call, repeated to last as long as a loop of single calls
         return f, calls_lasting(f), n, 1                      # after one untimed call

@@ -250,9 +250,9 @@ class _Branches:
     sin5: np.ndarray           # (2, 1, n) |sin(theta5)| = 2 |sin(theta5 / 2) cos(theta5 / 2)|
     X: np.ndarray              # (2, 1, 2, n) wrist-1 point in the arm plane
     Y: np.ndarray
-    sin3: np.ndarray           # (2, 2, 2, n)
-    outer: np.ndarray          # (2, 2, 2, n) margin to the outer reach (negative: beyond)
-    inner: np.ndarray          # (2, 2, 2, n) margin to the inner reach
+    sin3: np.ndarray           # (2, 1, 2, n) |sin(theta3)|, the same on both elbow branches
+    outer: np.ndarray          # (2, 1, 2, n) margin to the outer reach (negative: beyond)
+    inner: np.ndarray          # (2, 1, 2, n) margin to the inner reach
     represented: np.ndarray    # (2, 2, n) over (s, w) rows standing for a wrist family, or None
 
 
