@@ -667,9 +667,11 @@ def _branches(prm, flange, theta6_ref, tol, out=None):
     Px = Px[:, None, :]                                       # (2, 1, n)
     family = (prm, half_sum, half_diff, s5bar, c5bar, Px, Py, theta6_ref, tol)
     theta234, theta6, represented = _wrist_family(*family)
-    with np.errstate(divide="ignore", invalid="ignore"):      # 0/0 only in the family
+    if represented is None:          # no wrist family: c5bar s5bar > 0 everywhere
         sine_cosine = steps.theta234_sine_cosine(L, _SIGMA, c5bar, s5bar)    # (2, 2, n)
-    if represented is not None:      # a member of a wrist family: its own sine and cosine
+    else:                            # a member of a wrist family: its own sine and cosine
+        with np.errstate(divide="ignore", invalid="ignore"):  # 0/0 only in the family
+            sine_cosine = steps.theta234_sine_cosine(L, _SIGMA, c5bar, s5bar)
         for part, f in zip(sine_cosine, (np.sin, np.cos), strict=True):
             part[represented] = f(theta234[represented])
 
@@ -682,8 +684,8 @@ def _branches(prm, flange, theta6_ref, tol, out=None):
     # reaches (and are checked by forward kinematics).
     sin5 = 2.0 * s5bar * c5bar                                # (2, 1, n), |sin theta5|
     near = sin5 < _NEAR_WRIST
-    repair = _out_of_reach(prm, outer, inner, tol) & near if near.any() else near
-    if repair.any():
+    repair = _out_of_reach(prm, outer, inner, tol) & near if near.any() else None
+    if repair is not None and repair.any():
         theta234, theta6, represented = _wrist_family(*family, repair=repair)
         cols = np.flatnonzero(repair.any(axis=(0, 1)))        # the poses concerned
         chain = (X, Y, theta2, theta3, outer, inner, sin3)
@@ -716,6 +718,8 @@ def _wrist_family(prm, half_sum, half_diff, s5bar, c5bar, Px, Py, theta6_ref, to
     theta234 = half_sum + half_diff
     theta6 = half_sum - half_diff
     rep_tol = tol / (8.0 * max(1.0, abs(prm["d6"])))
+    if repair is None and min(s5bar.min(), c5bar.min()) > rep_tol:
+        return theta234, theta6, None                         # no family (the common case)
     exact = (s5bar <= rep_tol) | (c5bar <= rep_tol)           # (2, 1, n)
     if not (exact.any() or (repair is not None and repair.any())):
         return theta234, theta6, None
@@ -797,8 +801,8 @@ def _clipping_distance(prm, flange, branches, out):
     wrist centre inside the shoulder cylinder (normal to the arm plane) and the wrist-1 point
     out of the forearm's reach (in it); written into ``out``."""
     n = flange.q.shape[1]
-    if (branches.h2.min() >= 0.0 and branches.outer.min() >= 0.0
-            and branches.inner.min() >= 0.0):
+    inside = branches.h2.min() < 0.0   # some wrist centre inside the shoulder cylinder
+    if not inside and branches.outer.min() >= 0.0 and branches.inner.min() >= 0.0:
         out[...] = 0.0                                        # nothing was clipped
         return out
     a2, a3 = prm["a2"], prm["a3"]
@@ -806,7 +810,7 @@ def _clipping_distance(prm, flange, branches, out):
     X, Y = branches.X, branches.Y
     rho = np.sqrt(X * X + Y * Y)
     e = np.maximum(np.maximum(rho - r_out, r_in - rho), 0.0)                  # (2, 1, 2, n)
-    if branches.h2.min() < 0.0:        # some wrist centre inside the shoulder cylinder
+    if inside:
         e1 = _shoulder_gap(prm, flange, branches)             # (n,)
         e = np.sqrt(e1 * e1 + e * e)
     out.reshape(2, 2, 2, n)[...] = e                          # splits the rows: a view

@@ -62,17 +62,18 @@ def _array_clip0(x):
 
 
 def _array_no_minus_pi(theta):
-    at = theta == -np.pi
-    return np.where(at, np.pi, theta) if at.any() else theta
+    # the smallest entry tells whether some entry is -pi (or below), in one pass
+    return np.where(theta == -np.pi, np.pi, theta) if theta.min(initial=0.0) <= -np.pi else theta
 
 
 def _array_cos_sin(x, y):
     r = np.sqrt(x * x + y * y)
+    if r.min(initial=np.inf) > 0.0:       # no zero (the common case)
+        return x / r, y / r
     with np.errstate(divide="ignore", invalid="ignore"):
         c, s = x / r, y / r
     zero = r == 0.0
-    if zero.any():
-        c[zero], s[zero] = 1.0, 0.0
+    c[zero], s[zero] = 1.0, 0.0
     return c, s
 
 
