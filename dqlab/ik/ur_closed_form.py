@@ -642,11 +642,10 @@ def _solve_block(robot, prm, flange, targets, theta6_ref, options, out):
         out.reason[...] = _reasons(prm, flange, branches, any_valid, options.tol)
 
 
-def _branches(prm, flange, theta6_ref, tol, out=None):
-    """Steps 1 to 4 for every branch: the candidate joint vectors of a block of poses
-    (written into ``out`` when given)."""
+def _branches(prm, flange, theta6_ref, tol, out):
+    """Steps 1 to 4 for every branch: the candidate joint vectors of a block of poses,
+    written into ``out`` (6, 8, n)."""
     d1, d4 = prm["d1"], prm["d4"]
-    n = flange.q.shape[1]
     x5, y5, z5 = flange.p5
 
     # Step 1, theta1: arrays (2, n) over the shoulder branch s
@@ -694,10 +693,9 @@ def _branches(prm, flange, theta6_ref, tol, out=None):
             whole[..., cols] = part
     # theta4 = theta234 - theta2 - theta3, in (-4 pi, 4 pi) before wrapping
     theta4 = wrapped_angle(theta234[:, None] - theta2 - theta3)
-    solutions = _joint_vectors((theta1[:, None, None, :], theta2, theta3, theta4,
-                                theta5[:, None], wrapped_angle(theta6)[:, None]),
-                               prm["offsets"], n, out)
-    return _Branches(solutions=solutions, h=h, h2=h2, sin5=sin5, X=X, Y=Y,
+    _joint_vectors((theta1[:, None, None, :], theta2, theta3, theta4, theta5[:, None],
+                    wrapped_angle(theta6)[:, None]), prm["offsets"], out)
+    return _Branches(solutions=out, h=h, h2=h2, sin5=sin5, X=X, Y=Y,
                      sin3=sin3, outer=outer, inner=inner, represented=represented)
 
 
@@ -714,15 +712,14 @@ def _wrist_family(prm, half_sum, half_diff, s5bar, c5bar, Px, Py, theta6_ref, to
     singularity, where only theta234 -+ theta6 is fixed, the member of the family whose
     theta6 is nearest ``theta6_ref`` among those the arm can reach; for the rows in
     ``repair`` (near the singularity), the member nearest the computed theta234 that the arm
-    can reach. Also returns the mask of the rows so chosen (None when there is none)."""
+    can reach (``repair``, when given, marks some rows). Also returns the mask of the rows
+    so chosen (None when there is none)."""
     theta234 = half_sum + half_diff
     theta6 = half_sum - half_diff
     rep_tol = tol / (8.0 * max(1.0, abs(prm["d6"])))
     if repair is None and min(s5bar.min(), c5bar.min()) > rep_tol:
         return theta234, theta6, None                         # no family (the common case)
     exact = (s5bar <= rep_tol) | (c5bar <= rep_tol)           # (2, 1, n)
-    if not (exact.any() or (repair is not None and repair.any())):
-        return theta234, theta6, None
     rep = np.broadcast_to(exact, theta234.shape) if repair is None else exact | repair
     # the few poses concerned, cols, as arrays (2, 2, m)
     cols = np.flatnonzero(rep.any(axis=(0, 1)))
@@ -763,17 +760,15 @@ def _planar_chain(prm, Px, Py, theta234, sine_cosine=None):
     return X, Y, theta2, theta3, outer, inner, sin3
 
 
-def _joint_vectors(thetas, offsets, n, out=None):
-    """The joint vectors (6, 8, n) -- joint j of row k = 4 s + 2 e + w of pose i at
-    ``[j, k, i]`` -- from the six angle arrays over (s, e, w, n), joint offsets removed (in
-    ``out`` when given)."""
-    solutions = np.empty((6, 8, n)) if out is None else out
-    view = solutions.reshape(6, 2, 2, 2, n)    # splits the row axis: a view of ``out``
+def _joint_vectors(thetas, offsets, out):
+    """Write the joint vectors (6, 8, n) -- joint j of row k = 4 s + 2 e + w of pose i at
+    ``[j, k, i]`` -- from the six angle arrays over (s, e, w, n) into ``out``, joint offsets
+    removed."""
+    view = out.reshape(6, 2, 2, 2, out.shape[-1])   # splits the row axis: a view of ``out``
     for j, theta in enumerate(thetas):
         view[j] = theta
     if any(offsets):
-        solutions[...] = steps.wrap_angle(solutions - np.array(offsets)[:, None, None])
-    return solutions
+        out[...] = steps.wrap_angle(out - np.array(offsets)[:, None, None])
 
 
 def _errors(robot, prm, flange, branches, targets, options, out):
@@ -804,7 +799,7 @@ def _clipping_distance(prm, flange, branches, out):
     inside = branches.h2.min() < 0.0   # some wrist centre inside the shoulder cylinder
     if not inside and branches.outer.min() >= 0.0 and branches.inner.min() >= 0.0:
         out[...] = 0.0                                        # nothing was clipped
-        return out
+        return
     a2, a3 = prm["a2"], prm["a3"]
     r_out, r_in = abs(a2 + a3), abs(a2 - a3)
     X, Y = branches.X, branches.Y
@@ -814,7 +809,6 @@ def _clipping_distance(prm, flange, branches, out):
         e1 = _shoulder_gap(prm, flange, branches)             # (n,)
         e = np.sqrt(e1 * e1 + e * e)
     out.reshape(2, 2, 2, n)[...] = e                          # splits the rows: a view
-    return out
 
 
 def _shoulder_gap(prm, flange, branches):
