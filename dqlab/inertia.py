@@ -143,7 +143,7 @@ class LinkInertia:
 
         Examples
         --------
-        >>> LinkInertia.sphere(3.0, [0, 0, 0.1]).tensor.max()      # a point mass
+        >>> float(LinkInertia.sphere(3.0, [0, 0, 0.1]).tensor.max())      # a point mass
         0.0
         """
         mass = _mass(mass)

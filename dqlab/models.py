@@ -150,7 +150,7 @@ vert` (``a`` must then be given), the four joint
     --------
     >>> p = UR_DYNAMICS["UR3"]
     >>> inertias = ur_link_inertias(p["mass"], p["com"], p["tensor"])
-    >>> sum(I.mass for I in inertias)        # kg, the six moving links of the UR3
+    >>> round(sum(I.mass for I in inertias), 6)      # kg, the six moving links of the UR3
     8.63
     >>> approx = ur_link_inertias(p["mass"], p["com"], a=UR_DH["UR3"]["a"])
     >>> approx[1].tensor.diagonal().round(6)     # the upper arm: the table's first row
