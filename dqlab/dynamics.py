@@ -266,6 +266,16 @@ def _newton_euler(robot, inertias, q, qd, qdd, g_0, *, energy=False):
     return tau
 
 
+def _torques(robot, inertias, q, qd, qdd, g_0):
+    """:func:`_newton_euler`'s torques; one state (q of shape (n,)) runs the same recursion
+    on Python floats (:mod:`dqlab._dynamics_floats`, tested equal), much faster."""
+    if q.ndim != 1:
+        return _newton_euler(robot, inertias, q, qd, qdd, g_0)
+    consts = _dynamics_floats.constants(robot, inertias, joint_twists(robot), g_0)
+    return np.array(_dynamics_floats.inverse_dynamics(consts, q.tolist(), qd.tolist(),
+                                                      qdd.tolist()))
+
+
 def inverse_dynamics(robot: Robot, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, *,
                      gravity: ArrayLike = GRAVITY) -> NDArray[np.float64]:
     r"""Joint torques that give the accelerations ``qdd`` at the state ``(q, qd)``.
@@ -312,12 +322,7 @@ def inverse_dynamics(robot: Robot, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, 
     array([  0.   , -17.583,  -6.097,   0.   ,   0.   ,   0.   ])
     """
     (q, qd, qdd), g_0, inertias = _check(robot, q, [(qd, "qd"), (qdd, "qdd")], gravity)
-    if q.ndim == 1:         # one state: the same recursion on Python floats, much faster
-        consts = _dynamics_floats.constants(robot, inertias, joint_twists(robot), g_0)
-        tau = np.array(_dynamics_floats.inverse_dynamics(consts, q.tolist(), qd.tolist(),
-                                                         qdd.tolist()))
-    else:
-        tau = _newton_euler(robot, inertias, q, qd, qdd, g_0)
+    tau = _torques(robot, inertias, q, qd, qdd, g_0)
     return finite_or_raise(tau, (q, "q", (robot.n,)), (qd, "qd", (robot.n,)),
                            (qdd, "qdd", (robot.n,)))
 
@@ -336,7 +341,7 @@ def gravity_torques(robot: Robot, q: ArrayLike, *, gravity: ArrayLike = GRAVITY
     """
     (q,), g_0, inertias = _check(robot, q, (), gravity)
     zero = np.zeros_like(q)
-    return finite_or_raise(_newton_euler(robot, inertias, q, zero, zero, g_0),
+    return finite_or_raise(_torques(robot, inertias, q, zero, zero, g_0),
                            (q, "q", (robot.n,)))
 
 
@@ -353,7 +358,7 @@ def coriolis_torques(robot: Robot, q: ArrayLike, qd: ArrayLike) -> NDArray[np.fl
     True
     """
     (q, qd), g_0, inertias = _check(robot, q, [(qd, "qd")], (0.0, 0.0, 0.0))
-    return finite_or_raise(_newton_euler(robot, inertias, q, qd, np.zeros_like(q), g_0),
+    return finite_or_raise(_torques(robot, inertias, q, qd, np.zeros_like(q), g_0),
                            (q, "q", (robot.n,)), (qd, "qd", (robot.n,)))
 
 
@@ -380,7 +385,15 @@ def mass_matrix(robot: Robot, q: ArrayLike) -> NDArray[np.float64]:
     (True, True)
     """
     (q,), g_0, inertias = _check(robot, q, (), (0.0, 0.0, 0.0))
+    return _mass_matrix(robot, inertias, q, g_0)
+
+
+def _mass_matrix(robot, inertias, q, g_0):
     n = robot.n
+    if q.ndim == 1:
+        zero = np.zeros(n)
+        return np.array([_torques(robot, inertias, q, zero, e_j, g_0)
+                         for e_j in np.eye(n)]).T.copy()
     q_columns = np.broadcast_to(q[..., None, :], q.shape[:-1] + (n, n))
     unit = np.broadcast_to(np.eye(n), q_columns.shape)
     columns = _newton_euler(robot, inertias, q_columns, np.zeros_like(q_columns), unit, g_0)
@@ -414,8 +427,8 @@ def forward_dynamics(robot: Robot, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, 
     array([ 55. , -72.4,  17.4])
     """
     (q, qd, tau), g_0, inertias = _check(robot, q, [(qd, "qd"), (tau, "tau")], gravity)
-    bias = _newton_euler(robot, inertias, q, qd, np.zeros_like(q), g_0)
-    M = mass_matrix(robot, q)
+    bias = _torques(robot, inertias, q, qd, np.zeros_like(q), g_0)
+    M = _mass_matrix(robot, inertias, q, np.zeros(3))
     qdd = np.linalg.solve(M, (tau - bias)[..., None])[..., 0]
     return finite_or_raise(qdd, (q, "q", (robot.n,)), (qd, "qd", (robot.n,)),
                            (tau, "tau", (robot.n,)))
