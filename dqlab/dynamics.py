@@ -84,7 +84,7 @@ from .robot import Robot
 __all__ = [
     "inverse_dynamics", "mass_matrix", "gravity_torques", "coriolis_torques",
     "forward_dynamics", "kinetic_energy", "potential_energy", "link_inertias",
-    "joint_twists", "dual_cross", "with_payload", "with_inertias", "GRAVITY",
+    "joint_twists", "dual_cross", "with_payload", "with_inertias", "NewtonEuler", "GRAVITY",
 ]
 
 #: Gravity in the world frame by default, m/s^2: 9.81 along -z.
@@ -325,6 +325,61 @@ def inverse_dynamics(robot: Robot, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, 
     tau = _torques(robot, inertias, q, qd, qdd, g_0)
     return finite_or_raise(tau, (q, "q", (robot.n,)), (qd, "qd", (robot.n,)),
                            (qdd, "qdd", (robot.n,)))
+
+
+class NewtonEuler:
+    r""":func:`inverse_dynamics` of one robot, prepared once for many calls on single states.
+
+    A controller evaluates the inverse dynamics once per time step, always of the same robot;
+    this object checks the robot and reads its constants (link parameters, joint twists,
+    inertias, gravity in frame 0) once, and then each call only checks the state. It is a
+    snapshot: later changes to the robot's base are not seen.
+
+    Parameters
+    ----------
+    robot : Robot
+    gravity : array_like, shape (3,), optional
+        World frame, m/s^2.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dqlab.models import ur3
+    >>> rnea = NewtonEuler(ur3())
+    >>> q, qd, qdd = np.zeros(6), np.ones(6), np.zeros(6)
+    >>> bool(np.allclose(rnea(q, qd, qdd), inverse_dynamics(ur3(), q, qd, qdd), atol=1e-12))
+    True
+    """
+
+    def __init__(self, robot: Robot, *, gravity: ArrayLike = GRAVITY):
+        (_,), g_0, inertias = _check(robot, np.zeros(robot.n) if isinstance(robot, Robot)
+                                     else None, (), gravity)
+        self.robot = robot
+        self.gravity = tuple(float(x) for x in robot.base[:3, :3] @ g_0)
+        self._constants = _dynamics_floats.constants(robot, inertias, joint_twists(robot),
+                                                     g_0)
+
+    def __call__(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> NDArray[np.float64]:
+        """Joint torques, shape (n,) for one state (a batch goes to
+        :func:`inverse_dynamics`)."""
+        n = self.robot.n
+        try:
+            state = [np.asarray(x, dtype=float).tolist() for x in (q, qd, qdd)]
+        except (TypeError, ValueError):
+            state = None
+        if state is None or any(not isinstance(x, list) or len(x) != n
+                                or any(isinstance(v, list) for v in x) for x in state):
+            return inverse_dynamics(self.robot, q, qd, qdd, gravity=self.gravity)
+        total = sum(state[0]) + sum(state[1]) + sum(state[2])
+        if not total - total == 0.0 or self.robot.joint_types.count("prismatic"):
+            self.robot.check_joints(q, name="q")        # NaN, infinity or beyond a slide
+            if not total - total == 0.0:
+                return inverse_dynamics(self.robot, q, qd, qdd, gravity=self.gravity)
+        tau = _dynamics_floats.inverse_dynamics(self._constants, *state)
+        check = sum(tau)
+        if not check - check == 0.0:
+            return inverse_dynamics(self.robot, q, qd, qdd, gravity=self.gravity)
+        return np.array(tau)
 
 
 def gravity_torques(robot: Robot, q: ArrayLike, *, gravity: ArrayLike = GRAVITY

@@ -385,6 +385,14 @@ class DynamicsModel:
     damping: object = 0.0
     gravity: float = 9.81
     name = "dqlab dynamics"
+    _prepared: object = field(init=False, repr=False, compare=False, default=None)
+
+    def __post_init__(self):
+        n = self.robot.n
+        g = (0.0, 0.0, -number(self.gravity, "gravity", strict=False))
+        prepared = (dynamics.NewtonEuler(self.robot, gravity=g),
+                    vector(self.armature, n, "armature"), vector(self.damping, n, "damping"))
+        object.__setattr__(self, "_prepared", prepared)
 
     @classmethod
     def of_simulation(cls, sim, robot=None):
@@ -399,24 +407,19 @@ class DynamicsModel:
     def n(self):
         return self.robot.n
 
-    def _motors(self):
-        return (vector(self.armature, self.n, "armature"),
-                vector(self.damping, self.n, "damping"),
-                (0.0, 0.0, -number(self.gravity, "gravity", strict=False)))
-
     def inverse_dynamics(self, q, qd, qdd):
         """Joint torques for the accelerations ``qdd`` at ``(q, qd)``, shape (n,)."""
-        armature, damping, gravity = self._motors()
-        return (dynamics.inverse_dynamics(self.robot, q, qd, qdd, gravity=gravity)
-                + armature * np.asarray(qdd) + damping * np.asarray(qd))
+        newton_euler, armature, damping = self._prepared
+        return newton_euler(q, qd, qdd) + armature * np.asarray(qdd) + damping * np.asarray(qd)
 
     def gravity_torque(self, q):
         """:math:`g(q)`, shape (n,)."""
-        return dynamics.gravity_torques(self.robot, q, gravity=self._motors()[2])
+        zero = np.zeros(self.n)
+        return self._prepared[0](q, zero, zero)
 
     def mass_matrix(self, q):
         r""":math:`M(q) + \operatorname{diag}(a)`, shape (n, n)."""
-        return dynamics.mass_matrix(self.robot, q) + np.diag(self._motors()[0])
+        return dynamics.mass_matrix(self.robot, q) + np.diag(self._prepared[1])
 
 
 @dataclass(frozen=True)
