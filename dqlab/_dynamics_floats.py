@@ -28,88 +28,89 @@ def constants(robot, inertias, twists, g_0):
     return robot.convention == "dh", links, tuple(float(x) for x in g_0)
 
 
-def _cross(a, b):
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-
-
-def _momentum(m, c, inertia, w, v):
-    """p = m (v + w x c), L = I_c w + c x p."""
-    ixx, iyy, izz, ixy, ixz, iyz = inertia
-    wc = _cross(w, c)
-    p = (m * (v[0] + wc[0]), m * (v[1] + wc[1]), m * (v[2] + wc[2]))
-    cp = _cross(c, p)
-    return p, (ixx * w[0] + ixy * w[1] + ixz * w[2] + cp[0],
-               ixy * w[0] + iyy * w[1] + iyz * w[2] + cp[1],
-               ixz * w[0] + iyz * w[1] + izz * w[2] + cp[2])
-
-
 def inverse_dynamics(consts, q, qd, qdd):
-    """Joint torques (a list of floats) for one state given as lists of floats."""
-    standard, links, g_0 = consts
-    w, v = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
-    w_dot, v_dot = (0.0, 0.0, 0.0), (-g_0[0], -g_0[1], -g_0[2])
+    """Joint torques (a list of floats) for one state given as lists of floats.
+
+    Every vector is written out in its three components (``wx, wy, wz`` for the angular
+    velocity, ``vx...`` for the velocity of the body point at the frame's origin, ``ax...``
+    and ``bx...`` for their rates), which is what makes this path fast.
+    """
+    standard, links, (gx, gy, gz) = consts
+    wx = wy = wz = vx = vy = vz = 0.0                  # the base at rest
+    ax = ay = az = 0.0                                 # its angular acceleration
+    bx, by, bz = -gx, -gy, -gz                         # rising at -g: gravity
     poses, wrenches = [], []
-    for (revolute, theta0, d0, a, ca, sa, s_w, s_v, m, c, inertia), q_i, qd_i, qdd_i in zip(
-            links, q, qd, qdd, strict=True):
+    for (revolute, theta0, d0, a, ca, sa, (sx, sy, sz), (tx, ty, tz), m, (cx, cy, cz),
+         (ixx, iyy, izz, ixy, ixz, iyz)), q_i, qd_i, qdd_i in zip(links, q, qd, qdd,
+                                                                  strict=True):
         if revolute:
             theta, d = q_i + theta0, d0
         else:
             theta, d = theta0, q_i + d0
         ct, st = math.cos(theta), math.sin(theta)
         if standard:       # Rz(theta) Tz(d) Tx(a) Rx(alpha)
-            R = ((ct, -st * ca, st * sa), (st, ct * ca, -ct * sa), (0.0, sa, ca))
-            p = (a * ct, a * st, d)
+            r00, r01, r02, r10, r11, r12, r20, r21, r22 = (ct, -st * ca, st * sa, st,
+                                                           ct * ca, -ct * sa, 0.0, sa, ca)
+            px, py, pz = a * ct, a * st, d
         else:              # Rx(alpha) Tx(a) Rz(theta) Tz(d)
-            R = ((ct, -st, 0.0), (ca * st, ca * ct, -sa), (sa * st, sa * ct, ca))
-            p = (a, -sa * d, ca * d)
-        poses.append((R, p))
-        (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R
-        # the twist and its rate carried into frame i: R^T w, R^T (v + w x p)
-        for_twist = []
-        for x, y in ((w, v), (w_dot, v_dot)):
-            u = _cross(x, p)
-            u = (y[0] + u[0], y[1] + u[1], y[2] + u[2])
-            for_twist.append(((r00 * x[0] + r10 * x[1] + r20 * x[2],
-                               r01 * x[0] + r11 * x[1] + r21 * x[2],
-                               r02 * x[0] + r12 * x[1] + r22 * x[2]),
-                              (r00 * u[0] + r10 * u[1] + r20 * u[2],
-                               r01 * u[0] + r11 * u[1] + r21 * u[2],
-                               r02 * u[0] + r12 * u[1] + r22 * u[2])))
-        (w, v), (w_dot, v_dot) = for_twist
-        w = (w[0] + s_w[0] * qd_i, w[1] + s_w[1] * qd_i, w[2] + s_w[2] * qd_i)
-        v = (v[0] + s_v[0] * qd_i, v[1] + s_v[1] * qd_i, v[2] + s_v[2] * qd_i)
-        sw = (s_w[0] * qd_i, s_w[1] * qd_i, s_w[2] * qd_i)
-        sv = (s_v[0] * qd_i, s_v[1] * qd_i, s_v[2] * qd_i)
-        turn = _cross(w, sw)
-        slide_a, slide_b = _cross(w, sv), _cross(v, sw)
-        w_dot = (w_dot[0] + s_w[0] * qdd_i + turn[0], w_dot[1] + s_w[1] * qdd_i + turn[1],
-                 w_dot[2] + s_w[2] * qdd_i + turn[2])
-        v_dot = (v_dot[0] + s_v[0] * qdd_i + slide_a[0] + slide_b[0],
-                 v_dot[1] + s_v[1] * qdd_i + slide_a[1] + slide_b[1],
-                 v_dot[2] + s_v[2] * qdd_i + slide_a[2] + slide_b[2])
-        p_, L = _momentum(m, c, inertia, w, v)
-        p_dot, L_dot = _momentum(m, c, inertia, w_dot, v_dot)
-        wp, wL, vp = _cross(w, p_), _cross(w, L), _cross(v, p_)
-        wrenches.append(((p_dot[0] + wp[0], p_dot[1] + wp[1], p_dot[2] + wp[2]),
-                         (L_dot[0] + wL[0] + vp[0], L_dot[1] + wL[1] + vp[1],
-                          L_dot[2] + wL[2] + vp[2])))
+            r00, r01, r02, r10, r11, r12, r20, r21, r22 = (ct, -st, 0.0, ca * st, ca * ct,
+                                                           -sa, sa * st, sa * ct, ca)
+            px, py, pz = a, -sa * d, ca * d
+        poses.append((r00, r01, r02, r10, r11, r12, r20, r21, r22, px, py, pz))
+        # into frame i: w' = R^T w, v' = R^T (v + w x p); the same for the rates
+        ux, uy, uz = vx + wy * pz - wz * py, vy + wz * px - wx * pz, vz + wx * py - wy * px
+        wx, wy, wz = (r00 * wx + r10 * wy + r20 * wz, r01 * wx + r11 * wy + r21 * wz,
+                      r02 * wx + r12 * wy + r22 * wz)
+        vx, vy, vz = (r00 * ux + r10 * uy + r20 * uz, r01 * ux + r11 * uy + r21 * uz,
+                      r02 * ux + r12 * uy + r22 * uz)
+        ux, uy, uz = bx + ay * pz - az * py, by + az * px - ax * pz, bz + ax * py - ay * px
+        ax, ay, az = (r00 * ax + r10 * ay + r20 * az, r01 * ax + r11 * ay + r21 * az,
+                      r02 * ax + r12 * ay + r22 * az)
+        bx, by, bz = (r00 * ux + r10 * uy + r20 * uz, r01 * ux + r11 * uy + r21 * uz,
+                      r02 * ux + r12 * uy + r22 * uz)
+        # plus the joint's own twist s qd, and its rate s qdd + xi x s qd
+        wx, wy, wz = wx + sx * qd_i, wy + sy * qd_i, wz + sz * qd_i
+        vx, vy, vz = vx + tx * qd_i, vy + ty * qd_i, vz + tz * qd_i
+        ex, ey, ez = sx * qd_i, sy * qd_i, sz * qd_i          # s qd, real part
+        fx, fy, fz = tx * qd_i, ty * qd_i, tz * qd_i          # and dual part
+        ax, ay, az = (ax + sx * qdd_i + wy * ez - wz * ey, ay + sy * qdd_i + wz * ex - wx * ez,
+                      az + sz * qdd_i + wx * ey - wy * ex)
+        bx, by, bz = (bx + tx * qdd_i + wy * fz - wz * fy + vy * ez - vz * ey,
+                      by + ty * qdd_i + wz * fx - wx * fz + vz * ex - vx * ez,
+                      bz + tz * qdd_i + wx * fy - wy * fx + vx * ey - vy * ex)
+        # momentum h = (p, L), p = m (v + w x c), L = I_c w + c x p, and its rate's part
+        # M xi_dot, the same formula on (a, b)
+        pxm = m * (vx + wy * cz - wz * cy)
+        pym = m * (vy + wz * cx - wx * cz)
+        pzm = m * (vz + wx * cy - wy * cx)
+        Lx = ixx * wx + ixy * wy + ixz * wz + cy * pzm - cz * pym
+        Ly = ixy * wx + iyy * wy + iyz * wz + cz * pxm - cx * pzm
+        Lz = ixz * wx + iyz * wy + izz * wz + cx * pym - cy * pxm
+        qx = m * (bx + ay * cz - az * cy)
+        qy = m * (by + az * cx - ax * cz)
+        qz = m * (bz + ax * cy - ay * cx)
+        Nx = ixx * ax + ixy * ay + ixz * az + cy * qz - cz * qy
+        Ny = ixy * ax + iyy * ay + iyz * az + cz * qx - cx * qz
+        Nz = ixz * ax + iyz * ay + izz * az + cx * qy - cy * qx
+        # the net wrench M xi_dot + xi x M xi: f = p_dot + w x p, n = L_dot + w x L + v x p
+        wrenches.append((qx + wy * pzm - wz * pym, qy + wz * pxm - wx * pzm,
+                         qz + wx * pym - wy * pxm,
+                         Nx + wy * Lz - wz * Ly + vy * pzm - vz * pym,
+                         Ny + wz * Lx - wx * Lz + vz * pxm - vx * pzm,
+                         Nz + wx * Ly - wy * Lx + vx * pym - vy * pxm))
     n_links = len(links)
     tau = [0.0] * n_links
-    f, n = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+    fx = fy = fz = nx = ny = nz = 0.0
     for i in range(n_links - 1, -1, -1):
         if i < n_links - 1:      # carried from frame i+1 into frame i: R f, R n + p x R f
-            (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = poses[i + 1][0]
-            p = poses[i + 1][1]
-            f = (r00 * f[0] + r01 * f[1] + r02 * f[2], r10 * f[0] + r11 * f[1] + r12 * f[2],
-                 r20 * f[0] + r21 * f[1] + r22 * f[2])
-            n = (r00 * n[0] + r01 * n[1] + r02 * n[2], r10 * n[0] + r11 * n[1] + r12 * n[2],
-                 r20 * n[0] + r21 * n[1] + r22 * n[2])
-            pf = _cross(p, f)
-            n = (n[0] + pf[0], n[1] + pf[1], n[2] + pf[2])
-        (f_i, n_i) = wrenches[i]
-        f = (f[0] + f_i[0], f[1] + f_i[1], f[2] + f_i[2])
-        n = (n[0] + n_i[0], n[1] + n_i[1], n[2] + n_i[2])
-        s_w, s_v = links[i][6], links[i][7]
-        tau[i] = (n[0] * s_w[0] + n[1] * s_w[1] + n[2] * s_w[2]
-                  + f[0] * s_v[0] + f[1] * s_v[1] + f[2] * s_v[2])
+            r00, r01, r02, r10, r11, r12, r20, r21, r22, px, py, pz = poses[i + 1]
+            fx, fy, fz = (r00 * fx + r01 * fy + r02 * fz, r10 * fx + r11 * fy + r12 * fz,
+                          r20 * fx + r21 * fy + r22 * fz)
+            nx, ny, nz = (r00 * nx + r01 * ny + r02 * nz + py * fz - pz * fy,
+                          r10 * nx + r11 * ny + r12 * nz + pz * fx - px * fz,
+                          r20 * nx + r21 * ny + r22 * nz + px * fy - py * fx)
+        f0, f1, f2, n0, n1, n2 = wrenches[i]
+        fx, fy, fz, nx, ny, nz = fx + f0, fy + f1, fz + f2, nx + n0, ny + n1, nz + n2
+        _, _, _, _, _, _, (sx, sy, sz), (tx, ty, tz), _, _, _ = links[i]
+        tau[i] = nx * sx + ny * sy + nz * sz + fx * tx + fy * ty + fz * tz
     return tau
