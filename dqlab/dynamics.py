@@ -363,10 +363,13 @@ class NewtonEuler:
         """Joint torques, shape (n,) for one state (a batch goes to
         :func:`inverse_dynamics`)."""
         n = self.robot.n
-        try:
-            state = [np.asarray(x, dtype=float).tolist() for x in (q, qd, qdd)]
-        except (TypeError, ValueError):
-            state = None
+        if all(type(x) is np.ndarray and x.dtype == np.float64 for x in (q, qd, qdd)):
+            state = [q.tolist(), qd.tolist(), qdd.tolist()]
+        else:
+            try:
+                state = [np.asarray(x, dtype=float).tolist() for x in (q, qd, qdd)]
+            except (TypeError, ValueError):
+                state = None
         if state is None or any(not isinstance(x, list) or len(x) != n
                                 or any(isinstance(v, list) for v in x) for x in state):
             return inverse_dynamics(self.robot, q, qd, qdd, gravity=self.gravity)

@@ -259,6 +259,15 @@ class ArmSimulation:
         return M
 
 
+def _gains(controller, n):
+    """The controller's ``kp`` and ``kd`` as checked arrays of shape (n,), checked once per
+    number of joints and kept with the (immutable) controller."""
+    cache = controller.__dict__.setdefault("_gain_vectors", {})
+    if n not in cache:
+        cache[n] = (vector(controller.kp, n, "kp"), vector(controller.kd, n, "kd"))
+    return cache[n]
+
+
 @dataclass(frozen=True)
 class JointPD:
     r"""Joint PD control, :math:`\tau = K_p (q_d - q) + K_d (\dot q_d - \dot q)`,
@@ -295,8 +304,7 @@ class JointPD:
 
     def torque(self, sim, q_d, qd_d, qdd_d):
         """Motor torques for the reference ``(q_d, qd_d, qdd_d)``, shape (n,)."""
-        kp = vector(self.kp, sim.n, "kp")
-        kd = vector(self.kd, sim.n, "kd")
+        kp, kd = _gains(self, sim.n)
         q = sim.data.qpos
         tau = kp * (q_d - q) + kd * (qd_d - sim.data.qvel)
         if self.gravity_compensation:
@@ -339,8 +347,7 @@ class ComputedTorque:
 
     def torque(self, sim, q_d, qd_d, qdd_d):
         """Motor torques for the reference ``(q_d, qd_d, qdd_d)``, shape (n,)."""
-        kp = vector(self.kp, sim.n, "kp")
-        kd = vector(self.kd, sim.n, "kd")
+        kp, kd = _gains(self, sim.n)
         q, qd = sim.data.qpos, sim.data.qvel
         qdd_cmd = qdd_d + kd * (qd_d - qd) + kp * (q_d - q)
         return (self.model or sim).inverse_dynamics(q, qd, qdd_cmd)
