@@ -71,9 +71,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from . import _dynamics_floats
-from ._checks import as_float_array, finite_or_raise
+from ._checks import as_float_array, components, finite_or_raise, stack_components
+from ._kernels import dual_quaternion_mul
 from .dualquat import (
-    dual_quaternion_apply_line,
+    dual_quaternion_apply,
     dual_quaternion_conjugate,
     dual_quaternion_from_transform,
     dual_quaternion_product,
@@ -189,8 +190,16 @@ def dual_cross(a: ArrayLike, a_dual: ArrayLike, b: ArrayLike, b_dual: ArrayLike
 
 
 def _adjoint(Q, real, dual):
-    r""":math:`\hat Q\,(\mathbf a + \varepsilon\mathbf a^\circ)\,\hat Q^*` on dual vectors."""
-    return dual_quaternion_apply_line(Q, real, dual)
+    r""":math:`\hat Q\,(\mathbf a + \varepsilon\mathbf a^\circ)\,\hat Q^*` on dual vectors,
+    by two dual-quaternion products on the components: what
+    :func:`~dqlab.dualquat.dual_quaternion_apply_line` computes, without its argument checks
+    (the recursion's intermediate values are not the caller's input, and an input so large
+    that they overflow must reach the check of the result, which names it)."""
+    Qc = components(Q)
+    x = (0.0, *components(real), 0.0, *components(dual))
+    conjugate = (Qc[0], -Qc[1], -Qc[2], -Qc[3], Qc[4], -Qc[5], -Qc[6], -Qc[7])
+    y = dual_quaternion_mul(dual_quaternion_mul(Qc, x), conjugate)
+    return stack_components(y[1:4]), stack_components(y[5:8])
 
 
 # --------------------------------------------------------------------------------------
@@ -228,7 +237,13 @@ def _check(robot, q, more=(), gravity=GRAVITY):
 
 def _newton_euler(robot, inertias, q, qd, qdd, g_0, *, energy=False):
     """The recursion of the module docstring on checked arrays of shape (..., n); returns
-    the torques (..., n), or with ``energy`` the kinetic energy (...)."""
+    the torques (..., n), or with ``energy`` the kinetic energy (...). Inputs so large that
+    the result overflows give infinities here, which the callers turn into a ValueError."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        return _recursion(robot, inertias, q, qd, qdd, g_0, energy)
+
+
+def _recursion(robot, inertias, q, qd, qdd, g_0, energy):
     Q = dual_quaternion_from_transform(robot.link_transforms(q))      # Q_{i-1,i}, (..., n, 8)
     Q_star = dual_quaternion_conjugate(Q)
     s = joint_twists(robot)
@@ -355,6 +370,7 @@ class NewtonEuler:
         (_,), g_0, inertias = _check(robot, np.zeros(robot.n) if isinstance(robot, Robot)
                                      else None, (), gravity)
         self.robot = robot
+        self._slides = "prismatic" in robot.joint_types
         self.gravity = tuple(float(x) for x in robot.base[:3, :3] @ g_0)
         self._constants = _dynamics_floats.constants(robot, inertias, joint_twists(robot),
                                                      g_0)
@@ -362,22 +378,16 @@ class NewtonEuler:
     def __call__(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> NDArray[np.float64]:
         """Joint torques, shape (n,) for one state (a batch goes to
         :func:`inverse_dynamics`)."""
-        n = self.robot.n
-        if all(type(x) is np.ndarray and x.dtype == np.float64 for x in (q, qd, qdd)):
-            state = [q.tolist(), qd.tolist(), qdd.tolist()]
-        else:
-            try:
-                state = [np.asarray(x, dtype=float).tolist() for x in (q, qd, qdd)]
-            except (TypeError, ValueError):
-                state = None
-        if state is None or any(not isinstance(x, list) or len(x) != n
-                                or any(isinstance(v, list) for v in x) for x in state):
+        shape = (self.robot.n,)
+        if not all(type(x) is np.ndarray and x.dtype == np.float64 and x.shape == shape
+                   for x in (q, qd, qdd)):    # anything but one float state: the checked path
             return inverse_dynamics(self.robot, q, qd, qdd, gravity=self.gravity)
+        state = [q.tolist(), qd.tolist(), qdd.tolist()]
         total = sum(state[0]) + sum(state[1]) + sum(state[2])
-        if not total - total == 0.0 or self.robot.joint_types.count("prismatic"):
-            self.robot.check_joints(q, name="q")        # NaN, infinity or beyond a slide
-            if not total - total == 0.0:
-                return inverse_dynamics(self.robot, q, qd, qdd, gravity=self.gravity)
+        if not total - total == 0.0:           # NaN or infinity: the checked path names it
+            return inverse_dynamics(self.robot, q, qd, qdd, gravity=self.gravity)
+        if self._slides:
+            self.robot.check_joints(q, name="q")        # a slide beyond its travel
         tau = _dynamics_floats.inverse_dynamics(self._constants, *state)
         check = sum(tau)
         if not check - check == 0.0:
@@ -538,15 +548,9 @@ def potential_energy(robot: Robot, q: ArrayLike, *, gravity: ArrayLike = GRAVITY
     V = np.zeros(q.shape[:-1])
     for i, inertia in enumerate(inertias):
         Q_W = dual_quaternion_product(Q_W, Q[..., i, :])
-        c_W = _point(Q_W, inertia.com)
+        c_W = dual_quaternion_apply(Q_W, np.broadcast_to(inertia.com, Q_W.shape[:-1] + (3,)))
         V = V - inertia.mass * (c_W @ g_W)
     return finite_or_raise(V, (q, "q", (robot.n,)))
-
-
-def _point(Q, p):
-    """The point p moved by Q, p' = R p + t (chapter "Dual quaternions")."""
-    from .dualquat import dual_quaternion_apply
-    return dual_quaternion_apply(Q, np.broadcast_to(p, Q.shape[:-1] + (3,)))
 
 
 # --------------------------------------------------------------------------------------
