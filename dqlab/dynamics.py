@@ -70,8 +70,9 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from . import _dynamics_floats
 from ._checks import as_float_array, components, finite_or_raise, stack_components
+from ._dynamics_floats import constants as float_constants
+from ._dynamics_floats import inverse_dynamics as inverse_dynamics_on_floats
 from ._kernels import dual_quaternion_mul
 from .dualquat import (
     dual_quaternion_apply,
@@ -286,8 +287,8 @@ def _torques(robot, inertias, q, qd, qdd, g_0):
     on Python floats (:mod:`dqlab._dynamics_floats`, tested equal), much faster."""
     if q.ndim != 1:
         return _newton_euler(robot, inertias, q, qd, qdd, g_0)
-    consts = _dynamics_floats.constants(robot, inertias, joint_twists(robot), g_0)
-    return np.array(_dynamics_floats.inverse_dynamics(consts, q.tolist(), qd.tolist(),
+    consts = float_constants(robot, inertias, joint_twists(robot), g_0)
+    return np.array(inverse_dynamics_on_floats(consts, q.tolist(), qd.tolist(),
                                                       qdd.tolist()))
 
 
@@ -372,7 +373,7 @@ class NewtonEuler:
         self.robot = robot
         self._slides = "prismatic" in robot.joint_types
         self.gravity = tuple(float(x) for x in robot.base[:3, :3] @ g_0)
-        self._constants = _dynamics_floats.constants(robot, inertias, joint_twists(robot),
+        self._constants = float_constants(robot, inertias, joint_twists(robot),
                                                      g_0)
 
     def __call__(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> NDArray[np.float64]:
@@ -388,7 +389,7 @@ class NewtonEuler:
             return inverse_dynamics(self.robot, q, qd, qdd, gravity=self.gravity)
         if self._slides:
             self.robot.check_joints(q, name="q")        # a slide beyond its travel
-        tau = _dynamics_floats.inverse_dynamics(self._constants, *state)
+        tau = inverse_dynamics_on_floats(self._constants, *state)
         check = sum(tau)
         if not check - check == 0.0:
             return inverse_dynamics(self.robot, q, qd, qdd, gravity=self.gravity)
