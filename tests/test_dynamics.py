@@ -130,6 +130,23 @@ def test_inverse_dynamics_and_mass_matrix_equal_pinocchio(name):
         assert relative_gap(M[k], M_pin) <= 1e-9
 
 
+@pytest.mark.parametrize("name", ["ur3", "ur3_mdh", "scara"])
+def test_the_urdf_carries_the_same_dynamics(name):
+    # pinocchio reads the URDF that dqlab writes: its inverse dynamics must be dqlab's
+    pin = pytest.importorskip("pinocchio")
+    from dqlab.sim import urdf_from_robot
+
+    robot = ROBOTS[name]()
+    model = pin.buildModelFromXML(urdf_from_robot(robot))
+    model.gravity.linear = np.array([0.0, 0.0, -9.81])
+    data = model.createData()
+    assert model.nq == robot.n
+    q, qd, qdd = random_states(robot, 20, seed=13)
+    tau = dynamics.inverse_dynamics(robot, q, qd, qdd)
+    for k in range(len(q)):
+        assert relative_gap(tau[k], pin.rnea(model, data, q[k], qd[k], qdd[k])) <= 1e-9
+
+
 # --------------------------------------------------------------------------------------
 # Closed forms
 
