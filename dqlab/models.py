@@ -72,9 +72,10 @@ SCARA_RSM5 = {"l1": 0.350, "l2": 0.260, "z_low": 0.180, "stroke": 0.150,
 #: ``tensor``, the inertia tensor about the centre of mass in the axes of the link frame,
 #: ``(ixx, iyy, izz, ixy, ixz, iyz)`` in kg m^2, from the physical parameters of Universal
 #: Robots' ROS 2 description (``ur_ros2_description``): for the UR10 the values it extracted
-#: from URSim, for the UR3 and the UR5 its approximation by solid cylinders of radius 0.075 m
-#: along each link (the ROS file states them in its own link frames; they are rotated into
-#: the DH frames here, which only permutes the diagonal). Add a model with
+#: from URSim, for the UR3 and the UR5 its approximation by solid cylinders (radius 0.075 m,
+#: less for the last wrist link) along each link or its joint axis (the ROS file states them
+#: in its own link frames; they are rotated into the DH frames here, which only permutes the
+#: diagonal). Add a model with
 #: :func:`ur_link_inertias`.
 UR_DYNAMICS = {
     "UR3": {"mass": (2.0, 3.42, 1.26, 0.8, 0.8, 0.35),
