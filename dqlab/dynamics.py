@@ -459,10 +459,11 @@ def mass_matrix(robot: Robot, q: ArrayLike) -> NDArray[np.float64]:
 
 def _mass_matrix(robot, inertias, q, g_0):
     n = robot.n
-    if q.ndim == 1:
-        zero = np.zeros(n)
-        return np.array([_torques(robot, inertias, q, zero, e_j, g_0)
-                         for e_j in np.eye(n)]).T.copy()
+    if q.ndim == 1:         # one state: n runs of the float path, its constants read once
+        consts = float_constants(robot, inertias, joint_twists(robot), g_0)
+        q_list, zero = q.tolist(), [0.0] * n
+        return np.array([inverse_dynamics_on_floats(consts, q_list, zero, e_j)
+                         for e_j in np.eye(n).tolist()]).T.copy()
     q_columns = np.broadcast_to(q[..., None, :], q.shape[:-1] + (n, n))
     unit = np.broadcast_to(np.eye(n), q_columns.shape)
     columns = _newton_euler(robot, inertias, q_columns, np.zeros_like(q_columns), unit, g_0)
