@@ -124,6 +124,9 @@ class LinkInertia:
     def __setattr__(self, key, value):
         raise AttributeError("LinkInertia is immutable; build a new one")
 
+    def __reduce__(self):       # pickled (for instance by dask) as a call to the constructor
+        return LinkInertia, (self.mass, self.com.copy(), self.tensor.copy())
+
     def __repr__(self):
         return (f"LinkInertia(mass={self.mass!r}, com={self.com.tolist()!r}, "
                 f"tensor={self.tensor.tolist()!r})")

@@ -372,6 +372,18 @@ def test_link_inertia_checks_and_algebra():
         a.mass = 2.0
 
 
+def test_a_robot_with_inertias_pickles():
+    # dask sends robots to its workers by pickling them
+    import pickle
+
+    robot = models.ur3_mdh()
+    again = pickle.loads(pickle.dumps(robot))
+    assert [lk.inertia for lk in again.links] == [lk.inertia for lk in robot.links]
+    q, qd, qdd = random_states(robot, 3, seed=14)
+    np.testing.assert_array_equal(dynamics.inverse_dynamics(again, q, qd, qdd),
+                                  dynamics.inverse_dynamics(robot, q, qd, qdd))
+
+
 # --------------------------------------------------------------------------------------
 # Bad input
 
