@@ -130,12 +130,10 @@ def ur_link_inertias(masses: ArrayLike, centres_of_mass: ArrayLike,
     tensors : array_like, shape (6, 6) or (6, 3, 3), optional
         Inertia tensors about the centres of mass in the axes of the DH frames, rows
         ``(ixx, iyy, izz, ixy, ixz, iyz)`` or 3x3 matrices, kg m^2. When they are not given,
-        the stated approximation of Universal Robots' ROS description: every link a solid
-        cylinder of radius ``radius`` centred on its centre of mass, the upper arm and the
+        a stated approximation after the cylinders of Universal Robots' ROS description: every
+        link a solid cylinder of radius ``radius`` centred on its centre of mass, the upper arm and the
         forearm (links 2 and 3) along the link (the DH :math:`x` axis) with the lengths
-        :math:`\lvert a_2
-vert, \lvert a_3
-vert` (``a`` must then be given), the four joint
+        :math:`\lvert a_2\rvert, \lvert a_3\rvert` (``a`` must then be given), the four joint
         housings (links 1, 4, 5 and 6) along their own joint's axis with the length
         :math:`2r`.
     a : array_like, shape (6,), optional
@@ -196,8 +194,8 @@ def rod_link_inertias(robot: Robot, *, base_mass: float = 0.5, mass_per_metre: f
     frame: in standard DH from :math:`(-a_i, 0, 0)` (the foot of the common normal on joint
     :math:`i`'s axis) through the origin of frame :math:`i` to :math:`(0, 0, d_{i+1})`; in
     modified DH from the origin of frame :math:`i` (on joint :math:`i`'s axis) through
-    :math:`(a_i, 0, 0)` to the next frame's origin :math:`(a_i, -r_{i+1}\sinlpha_i,
-    r_{i+1}\coslpha_i)` (the constant :math:`d` of a prismatic joint stands for its
+    :math:`(a_i, 0, 0)` to the next frame's origin :math:`(a_i, -r_{i+1}\sin\alpha_i,
+    r_{i+1}\cos\alpha_i)` (the constant :math:`d` of a prismatic joint stands for its
     offset). The link is a solid cylinder of radius ``radius`` along the straight line
     between the two ends (along its joint axis, of length :math:`2r`, if they coincide), of
     mass ``base_mass + mass_per_metre * path length``: 0.5 kg plus 4 kg per metre by default.

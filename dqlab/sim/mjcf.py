@@ -366,7 +366,7 @@ def mjcf_from_robot(robot, *, masses=None, payload=0.0, radius=None, damping=0.1
 
 def _inertial(inertia, X_BF):
     r"""The ``<inertial>`` element of a body whose link frame F sits at ``X_BF`` in it: the
-    centre of mass :math:`X_{BF}\,\mathbf c` and the tensor :math:`R I_c R^	op`, written
+    centre of mass :math:`X_{BF}\,\mathbf c` and the tensor :math:`R I_c R^\top`, written
     as MuJoCo's ``fullinertia`` (ixx iyy izz ixy ixz iyz)."""
     R = X_BF[:3, :3]
     com = R @ inertia.com + X_BF[:3, 3]
