@@ -130,9 +130,10 @@ def ur_link_inertias(masses: ArrayLike, centres_of_mass: ArrayLike,
     tensors : array_like, shape (6, 6) or (6, 3, 3), optional
         Inertia tensors about the centres of mass in the axes of the DH frames, rows
         ``(ixx, iyy, izz, ixy, ixz, iyz)`` or 3x3 matrices, kg m^2. When they are not given,
-        a stated approximation after the cylinders of Universal Robots' ROS description: every
-        link a solid cylinder of radius ``radius`` centred on its centre of mass, the upper arm and the
-        forearm (links 2 and 3) along the link (the DH :math:`x` axis) with the lengths
+        a stated approximation after the cylinders of Universal Robots' ROS description:
+        every link a solid cylinder of radius ``radius`` centred on its centre of mass, the
+        upper arm and the forearm (links 2 and 3) along the link (the DH :math:`x` axis) with
+        the lengths
         :math:`\lvert a_2\rvert, \lvert a_3\rvert` (``a`` must then be given), the four joint
         housings (links 1, 4, 5 and 6) along their own joint's axis with the length
         :math:`2r`.
