@@ -595,8 +595,8 @@ def with_payload(robot: Robot, mass: float, *, radius: float = 0.0) -> Robot:
     centred at its tool centre point, welded to the last link.
 
     The sphere's inertia, :math:`\tfrac25 m r^2` about its centre, is added to the last
-    link's (:meth:`LinkInertia.__add__ <dqlab.inertia.LinkInertia.__add__>`), in the last
-    link's frame where the tool sits at :math:`X_{nT}`.
+    link's (``+`` of two :class:`~dqlab.inertia.LinkInertia`), in the last link's frame, where
+    the tool sits at :math:`X_{nT}`.
 
     Examples
     --------

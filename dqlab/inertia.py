@@ -70,8 +70,8 @@ class LinkInertia:
 
     Notes
     -----
-    A :class:`LinkInertia` is immutable; :meth:`scaled`, :meth:`__add__` and
-    :meth:`moved` return new ones.
+    A :class:`LinkInertia` is immutable; :meth:`scaled`, ``+`` (two bodies welded
+    together) and :meth:`moved` return new ones.
 
     Examples
     --------
