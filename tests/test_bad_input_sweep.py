@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import dqlab
-from dqlab import ik, jacobian
+from dqlab import dynamics, ik, jacobian
 from dqlab.models import desk_arm, scara_rsm5, ur3
 
 UR3 = ur3()
@@ -73,6 +73,20 @@ OTHER_CALLS = {
     "ik.pose_errors": (ik.pose_errors, (T, T)),
     "jacobian.manipulability": (jacobian.manipulability, (UR3.jacobian(Q6),)),
     "jacobian.singular_values": (jacobian.singular_values, (UR3.jacobian(Q6),)),
+    "dynamics.inverse_dynamics": (lambda q, qd, qdd: dynamics.inverse_dynamics(UR3, q, qd, qdd),
+                                  (Q6, Q6 / 2, Q6 / 3)),
+    "dynamics.mass_matrix": (lambda q: dynamics.mass_matrix(UR3, q), (Q6,)),
+    "dynamics.gravity_torques": (lambda q: dynamics.gravity_torques(UR3, q), (Q6,)),
+    "dynamics.coriolis_torques": (lambda q, qd: dynamics.coriolis_torques(UR3, q, qd),
+                                  (Q6, Q6 / 2)),
+    "dynamics.forward_dynamics": (lambda q, qd, tau: dynamics.forward_dynamics(UR3, q, qd, tau),
+                                  (Q6, Q6 / 2, Q6)),
+    "dynamics.kinetic_energy": (lambda q, qd: dynamics.kinetic_energy(UR3, q, qd), (Q6, Q6)),
+    "dynamics.potential_energy": (lambda q: dynamics.potential_energy(UR3, q), (Q6,)),
+    "dynamics.NewtonEuler": (lambda q, qd, qdd: dynamics.NewtonEuler(UR3)(q, qd, qdd),
+                             (Q6, Q6 / 2, Q6 / 3)),
+    "dynamics.gravity": (lambda gravity: dynamics.gravity_torques(UR3, Q6, gravity=gravity),
+                         ([0.0, 0.0, -9.81],)),
 }
 
 
