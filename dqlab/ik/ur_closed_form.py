@@ -133,6 +133,7 @@ from ..transforms import transform_inverse
 from . import ur_steps as steps
 from .result import IKResult, finish
 from .targets import RIGID_TOL, parse_targets, pose_errors
+from .ur_calibrated import calibrated_ur, nominal_ur
 
 __all__ = ["ur", "ur_parameters", "equivalent_solutions", "closest_solution",
            "distinct_solutions", "SOLUTION_ORDER"]
@@ -600,7 +601,15 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     pose_tol = check_tolerance(pose_tol, "pose_tol")
     if residuals not in ("fk", "equations"):
         raise ValueError(f"residuals must be 'fk' or 'equations', got {residuals!r}")
-    prm = _parameters(robot)
+    try:
+        prm = _parameters(robot)
+    except ValueError as exc:                   # not the exact UR shape: a calibrated UR?
+        try:
+            nominal_ur(robot)
+        except ValueError as why:
+            raise ValueError(f"{exc}; nor is it a calibrated UR: {why}") from None
+        return calibrated_ur(robot, target, ur, tol=tol, tool=tool, q_ref=q_ref,
+                             singular_tol=singular_tol, pose_tol=pose_tol, residuals=residuals)
     if (tool is None and residuals == "equations" and type(target) is np.ndarray
             and target.dtype is _FLOAT64 and pose_tol <= RIGID_TOL):
         result = _solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref)
