@@ -569,7 +569,9 @@ def robot_from_calibration_conf(path, model, *, checksum=None, name: str = "") -
         A name of :data:`dqlab.models.UR_MODELS` (``"UR5e"``) or a nominal UR robot.
     checksum : sequence of 6 int, optional
         The joints' checksums the file must hold (for example a controller's
-        ``KinematicsInfo.checksum``): a file of another robot is refused.
+        ``KinematicsInfo.checksum``): a file of another robot is refused. This is what ties
+        the file to its robot: corrections move any UR by the same millimetres, so they do
+        not tell its model (corrections larger than :data:`MODEL_TOLERANCE` are refused).
     name : str, optional
 
     Returns
@@ -716,11 +718,10 @@ def _common_normal(p, u, q, v, o_prev, x_prev):
     the second -- and its direction. Parallel lines: the normal through the foot of o_prev."""
     n = np.cross(u, v)
     s = float(n @ n)
-    w = p - q
-    if s > 1e-20:
-        b, d, e = float(u @ v), float(u @ w), float(v @ w)
-        t = (b * e - d) / s
-        r = (e - b * d) / s
+    w = q - p
+    if s > 1e-20:               # t and r from cross products: no cancellation of u.v ~ 1
+        t = float(np.cross(w, v) @ n) / s
+        r = float(np.cross(w, u) @ n) / s
         return p + t * u, q + r * v, n / math.sqrt(s)
     foot = p + ((o_prev - p) @ u) * u
     origin = q + ((foot - q) @ v) * v
