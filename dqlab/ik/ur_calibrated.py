@@ -76,7 +76,8 @@ MAX_DISCREPANCY = 0.05
 _STOP = 0.1            # a Newton branch stops when its errors are below _STOP tol
 _DAMPING = 1e-12       # lambda = _DAMPING tr(J^T J) / 6
 _MAX_STEP = 0.5        # longest Newton step, rad (a longer one is shortened)
-_GIVE_UP_AFTER = 10    # steps after which a branch still 1 mm / 1 mrad off is abandoned
+_GIVE_UP_AFTER = 8     # steps after which a branch must keep halving its error
+_BLOCK = 2048          # branches per block of the Newton steps
 _FEW_ROWS = 64         # up to this many branches, the kernel working on whole matrices
 _SAMPLES = np.random.default_rng(20260531).uniform(-np.pi, np.pi, (64, 6))
 
@@ -272,20 +273,32 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
     X_06 = X_0T @ X_T6                                  # ... and the flanges they mean
     wide = max(tol, 2.0 * nominal.position_gap)
 
-    def exact_solutions(X):
+    def exact_solutions(X, tol=wide):
         return closed_form(nominal.robot, X[0] if X.shape[0] == 1 and batch == () else X,
-                           tol=wide, q_ref=q_ref, singular_tol=singular_tol)
+                           tol=tol, q_ref=q_ref, singular_tol=singular_tol)
 
     start = exact_solutions(X_06)
+    q0 = start.solutions.reshape(n * 8, 6).copy()
+    errors = start.position_error.reshape(n * 8)
+    found = start.valid.reshape(n * 8)                 # the branches the exact arm found
+    exact = found & (errors <= tol)                     # ... of them, its exact solutions
+    near = ~found & (errors <= 10.0 * wide)             # those it misses by a little more
+    started = found.copy()
+    if near.any():                                      # (as near a wrist singularity)
+        poses = np.flatnonzero(near.reshape(n, 8).any(axis=1))
+        again = exact_solutions(X_06[poses], tol=10.0 * wide)
+        rows = (8 * poses[:, None] + np.arange(8)).reshape(-1)
+        use = near[rows] & again.valid.reshape(-1)
+        q0[rows[use]] = again.solutions.reshape(-1, 6)[use]
+        started[rows[use]] = True
     chain = (nominal.links, X_6T)
     polished = _Polished.empty(n)
-    rows = np.flatnonzero(start.valid.reshape(n * 8))   # the branches the exact arm found
-    polished.record(rows, *_newton(*chain, start.solutions.reshape(n * 8, 6)[rows],
-                                   X_0T[rows // 8], tol, max_iter))
-    errors = start.position_error.reshape(n * 8)
-    exact = start.valid.reshape(n * 8) & (errors <= tol)    # the exact arm's own solutions
-    _repair(chain, nominal, polished, errors <= 10.0 * wide, exact, exact_solutions, X_0T,
-            X_T6, tol, max_iter)
+    rows = np.flatnonzero(started)
+    polished.record(rows, *_newton(*chain, q0[rows], X_0T[rows // 8], tol, max_iter))
+    extra = np.flatnonzero(started & ~found)            # a branch the exact arm misses: keep
+    polished.converged[extra] &= polished.are_new(extra, polished.q[extra],   # it if new
+                                                  polished.unique() & found)
+    _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, tol, max_iter)
     done = np.flatnonzero(polished.done)
     pe = start.position_error.reshape(n * 8).copy()
     re = start.rotation_error.reshape(n * 8).copy()
@@ -335,6 +348,14 @@ class _Polished:
         repeats = (same & np.tri(8, k=-1, dtype=bool)).any(axis=-1).reshape(-1)
         return self.converged & ~repeats
 
+    def are_new(self, rows, q, unique):
+        """Whether each joint vector ``q[j]`` differs from every unique row of the pose of
+        ``rows[j]``."""
+        Q = np.where(unique[:, None], self.q, np.nan).reshape(-1, 8, 6)[rows // 8]
+        with np.errstate(invalid="ignore"):
+            same = np.abs(wrap_angle(Q - q[:, None])).max(axis=-1) < 1e-6
+        return ~same.any(axis=-1)
+
     def is_new(self, row, q, unique):
         """Whether the joint vector ``q`` (6,) differs from every unique row of the pose of
         ``row``."""
@@ -352,40 +373,42 @@ def _checked_tool(tool, pose_tol):
     return tool
 
 
-def _repair(chain, nominal, polished, reach, exact, exact_solutions, X_0T, X_T6, tol,
-            max_iter):
-    r"""Restart the branches missing from a pose: polished but not converged although the
-    exact arm reaches the pose exactly on that branch (``exact``), converged onto another
-    branch's solution (near a singularity the exact arm's start can lie on the wrong side of
-    the calibrated arm's), or not started although the exact arm missed the pose by little
-    (``reach``). Restarts, in turn:
+def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, tol, max_iter):
+    r"""Restart the branches missing from a pose: converged onto another branch's solution
+    (near a singularity the exact arm's start may lie on the wrong side of the calibrated
+    arm's), or not converged. Restarts, in turn:
 
     1. the exact arm's solutions of the pose corrected by the two arms' difference at a
        solution :math:`q^\ast` the pose already has,
        :math:`X' = X\, X_{cal}(q^\ast)^{-1} X_{exact}(q^\ast)`, which the exact arm reaches
        in :math:`q^\ast` exactly and, nearby, in the other branches;
-    2. for branches still missing: a sibling's solution flipped by the exact arm's elbow or
-       wrist flip (:func:`_flip`), or, for a branch the exact arm has, moved along the
-       calibrated arm's most singular direction (the other shoulder, near the shoulder
-       singularity).
+    2. a sibling's solution flipped by the exact arm's elbow or wrist flip (:func:`_flip`);
+       and, for a branch the exact arm ``found`` that repeats another or did not converge
+       from a start near a singularity (from a regular start it has no solution nearby),
+       its own start ``q0`` and the solutions of the other shoulder's branches, when near a
+       singularity, moved along the calibrated arm's most singular direction there (by
+       0.05, 0.2 and 0.6 rad either way): the two solutions a singularity separates lie on
+       either side.
 
     The first restart that converges to a solution the pose does not have yet replaces the
     branch; ``polished`` is updated in place."""
     unique = polished.unique()
-    missing = (polished.done & ~unique & (polished.converged | exact)) | (~polished.done & reach)
+    missing = polished.done & ~unique
+    if not missing.any():
+        return
     poses = np.flatnonzero(missing.reshape(-1, 8).any(axis=1)
                            & unique.reshape(-1, 8).any(axis=1))
-    if not poses.size:
-        return
-    first = 8 * poses + np.argmax(unique.reshape(-1, 8)[poses], axis=1)
-    X_cal6 = polished.X[first] @ X_T6                   # the calibrated flange at q*
-    X_exact6 = nominal.robot.fk(polished.q[first])
-    corrected = exact_solutions(X_0T[poses] @ X_T6 @ transform_inverse(X_cal6) @ X_exact6)
-    rows = (8 * poses[:, None] + np.arange(8)).reshape(-1)
-    use = missing[rows] & corrected.valid.reshape(-1)
-    _restart(chain, polished, unique, rows[use], corrected.solutions.reshape(-1, 6)[use],
-             X_0T, tol, max_iter)
-    wanted = np.flatnonzero(missing & ~unique)
+    if poses.size:
+        first = 8 * poses + np.argmax(unique.reshape(-1, 8)[poses], axis=1)
+        X_cal6 = polished.X[first] @ X_T6               # the calibrated flange at q*
+        X_exact6 = nominal.robot.fk(polished.q[first])
+        corrected = exact_solutions(X_0T[poses] @ X_T6 @ transform_inverse(X_cal6)
+                                    @ X_exact6)
+        rows = (8 * poses[:, None] + np.arange(8)).reshape(-1)
+        use = missing[rows] & corrected.valid.reshape(-1)
+        _restart(chain, polished, unique, rows[use], corrected.solutions.reshape(-1, 6)[use],
+                 X_0T, tol, max_iter)
+    wanted = np.flatnonzero(polished.done & ~unique)
     if not wanted.size:
         return
     owners, starts = [], []
@@ -394,17 +417,25 @@ def _repair(chain, nominal, polished, reach, exact, exact_solutions, X_0T, X_T6,
         ok = unique[sibling]
         owners.append(wanted[ok])
         starts.append(_flip(nominal.robot, polished.q[sibling[ok]], bits))
-    wanted = wanted[polished.done[wanted]]
-    for bits in (4, 5, 6, 7):                           # the other shoulder: along the
-        sibling = wanted ^ bits                         # arm's most singular direction
+    kernel = _MatrixChain(*chain)
+    wanted = wanted[found[wanted]]
+    failed = wanted[~polished.converged[wanted]]        # restart those only near a
+    if failed.size:                                     # singularity (else: no solution)
+        sigma = np.linalg.svd(kernel.jacobian(kernel.frames(q0[failed])), compute_uv=False)
+        wanted = np.union1d(wanted[polished.converged[wanted]],
+                            failed[sigma[:, -1] < 1e-2 * sigma[:, 0]])
+    bases = [(wanted, q0[wanted])]                      # the branch's own start
+    for bits in (4, 5, 6, 7):                           # the other shoulder's solutions
+        sibling = wanted ^ bits
         ok = unique[sibling]
-        if ok.any():
-            kernel = _MatrixChain(*chain)
-            J = kernel.jacobian(kernel.frames(polished.q[sibling[ok]]))
-            v = np.linalg.svd(J)[2][:, -1]              # (m, 6)
+        bases.append((wanted[ok], polished.q[sibling[ok]]))
+    for rows, q in bases:
+        if rows.size:
+            _, sigma, V = np.linalg.svd(kernel.jacobian(kernel.frames(q)))
+            near = sigma[:, -1] < 1e-2 * sigma[:, 0]     # only near a singularity
             for t in (0.05, -0.05, 0.2, -0.2, 0.6, -0.6):
-                owners.append(wanted[ok])
-                starts.append(polished.q[sibling[ok]] + t * v)
+                owners.append(rows[near])
+                starts.append(q[near] + t * V[near, -1])
     _restart(chain, polished, unique, np.concatenate(owners), np.concatenate(starts), X_0T,
              tol, max_iter)
 
@@ -415,10 +446,11 @@ def _restart(chain, polished, unique, owners, starts, X_0T, tol, max_iter):
     if not owners.size:
         return
     q, converged, X, measures = _newton(*chain, starts, X_0T[owners // 8], tol, max_iter)
+    new = converged & polished.are_new(owners, q, unique)
     fixed = np.zeros(unique.size, dtype=bool)
-    for j in np.flatnonzero(converged):                 # in the order of the starts
+    for j in np.flatnonzero(new):                       # in the order of the starts
         row = owners[j]
-        if fixed[row] or not polished.is_new(row, q[j], unique):
+        if fixed[row] or not polished.is_new(row, q[j], unique):   # taken meanwhile
             continue
         polished.record(row, q[j], True, X[j], measures[:, j])
         unique[row] = fixed[row] = True
@@ -445,14 +477,23 @@ def _flip(exact, q, bits):
 def _newton(links, tool, q, X_target, tol, max_iter):
     """Newton steps from the joint vectors ``q`` (m, 6) towards the poses ``X_target``
     (m, 4, 4) of frame 0, until each row's position and rotation errors (Euclidean) are
-    below ``_STOP tol`` (or ``max_iter`` steps). Returns the joint vectors, whether each
-    converged, the TCP poses (m, 4, 4) and the singularity measures (3, m) at them."""
+    below ``_STOP tol``, or it stops making progress (after ``_GIVE_UP_AFTER`` steps, less
+    than halving its error in two steps), or ``max_iter`` steps. Returns the joint vectors,
+    whether each converged, the TCP poses (m, 4, 4) and the singularity measures (3, m) at
+    them. Many rows go through in blocks (temporaries that stay in the cache)."""
+    if q.shape[0] > _BLOCK:
+        parts = [_newton(links, tool, q[i:i + _BLOCK], X_target[i:i + _BLOCK], tol, max_iter)
+                 for i in range(0, q.shape[0], _BLOCK)]
+        return (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
+                np.concatenate([p[2] for p in parts]), np.concatenate([p[3] for p in parts],
+                                                                      axis=1))
     m = q.shape[0]
     chain = _chain(links, tool, m)
     q = q.copy()
     frames = chain.frames(q)
     targets = chain.targets(X_target)
     size = np.full(m, np.inf)                  # |e| at the current q of each row
+    before = np.full((2, m), np.inf)           # ... and at the two previous iterates
     stop = _STOP * tol
     active = np.arange(m)
     for iteration in range(max_iter + 1):
@@ -460,10 +501,11 @@ def _newton(links, tool, q, X_target, tol, max_iter):
         part = frames if whole else chain.take(frames, active)
         e = chain.residual(part, targets if whole else chain.take(targets, active))
         ee = e * e
+        before[:, active] = before[1, active], size[active]
         size[active] = np.sqrt(np.maximum(ee[:, :3].sum(axis=1), ee[:, 3:].sum(axis=1)))
         keep = size[active] > stop             # NaN stops too
-        if iteration >= _GIVE_UP_AFTER:        # far from converging: give up
-            keep &= size[active] < 1e-3
+        if iteration >= _GIVE_UP_AFTER:        # no longer making progress: give up
+            keep &= size[active] < 0.5 * before[0, active]
         if iteration == max_iter or not keep.any():
             break
         if not keep.all():
@@ -610,6 +652,7 @@ class _EntryChain:
     def __init__(self, links, tool):
         self.links = links
         self.tool = tool.tolist()
+        self.no_tool = bool(np.array_equal(tool, np.eye(4)))
 
     def frames(self, q):
         qT = np.ascontiguousarray(q.T)
@@ -632,9 +675,12 @@ class _EntryChain:
             os_.append(o)
             xs.append(x)
         (t00, t01, t02, tx), (t10, t11, t12, ty), (t20, t21, t22, tz), _ = self.tool
-        p = [o[k] + tx * x[k] + ty * y[k] + tz * z[k] for k in range(3)]
-        R = [(x[k] * t00 + y[k] * t10 + z[k] * t20, x[k] * t01 + y[k] * t11 + z[k] * t21,
-              x[k] * t02 + y[k] * t12 + z[k] * t22) for k in range(3)]       # rows
+        if self.no_tool:
+            p, R = list(o), [(x[k], y[k], z[k]) for k in range(3)]            # R by rows
+        else:
+            p = [o[k] + tx * x[k] + ty * y[k] + tz * z[k] for k in range(3)]
+            R = [(x[k] * t00 + y[k] * t10 + z[k] * t20, x[k] * t01 + y[k] * t11 + z[k] * t21,
+                  x[k] * t02 + y[k] * t12 + z[k] * t22) for k in range(3)]
         entries = [v for vec in (*zs[:5], *os_[:5], xs[1], xs[2]) for v in vec]
         entries += p + [v for row in R for v in row]
         out = np.empty((48, q.shape[0]))
