@@ -65,6 +65,7 @@ from ..ik import pose_errors
 from ..models import UR_MODELS
 from ..robot import Link, Robot
 from ..rotations import rot_x, rot_y, rot_z
+from ..transforms import check_transform
 
 __all__ = ["CalibrationError", "KinematicsInfo", "CalibrationConf", "MODEL_TOLERANCE",
            "ROBOT_STATE", "KINEMATICS_INFO", "UNCALIBRATED", "kinematics_info_from_robot",
@@ -643,6 +644,11 @@ def robot_from_joint_origins(origins, *, name: str = "") -> Robot:
     Robot
         Standard DH, revolute joints, limits :math:`\pm 2\pi`.
 
+    Raises
+    ------
+    ValueError
+        If ``origins`` are not rigid transforms of shape (n, 4, 4) (naming ``origins``).
+
     Examples
     --------
     The UR5e's chain as ROS describes it, read back into its DH parameters:
@@ -659,8 +665,8 @@ def robot_from_joint_origins(origins, *, name: str = "") -> Robot:
     >>> [round(lk.d, 4) for lk in robot.links], [round(lk.a, 4) for lk in robot.links]
     ([0.1625, 0.0, 0.0, 0.1333, 0.0997, 0.0996], [0.0, -0.425, -0.3922, 0.0, 0.0, 0.0])
     """
-    S = np.asarray(origins, dtype=float)
-    if S.ndim != 3 or S.shape[1:] != (4, 4) or S.shape[0] < 1:
+    S = check_transform(origins, name="origins")
+    if S.ndim != 3 or S.shape[0] < 1:
         raise ValueError(f"origins must have shape (n, 4, 4), got {S.shape}")
     W = np.empty_like(S)
     W[0] = S[0]
