@@ -631,12 +631,14 @@ class _MatrixChain:
 
 
 def _measures(z1, z3, z5, x2, x3, o5):
-    """The three singularity measures (3, m) from the vectors (m, 3) they need."""
-    wrist = np.linalg.norm(np.cross(z3, z5), axis=-1)
-    elbow = np.linalg.norm(np.cross(x2, x3), axis=-1)
-    normal = np.hypot(z1[:, 0], z1[:, 1])
-    shoulder = np.abs(z1[:, 0] * o5[:, 1] - z1[:, 1] * o5[:, 0]) / normal
-    return np.stack([wrist, elbow, shoulder])
+    """The three singularity measures (3, m) from the vectors (m, 3) they need: |z3 x z5|,
+    |x2 x x3| and |(o5 . (z0 x z1))| / |z0 x z1| with z0 = (0, 0, 1)."""
+    a, b = np.stack([z3, x2]), np.stack([z5, x3])                  # (2, m, 3)
+    cross = a[..., [1, 2, 0]] * b[..., [2, 0, 1]] - a[..., [2, 0, 1]] * b[..., [1, 2, 0]]
+    sines = np.sqrt((cross * cross).sum(axis=-1))                   # (2, m)
+    shoulder = (np.abs(z1[:, 0] * o5[:, 1] - z1[:, 1] * o5[:, 0])
+                / np.hypot(z1[:, 0], z1[:, 1]))
+    return np.concatenate([sines, shoulder[None]])
 
 
 _DIAGONAL = np.arange(6)

@@ -474,7 +474,9 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     ----------
     robot : dqlab.robot.Robot
         A UR-family arm in standard DH (for example :func:`dqlab.models.ur3`); its base
-        transform and tool are taken into account, and joint offsets are honoured.
+        transform and tool are taken into account, and joint offsets are honoured. A
+        calibrated UR (parameters millimetres off the exact shape) is solved by
+        :func:`dqlab.ik.ur_calibrated.calibrated_ur`, with the same result.
     target : array_like, shape (..., 4, 4) or (..., 8)
         Target pose(s) of the TCP in the world frame, as rigid transforms or unit dual
         quaternions ``(q_r, q_d)`` (told apart by the trailing shape; see
