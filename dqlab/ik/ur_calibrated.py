@@ -78,6 +78,7 @@ _DAMPING = 1e-12       # lambda = _DAMPING tr(J^T J) / 6
 _MAX_STEP = 0.5        # longest Newton step, rad (a longer one is shortened)
 _GIVE_UP_AFTER = 8     # steps after which a branch must keep halving its error
 _BLOCK = 2048          # branches per block of the Newton steps
+_RESTART_ITER = 10     # Newton steps of a restart at most
 _FEW_ROWS = 64         # up to this many branches, the kernel working on whole matrices
 _SAMPLES = np.random.default_rng(20260531).uniform(-np.pi, np.pi, (64, 6))
 
@@ -199,7 +200,7 @@ def _angle_about(u, v, n):
 def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 1e-9,
                   tool: ArrayLike | None = None, q_ref: ArrayLike | None = None,
                   singular_tol: float = 5e-7, pose_tol: float = 1e-9,
-                  residuals: str = "equations", max_iter: int = 30) -> IKResult:
+                  residuals: str = "equations", max_iter: int = 16) -> IKResult:
     r"""Every inverse-kinematics solution of a calibrated UR: ``dqlab.ik.ur`` for such a robot.
 
     ``dqlab.ik.ur`` calls this when its robot has not the exact UR shape; call that instead.
@@ -445,7 +446,8 @@ def _restart(chain, polished, unique, owners, starts, X_0T, tol, max_iter):
     that converges to a solution its pose does not have replaces the row."""
     if not owners.size:
         return
-    q, converged, X, measures = _newton(*chain, starts, X_0T[owners // 8], tol, max_iter)
+    q, converged, X, measures = _newton(*chain, starts, X_0T[owners // 8], tol,
+                                        min(max_iter, _RESTART_ITER))
     new = converged & polished.are_new(owners, q, unique)
     fixed = np.zeros(unique.size, dtype=bool)
     for j in np.flatnonzero(new):                       # in the order of the starts
