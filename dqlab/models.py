@@ -6,6 +6,10 @@ function               convention  source
 :func:`ur3`            DH          Universal Robots' published DH parameters (thesis, table 4.2)
 :func:`ur5`            DH          Universal Robots' published DH parameters
 :func:`ur10`           DH          Universal Robots' published DH parameters
+:func:`ur3e` ...        DH          Universal Robots' published DH parameters: :func:`ur3e`,
+                                   :func:`ur5e` (:func:`ur7e`), :func:`ur10e` (:func:`ur12e`),
+                                   :func:`ur16e`, :func:`ur15`, :func:`ur18`, :func:`ur8_long`,
+                                   :func:`ur20`, :func:`ur30` (:data:`UR_MODELS` by name)
 :func:`ur3_mdh`        MDH         the UR3 project report (modified DH with "q_fig" offsets)
 :func:`desk_arm`       DH          the 3-DOF desktop arm of the lab report (identified lengths)
 :func:`scara_rsm5`     MDH         the Samsung RSM-5 SCARA of the course notes, annex A
@@ -27,6 +31,8 @@ from .robot import PRISMATIC, Link, Robot
 
 __all__ = [
     "ur3", "ur5", "ur10", "ur3_mdh", "desk_arm", "scara_rsm5", "six_r",
+    "ur3e", "ur5e", "ur7e", "ur10e", "ur12e", "ur16e", "ur15", "ur18", "ur8_long", "ur20",
+    "ur30", "UR_CURRENT_DH", "UR_MAX_JOINT_SPEED_DEG", "UR_PUBLISHED_MASSES", "UR_MODELS",
     "UR_DH", "UR_ALPHA", "UR3_MDH", "DESK_ARM", "SCARA_RSM5",
     "desk_arm_joints_from_lab", "desk_arm_lab_from_joints",
     "ChainShape", "UR_SHAPE", "DESK_ARM_SHAPE", "SCARA_SHAPE",
@@ -315,6 +321,259 @@ def ur10() -> Robot:
     array([-1.1843 , -0.25614,  0.0116 ])
     """
     return _ur("UR10", "UR10")
+
+
+# --------------------------------------------------------------------------------------
+# The current UR models: e-series, UR15, UR18, UR8 Long, UR20, UR30
+
+#: The published standard DH lengths of the current UR models, added to :data:`UR_DH` (same
+#: form, metres; the twists are :data:`UR_ALPHA`). Source: Universal Robots, "DH parameters
+#: for calculations of kinematics and dynamics" (universal-robots.com/articles/ur/
+#: application-installation/dh-parameters-for-calculations-of-kinematics-and-dynamics/), as
+#: also tabulated by ``ur_analytic_ik``. The e-series, UR20 and UR30 values are those the
+#: controller simulator reports in its kinematics-info message: they reproduce the
+#: ``calib_...`` hashes of UR's ROS description files (checked in the tests). UR renamed the
+#: UR5e "UR7e" and the UR10e "UR12e" in 2025: the same arms, with the same parameters.
+UR_CURRENT_DH = {
+    "UR3e": {"d": (0.15185, 0.0, 0.0, 0.13105, 0.08535, 0.0921),
+             "a": (0.0, -0.24355, -0.2132, 0.0, 0.0, 0.0)},
+    "UR5e": {"d": (0.1625, 0.0, 0.0, 0.1333, 0.0997, 0.0996),
+             "a": (0.0, -0.425, -0.3922, 0.0, 0.0, 0.0)},
+    "UR10e": {"d": (0.1807, 0.0, 0.0, 0.17415, 0.11985, 0.11655),
+              "a": (0.0, -0.6127, -0.57155, 0.0, 0.0, 0.0)},
+    "UR16e": {"d": (0.1807, 0.0, 0.0, 0.17415, 0.11985, 0.11655),
+              "a": (0.0, -0.4784, -0.36, 0.0, 0.0, 0.0)},
+    "UR15": {"d": (0.2186, 0.0, 0.0, 0.1824, 0.1361, 0.1434),
+             "a": (0.0, -0.6475, -0.5164, 0.0, 0.0, 0.0)},
+    "UR18": {"d": (0.2186, 0.0, 0.0, 0.1824, 0.1361, 0.1434),
+             "a": (0.0, -0.475, -0.3389, 0.0, 0.0, 0.0)},
+    "UR8 Long": {"d": (0.2186, 0.0, 0.0, 0.1824, 0.1361, 0.1434),
+                 "a": (0.0, -0.8989, -0.7149, 0.0, 0.0, 0.0)},
+    "UR20": {"d": (0.2363, 0.0, 0.0, 0.201, 0.1593, 0.1543),
+             "a": (0.0, -0.862, -0.7287, 0.0, 0.0, 0.0)},
+    "UR30": {"d": (0.2363, 0.0, 0.0, 0.201, 0.1593, 0.1543),
+             "a": (0.0, -0.637, -0.5037, 0.0, 0.0, 0.0)},
+}
+UR_CURRENT_DH["UR7e"] = UR_CURRENT_DH["UR5e"]
+UR_CURRENT_DH["UR12e"] = UR_CURRENT_DH["UR10e"]
+UR_DH.update(UR_CURRENT_DH)
+
+#: Published maximum joint speeds of current UR models in degrees per second, joints 1 to 6
+#: (the joint-limit files of Universal Robots' ROS description, from the user manuals), to
+#: be carried by the links once they hold speed limits.
+UR_MAX_JOINT_SPEED_DEG = {
+    "UR3e": (180.0, 180.0, 180.0, 360.0, 360.0, 360.0),
+    "UR5e": (180.0,) * 6,
+    "UR10e": (120.0, 120.0, 180.0, 180.0, 180.0, 180.0),
+    "UR12e": (120.0, 120.0, 180.0, 180.0, 180.0, 180.0),
+    "UR16e": (120.0, 120.0, 180.0, 180.0, 180.0, 180.0),
+    "UR18": (180.0, 180.0, 240.0, 300.0, 300.0, 300.0),
+    "UR20": (120.0, 120.0, 150.0, 210.0, 210.0, 210.0),
+    "UR30": (120.0, 120.0, 150.0, 210.0, 210.0, 210.0),
+}
+
+#: Published link masses (kg) and centres of mass (m, in the DH frame of the link), links 1
+#: to 6, from the same page of Universal Robots as :data:`UR_CURRENT_DH` (which also gives
+#: the UR20's inertia matrices), to be carried by the links once they hold inertias.
+UR_PUBLISHED_MASSES = {
+    "UR3e": ((1.98, (0.0, -0.02, 0.0)), (3.4445, (0.13, 0.0, 0.1157)),
+             (1.437, (0.05, 0.0, 0.0238)), (0.871, (0.0, 0.0, 0.01)),
+             (0.805, (0.0, 0.0, 0.01)), (0.261, (0.0, 0.0, -0.02))),
+    "UR5e": ((3.761, (0.0, -0.02561, 0.00193)), (8.058, (0.2125, 0.0, 0.11336)),
+             (2.846, (0.15, 0.0, 0.0265)), (1.37, (0.0, -0.0018, 0.01634)),
+             (1.3, (0.0, 0.0018, 0.01634)), (0.365, (0.0, 0.0, -0.001159))),
+    "UR20": ((16.343, (0.0, -0.0610, 0.0062)), (29.632, (0.5226, 0.0, 0.2098)),
+             (7.879, (0.3234, 0.0, 0.0604)), (3.054, (0.0, -0.0026, 0.0393)),
+             (3.126, (0.0, 0.0024, 0.0379)), (0.846, (0.0, -0.0003, -0.0318))),
+}
+
+
+def ur3e() -> Robot:
+    r"""The Universal Robots UR3e with the maker's standard DH parameters.
+
+    :math:`d_1 = 0.15185`, :math:`a_2 = -0.24355`, :math:`a_3 = -0.2132`,
+    :math:`d_4 = 0.13105`, :math:`d_5 = 0.08535`, :math:`d_6 = 0.0921` m, the twists of
+    :data:`UR_ALPHA`, and the conventions of :func:`ur3` (those of ``ur_analytic_ik``): no
+    tool, base at the foot of joint 1, limits :math:`\pm 2\pi`. Source:
+    :data:`UR_CURRENT_DH`.
+
+    Returns
+    -------
+    Robot
+
+    Examples
+    --------
+    At :math:`q = 0` the flange is at :math:`(a_2 + a_3,\ -d_4 - d_6,\ d_1 - d_5)`:
+
+    >>> ur3e().fk([0, 0, 0, 0, 0, 0])[:3, 3].round(5)
+    array([-0.45675, -0.22315,  0.0665 ])
+    """
+    return _ur("UR3e", "UR3e")
+
+
+def ur5e() -> Robot:
+    """The Universal Robots UR5e (since 2025 also sold as the UR7e), with the maker's
+    standard DH parameters (see :func:`ur3e` and :data:`UR_CURRENT_DH`).
+
+    Returns
+    -------
+    Robot
+
+    Examples
+    --------
+    >>> ur5e().fk([0, 0, 0, 0, 0, 0])[:3, 3].round(5)
+    array([-0.8172, -0.2329,  0.0628])
+    """
+    return _ur("UR5e", "UR5e")
+
+
+def ur7e() -> Robot:
+    """The Universal Robots UR7e: the UR5e under its 2025 name (see :func:`ur5e`).
+
+    Returns
+    -------
+    Robot
+
+    Examples
+    --------
+    >>> ur7e().name, bool((ur7e().fk([0.1] * 6) == ur5e().fk([0.1] * 6)).all())
+    ('UR7e', True)
+    """
+    return _ur("UR7e", "UR7e")
+
+
+def ur10e() -> Robot:
+    """The Universal Robots UR10e (since 2025 also sold as the UR12e), with the maker's
+    standard DH parameters (see :func:`ur3e` and :data:`UR_CURRENT_DH`).
+
+    Returns
+    -------
+    Robot
+
+    Examples
+    --------
+    >>> ur10e().fk([0, 0, 0, 0, 0, 0])[:3, 3].round(5)
+    array([-1.18425, -0.2907 ,  0.06085])
+    """
+    return _ur("UR10e", "UR10e")
+
+
+def ur12e() -> Robot:
+    """The Universal Robots UR12e: the UR10e under its 2025 name (see :func:`ur10e`).
+
+    Returns
+    -------
+    Robot
+
+    Examples
+    --------
+    >>> ur12e().name, bool((ur12e().fk([0.1] * 6) == ur10e().fk([0.1] * 6)).all())
+    ('UR12e', True)
+    """
+    return _ur("UR12e", "UR12e")
+
+
+def ur16e() -> Robot:
+    """The Universal Robots UR16e with the maker's standard DH parameters (see
+    :func:`ur3e` and :data:`UR_CURRENT_DH`).
+
+    Returns
+    -------
+    Robot
+
+    Examples
+    --------
+    >>> ur16e().fk([0, 0, 0, 0, 0, 0])[:3, 3].round(5)
+    array([-0.8384 , -0.2907 ,  0.06085])
+    """
+    return _ur("UR16e", "UR16e")
+
+
+def ur15() -> Robot:
+    """The Universal Robots UR15 with the maker's standard DH parameters (see
+    :func:`ur3e` and :data:`UR_CURRENT_DH`).
+
+    Returns
+    -------
+    Robot
+
+    Examples
+    --------
+    >>> ur15().fk([0, 0, 0, 0, 0, 0])[:3, 3].round(5)
+    array([-1.1639, -0.3258,  0.0825])
+    """
+    return _ur("UR15", "UR15")
+
+
+def ur18() -> Robot:
+    """The Universal Robots UR18 with the maker's standard DH parameters (see
+    :func:`ur3e` and :data:`UR_CURRENT_DH`).
+
+    Returns
+    -------
+    Robot
+
+    Examples
+    --------
+    >>> ur18().fk([0, 0, 0, 0, 0, 0])[:3, 3].round(5)
+    array([-0.8139, -0.3258,  0.0825])
+    """
+    return _ur("UR18", "UR18")
+
+
+def ur8_long() -> Robot:
+    """The Universal Robots UR8 Long with the maker's standard DH parameters (see
+    :func:`ur3e` and :data:`UR_CURRENT_DH`).
+
+    Returns
+    -------
+    Robot
+
+    Examples
+    --------
+    >>> ur8_long().fk([0, 0, 0, 0, 0, 0])[:3, 3].round(5)
+    array([-1.6138, -0.3258,  0.0825])
+    """
+    return _ur("UR8 Long", "UR8 Long")
+
+
+def ur20() -> Robot:
+    """The Universal Robots UR20 with the maker's standard DH parameters (see
+    :func:`ur3e` and :data:`UR_CURRENT_DH`).
+
+    Returns
+    -------
+    Robot
+
+    Examples
+    --------
+    >>> ur20().fk([0, 0, 0, 0, 0, 0])[:3, 3].round(5)
+    array([-1.5907, -0.3553,  0.077 ])
+    """
+    return _ur("UR20", "UR20")
+
+
+def ur30() -> Robot:
+    """The Universal Robots UR30 with the maker's standard DH parameters (see
+    :func:`ur3e` and :data:`UR_CURRENT_DH`).
+
+    Returns
+    -------
+    Robot
+
+    Examples
+    --------
+    >>> ur30().fk([0, 0, 0, 0, 0, 0])[:3, 3].round(5)
+    array([-1.1407, -0.3553,  0.077 ])
+    """
+    return _ur("UR30", "UR30")
+
+
+#: The function of :mod:`dqlab.models` that builds each UR model, by the model's name (as
+#: the controller and :data:`UR_DH` spell it).
+UR_MODELS = {"UR3": ur3, "UR5": ur5, "UR10": ur10, "UR3e": ur3e, "UR5e": ur5e, "UR7e": ur7e,
+             "UR10e": ur10e, "UR12e": ur12e, "UR16e": ur16e, "UR15": ur15, "UR18": ur18,
+             "UR8 Long": ur8_long, "UR20": ur20, "UR30": ur30}
 
 
 def ur3_mdh() -> Robot:

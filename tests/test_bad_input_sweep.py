@@ -16,9 +16,12 @@ import pytest
 
 import dqlab
 from dqlab import dynamics, ik, jacobian
+from dqlab.identify import dh_parameters, robot_from_dh_parameters
 from dqlab.models import desk_arm, scara_rsm5, ur3
+from dqlab.ur.calibration import robot_from_joint_origins
 
 UR3 = ur3()
+CALIBRATED = robot_from_dh_parameters(UR3, dh_parameters(UR3) + 1e-3)   # a calibrated UR3
 Q6 = np.array([0.3, -1.2, 1.1, -0.4, 0.9, 0.2])
 Q = np.array([0.5, 0.5, 0.5, 0.5])
 V = np.array([1.0, 2.0, 3.0])
@@ -87,6 +90,9 @@ OTHER_CALLS = {
                              (Q6, Q6 / 2, Q6 / 3)),
     "dynamics.gravity": (lambda gravity: dynamics.gravity_torques(UR3, Q6, gravity=gravity),
                          ([0.0, 0.0, -9.81],)),
+    "ik.ur(calibrated)": (lambda target: ik.ur(CALIBRATED, target), (CALIBRATED.fk(Q6),)),
+    "ur.calibration.robot_from_joint_origins": (robot_from_joint_origins,
+                                                (np.tile(np.eye(4), (6, 1, 1)),)),
 }
 
 
