@@ -79,6 +79,91 @@ def check_tolerance(value, name):
     return v
 
 
+def check_scalar(value, name, *, minimum=None, maximum=None, strict=False, finite=True,
+                 integer=False):
+    """``value`` as a float (an int with ``integer``), or ``ValueError`` naming ``name``.
+
+    The one check of a scalar argument, with one exception type for every mistake: text,
+    None, a bool, a complex number, an array of more than one number, NaN, infinity (unless
+    ``finite`` is False, which lets ``+inf`` through as "no limit"), a value below
+    ``minimum`` (or equal to it, with ``strict``) or above ``maximum``, and with ``integer``
+    anything but an integer type.
+
+    Parameters
+    ----------
+    value : object
+        The argument as given.
+    name : str
+        Its name, quoted in the message.
+    minimum, maximum : float, optional
+        Bounds; ``minimum`` is excluded with ``strict``, ``maximum`` is always included.
+    strict : bool
+        Require ``value > minimum`` rather than ``>=``.
+    finite : bool
+        Refuse infinities (default); with False, ``inf`` is a valid value within the bounds.
+    integer : bool
+        Require an integer type (Python ``int`` or a numpy integer; not ``2.0``).
+
+    Returns
+    -------
+    float or int
+
+    Examples
+    --------
+    >>> check_scalar(0.5, "dt", minimum=0, strict=True)
+    0.5
+    >>> check_scalar(3, "stride", minimum=1, integer=True)
+    3
+    >>> check_scalar(float("nan"), "dt", minimum=0, strict=True)
+    Traceback (most recent call last):
+    ...
+    ValueError: dt must be a finite number > 0, got nan
+    >>> check_scalar("1 s", "duration", minimum=0, strict=True)
+    Traceback (most recent call last):
+    ...
+    ValueError: duration must be a finite number > 0, got '1 s'
+    """
+    want = "an integer" if integer else ("a finite number" if finite else "a number")
+    if minimum is not None:
+        want += f" {'>' if strict else '>='} {minimum:g}"
+    if maximum is not None:
+        want += f"{' and' if minimum is not None else ''} <= {maximum:g}"
+    message = f"{name} must be {want}, got {value!r}"
+    kinds = "iu" if integer else "iuf"
+    if isinstance(value, (bool, np.bool_, str, bytes)) or value is None:
+        raise ValueError(message)
+    try:
+        a = np.asarray(value)
+    except Exception:
+        raise ValueError(message) from None
+    if a.ndim != 0 or a.dtype.kind not in kinds:
+        raise ValueError(message)
+    v = int(a) if integer else float(a)
+    if not integer and (math.isnan(v) or (finite and math.isinf(v)) or v == -math.inf):
+        raise ValueError(message)
+    if minimum is not None and not (v > minimum if strict else v >= minimum):
+        raise ValueError(message)
+    if maximum is not None and not v <= maximum:
+        raise ValueError(message)
+    return v
+
+
+def check_instance(value, kind, name):
+    """``value`` itself, or ``TypeError`` naming ``name`` unless it is an instance of
+    ``kind`` (a class or a tuple of classes).
+
+    >>> check_instance(None, float, "robot")
+    Traceback (most recent call last):
+    ...
+    TypeError: robot must be a float, got None
+    """
+    if not isinstance(value, kind):
+        names = " or ".join(k.__name__ for k in (kind if isinstance(kind, tuple) else (kind,)))
+        got = "None" if value is None else f"a {type(value).__name__}"
+        raise TypeError(f"{name} must be a {names}, got {got}")
+    return value
+
+
 def as_float_array(x, name, trailing=None):
     """Return ``x`` as a float array whose trailing shape is ``trailing``.
 

@@ -201,9 +201,10 @@ def test_time_law_errors(call, match):
         call()
 
 
-def test_time_law_type_errors():
-    with pytest.raises(TypeError, match="duration"):
-        cubic("1 s")
+def test_a_scalar_that_is_not_a_number_is_a_value_error_like_any_other_mistake():
+    for bad in ("1 s", None, 1j, True, [1.0, 2.0]):
+        with pytest.raises(ValueError, match="^duration must be a finite number > 0"):
+            cubic(bad)
 
 
 # --------------------------------------------------------------------------------------

@@ -13,7 +13,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .._checks import as_float_array
+from .._checks import as_float_array, check_scalar
 from ..dualquat import (
     dual_quaternion_conjugate,
     dual_quaternion_from_transform,
@@ -32,7 +32,6 @@ from ..quaternion import (
 )
 from ..transforms import check_transform
 from . import time_laws
-from ._args import positive
 
 __all__ = ["CartesianPath", "line_slerp", "screw_path", "circle_three_phase"]
 
@@ -150,7 +149,7 @@ def _normalised_law(law, duration):
     if law is None:
         if duration is None:
             raise ValueError("give a duration or a normalised time law")
-        return time_laws.quintic(positive(duration, "duration"))
+        return time_laws.quintic(check_scalar(duration, "duration", minimum=0, strict=True))
     if not isinstance(law, time_laws.TimeLaw):
         raise TypeError(f"law must be a TimeLaw, got {type(law).__name__}")
     if abs(law.distance - 1.0) > 1e-12:
@@ -196,7 +195,7 @@ def line_slerp(X_A, X_B, *, duration=None, law=None, dt=0.005):
     X_A = check_transform(X_A, name="X_A")
     X_B = check_transform(X_B, name="X_B")
     law = _normalised_law(law, duration)
-    t, s, sd, sdd = law.sample(positive(dt, "dt"))
+    t, s, sd, sdd = law.sample(check_scalar(dt, "dt", minimum=0, strict=True))
     p_A, p_B = X_A[:3, 3], X_B[:3, 3]
     q_A, q_B = quaternion_from_matrix(X_A[:3, :3]), quaternion_from_matrix(X_B[:3, :3])
     if np.dot(q_A, q_B) < 0:
@@ -254,7 +253,7 @@ def screw_path(X_A, X_B, *, duration=None, law=None, dt=0.005):
     X_A = check_transform(X_A, name="X_A")
     X_B = check_transform(X_B, name="X_B")
     law = _normalised_law(law, duration)
-    t, s, sd, sdd = law.sample(positive(dt, "dt"))
+    t, s, sd, sdd = law.sample(check_scalar(dt, "dt", minimum=0, strict=True))
     Q_A, Q_B = dual_quaternion_from_transform(X_A), dual_quaternion_from_transform(X_B)
     if np.dot(Q_A[:4], Q_B[:4]) < 0:
         Q_B = -Q_B
@@ -325,10 +324,10 @@ def circle_three_phase(center, radius, speed, dt=0.005, plane="xz", *,
     c = as_float_array(center, "center", (3,))
     if c.shape != (3,):
         raise ValueError(f"center must have shape (3,), got {c.shape}")
-    R = positive(radius, "radius")
-    V = positive(speed, "speed")
-    dt = positive(dt, "dt")
-    if plane not in _PLANES:
+    R = check_scalar(radius, "radius", minimum=0, strict=True)
+    V = check_scalar(speed, "speed", minimum=0, strict=True)
+    dt = check_scalar(dt, "dt", minimum=0, strict=True)
+    if not isinstance(plane, str) or plane not in _PLANES:
         raise ValueError(f"plane must be one of {sorted(_PLANES)}, got {plane!r}")
     law = time_laws.three_phase(2 * np.pi * R, V, fractions)
     t, s, sd, sdd = law.sample(dt, endpoint=False)
