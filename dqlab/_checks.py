@@ -123,29 +123,35 @@ def check_scalar(value, name, *, minimum=None, maximum=None, strict=False, finit
     ...
     ValueError: duration must be a finite number > 0, got '1 s'
     """
+    if type(value) is float and not integer:            # the common cases, without numpy
+        v = value
+    elif type(value) is int and (integer or abs(value) < 2 ** 1000):
+        v = value if integer else float(value)
+    else:
+        if isinstance(value, (bool, np.bool_, str, bytes)) or value is None:
+            _refuse(value, name, minimum, maximum, strict, finite, integer)
+        try:
+            a = np.asarray(value)
+        except Exception:
+            a = np.asarray(None)
+        if a.ndim != 0 or a.dtype.kind not in ("iu" if integer else "iuf"):
+            _refuse(value, name, minimum, maximum, strict, finite, integer)
+        v = int(a) if integer else float(a)
+    if ((not integer and (math.isnan(v) or (finite and math.isinf(v)) or v == -math.inf))
+            or (minimum is not None and not (v > minimum if strict else v >= minimum))
+            or (maximum is not None and not v <= maximum)):
+        _refuse(value, name, minimum, maximum, strict, finite, integer)
+    return v
+
+
+def _refuse(value, name, minimum, maximum, strict, finite, integer):
+    """The ``ValueError`` of :func:`check_scalar`: what ``name`` must be, and what it got."""
     want = "an integer" if integer else ("a finite number" if finite else "a number")
     if minimum is not None:
         want += f" {'>' if strict else '>='} {minimum:g}"
     if maximum is not None:
         want += f"{' and' if minimum is not None else ''} <= {maximum:g}"
-    message = f"{name} must be {want}, got {value!r}"
-    kinds = "iu" if integer else "iuf"
-    if isinstance(value, (bool, np.bool_, str, bytes)) or value is None:
-        raise ValueError(message)
-    try:
-        a = np.asarray(value)
-    except Exception:
-        raise ValueError(message) from None
-    if a.ndim != 0 or a.dtype.kind not in kinds:
-        raise ValueError(message)
-    v = int(a) if integer else float(a)
-    if not integer and (math.isnan(v) or (finite and math.isinf(v)) or v == -math.inf):
-        raise ValueError(message)
-    if minimum is not None and not (v > minimum if strict else v >= minimum):
-        raise ValueError(message)
-    if maximum is not None and not v <= maximum:
-        raise ValueError(message)
-    return v
+    raise ValueError(f"{name} must be {want}, got {value!r}")
 
 
 def check_instance(value, kind, name):

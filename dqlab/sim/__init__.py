@@ -30,6 +30,7 @@ from .simulation import (
     ArmSimulation,
     ComputedTorque,
     JointPD,
+    SimulationError,
     TrackingResult,
     check_trajectory,
     require_mujoco,
@@ -41,5 +42,5 @@ __all__ = [
     "mjcf_from_robot", "urdf_from_robot", "link_placements", "default_masses",
     "UR3_LINK_MASSES", "UR3_PAYLOAD", "UR3_BASE_MASS",
     "ArmSimulation", "JointPD", "ComputedTorque", "TrackingResult", "track",
-    "check_trajectory", "require_mujoco", "MujocoBackend", "UR3_HOME",
+    "check_trajectory", "require_mujoco", "SimulationError", "MujocoBackend", "UR3_HOME",
 ]

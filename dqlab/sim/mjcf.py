@@ -38,9 +38,10 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from .._checks import check_instance, check_scalar
 from ..quaternion import quaternion_from_matrix
 from ..robot import Robot
-from ._checks import number, per_joint
+from ._checks import per_joint
 
 __all__ = ["mjcf_from_robot", "link_placements", "default_masses", "UR3_LINK_MASSES",
            "UR3_PAYLOAD", "UR3_BASE_MASS"]
@@ -54,6 +55,14 @@ UR3_PAYLOAD = 3.0
 #: Mass of the fixed base housing in kg: the data sheet's 11 kg minus the moving links (it
 #: carries the cable's share too). Fixed to the world, it never enters the dynamics.
 UR3_BASE_MASS = 11.0 - sum(UR3_LINK_MASSES)
+
+#: The lightest link mass accepted, kg (MuJoCo refuses a moving body whose mass or inertia
+#: is below its ``mjMINVAL``, 1e-15).
+MIN_MASS = 1e-6
+#: The range of the drawn links' radius, metres.
+MIN_RADIUS, MAX_RADIUS = 1e-3, 1.0
+#: The range of the simulation time step, seconds.
+MIN_TIMESTEP, MAX_TIMESTEP = 1e-9, 1.0
 
 _LINK_COLOR = "0.62 0.66 0.72 1"
 _HOUSING_COLOR = "0.20 0.45 0.75 1"
@@ -105,8 +114,7 @@ def link_placements(robot):
     >>> np.allclose(X_BnT, np.eye(4))       # no tool: the TCP is body 6's origin
     True
     """
-    if not isinstance(robot, Robot):
-        raise TypeError(f"robot must be a dqlab Robot, got {type(robot).__name__}")
+    check_instance(robot, Robot, "robot")
     corners = [np.eye(4)]
     lefts = []
     for link in robot.links:
@@ -177,6 +185,7 @@ def default_masses(robot):
     >>> default_masses(desk_arm()).round(3)
     array([0.768, 1.076, 1.148])
     """
+    check_instance(robot, Robot, "robot")
     if _is_ur3(robot):
         return np.array(UR3_LINK_MASSES)
     placements, X_BnT, corners = link_placements(robot)
@@ -213,7 +222,7 @@ def mjcf_from_robot(robot, *, masses=None, payload=0.0, radius=None, damping=0.1
         Joint viscous damping (N m s/rad) and armature, the reflected rotor inertia that
         MuJoCo adds to the diagonal of the mass matrix (kg m^2).
     timestep : float, optional
-        Simulation step in seconds.
+        Simulation step in seconds, written exactly.
     integrator : {"implicitfast", "implicit", "RK4", "Euler"}, optional
         ``implicitfast`` (default) treats damping implicitly, the choice for stiff joints.
     gravity : float, optional
@@ -234,8 +243,12 @@ def mjcf_from_robot(robot, *, masses=None, payload=0.0, radius=None, damping=0.1
     TypeError
         If ``robot`` is not a :class:`~dqlab.robot.Robot`.
     ValueError
-        If a mass, radius, damping, armature or time step is negative, not finite or of the
-        wrong length, or the integrator is unknown.
+        If a mass, radius, damping, armature or time step is negative, not finite, of the
+        wrong length or outside its range (a link mass below :data:`MIN_MASS`, a radius
+        outside [:data:`MIN_RADIUS`, :data:`MAX_RADIUS`], a time step outside
+        [:data:`MIN_TIMESTEP`, :data:`MAX_TIMESTEP`]: MuJoCo refuses bodies too light for
+        it, and a step it would write as 0 or take as the whole motion simulates nothing),
+        ``name`` is not text, or the integrator is unknown.
 
     See Also
     --------
@@ -260,26 +273,27 @@ def mjcf_from_robot(robot, *, masses=None, payload=0.0, radius=None, damping=0.1
     is_ur3 = _is_ur3(robot)
     if radius is None:
         radius = min(max(0.05 * total_length, 0.01), 0.05)
-    radius = number(radius, "radius")
+    radius = check_scalar(radius, "radius", minimum=MIN_RADIUS, maximum=MAX_RADIUS)
     masses = default_masses(robot) if masses is None else masses
-    masses = per_joint(masses, n, "masses", positive=True)
+    masses = per_joint(masses, n, "masses", positive=True, minimum=MIN_MASS)
     damping = per_joint(damping, n, "damping", positive=False)
     armature = per_joint(armature, n, "armature", positive=False)
-    payload = number(payload, "payload", strict=False)
-    timestep = number(timestep, "timestep")
-    gravity = number(gravity, "gravity", strict=False)
+    payload = check_scalar(payload, "payload", minimum=0)
+    timestep = check_scalar(timestep, "timestep", minimum=MIN_TIMESTEP, maximum=MAX_TIMESTEP)
+    gravity = check_scalar(gravity, "gravity", minimum=0)
     if base_mass is None:
         base_mass = UR3_BASE_MASS if is_ur3 else 1.0
-    base_mass = number(base_mass, "base_mass")
-    if integrator not in ("implicitfast", "implicit", "RK4", "Euler"):
+    base_mass = check_scalar(base_mass, "base_mass", minimum=0, strict=True)
+    if not isinstance(integrator, str) or integrator not in (
+            "implicitfast", "implicit", "RK4", "Euler"):
         raise ValueError("integrator must be 'implicitfast', 'implicit', 'RK4' or 'Euler', "
                          f"got {integrator!r}")
-    model_name = quoteattr(name if name is not None else (robot.name or "robot"))
+    model_name = quoteattr(model_name_of(robot, name))
 
     lines = [
         f"<mujoco model={model_name}>",
         '  <compiler angle="radian" autolimits="true"/>',
-        f'  <option timestep="{xml_number(timestep)}" integrator="{integrator}" '
+        f'  <option timestep="{timestep!r}" integrator="{integrator}" '
         f'gravity="0 0 {xml_number(-gravity)}"/>',
         "  <default>",
         '    <geom contype="0" conaffinity="0"/>',
@@ -323,6 +337,15 @@ def mjcf_from_robot(robot, *, masses=None, payload=0.0, radius=None, damping=0.1
         lines.append(f'    <motor name="motor{i + 1}" joint="joint{i + 1}" gear="1"/>')
     lines += ["  </actuator>", "</mujoco>", ""]
     return "\n".join(lines)
+
+
+def model_name_of(robot, name):
+    """The name a generated model takes: ``name`` (text), else the robot's."""
+    if name is None:
+        return robot.name or "robot"
+    if not isinstance(name, str):
+        raise ValueError(f"name must be text (the model's name), got {name!r}")
+    return name
 
 
 def _housing_and_path(indent, name, mass, radius, path, color):
