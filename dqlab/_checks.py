@@ -1,6 +1,8 @@
 """Input validation shared by every module: shapes, finiteness, clear ``ValueError`` s."""
 
 import math
+import os
+from pathlib import Path
 
 import numpy as np
 
@@ -70,13 +72,7 @@ def check_tolerance(value, name):
     ...
     ValueError: tol must be a number >= 0, got nan
     """
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number >= 0, got {value!r}") from None
-    if not v >= 0.0:
-        raise ValueError(f"{name} must be a number >= 0, got {value!r}")
-    return v
+    return check_scalar(value, name, minimum=0, finite=False)
 
 
 def check_scalar(value, name, *, minimum=None, maximum=None, strict=False, finite=True,
@@ -168,6 +164,19 @@ def check_instance(value, kind, name):
         got = "None" if value is None else f"a {type(value).__name__}"
         raise TypeError(f"{name} must be a {names}, got {got}")
     return value
+
+
+def check_path(path, name="path"):
+    """``path`` as a :class:`pathlib.Path`, or ``TypeError`` naming ``name`` unless it is
+    text or an ``os.PathLike`` (an int would be taken for an open file descriptor).
+
+    >>> check_path("poses.csv").name
+    'poses.csv'
+    """
+    if not isinstance(path, (str, os.PathLike)):
+        got = "None" if path is None else f"a {type(path).__name__}"
+        raise TypeError(f"{name} must be a file path (text or os.PathLike), got {got}")
+    return Path(path)
 
 
 def as_float_array(x, name, trailing=None):

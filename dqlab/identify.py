@@ -172,11 +172,10 @@ class Identification:
         return float(self.estimate[self._index(name)])
 
     def _index(self, name):
-        try:
-            return self.names.index(name)
-        except ValueError:
-            raise ValueError(f"no parameter named {name!r}; parameters: "
-                             f"{', '.join(self.names)}") from None
+        if not isinstance(name, str) or name not in self.names:
+            raise ValueError(f"name must be one of the parameters {', '.join(self.names)}; "
+                             f"got {name!r}")
+        return self.names.index(name)
 
     def combinations(self):
         """The identifiable combinations with their estimates and standard errors.
@@ -214,8 +213,18 @@ class Identification:
         m                      0.98       0.0424
         rank 2 of 2, condition number 3.01, residual sigma 0.0949
         """
-        per_name = scale if isinstance(scale, dict) else dict.fromkeys(self.names, scale)
-        sigma_scale = 1.0 if isinstance(scale, dict) else scale
+        if isinstance(scale, dict):
+            unknown = [k for k in scale if k not in self.names]
+            if unknown:
+                raise ValueError(f"scale names unknown parameters {unknown}; parameters are "
+                                 f"{', '.join(self.names)}")
+            per_name = {k: check_scalar(v, f"scale[{k!r}]") for k, v in scale.items()}
+            sigma_scale = 1.0
+        else:
+            sigma_scale = check_scalar(scale, "scale")
+            per_name = dict.fromkeys(self.names, sigma_scale)
+        if not isinstance(unit, str):
+            raise ValueError(f"unit must be text, got {unit!r}")
         se = self.standard_errors
         lines = [f"{'parameter':12s} {'estimate':>14s} {'std error':>12s}  {unit}".rstrip()]
         for k, name in enumerate(self.names):
@@ -237,10 +246,12 @@ class Identification:
 
 def _norm(v, axis=None):
     """Euclidean norm(s) of ``v`` without overflow or underflow: each vector is divided by
-    its largest entry first."""
+    its largest entry first (infinite if an entry is)."""
     big = np.max(np.abs(v), axis=axis, keepdims=True, initial=0.0)
-    safe = np.where(big > 0.0, big, 1.0)
-    out = np.linalg.norm(v / safe, axis=axis, keepdims=True) * big
+    safe = np.where((big > 0.0) & (big < np.inf), big, 1.0)
+    with np.errstate(over="ignore"):
+        out = np.linalg.norm(v / safe, axis=axis, keepdims=True) * np.minimum(big, safe)
+    out = np.where(big == np.inf, np.inf, out)
     return out.reshape(np.shape(out)[:0] if axis is None else np.delete(np.shape(out), axis))
 
 
@@ -804,6 +815,16 @@ def identification_jacobian(robot, q, *, measure="position"):
     return np.swapaxes(J.reshape(lead + (4 * robot.n, J.shape[-1])), -1, -2)
 
 
+def _levenberg_marquardt_step(H, g, lam):
+    r"""The scaled step :math:`\delta` of
+    :math:`(H + \lambda \operatorname{diag} H)\,\delta = g` (least squares if singular)."""
+    A = H + lam * np.diag(np.diag(H))
+    try:
+        return np.linalg.solve(A, g)
+    except np.linalg.LinAlgError:
+        return np.linalg.lstsq(A, g, rcond=None)[0]
+
+
 def _residuals(robot, q, measured, measure, rotation_scale):
     X = robot.fk(q)
     dp = measured[..., :3, 3] - X[..., :3, 3] if measure == "pose" else measured - X[..., :3, 3]
@@ -919,7 +940,7 @@ def calibrate(robot, q, measured, *, measure="position", fixed=(), rotation_scal
         measured = check_transform(measured, tol=1e-6, name="measured")
     rotation_scale = check_scalar(rotation_scale, "rotation_scale", minimum=0, strict=True)
     rank_tol, max_condition = _check_rank_tol(rank_tol, max_condition)
-    tol = check_tolerance(tol, "tol")
+    tol = check_scalar(tol, "tol", minimum=0)     # finite: inf would stop at the first step
     max_iter = check_scalar(max_iter, "max_iter", minimum=1, integer=True)
     if fixed is None:
         fixed = ()
@@ -944,29 +965,38 @@ def calibrate(robot, q, measured, *, measure="position", fixed=(), rotation_scal
 
     current = robot
     r = _residuals(current, q, measured, measure, rotation_scale)
-    cost = 0.5 * r @ r
+    cost = _norm(r)                    # the cost is 0.5 cost**2; the norm does not overflow
+    if not math.isfinite(cost):
+        raise ValueError("measured: the residuals overflow (the measurements are too large "
+                         "for the model)")
     lam = 1e-3
     converged = False
     iterations = 0
     while iterations < max_iter:
         iterations += 1
         Jk = _stacked_jacobian(current, q, measure, rotation_scale)[:, kept]
-        D = np.linalg.norm(Jk, axis=0)
+        D = _norm(Jk, axis=0)
         D = np.where(D > 0.0, D, 1.0)
         Js = Jk / D                                  # unit columns: a well-scaled system
         g = Js.T @ r
         H = Js.T @ Js
         while True:
-            step_s = np.linalg.solve(H + lam * np.diag(np.diag(H)), g)
+            step_s = _levenberg_marquardt_step(H, g, lam)
             trial_x = x.copy()
-            trial_x[kept] += step_s / D
-            trial = robot_from_dh_parameters(robot, trial_x)
-            r_trial = _residuals(trial, q, measured, measure, rotation_scale)
-            cost_trial = 0.5 * r_trial @ r_trial
+            with np.errstate(over="ignore"):
+                trial_x[kept] += step_s / D
+            cost_trial, trial, r_trial = math.inf, None, None
+            if np.isfinite(trial_x).all():
+                trial = robot_from_dh_parameters(robot, trial_x)
+                with np.errstate(over="ignore", invalid="ignore"):
+                    r_trial = _residuals(trial, q, measured, measure, rotation_scale)
+                if np.isfinite(r_trial).all():
+                    cost_trial = _norm(r_trial)
             if cost_trial <= cost or lam > 1e12:
                 break
             lam *= 10.0
-        small_step = np.linalg.norm(step_s) <= tol * (1.0 + np.linalg.norm(x[kept] * D))
+        with np.errstate(over="ignore"):
+            small_step = _norm(step_s) <= tol * (1.0 + _norm(x[kept] * D))
         if cost_trial <= cost:
             x, current, r, cost = trial_x, trial, r_trial, cost_trial
             lam = max(lam / 10.0, 1e-12)

@@ -30,6 +30,7 @@ from . import ik
 from ._checks import as_float_array, check_instance, check_scalar, check_tolerance
 from .robot import Robot
 from .trajectory import Trajectory, joint_trajectory
+from .trajectory.time_laws import MAX_SAMPLES
 from .transforms import check_transform
 
 __all__ = ["PickPlaceTask", "PickPlacePlan", "task_from_lab", "joint_targets",
@@ -63,16 +64,14 @@ class PickPlaceTask:
         if p.ndim != 2 or len(p) == 0:
             raise ValueError(f"positions must have shape (K, 3) with K >= 1, got {p.shape}")
         k = len(p)
-        s = np.asarray(self.suction)
-        if s.shape != (k,):
-            raise ValueError(f"suction must have shape ({k},), got {s.shape}")
-        if s.dtype != bool:
-            s_num = as_float_array(s, "suction")
-            if not np.all((s_num == 0) | (s_num == 1)):
-                bad = int(np.flatnonzero((s_num != 0) & (s_num != 1))[0])
-                raise ValueError(f"suction must be 0 (off) or 1 (on); step {bad} has "
-                                 f"{float(s_num[bad]):g}")
-            s = s_num == 1
+        s_num = as_float_array(self.suction, "suction")
+        if s_num.shape != (k,):
+            raise ValueError(f"suction must have shape ({k},), got {s_num.shape}")
+        if not np.all((s_num == 0) | (s_num == 1)):
+            bad = int(np.flatnonzero((s_num != 0) & (s_num != 1))[0])
+            raise ValueError(f"suction must be 0 (off) or 1 (on); step {bad} has "
+                             f"{float(s_num[bad]):g}")
+        s = s_num == 1
         w = as_float_array(self.wrist, "wrist")
         if w.shape != (k,):
             raise ValueError(f"wrist must have shape ({k},), got {w.shape}")
@@ -114,8 +113,11 @@ def task_from_lab(rows):
     rows = as_float_array(rows, "rows", (5,))
     if rows.ndim != 2:
         raise ValueError(f"rows must have shape (K, 5), got shape {rows.shape}")
-    return PickPlaceTask(positions=rows[:, :3] / 1000.0, suction=rows[:, 3],
-                         wrist=np.radians(rows[:, 4]))
+    try:
+        return PickPlaceTask(positions=rows[:, :3] / 1000.0, suction=rows[:, 3],
+                             wrist=np.radians(rows[:, 4]))
+    except ValueError as exc:
+        raise ValueError(f"rows: {exc}") from None
 
 
 def _check_wrist_limits(wrist_limits):
@@ -185,7 +187,7 @@ def joint_targets(robot, task, *, branch=0, wrist_limits=(-math.pi, math.pi), to
     check_instance(task, PickPlaceTask, "task")
     branch = _check_branch(branch)
     lo, hi = _check_wrist_limits(wrist_limits)
-    tol = check_tolerance(tol, "tol")
+    tol = check_scalar(tol, "tol", minimum=0)     # finite: inf would accept any solution
     result = ik.desk_arm(robot, task.positions, tol=tol)
     targets = np.empty((len(task), 4))
     previous = None
@@ -193,7 +195,8 @@ def joint_targets(robot, task, *, branch=0, wrist_limits=(-math.pi, math.pi), to
         where = "(" + ", ".join(f"{v:.4g}" for v in task.positions[k] * 1000) + ") mm"
         if not result.success[k]:
             reason = str(result.reason[k]).removeprefix("unreachable: ")
-            raise ValueError(f"step {k}: {where} is unreachable: {reason}")
+            raise ValueError(f"step {k}: {where} is unreachable: {reason} (position "
+                             f"tolerance tol = {tol:g} m)")
         if branch == "closest":
             rows = np.flatnonzero(result.valid[k])
             if previous is None:
@@ -211,7 +214,7 @@ def joint_targets(robot, task, *, branch=0, wrist_limits=(-math.pi, math.pi), to
         w = task.wrist[k]
         if not lo <= w <= hi:
             raise ValueError(f"step {k}: wrist angle {math.degrees(w):.6g} deg is outside "
-                             f"the wrist limits [{math.degrees(lo):.6g}, "
+                             f"wrist_limits [{math.degrees(lo):.6g}, "
                              f"{math.degrees(hi):.6g}] deg")
         targets[k, :3] = result.solutions[k, row]
         targets[k, 3] = w
@@ -415,6 +418,9 @@ def plan_pick_place(robot, task, *, object_pose=None, branch=0,
             state = bool(task.suction[k])
             hold = max(dwell, dt)
             count = max(1, math.ceil(hold / dt - 1e-9))
+            if count > MAX_SAMPLES:
+                raise ValueError(f"dwell / dt = {dwell:g} s / {dt:g} s: {count:.3g} samples is "
+                                 f"too large (at most {MAX_SAMPLES:.0e})")
             ts.append(now + np.linspace(hold / count, hold, count))
             qs.append(np.repeat(targets[k:k + 1], count, axis=0))
             qds.append(np.zeros((count, 4)))
@@ -422,8 +428,12 @@ def plan_pick_place(robot, task, *, object_pose=None, branch=0,
             steps.append(np.full(count, k))
             states.append(np.full(count, state))
             now += hold
-    trajectory = Trajectory(t=np.concatenate(ts), q=np.concatenate(qs),
-                            qd=np.concatenate(qds), qdd=np.concatenate(qdds))
+    t = np.concatenate(ts)
+    if not np.all(np.diff(t) > 0.0):
+        raise ValueError(f"dt = {dt:g} s and dwell = {dwell:g} s are too large for the motion: "
+                         f"its instants can no longer be told apart in floating point")
+    trajectory = Trajectory(t=t, q=np.concatenate(qs), qd=np.concatenate(qds),
+                            qdd=np.concatenate(qdds))
     t, q = trajectory.t, trajectory.q
     step = np.concatenate(steps)
     suction = np.concatenate(states)

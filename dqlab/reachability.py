@@ -19,12 +19,11 @@ the grid with dask; chapter 11 plots a map of :math:`10^7` samples made that way
 import zipfile
 import zlib
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._checks import as_float_array, check_instance, check_scalar
+from ._checks import as_float_array, check_instance, check_path, check_scalar
 from .ik import ur
 from .jacobian import manipulability
 from .quaternion import check_unit_quaternion, matrix_from_quaternion
@@ -95,7 +94,14 @@ def pose_dexterity(robot: Robot, poses: ArrayLike, **options
     (array([8, 8]), array([16.03,  0.  ]))
     """
     check_instance(robot, Robot, "robot")
-    result = ur(robot, poses, **options)
+    check_ik_options(robot, options)
+    try:
+        # a pose far beyond reach (1e150 m) overflows inside the solver, which then reports
+        # no valid branch: the right count, 0
+        with np.errstate(over="ignore", invalid="ignore"):
+            result = ur(robot, poses, **options)
+    except (ValueError, TypeError) as exc:     # the solver calls its argument "target"
+        raise type(exc)(f"poses: {exc}") from None
     w = np.zeros(result.valid.shape)
     if result.valid.any():
         w[result.valid] = manipulability(robot.jacobian(result.solutions[result.valid]))
@@ -221,7 +227,7 @@ class ReachabilityMap:
     def __post_init__(self):
         self.positions = as_float_array(self.positions, "positions", (3,))
         lead = self.positions.shape[:-1]
-        self.orientations = check_unit_quaternion(self.orientations, name="orientations")
+        self.orientations = _unit_quaternions(self.orientations)
         if self.orientations.ndim != 2 or len(self.orientations) == 0:
             raise ValueError(f"orientations must have shape (K, 4) with K >= 1, got shape "
                              f"{self.orientations.shape}")
@@ -231,14 +237,17 @@ class ReachabilityMap:
         if np.any(self.branches < self.reachable):
             raise ValueError("branches must be >= reachable at every position (each reachable "
                              "orientation has at least one branch)")
-        median = np.asarray(self.median_manipulability)
+        try:
+            median = np.asarray(self.median_manipulability)
+        except ValueError:
+            median = np.asarray(None)
         if median.dtype.kind not in "iuf":
-            raise ValueError(f"median_manipulability must hold real numbers, got dtype "
-                             f"{median.dtype}")
+            raise ValueError(f"median_manipulability must be an array of real numbers, got "
+                             f"{self.median_manipulability!r}"[:200])
         median = median.astype(float)
         if median.shape != lead:
-            raise ValueError(f"median_manipulability must have shape {lead}, got shape "
-                             f"{median.shape}")
+            raise ValueError(f"median_manipulability must have shape {lead}, that of "
+                             f"positions[..., 0], got shape {median.shape}")
         reached = self.reachable > 0
         good = np.isfinite(median) & (median >= 0)
         if np.any(np.isnan(median) == reached) or not np.all(good[reached]):
@@ -278,6 +287,9 @@ class ReachabilityMap:
         >>> back.reachable, back.metadata["command"]
         (array([8, 0]), 'an example')
         """
+        path = check_path(path)
+        if path.is_dir():
+            raise ValueError(f"path {path} is a directory: give the file to write")
         meta = {**self.metadata, **metadata}
         arrays = {name: getattr(self, name) for name in self._ARRAYS}
         for key, value in meta.items():
@@ -300,7 +312,7 @@ class ReachabilityMap:
         FileNotFoundError
             If there is no such file.
         """
-        path = Path(path)
+        path = check_path(path)
         try:
             with np.load(path, allow_pickle=False) as data:
                 if not isinstance(data, np.lib.npyio.NpzFile):
@@ -336,21 +348,32 @@ def _why(exc):
 
 def _counts(value, name, shape, bound):
     """Integer counts of shape ``shape`` between 0 and ``bound``."""
-    a = np.asarray(value)
+    try:
+        a = np.asarray(value)
+    except ValueError:
+        a = np.asarray(None)
     if a.dtype.kind not in "iu":
-        raise ValueError(f"{name} must hold integers, got dtype {a.dtype}")
+        raise ValueError(f"{name} must be an array of integers, got {value!r}"[:200])
     if a.shape != shape:
-        raise ValueError(f"{name} must have shape {shape}, got shape {a.shape}")
+        raise ValueError(f"{name} must have shape {shape}, that of positions[..., 0], got "
+                         f"shape {a.shape}")
     if a.size and (a.min() < 0 or a.max() > bound):
         raise ValueError(f"{name} must be between 0 and {bound}, got values from {a.min()} "
                          f"to {a.max()}")
     return a.astype(np.int64)
 
 
+def _unit_quaternions(orientations):
+    """``orientations`` checked as unit quaternions (huge ones overflow in the norm: they
+    are refused as not finite, without a warning)."""
+    with np.errstate(over="ignore"):
+        return check_unit_quaternion(orientations, name="orientations")
+
+
 def _check_grid(positions, orientations):
     """``positions`` (..., 3) and ``orientations`` (K, 4), checked."""
     positions = as_float_array(positions, "positions", (3,))
-    orientations = check_unit_quaternion(orientations, name="orientations")
+    orientations = _unit_quaternions(orientations)
     if orientations.ndim != 2 or len(orientations) == 0:
         raise ValueError(f"orientations must have shape (K, 4) with K >= 1, got shape "
                          f"{orientations.shape}")

@@ -196,7 +196,10 @@ class IKArrays:
 
 
 def _ik_block(robot, options, dtype, poses):
-    result = ur(robot, poses, **options)
+    try:
+        result = ur(robot, poses, **options)
+    except (ValueError, TypeError) as exc:     # the solver calls its argument "target"
+        raise type(exc)(f"poses: {exc}") from None
     out = np.empty(result.valid.shape[:-1], dtype=dtype)
     for name in ("solutions", "valid", "position_error", "rotation_error"):
         out[name] = getattr(result, name)

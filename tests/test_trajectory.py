@@ -432,7 +432,7 @@ def test_circle_in_other_planes(plane, axes):
     (lambda: circle_three_phase([0, 0, 0], 0.1, 0.0), "speed"),
     (lambda: circle_three_phase([0, 0, 0], 0.1, 0.05, dt=0), "dt"),
     (lambda: circle_three_phase([0, 0, 0], 0.1, 0.05, plane="xx"), "plane"),
-    (lambda: circle_three_phase([0, 0, 0], 0.1, 0.05, orientation=np.eye(2)), "rotation"),
+    (lambda: circle_three_phase([0, 0, 0], 0.1, 0.05, orientation=np.eye(2)), "orientation"),
     (lambda: line_slerp(np.eye(4), np.eye(4)), "duration"),
     (lambda: line_slerp(np.eye(4), np.eye(4), law=quintic(1.0, 2.0)), "from 0 to 1"),
     (lambda: screw_path(np.eye(4), 2 * np.eye(4), duration=1.0), "X_B"),

@@ -28,6 +28,8 @@ and returns a :class:`TrackingResult` of arrays.
 """
 
 import math
+from collections import deque
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -133,7 +135,7 @@ class ArmSimulation:
         self._lo, self._hi = robot.limits.T
         self._failures = {int(getattr(mujoco.mjtWarning, key)): what
                           for key, what in _FAILURES.items()}
-        self._mujoco_messages = []
+        self._mujoco_messages = deque(maxlen=16)
         mujoco.mj_forward(self.model, self.data)
 
     # -- state -----------------------------------------------------------------------------
@@ -177,7 +179,8 @@ class ArmSimulation:
         self.data.qpos[:] = q
         self.data.qvel[:] = qd
         self.data.time = time
-        self._mj.mj_forward(self.model, self.data)
+        with self._mujoco_warnings_kept():
+            self._mj.mj_forward(self.model, self.data)
 
     def check_target(self, q, name="q"):
         """``q`` as a float array of shape (n,), or a ValueError naming ``name``: wrong
@@ -232,7 +235,8 @@ class ArmSimulation:
         self.model.body_inertia[self._payload_body] = 0.4 * mass * self._payload_radius ** 2
         # recompute the model's derived constants on the scratch data (mj_setConst moves the
         # data it is given to the reference configuration)
-        self._mj.mj_setConst(self.model, self._scratch)
+        with self._mujoco_warnings_kept():
+            self._mj.mj_setConst(self.model, self._scratch)
 
     # -- dynamics ----------------------------------------------------------------------------
     def step(self, torque, steps=1):
@@ -258,21 +262,26 @@ class ArmSimulation:
                              f"ignores controls beyond {MAX_CONTROL:g}")
         steps = check_scalar(steps, "steps", minimum=0, integer=True)
         self.data.ctrl[:] = torque
-        mj = self._mj
         counts = self.data.warning.number            # MuJoCo's warning counters (a view)
         before = counts.tolist()
-        # MuJoCo's own message is kept for the error below instead of being printed and
-        # written to MUJOCO_LOG.TXT in the working directory
-        handler = mj.get_mju_user_warning()
-        mj.set_mju_user_warning(self._mujoco_messages.append)
-        try:
+        with self._mujoco_warnings_kept():
             for _ in range(steps):
                 start = self.data.time
-                mj.mj_step(self.model, self.data)
+                self._mj.mj_step(self.model, self.data)
                 after = counts.tolist()
                 if after != before:
                     self._raise_if_failed(before, after, start)
                     before = after
+
+    @contextmanager
+    def _mujoco_warnings_kept(self):
+        """MuJoCo's warnings kept (the last few, for the errors of :meth:`step`) instead of
+        printed and appended to ``MUJOCO_LOG.TXT`` in the working directory."""
+        mj = self._mj
+        handler = mj.get_mju_user_warning()
+        mj.set_mju_user_warning(self._mujoco_messages.append)
+        try:
+            yield
         finally:
             mj.set_mju_user_warning(handler)
 
@@ -318,7 +327,8 @@ class ArmSimulation:
         scratch.qpos[:] = vector(q, self.n, "q")
         scratch.qvel[:] = vector(qd, self.n, "qd")
         scratch.qacc[:] = vector(qdd, self.n, "qdd")
-        self._mj.mj_inverse(self.model, scratch)
+        with self._mujoco_warnings_kept():
+            self._mj.mj_inverse(self.model, scratch)
         tau = scratch.qfrc_inverse.copy()
         total = sum(tau.tolist())
         if not total - total == 0.0 and not np.isfinite(tau).all():
@@ -334,7 +344,8 @@ class ArmSimulation:
         """:math:`M(q)`, shape (n, n), armature included."""
         scratch = self._scratch
         scratch.qpos[:] = vector(q, self.n, "q")
-        self._mj.mj_fwdPosition(self.model, scratch)
+        with self._mujoco_warnings_kept():
+            self._mj.mj_fwdPosition(self.model, scratch)
         M = np.empty((self.n, self.n))
         try:
             self._mj.mj_fullM(self.model, scratch, M)             # MuJoCo 4
@@ -585,7 +596,8 @@ def sample_reference(t, q, qd, qdd, times, *, velocity_lag=0.0):
     q, qd, qdd = (as_float_array(x, name) for x, name in ((q, "q"), (qd, "qd"), (qdd, "qdd")))
     for x, name in ((q, "q"), (qd, "qd"), (qdd, "qdd")):
         if x.ndim != 2 or x.shape[0] != t.size:
-            raise ValueError(f"{name} must have shape ({t.size}, n), got shape {x.shape}")
+            raise ValueError(f"{name} must have shape ({t.size}, n), one row per sample of t, "
+                             f"got shape {x.shape}")
         if x.shape != q.shape:
             raise ValueError(f"{name} must have the shape of q, {q.shape}, got {x.shape}")
     times = as_float_array(times, "times")
@@ -706,14 +718,33 @@ def track(sim, trajectory, controller, *, start_from_trajectory=True, payload=No
     q_out = np.empty((steps + 1, n))
     qd_out = np.empty((steps + 1, n))
     tau_out = np.empty((steps + 1, n))
-    data = sim.data
+    saved_payload = sim.payload
+    carried = None
     if masses is not None:
-        saved_payload = sim.payload
         sample = np.clip(np.searchsorted(t, times - sim.time + t[0] + 1e-12, side="right") - 1,
                          0, t.size - 1)
         carried = masses[sample]
+    try:
+        _run(sim, controller, times, q_ref, qd_ref, qdd_ref, carried, q_out, qd_out, tau_out)
+    finally:
+        if carried is not None:
+            sim.payload = saved_payload            # restored after a failed run too
+    # (after mj_step, MuJoCo's site positions still belong to the state before the step:
+    # both are recomputed from the joints)
+    tcp, tcp_desired = sim.flange_positions(q_out), sim.flange_positions(q_ref)
+    return TrackingResult(t=times, q=q_out, qd=qd_out, torque=tau_out, q_desired=q_ref,
+                          qd_desired=qd_ref, tcp=tcp, tcp_desired=tcp_desired,
+                          flange_error=np.linalg.norm(tcp - tcp_desired, axis=-1),
+                          controller=getattr(controller, "name", type(controller).__name__))
+
+
+def _run(sim, controller, times, q_ref, qd_ref, qdd_ref, carried, q_out, qd_out, tau_out):
+    """The loop of :func:`track`: state, torque and step at every instant of ``times``
+    (``carried``: the payload at each, or None), written into the ``*_out`` arrays."""
+    data = sim.data
+    steps = len(times) - 1
     for k in range(steps + 1):
-        if masses is not None and (k == 0 or carried[k] != carried[k - 1]):
+        if carried is not None and (k == 0 or carried[k] != carried[k - 1]):
             sim.payload = carried[k]
         q_out[k] = data.qpos
         qd_out[k] = data.qvel
@@ -727,12 +758,3 @@ def track(sim, trajectory, controller, *, start_from_trajectory=True, payload=No
                 f"{MAX_CONTROL:g} (gains too high, or the arm far from the reference)")
         if k < steps:
             sim.step(tau)
-    if masses is not None:
-        sim.payload = saved_payload
-    # (after mj_step, MuJoCo's site positions still belong to the state before the step:
-    # both are recomputed from the joints)
-    tcp, tcp_desired = sim.flange_positions(q_out), sim.flange_positions(q_ref)
-    return TrackingResult(t=times, q=q_out, qd=qd_out, torque=tau_out, q_desired=q_ref,
-                          qd_desired=qd_ref, tcp=tcp, tcp_desired=tcp_desired,
-                          flange_error=np.linalg.norm(tcp - tcp_desired, axis=-1),
-                          controller=getattr(controller, "name", type(controller).__name__))

@@ -24,12 +24,14 @@ from ..dualquat import (
 )
 from ..quaternion import (
     axis_angle_from_quaternion,
+    check_unit_quaternion,
     matrix_from_quaternion,
     quaternion_conjugate,
     quaternion_from_matrix,
     quaternion_product,
     slerp,
 )
+from ..rotations import check_rotation_matrix
 from ..transforms import check_transform
 from . import time_laws
 
@@ -82,10 +84,13 @@ class CartesianPath:
         for name, shape in shapes.items():
             value = getattr(self, name)
             if value is None:
+                if name in ("position", "velocity", "acceleration"):
+                    raise ValueError(f"{name} is required: an array of shape {shape}")
                 continue
             a = as_float_array(value, name)
             if a.shape != shape:
-                raise ValueError(f"{name} must have shape {shape}, got {a.shape}")
+                raise ValueError(f"{name} must have shape {shape} (one row per instant of "
+                                 f"t), got {a.shape}")
             object.__setattr__(self, name, a)
         if self.orientation is not None and self.angular_velocity is None:
             raise ValueError("an orientation needs its angular_velocity (zeros if fixed)")
@@ -129,20 +134,26 @@ class CartesianPath:
         -------
         CartesianPath
         """
-        q = _orientation(rotation)
+        q = _orientation(rotation, "rotation")
         return replace(self, orientation=np.broadcast_to(q, (len(self), 4)).copy(),
                        angular_velocity=np.zeros((len(self), 3)))
 
 
-def _orientation(rotation):
-    r = as_float_array(rotation, "rotation")
+def _orientation(rotation, name):
+    r = as_float_array(rotation, name)
     if r.shape == (3, 3):
-        return quaternion_from_matrix(r)
+        return quaternion_from_matrix(check_rotation_matrix(r, name=name))
     if r.shape == (4,):
-        if abs(np.linalg.norm(r) - 1.0) > 1e-9:
-            raise ValueError(f"rotation quaternion must be unit, norm {np.linalg.norm(r):.6g}")
-        return r
-    raise ValueError(f"rotation must be a (3, 3) matrix or a (4,) quaternion, got {r.shape}")
+        return check_unit_quaternion(r, name=name)
+    raise ValueError(f"{name} must be a (3, 3) matrix or a (4,) quaternion, got shape "
+                     f"{r.shape}")
+
+
+def _one_transform(X, name):
+    X = check_transform(X, name=name)
+    if X.shape != (4, 4):
+        raise ValueError(f"{name} must be one (4, 4) transform, got shape {X.shape}")
+    return X
 
 
 def _normalised_law(law, duration):
@@ -192,8 +203,8 @@ def line_slerp(X_A, X_B, *, duration=None, law=None, dt=0.005):
     >>> path.position[:, 0], path.angular_velocity[1].round(6)
     (array([0.  , 0.15, 0.3 ]), array([0.      , 0.      , 2.945243]))
     """
-    X_A = check_transform(X_A, name="X_A")
-    X_B = check_transform(X_B, name="X_B")
+    X_A = _one_transform(X_A, "X_A")
+    X_B = _one_transform(X_B, "X_B")
     law = _normalised_law(law, duration)
     t, s, sd, sdd = law.sample(check_scalar(dt, "dt", minimum=0, strict=True))
     p_A, p_B = X_A[:3, 3], X_B[:3, 3]
@@ -250,8 +261,8 @@ def screw_path(X_A, X_B, *, duration=None, law=None, dt=0.005):
     >>> screw_path(X_A, X_B, duration=1.0, dt=0.5).position[1].round(6)
     array([0.212132, 0.212132, 0.      ])
     """
-    X_A = check_transform(X_A, name="X_A")
-    X_B = check_transform(X_B, name="X_B")
+    X_A = _one_transform(X_A, "X_A")
+    X_B = _one_transform(X_B, "X_B")
     law = _normalised_law(law, duration)
     t, s, sd, sdd = law.sample(check_scalar(dt, "dt", minimum=0, strict=True))
     Q_A, Q_B = dual_quaternion_from_transform(X_A), dual_quaternion_from_transform(X_B)
@@ -347,5 +358,7 @@ def circle_three_phase(center, radius, speed, dt=0.005, plane="xz", *,
     path = CartesianPath(t=t, position=position, velocity=velocity, acceleration=acceleration,
                          s=s, sd=sd, sdd=sdd, law=law)
     if orientation is not None:
-        path = path.with_orientation(orientation)
+        q = _orientation(orientation, "orientation")
+        path = replace(path, orientation=np.broadcast_to(q, (len(path), 4)).copy(),
+                       angular_velocity=np.zeros((len(path), 3)))
     return path

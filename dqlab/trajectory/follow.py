@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._checks import as_float_array, check_instance, check_scalar, check_tolerance
+from .._checks import as_float_array, check_instance, check_scalar
 from ..ik import SOLUTION_ORDER, IKResult, numerical, ur
 from ..robot import Robot
 from ..rotations import wrap_angle
@@ -79,12 +79,17 @@ def joint_velocities(J, twist, *, damping=0.0):
     Js, xs = J / k, x[..., None] / k
     with np.errstate(over="ignore", under="ignore"):
         lam_s = lam / k
+        # lambda far above every singular value (|J_s| <= 1): q_dot = J^T x / lambda^2
+        huge = lam_s > 1e100
         Jt = np.swapaxes(Js, -1, -2)
-        A = Js @ Jt + lam_s ** 2 * np.eye(J.shape[-2])
+        A = Js @ Jt + np.where(huge, 1.0, lam_s) ** 2 * np.eye(J.shape[-2])
         try:
             q_dot = (Jt @ np.linalg.solve(A, xs))[..., 0]
         except np.linalg.LinAlgError:             # exactly rank deficient: J^+ by SVD
             q_dot = (np.linalg.pinv(Js) @ xs)[..., 0]
+        if huge.any():
+            q_dot = np.where(huge[..., 0], (Jt @ xs)[..., 0] / lam_s[..., 0] / lam_s[..., 0],
+                             q_dot)
     if not np.isfinite(q_dot).all():
         raise ValueError("the joint velocities overflow: the twist is too large for J "
                          "(or J too close to singular without damping)")
@@ -236,6 +241,12 @@ def _row_index(branch):
 
 def _check_path(path):
     check_instance(path, CartesianPath, "path")
+
+
+def _acceptance_tolerance(tol):
+    """``tol`` of a solver that accepts a solution within it: a number >= 0 and finite (with
+    an infinite tolerance any joint vector would pass for a solution)."""
+    return check_scalar(tol, "tol", minimum=0)
 
 
 def track_branches(result, *, q_start=None, branch=None, max_step=0.1, t=None):
@@ -418,7 +429,7 @@ def follow_path_ur(robot, path, *, q_start=None, branch=None, max_step=0.1, damp
     """
     check_instance(robot, Robot, "robot")
     _check_path(path)
-    tol = check_tolerance(tol, "tol")
+    tol = _acceptance_tolerance(tol)
     poses = path.poses
     N = len(path)
     res = ur(robot, poses, tol=tol)
@@ -428,7 +439,7 @@ def follow_path_ur(robot, path, *, q_start=None, branch=None, max_step=0.1, damp
                          f"{np.round(path.position[i], 6).tolist()}) has no IK solution: "
                          f"{res.reason[i]}")
     if q_start is not None:
-        q_start = robot.check_joints(q_start)
+        q_start = robot.check_joints(q_start, name="q_start")
     q, rows, switches = track_branches(res, q_start=q_start, branch=branch,
                                        max_step=max_step, t=path.t)
     lo, hi = robot.limits.T
@@ -498,10 +509,12 @@ def follow_path_numerical(robot, path, q_start, *, damping=0.0, tol=1e-10, max_i
     """
     check_instance(robot, Robot, "robot")
     _check_path(path)
-    q_prev = robot.check_joints(q_start)
+    q_prev = robot.check_joints(q_start, name="q_start")
     if q_prev.shape != (robot.n,):
         raise ValueError(f"q_start must have shape ({robot.n},), got shape {q_prev.shape}")
     damping = check_scalar(damping, "damping", minimum=0)
+    tol = _acceptance_tolerance(tol)
+    max_iter = check_scalar(max_iter, "max_iter", minimum=1, integer=True)
     N = len(path)
     q = np.empty((N, robot.n))
     error = np.empty(N)
@@ -509,8 +522,9 @@ def follow_path_numerical(robot, path, q_start, *, damping=0.0, tol=1e-10, max_i
         res = numerical(robot, path.position[k], q_prev, position_only=True, tol=tol,
                         max_iter=max_iter)
         if not res.valid[0]:
-            raise ValueError(f"path point {k} (t = {path.t[k]:.4g} s) not reached from the "
-                             f"previous point: {res.reason}")
+            start = "q_start" if k == 0 else "the previous point"
+            raise ValueError(f"path point {k} (t = {path.t[k]:.4g} s) not reached from {start} "
+                             f"with tol = {tol:g} m and max_iter = {max_iter}: {res.reason}")
         q_prev = q[k] = res.solutions[0]
         error[k] = res.position_error[0]
     J_v = robot.jacobian(q)[:, :3, :]

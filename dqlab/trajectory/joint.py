@@ -9,11 +9,10 @@ Chapter 10 of the book derives them.
 
 import math
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-from .._checks import as_float_array, check_scalar
+from .._checks import as_float_array, check_path, check_scalar
 from . import time_laws
 
 __all__ = ["Trajectory", "joint_trajectory", "via_points"]
@@ -71,7 +70,8 @@ class Trajectory:
                              f"t[{i - 1}] = {t[i - 1]:.9g}")
         q = as_float_array(self.q, "q")
         if q.ndim != 2 or q.shape[0] != t.size or q.shape[1] == 0:
-            raise ValueError(f"q must have shape (N, n) = ({t.size}, n), got shape {q.shape}")
+            raise ValueError(f"q must have shape (N, n) = ({t.size}, n), one row per instant of "
+                             f"t, got shape {q.shape}")
         fields = {"t": t, "q": q}
         for name in ("qd", "qdd"):
             a = as_float_array(getattr(self, name), name)
@@ -81,8 +81,8 @@ class Trajectory:
         if self.poses is not None:
             fields["poses"] = as_float_array(self.poses, "poses", (4, 4))
             if fields["poses"].shape != (t.size, 4, 4):
-                raise ValueError(f"poses must have shape ({t.size}, 4, 4), got "
-                                 f"{fields['poses'].shape}")
+                raise ValueError(f"poses must have shape ({t.size}, 4, 4), one pose per instant "
+                                 f"of t, got {fields['poses'].shape}")
         for name, a in fields.items():
             a = np.array(a, dtype=float)
             a.flags.writeable = False
@@ -131,6 +131,7 @@ class Trajectory:
         >>> bool(np.array_equal(back.q, traj.q))
         True
         """
+        path = check_path(path)
         blocks = [self.t[:, None], self.q, self.qd, self.qdd]
         if self.poses is not None:
             from ..quaternion import quaternion_from_matrix
@@ -166,7 +167,7 @@ class Trajectory:
         ...
         ValueError: .../bad.csv, line 3: expected 4 values, got 3 (truncated or corrupt row)
         """
-        path = Path(path)
+        path = check_path(path)
         raw = path.read_bytes()
         lines = []
         for number, line in enumerate(raw.split(b"\n"), start=1):
@@ -428,7 +429,7 @@ def via_points(q_points, times, *, dt=0.005, method="spline"):
         raise ValueError(f"method must be 'spline' or 'stop', got {method!r}")
     dt = check_scalar(dt, "dt", minimum=0, strict=True)
     h = np.diff(tk)
-    with np.errstate(over="ignore", invalid="ignore"):
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         t, q, qd, qdd = _via_point_samples(Q, tk, h, dt, method)
     if not (np.isfinite(qd).all() and np.isfinite(qdd).all()):
         raise ValueError(f"times: via-points {h.min():g} s apart are too close for the motion "

@@ -324,9 +324,7 @@ def _three_segments(t_acc, t_cruise, t_dec, v, name, sign=1.0, culprit="the limi
     so that the speed and acceleration at its start are exactly those of the phase.
     ``culprit`` names the argument blamed when a phase is too short to be represented.
     """
-    with np.errstate(over="ignore"):
-        a, d = v / t_acc, v / t_dec
-    if not all(math.isfinite(x) for x in (v, t_acc, t_cruise, t_dec, a, d)):
+    if not all(math.isfinite(x) for x in (v, t_acc, t_cruise, t_dec)):
         raise ValueError(f"the time law overflows: speed {v:g}, phases of {t_acc:g}, "
                          f"{t_cruise:g} and {t_dec:g} s")
     breaks = np.concatenate([[0.0], np.cumsum([t_acc, t_cruise, t_dec])])
@@ -334,7 +332,13 @@ def _three_segments(t_acc, t_cruise, t_dec, v, name, sign=1.0, culprit="the limi
     if not (keep[0] and keep[-1]):
         raise ValueError(
             f"{culprit}: an acceleration phase of {min(t_acc, t_dec):g} s is too short to be "
-            f"represented in a motion of {breaks[-1]:g} s")
+            f"represented in a motion of {breaks[-1]:g} s (their ratio is too large for "
+            f"floating point)")
+    with np.errstate(over="ignore"):
+        a, d = v / t_acc, v / t_dec
+    if not (math.isfinite(a) and math.isfinite(d)):
+        raise ValueError(f"the time law's acceleration overflows: speed {v:g} reached in "
+                         f"{min(t_acc, t_dec):g} s")
     breaks = np.concatenate([[0.0], breaks[1:][keep]])
     h = np.diff(breaks)
     phases = [(0.0, a)] + ([(v, 0.0)] if keep[1] else []) + [(v, -d)]
