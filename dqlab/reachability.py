@@ -314,9 +314,10 @@ class ReachabilityMap:
         """
         path = check_path(path)
         try:
-            with np.load(path, allow_pickle=False) as data:
-                if not isinstance(data, np.lib.npyio.NpzFile):
-                    raise ValueError("a single array, not an .npz archive of a map")
+            data = np.load(path, allow_pickle=False)
+            if not isinstance(data, np.lib.npyio.NpzFile):
+                raise ValueError("a single array, not an .npz archive of a map")
+            with data:
                 missing = [name for name in cls._ARRAYS if name not in data.files]
                 if missing:
                     raise ValueError(f"no array {', '.join(missing)} (not a reachability map)")
@@ -324,8 +325,6 @@ class ReachabilityMap:
                 meta = {key[5:]: data[key] for key in data.files if key.startswith("meta_")}
         except FileNotFoundError:
             raise
-        except AttributeError:
-            raise ValueError(f"{path}: a single array, not an .npz archive of a map") from None
         except (ValueError, OSError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
             raise ValueError(f"{path}: not a reachability map written by "
                              f"ReachabilityMap.save: {_why(exc)}") from None

@@ -198,3 +198,27 @@ def test_animation_records_the_arm_the_cup_and_the_object(arm, plan):
     assert len(light.html(bundle="none")) < len(scene.html(bundle="none"))
     with pytest.raises(ValueError, match="stride must be"):
         viz.animate_pick_place(viz.Scene(), arm, plan, stride=0)
+
+
+@pytest.mark.parametrize("branch", [1.0, True, "1", None, 4, -1])
+def test_a_branch_that_is_not_a_row_number_is_refused(arm, branch):
+    with pytest.raises(ValueError, match="^branch must be 0, 1, 2, 3 or 'closest'"):
+        pp.joint_targets(arm, pp.task_from_lab(LAB_ROWS), branch=branch)
+
+
+def test_functions_that_take_a_robot_refuse_none(plan):
+    task = pp.task_from_lab(LAB_ROWS)
+    for call in (lambda: pp.joint_targets(None, task), lambda: pp.cup_poses(None, plan.targets),
+                 lambda: pp.plan_pick_place(None, task)):
+        with pytest.raises(TypeError, match="^robot must be a Robot, got None"):
+            call()
+
+
+def test_instants_that_cannot_be_told_apart_are_refused(arm):
+    with pytest.raises(ValueError, match="dt = 1e.199 s and dwell = 0.3 s are too large"):
+        pp.plan_pick_place(arm, pp.task_from_lab(LAB_ROWS), dt=1e199)
+
+
+def test_a_tolerance_of_infinity_would_accept_any_target_and_is_refused(arm):
+    with pytest.raises(ValueError, match="^tol must be a finite number >= 0, got inf"):
+        pp.joint_targets(arm, pp.task_from_lab(LAB_ROWS), tol=np.inf)

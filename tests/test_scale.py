@@ -259,6 +259,61 @@ def test_reachability_map_save_and_load(tmp_path):
         rmap.save(tmp_path / "bad.npz", robot=ROBOT)
 
 
+def _saved_arrays(rmap, **changes):
+    arrays = {name: getattr(rmap, name) for name in ("positions", "orientations", "reachable",
+                                                     "branches", "median_manipulability")}
+    arrays.update(changes)
+    return arrays
+
+
+@pytest.mark.parametrize("change, match", [
+    ({"reachable": np.zeros(3, dtype=int)}, "reachable must have shape"),
+    ({"branches": np.array([7.5, 0.0])}, "branches must be an array of integers"),
+    ("negative", "reachable must be between 0 and 4"),
+    ("more reachable than branches", "branches must be >= reachable"),
+    ({"orientations": np.ones((4, 4))}, "orientations must be a unit quaternion"),
+    ({"median_manipulability": np.zeros(2)}, "median_manipulability must be NaN exactly"),
+    ({"positions": np.full((2, 3), np.nan)}, "positions contains NaN"),
+])
+def test_a_map_of_inconsistent_arrays_is_refused_by_load_naming_the_file(tmp_path, change,
+                                                                        match):
+    rmap = reachability_statistics(ROBOT, [[0.0, -0.35, 0.25], [0.9, 0.0, 0.2]],
+                                   super_fibonacci_quaternions(4))
+    if change == "negative":
+        change = {"reachable": np.array([-1, 0])}
+    elif change == "more reachable than branches":
+        change = {"branches": np.array([3, 0])}
+    np.savez(tmp_path / "bad.npz", **_saved_arrays(rmap, **change))
+    with pytest.raises(ValueError, match=f"bad.npz: {match}"):
+        ReachabilityMap.load(tmp_path / "bad.npz")
+
+
+def test_a_file_that_is_not_a_map_is_refused_naming_it(tmp_path):
+    rmap = reachability_statistics(ROBOT, [[0.0, -0.35, 0.25]], super_fibonacci_quaternions(4))
+    rmap.save(tmp_path / "good.npz")
+    data = (tmp_path / "good.npz").read_bytes()
+    files = {"noise.npz": np.random.default_rng(0).bytes(300), "cut.npz": data[:len(data) // 2],
+             "empty.npz": b""}
+    for name, content in files.items():
+        (tmp_path / name).write_bytes(content)
+    np.save(tmp_path / "array.npy", np.zeros(3))
+    objects = np.array([{}], dtype=object)
+    np.savez(tmp_path / "objects.npz", **_saved_arrays(rmap, reachable=objects))
+    np.savez(tmp_path / "missing.npz", positions=rmap.positions)
+    for name, match in [("noise.npz", "not a reachability map"),
+                        ("cut.npz", "not a reachability map"),
+                        ("empty.npz", "not a reachability map"),
+                        ("array.npy", "a single array"),
+                        ("objects.npz", "stored as Python objects"),
+                        ("missing.npz", "no array orientations")]:
+        with pytest.raises(ValueError, match=f"{name}.*{match}"):
+            ReachabilityMap.load(tmp_path / name)
+    with pytest.raises(FileNotFoundError):
+        ReachabilityMap.load(tmp_path / "absent.npz")
+    with pytest.raises(ValueError, match="is a directory"):
+        rmap.save(tmp_path)
+
+
 def test_super_fibonacci_quaternions_cover_the_rotations_evenly():
     q = super_fibonacci_quaternions(2000)
     assert np.allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-15)

@@ -135,8 +135,8 @@ class TimeLaw:
             raise ValueError("breaks must start at 0 and increase strictly")
         h = np.diff(breaks)
         for order, what in ((1, "speed"), (2, "acceleration"), (3, "jerk")):
-            bound = np.abs(_derivative(coefficients, order)).sum(axis=-1)
             with np.errstate(over="ignore"):
+                bound = np.abs(_derivative(coefficients, order)).sum(axis=-1)
                 for _ in range(order):
                     bound = bound / h
             if not np.all(np.isfinite(bound)):
@@ -250,7 +250,8 @@ def _derivative(coefficients, order):
 def _polynomial_law(duration, distance, unit_coefficients, name):
     T = check_scalar(duration, "duration", minimum=0, strict=True)
     D = check_scalar(distance, "distance")
-    coefficients = np.asarray(unit_coefficients, dtype=float) * D
+    with np.errstate(over="ignore"):
+        coefficients = np.asarray(unit_coefficients, dtype=float) * D
     if not np.isfinite(coefficients).all():
         raise ValueError(f"distance = {D:g} is too large: the law's coefficients overflow")
     return TimeLaw(np.array([0.0, T]), coefficients[None], name)
@@ -455,11 +456,12 @@ def trapezoidal(distance=1.0, *, v_max=None, a_max=None, duration=None, accel_fr
         culprit = f"accel_fraction = {f:g}"
     t_a = min(t_a, T / 2)
     cruise_time = max(T - 2 * t_a, 0.0)
-    if cruise_time < 1e-12 * T:
-        cruise_time = 0.0
+    if cruise_time < 1e-12 * T:                   # triangular: stop in what is left
+        cruise_time, t_dec = 0.0, T - t_a
+    else:                                         # symmetric (T - t_a - cruise would cancel)
+        t_dec = t_a
     v_peak = D / (T - t_a)
-    return _three_segments(t_a, cruise_time, T - t_a - cruise_time, v_peak, "trapezoidal",
-                           sign, culprit)
+    return _three_segments(t_a, cruise_time, t_dec, v_peak, "trapezoidal", sign, culprit)
 
 
 def three_phase(distance, speed, fractions=(0.25, 0.25, 0.5)):
