@@ -130,6 +130,8 @@ def check_ik_options(robot, options, kind=(4, 4)):
         Of the probe pose (the robot at its zero configuration).
     """
     check_instance(robot, Robot, "robot")
+    if kind not in ((4, 4), (8,)):
+        raise ValueError(f"kind must be (4, 4) or (8,), the form of the poses, got {kind!r}")
     q_ref = options.get("q_ref")
     if q_ref is not None and np.shape(q_ref) != (6,):
         raise ValueError(f"q_ref must be one joint vector of shape (6,) here (the same "

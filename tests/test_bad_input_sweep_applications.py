@@ -28,6 +28,7 @@ from dqlab import pick_place as pp
 from dqlab.models import desk_arm, ur3
 from dqlab.reachability import (
     ReachabilityMap,
+    check_ik_options,
     pose_dexterity,
     reachability_statistics,
     super_fibonacci_quaternions,
@@ -253,6 +254,8 @@ case(M, "ReachabilityMap", ReachabilityMap, positions=A(RMAP.positions),
      orientations=A(RMAP.orientations), reachable=A(RMAP.reachable),
      branches=A(RMAP.branches), median_manipulability=A(RMAP.median_manipulability))
 case(M, "ReachabilityMap.save", lambda path: RMAP.save(path), path=P("map.npz"))
+case(M, "check_ik_options", lambda **kw: check_ik_options(options={"tol": 1e-9}, **kw),
+     robot=O(UR3), kind=O((4, 4)))
 case(M, "ReachabilityMap.load", ReachabilityMap.load, path=P("map.npz"))
 
 
@@ -416,6 +419,23 @@ case(M, "track(controller)", lambda controller: _track(controller=controller),
 case(M, "ComputedTorque", _track, kp=A([400.0] * 6), kd=S(40.0))
 case(M, "JointPD", lambda **kw: _track(controller="PD", **kw), kp=S(300.0), kd=A([20.0] * 6))
 case(M, "TrackingResult.frames", _frames, fps=S(25.0))
+
+
+def _torque(controller):
+    def call(**kw):
+        from dqlab.sim import ComputedTorque, JointPD
+        law = ComputedTorque() if controller == "computed torque" else JointPD(
+            kp=300.0, kd=20.0, gravity_compensation=True)
+        sim = kw.pop("sim", None) or _sim()
+        if sim is _sim():
+            sim.reset(Q6)
+        return law.torque(sim, **kw)
+    return call
+
+
+for controller in ("computed torque", "PD"):
+    case(M, f"{controller}.torque", _torque(controller), sim=O(None, none_ok=True),
+         q_d=A(Q6 + 0.01), qd_d=A(np.full(6, 0.1)), qdd_d=A(np.full(6, -0.2)))
 case(M, "check_trajectory", _check_trajectory, trajectory=O(TRAJ), robot=O(UR3))
 case(M, "sample_reference", _sample_reference, t=A(TRAJ.t), q=A(TRAJ.q), qd=A(TRAJ.qd),
      qdd=A(TRAJ.qdd), times=Any([0.01, 0.1, 0.15]), velocity_lag=S(0.001))
@@ -517,6 +537,9 @@ def test_bad_argument_is_refused_by_name_or_gives_a_correct_result(name, label, 
         OUTCOMES[module, "clear error" if named else "other"] += 1
         assert named, f"the error does not name {label!r}: {type(exc).__name__}: {message}"
         return
+    except Exception:                               # a crash: counted, then shown
+        OUTCOMES[module, "other"] += 1
+        raise
     finite = _numbers_finite(result)
     correct = ((kind == "empty" and _is_empty(result))
                or (kind in ("huge", "tiny") and finite)

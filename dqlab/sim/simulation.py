@@ -366,6 +366,12 @@ class _Gains:
             object.__setattr__(self, "_checked_gains", checked)
         return checked[1], checked[2]
 
+    def _reference(self, sim, q_d, qd_d, qdd_d):
+        """The arguments of ``torque``, checked: a simulation and three (n,) vectors."""
+        check_instance(sim, ArmSimulation, "sim")
+        n = sim.n
+        return vector(q_d, n, "q_d"), vector(qd_d, n, "qd_d"), vector(qdd_d, n, "qdd_d")
+
 
 @dataclass(frozen=True)
 class JointPD(_Gains):
@@ -403,6 +409,7 @@ class JointPD(_Gains):
 
     def torque(self, sim, q_d, qd_d, qdd_d):
         """Motor torques for the reference ``(q_d, qd_d, qdd_d)``, shape (n,)."""
+        q_d, qd_d, qdd_d = self._reference(sim, q_d, qd_d, qdd_d)
         kp, kd = self._gains(sim.n)
         q = sim.data.qpos
         tau = kp * (q_d - q) + kd * (qd_d - sim.data.qvel)
@@ -443,6 +450,7 @@ class ComputedTorque(_Gains):
 
     def torque(self, sim, q_d, qd_d, qdd_d):
         """Motor torques for the reference ``(q_d, qd_d, qdd_d)``, shape (n,)."""
+        q_d, qd_d, qdd_d = self._reference(sim, q_d, qd_d, qdd_d)
         kp, kd = self._gains(sim.n)
         q, qd = sim.data.qpos, sim.data.qvel
         qdd_cmd = qdd_d + kd * (qd_d - qd) + kp * (q_d - q)
