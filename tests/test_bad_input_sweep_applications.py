@@ -177,6 +177,8 @@ case(M, "CartesianPath", CartesianPath, t=A(PATH.t), position=A(PATH.position),
 case(M, "CartesianPath.with_orientation", PATH.with_orientation, rotation=A(rot_x(0.4)))
 case(M, "line_slerp", line_slerp, X_A=A(X_A), X_B=A(X_B), duration=S(0.5), dt=S(0.1))
 case(M, "line_slerp(law)", line_slerp, X_A=A(X_A), X_B=A(X_B), law=O(LAW), dt=S(0.1))
+case(M, "line_slerp(speed)", line_slerp, X_A=A(X_A), X_B=A(X_B), speed=S(0.2),
+     acceleration=S(1.0), dt=S(0.1))
 case(M, "screw_path", screw_path, X_A=A(X_A), X_B=A(X_B), duration=S(0.5), dt=S(0.1))
 case(M, "circle_three_phase", circle_three_phase, center=A([0.0, -0.35, 0.25]),
      radius=S(0.1), speed=S(0.5), dt=S(0.1), plane=O("xz"), fractions=A([0.25, 0.25, 0.5]),

@@ -808,3 +808,30 @@ def test_a_csv_file_that_is_not_utf8_is_refused_naming_the_file_and_line(tmp_pat
         Trajectory.load_csv(path)
     with pytest.raises(TypeError, match="^path must be a file path"):
         Trajectory.load_csv(None)
+
+
+@settings(max_examples=30, deadline=None)
+@given(L=st.floats(0.01, 1.0), V=st.floats(0.01, 1.0), A=st.floats(0.05, 5.0))
+def test_a_line_run_at_a_tool_speed_stays_within_it(L, V, A):
+    X_A = transform_from(rot_x(0.3), [0.1, -0.2, 0.3])
+    X_B = transform_from(rot_x(0.3) @ rot_z(0.5), X_A[:3, 3] + L * np.array([0.6, 0.0, 0.8]))
+    path = line_slerp(X_A, X_B, speed=V, acceleration=A, dt=0.002)
+    t = np.linspace(0.0, path.law.duration, 4001)
+    s, sd, sdd = path.law(t)
+    assert np.max(np.abs(sd)) * L <= V * (1 + 1e-9)
+    assert np.max(np.abs(sdd)) * L <= A * (1 + 1e-9)
+    T = L / V + V / A if L > V * V / A else 2 * np.sqrt(L / A)      # the shortest motion
+    assert path.law.duration == pytest.approx(T, rel=1e-12)
+    assert np.allclose(path.position[-1], X_B[:3, 3], atol=1e-15)
+
+
+def test_a_line_takes_one_timing():
+    X_B = transform_from(np.eye(3), [0.3, 0.0, 0.0])
+    for kwargs in ({"duration": 1.0, "law": quintic(1.0)}, {"duration": 1.0, "speed": 0.1,
+                                                             "acceleration": 1.0},
+                   {"speed": 0.1}):
+        with pytest.raises(ValueError, match="give"):
+            line_slerp(np.eye(4), X_B, **kwargs)
+    with pytest.raises(ValueError, match="^speed: the line has length 0"):
+        line_slerp(np.eye(4), transform_from(rot_z(1.0), [0.0, 0.0, 0.0]), speed=0.1,
+                   acceleration=1.0)

@@ -161,6 +161,8 @@ def _normalised_law(law, duration):
         if duration is None:
             raise ValueError("give a duration or a normalised time law")
         return time_laws.quintic(check_scalar(duration, "duration", minimum=0, strict=True))
+    if duration is not None:
+        raise ValueError("give a duration or a law, not both (the law has its duration)")
     if not isinstance(law, time_laws.TimeLaw):
         raise TypeError(f"law must be a TimeLaw, got {type(law).__name__}")
     if abs(law.distance - 1.0) > 1e-12:
@@ -168,7 +170,8 @@ def _normalised_law(law, duration):
     return law
 
 
-def line_slerp(X_A, X_B, *, duration=None, law=None, dt=0.005):
+def line_slerp(X_A, X_B, *, duration=None, law=None, speed=None, acceleration=None,
+               dt=0.005):
     r"""Straight line for the tool point, SLERP for its orientation.
 
     With :math:`s(t)` from 0 to 1 and :math:`q_B q_A^* = (\cos\frac\theta2,
@@ -179,20 +182,35 @@ def line_slerp(X_A, X_B, *, duration=None, law=None, dt=0.005):
         p = p_A + s\,(p_B - p_A),\qquad q = (q_B q_A^*)^s\, q_A,\qquad
         \dot p = \dot s\,(p_B - p_A),\qquad \omega = \dot s\,\theta\,\mathbf u .
 
+    The timing is given one of three ways: a ``duration`` (a quintic law), a normalised
+    ``law``, or the tool's ``speed`` and ``acceleration`` along the line (metres per second
+    and per second squared): the shortest trapezoidal law within both,
+    :func:`~dqlab.trajectory.time_laws.trapezoidal` with :math:`v_{max} = V / L` and
+    :math:`a_{max} = A / L` for the length :math:`L = \lVert p_B - p_A\rVert`, so that
+    :math:`\lVert\dot p\rVert \le V` and :math:`\lVert\ddot p\rVert \le A`.
+
     Parameters
     ----------
     X_A, X_B : array_like, shape (4, 4)
         Start and end poses :math:`X_{WT}`.
     duration : float, optional
-        Duration in seconds of a quintic law (used when ``law`` is None).
+        Duration in seconds of a quintic law.
     law : TimeLaw, optional
         A normalised law (``distance`` 1).
+    speed, acceleration : float, optional
+        Largest tool speed (m/s) and acceleration (m/s^2) along the line, given together.
     dt : float
         Sampling period in seconds.
 
     Returns
     -------
     CartesianPath
+
+    Raises
+    ------
+    ValueError
+        If the poses are not rigid transforms, more or less than one timing is given, or a
+        speed is given for a line of zero length (a turn on the spot: give a duration).
 
     Examples
     --------
@@ -202,9 +220,18 @@ def line_slerp(X_A, X_B, *, duration=None, law=None, dt=0.005):
     ...                   duration=1.0, dt=0.5)
     >>> path.position[:, 0], path.angular_velocity[1].round(6)
     (array([0.  , 0.15, 0.3 ]), array([0.      , 0.      , 2.945243]))
+    >>> path = line_slerp(np.eye(4), transform_from(np.eye(3), [0.3, 0, 0]), speed=0.25,
+    ...                   acceleration=0.5, dt=0.01)
+    >>> round(path.law.duration, 6), round(float(path.speed.max()), 6)     # 0.3/0.25 + 0.5
+    (1.7, 0.25)
     """
     X_A = _one_transform(X_A, "X_A")
     X_B = _one_transform(X_B, "X_B")
+    if speed is not None or acceleration is not None:
+        if law is not None or duration is not None:
+            raise ValueError("give a duration, a law, or a speed and an acceleration: one "
+                             "timing, not several")
+        law = _line_law(X_A, X_B, speed, acceleration)
     law = _normalised_law(law, duration)
     t, s, sd, sdd = law.sample(check_scalar(dt, "dt", minimum=0, strict=True))
     p_A, p_B = X_A[:3, 3], X_B[:3, 3]
@@ -216,6 +243,19 @@ def line_slerp(X_A, X_B, *, duration=None, law=None, dt=0.005):
         t=t, position=p_A + s[:, None] * (p_B - p_A), velocity=sd[:, None] * (p_B - p_A),
         acceleration=sdd[:, None] * (p_B - p_A), orientation=slerp(q_A, q_B, s),
         angular_velocity=(sd * angle)[:, None] * axis, s=s, sd=sd, sdd=sdd, law=law)
+
+
+def _line_law(X_A, X_B, speed, acceleration):
+    """The normalised trapezoid of a line of length L run within ``speed`` (m/s) and
+    ``acceleration`` (m/s^2)."""
+    if speed is None or acceleration is None:
+        raise ValueError("give the speed and the acceleration together")
+    V = check_scalar(speed, "speed", minimum=0, strict=True)
+    A = check_scalar(acceleration, "acceleration", minimum=0, strict=True)
+    L = float(np.linalg.norm(X_B[:3, 3] - X_A[:3, 3]))
+    if L == 0.0:
+        raise ValueError("speed: the line has length 0 (a turn on the spot): give a duration")
+    return time_laws.trapezoidal(1.0, v_max=V / L, a_max=A / L)
 
 
 def screw_path(X_A, X_B, *, duration=None, law=None, dt=0.005):
