@@ -3,7 +3,7 @@ r"""A pick-and-place task for the desktop arm, driven by its closed-form inverse
 The lab report drives its arm with a list of rows ``[x, y, z, suction, q3]``: go to the
 point, then switch the suction cup on (1) or off (0); ``q3`` turns the cup about the
 vertical. This module turns such a list into a timed joint trajectory that a robot may be
-sent, in three steps (chapter 12):
+sent, in two steps (chapter 12):
 
 1. :func:`joint_targets` -- every point to a joint target by
    :func:`dqlab.ik.desk_arm_closed_form.desk_arm`,
@@ -12,8 +12,9 @@ sent, in three steps (chapter 12):
 2. :func:`plan_pick_place` -- rest-to-rest segments between consecutive targets with the
    quintic time law of :func:`dqlab.trajectory.joint.joint_trajectory` (chapter 10), a dwell
    where the cup switches, and the object carried by the cup
-   while the suction is on; the result is checked once more (finite, within limits);
-and :func:`dqlab.viz.pick_place.animate_pick_place` plays a plan in a 3D scene.
+   while the suction is on; the result is checked once more (finite, within limits).
+
+:func:`dqlab.viz.pick_place.animate_pick_place` plays a plan in a 3D scene.
 
 A target is four numbers: the chain angles :math:`(\theta_1, \theta_2, \theta_3)` of
 :func:`dqlab.models.desk_arm` and the wrist (cup) angle. The cup hangs vertically below the
