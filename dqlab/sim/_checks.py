@@ -5,6 +5,8 @@ import numpy as np
 
 from .._checks import check_scalar, real_array
 
+_FLOAT64 = np.dtype(np.float64)
+
 
 def number(value, name, *, minimum=0.0, strict=True):
     """``value`` as a finite float above ``minimum`` (or equal, if not ``strict``): the call
@@ -26,7 +28,7 @@ def vector(value, n, name):
     >>> vector(2.0, 3, "kp")
     array([2., 2., 2.])
     """
-    if type(value) is np.ndarray and value.dtype == np.float64 and value.shape == (n,):
+    if type(value) is np.ndarray and value.dtype is _FLOAT64 and value.shape == (n,):
         total = sum(value.tolist())                   # a float: fast for a few joints
         if total - total == 0.0:                      # NaN or inf, or an overflow: check
             return value

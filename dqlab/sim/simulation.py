@@ -29,7 +29,6 @@ and returns a :class:`TrackingResult` of arrays.
 
 import math
 from collections import deque
-from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -133,6 +132,7 @@ class ArmSimulation:
         self._payload_body = self.model.body("payload").id
         self._payload_radius = float(self.model.geom("payload").size[0])
         self._lo, self._hi = robot.limits.T
+        self._n = robot.n
         self._failures = {int(getattr(mujoco.mjtWarning, key)): what
                           for key, what in _FAILURES.items()}
         self._mujoco_messages = deque(maxlen=16)
@@ -141,7 +141,8 @@ class ArmSimulation:
     # -- state -----------------------------------------------------------------------------
     @property
     def n(self):
-        return self.robot.n
+        """Number of joints."""
+        return self._n
 
     @property
     def timestep(self):
@@ -179,8 +180,11 @@ class ArmSimulation:
         self.data.qpos[:] = q
         self.data.qvel[:] = qd
         self.data.time = time
-        with self._mujoco_warnings_kept():
+        previous = self._keep_mujoco_warnings()
+        try:
             self._mj.mj_forward(self.model, self.data)
+        finally:
+            self._mj.set_mju_user_warning(previous)
 
     def check_target(self, q, name="q"):
         """``q`` as a float array of shape (n,), or a ValueError naming ``name``: wrong
@@ -235,8 +239,11 @@ class ArmSimulation:
         self.model.body_inertia[self._payload_body] = 0.4 * mass * self._payload_radius ** 2
         # recompute the model's derived constants on the scratch data (mj_setConst moves the
         # data it is given to the reference configuration)
-        with self._mujoco_warnings_kept():
+        previous = self._keep_mujoco_warnings()
+        try:
             self._mj.mj_setConst(self.model, self._scratch)
+        finally:
+            self._mj.set_mju_user_warning(previous)
 
     # -- dynamics ----------------------------------------------------------------------------
     def step(self, torque, steps=1):
@@ -264,7 +271,8 @@ class ArmSimulation:
         self.data.ctrl[:] = torque
         counts = self.data.warning.number            # MuJoCo's warning counters (a view)
         before = counts.tolist()
-        with self._mujoco_warnings_kept():
+        previous = self._keep_mujoco_warnings()
+        try:
             for _ in range(steps):
                 start = self.data.time
                 self._mj.mj_step(self.model, self.data)
@@ -272,18 +280,16 @@ class ArmSimulation:
                 if after != before:
                     self._raise_if_failed(before, after, start)
                     before = after
-
-    @contextmanager
-    def _mujoco_warnings_kept(self):
-        """MuJoCo's warnings kept (the last few, for the errors of :meth:`step`) instead of
-        printed and appended to ``MUJOCO_LOG.TXT`` in the working directory."""
-        mj = self._mj
-        handler = mj.get_mju_user_warning()
-        mj.set_mju_user_warning(self._mujoco_messages.append)
-        try:
-            yield
         finally:
-            mj.set_mju_user_warning(handler)
+            self._mj.set_mju_user_warning(previous)
+
+    def _keep_mujoco_warnings(self):
+        """Keep MuJoCo's warnings (the last few, for the errors of :meth:`step`) instead of
+        having them printed and appended to ``MUJOCO_LOG.TXT`` in the working directory;
+        returns the handler to put back with ``mujoco.set_mju_user_warning``."""
+        previous = self._mj.get_mju_user_warning()
+        self._mj.set_mju_user_warning(self._mujoco_messages.append)
+        return previous
 
     def _raise_if_failed(self, before, after, start):
         """SimulationError if one of MuJoCo's failure counters went up during the step that
@@ -327,8 +333,11 @@ class ArmSimulation:
         scratch.qpos[:] = vector(q, self.n, "q")
         scratch.qvel[:] = vector(qd, self.n, "qd")
         scratch.qacc[:] = vector(qdd, self.n, "qdd")
-        with self._mujoco_warnings_kept():
+        previous = self._keep_mujoco_warnings()
+        try:
             self._mj.mj_inverse(self.model, scratch)
+        finally:
+            self._mj.set_mju_user_warning(previous)
         tau = scratch.qfrc_inverse.copy()
         total = sum(tau.tolist())
         if not total - total == 0.0 and not np.isfinite(tau).all():
@@ -344,8 +353,11 @@ class ArmSimulation:
         """:math:`M(q)`, shape (n, n), armature included."""
         scratch = self._scratch
         scratch.qpos[:] = vector(q, self.n, "q")
-        with self._mujoco_warnings_kept():
+        previous = self._keep_mujoco_warnings()
+        try:
             self._mj.mj_fwdPosition(self.model, scratch)
+        finally:
+            self._mj.set_mju_user_warning(previous)
         M = np.empty((self.n, self.n))
         try:
             self._mj.mj_fullM(self.model, scratch, M)             # MuJoCo 4
