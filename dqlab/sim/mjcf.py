@@ -44,7 +44,8 @@ from ..robot import Robot
 from ._checks import per_joint
 
 __all__ = ["mjcf_from_robot", "link_placements", "default_masses", "UR3_LINK_MASSES",
-           "UR3_PAYLOAD", "UR3_BASE_MASS"]
+           "UR3_PAYLOAD", "UR3_BASE_MASS", "MIN_MASS", "MIN_RADIUS", "MAX_RADIUS",
+           "MIN_TIMESTEP", "MAX_TIMESTEP"]
 
 #: Masses of the UR3's six moving links in kg, from Universal Robots' table of dynamic
 #: parameters (the ``ur_dh`` reference). Their sum, 8.63 kg, plus the base housing and the
@@ -59,10 +60,14 @@ UR3_BASE_MASS = 11.0 - sum(UR3_LINK_MASSES)
 #: The lightest link mass accepted, kg (MuJoCo refuses a moving body whose mass or inertia
 #: is below its ``mjMINVAL``, 1e-15).
 MIN_MASS = 1e-6
-#: The range of the drawn links' radius, metres.
-MIN_RADIUS, MAX_RADIUS = 1e-3, 1.0
-#: The range of the simulation time step, seconds.
-MIN_TIMESTEP, MAX_TIMESTEP = 1e-9, 1.0
+#: The smallest radius of the drawn links, metres.
+MIN_RADIUS = 1e-3
+#: The largest radius of the drawn links, metres.
+MAX_RADIUS = 1.0
+#: The shortest simulation time step, seconds.
+MIN_TIMESTEP = 1e-9
+#: The longest simulation time step, seconds.
+MAX_TIMESTEP = 1.0
 
 _LINK_COLOR = "0.62 0.66 0.72 1"
 _HOUSING_COLOR = "0.20 0.45 0.75 1"

@@ -24,7 +24,8 @@ import numpy as np
 
 from .._checks import as_float_array, check_scalar
 
-__all__ = ["TimeLaw", "cubic", "quintic", "trapezoidal", "three_phase", "time_grid"]
+__all__ = ["TimeLaw", "cubic", "quintic", "trapezoidal", "three_phase", "time_grid",
+           "MAX_SAMPLES"]
 
 
 def time_grid(duration, dt, *, endpoint=True):
