@@ -10,11 +10,11 @@ orientations reachable, the mean branch count, the median manipulability).
 
 - Grid: x, y from -0.60 to 0.60 m and z from -0.45 to 0.75 m in steps of 0.05 m (25^3 =
   15 625 positions; it holds the board points of chapter 11's circle), times 640
-  orientations of a super-Fibonacci spiral (``dqlab.scale.super_fibonacci_quaternions``):
-  10 000 000 poses. Deterministic, nothing random. ``--quick``: steps of 0.15 m (9^3) and
-  64 orientations.
-- numpy: ``dqlab.scale.reachability_statistics``, the same computation in this process,
-  one core.
+  orientations of a super-Fibonacci spiral
+  (``dqlab.reachability.super_fibonacci_quaternions``): 10 000 000 poses. Deterministic,
+  nothing random. ``--quick``: steps of 0.15 m (9^3) and 64 orientations.
+- numpy: ``dqlab.reachability.reachability_statistics``, the same computation in this
+  process, one core.
 - dask: a ``distributed.LocalCluster`` of 1 worker, then of 2 workers (one process and one
   thread each: ``processes=True, threads_per_worker=1``), ``reachability_map(...,
   scheduler=client)``; or the cluster at ``--address``, the same call with the address.
@@ -51,11 +51,11 @@ import numpy as np  # noqa: E402
 
 import dqlab  # noqa: E402
 from dqlab.models import ur3  # noqa: E402
-from dqlab.scale import (  # noqa: E402
-    reachability_map,
+from dqlab.reachability import (  # noqa: E402
     reachability_statistics,
     super_fibonacci_quaternions,
 )
+from dqlab.scale import reachability_map  # noqa: E402
 
 
 def grid(quick):

@@ -1,6 +1,8 @@
 """Input validation shared by every module: shapes, finiteness, clear ``ValueError`` s."""
 
 import math
+import os
+from pathlib import Path
 
 import numpy as np
 
@@ -70,13 +72,111 @@ def check_tolerance(value, name):
     ...
     ValueError: tol must be a number >= 0, got nan
     """
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number >= 0, got {value!r}") from None
-    if not v >= 0.0:
-        raise ValueError(f"{name} must be a number >= 0, got {value!r}")
+    return check_scalar(value, name, minimum=0, finite=False)
+
+
+def check_scalar(value, name, *, minimum=None, maximum=None, strict=False, finite=True,
+                 integer=False):
+    """``value`` as a float (an int with ``integer``), or ``ValueError`` naming ``name``.
+
+    The one check of a scalar argument, with one exception type for every mistake: text,
+    None, a bool, a complex number, an array of more than one number, NaN, infinity (unless
+    ``finite`` is False, which lets ``+inf`` through as "no limit"), a value below
+    ``minimum`` (or equal to it, with ``strict``) or above ``maximum``, and with ``integer``
+    anything but an integer type.
+
+    Parameters
+    ----------
+    value : object
+        The argument as given.
+    name : str
+        Its name, quoted in the message.
+    minimum, maximum : float, optional
+        Bounds; ``minimum`` is excluded with ``strict``, ``maximum`` is always included.
+    strict : bool
+        Require ``value > minimum`` rather than ``>=``.
+    finite : bool
+        Refuse infinities (default); with False, ``inf`` is a valid value within the bounds.
+    integer : bool
+        Require an integer type (Python ``int`` or a numpy integer; not ``2.0``).
+
+    Returns
+    -------
+    float or int
+
+    Examples
+    --------
+    >>> check_scalar(0.5, "dt", minimum=0, strict=True)
+    0.5
+    >>> check_scalar(3, "stride", minimum=1, integer=True)
+    3
+    >>> check_scalar(float("nan"), "dt", minimum=0, strict=True)
+    Traceback (most recent call last):
+    ...
+    ValueError: dt must be a finite number > 0, got nan
+    >>> check_scalar("1 s", "duration", minimum=0, strict=True)
+    Traceback (most recent call last):
+    ...
+    ValueError: duration must be a finite number > 0, got '1 s'
+    """
+    if type(value) is float and not integer:            # the common cases, without numpy
+        v = value
+    elif type(value) is int and (integer or abs(value) < 2 ** 1000):
+        v = value if integer else float(value)
+    else:
+        if isinstance(value, (bool, np.bool_, str, bytes)) or value is None:
+            _refuse(value, name, minimum, maximum, strict, finite, integer)
+        try:
+            a = np.asarray(value)
+        except Exception:
+            a = np.asarray(None)
+        if a.ndim != 0 or a.dtype.kind not in ("iu" if integer else "iuf"):
+            _refuse(value, name, minimum, maximum, strict, finite, integer)
+        v = int(a) if integer else float(a)
+    if ((not integer and (math.isnan(v) or (finite and math.isinf(v)) or v == -math.inf))
+            or (minimum is not None and not (v > minimum if strict else v >= minimum))
+            or (maximum is not None and not v <= maximum)):
+        _refuse(value, name, minimum, maximum, strict, finite, integer)
     return v
+
+
+def _refuse(value, name, minimum, maximum, strict, finite, integer):
+    """The ``ValueError`` of :func:`check_scalar`: what ``name`` must be, and what it got."""
+    want = "an integer" if integer else ("a finite number" if finite else "a number")
+    if minimum is not None:
+        want += f" {'>' if strict else '>='} {minimum:g}"
+    if maximum is not None:
+        want += f"{' and' if minimum is not None else ''} <= {maximum:g}"
+    raise ValueError(f"{name} must be {want}, got {value!r}")
+
+
+def check_instance(value, kind, name):
+    """``value`` itself, or ``TypeError`` naming ``name`` unless it is an instance of
+    ``kind`` (a class or a tuple of classes).
+
+    >>> check_instance(None, float, "robot")
+    Traceback (most recent call last):
+    ...
+    TypeError: robot must be a float, got None
+    """
+    if not isinstance(value, kind):
+        names = " or ".join(k.__name__ for k in (kind if isinstance(kind, tuple) else (kind,)))
+        got = "None" if value is None else f"a {type(value).__name__}"
+        raise TypeError(f"{name} must be a {names}, got {got}")
+    return value
+
+
+def check_path(path, name="path"):
+    """``path`` as a :class:`pathlib.Path`, or ``TypeError`` naming ``name`` unless it is
+    text or an ``os.PathLike`` (an int would be taken for an open file descriptor).
+
+    >>> check_path("poses.csv").name
+    'poses.csv'
+    """
+    if not isinstance(path, (str, os.PathLike)):
+        got = "None" if path is None else f"a {type(path).__name__}"
+        raise TypeError(f"{name} must be a file path (text or os.PathLike), got {got}")
+    return Path(path)
 
 
 def as_float_array(x, name, trailing=None):

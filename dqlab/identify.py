@@ -30,8 +30,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._checks import as_float_array
-from .quaternion import quaternion_from_matrix
+from ._checks import (
+    as_float_array,
+    check_instance,
+    check_scalar,
+    check_tolerance,
+    components,
+    stack_components,
+)
+from ._kernels import rotation_vector_from_matrix_entries
 from .robot import Link, Robot
 from .transforms import check_transform
 
@@ -68,9 +75,15 @@ class Identification:
     estimated : ndarray of bool, shape (p,)
         Which parameters were estimated; the others were held (unidentifiable, or fixed by
         the caller).
-    unit_covariance : ndarray, shape (p, p)
-        :math:`(J^\mathsf{T} J)^{-1}` of the estimated parameters (zero rows and columns for
-        the held ones): the covariance of the estimate per unit measurement variance.
+    scaled_unit_covariance : ndarray, shape (p, p)
+        :math:`(J_s^\mathsf{T} J_s)^{-1}` of the estimated parameters in the column-scaled
+        problem :math:`J_s = J D^{-1}` (zero rows and columns for the held ones).
+    column_scales : ndarray, shape (p,)
+        :math:`D`, the column norms of the regressor (1 for a column without effect).
+        :attr:`unit_covariance` is :math:`D^{-1} (J_s^\mathsf{T} J_s)^{-1} D^{-1}`; the
+        covariance and the standard errors are computed from the scaled form, so that they
+        do not overflow or underflow when the problem is given in very large or very small
+        units.
     sigma : float
         Residual standard deviation :math:`\hat\sigma = \sqrt{\lVert r\rVert^2 / (k - r)}`.
     residuals : ndarray, shape (k,)
@@ -115,7 +128,8 @@ class Identification:
     names: tuple
     estimate: np.ndarray
     estimated: np.ndarray
-    unit_covariance: np.ndarray
+    scaled_unit_covariance: np.ndarray
+    column_scales: np.ndarray
     sigma: float
     residuals: np.ndarray
     singular_values: np.ndarray
@@ -135,25 +149,33 @@ class Identification:
         return tuple(n for n, e in zip(self.names, self.estimated, strict=True) if not e)
 
     @property
+    def unit_covariance(self):
+        r""":math:`(J^\mathsf{T} J)^{-1}` of the estimated parameters (zero rows and columns for
+        the held ones): the covariance of the estimate per unit measurement variance, shape
+        (p, p)."""
+        inverse = 1.0 / self.column_scales
+        return inverse[:, None] * self.scaled_unit_covariance * inverse[None, :]
+
+    @property
     def covariance(self):
         r""":math:`\hat\sigma^2 (J^\mathsf{T} J)^{-1}`, shape (p, p)."""
-        return self.sigma**2 * self.unit_covariance
+        w = self.sigma / self.column_scales
+        return w[:, None] * self.scaled_unit_covariance * w[None, :]
 
     @property
     def standard_errors(self):
         """Standard errors of the parameters from the residual variance (0 when held)."""
-        return np.sqrt(np.diag(self.covariance))
+        return self.sigma / self.column_scales * np.sqrt(np.diag(self.scaled_unit_covariance))
 
     def value(self, name):
         """The estimate of one parameter, by name."""
         return float(self.estimate[self._index(name)])
 
     def _index(self, name):
-        try:
-            return self.names.index(name)
-        except ValueError:
-            raise ValueError(f"no parameter named {name!r}; parameters: "
-                             f"{', '.join(self.names)}") from None
+        if not isinstance(name, str) or name not in self.names:
+            raise ValueError(f"name must be one of the parameters {', '.join(self.names)}; "
+                             f"got {name!r}")
+        return self.names.index(name)
 
     def combinations(self):
         """The identifiable combinations with their estimates and standard errors.
@@ -164,8 +186,8 @@ class Identification:
             ``(label, value, standard error)``, one per row of ``identifiable_rows``.
         """
         values = self.identifiable_rows @ self.estimate
-        var = np.einsum("ij,jk,ik->i", self.identifiable_rows, self.covariance,
-                        self.identifiable_rows)
+        w = self.identifiable_rows * (self.sigma / self.column_scales)
+        var = np.einsum("ij,jk,ik->i", w, self.scaled_unit_covariance, w)
         return [(label, float(v), float(np.sqrt(max(s, 0.0))))
                 for label, v, s in zip(self.identifiable, values, var, strict=True)]
 
@@ -191,8 +213,18 @@ class Identification:
         m                      0.98       0.0424
         rank 2 of 2, condition number 3.01, residual sigma 0.0949
         """
-        per_name = scale if isinstance(scale, dict) else dict.fromkeys(self.names, scale)
-        sigma_scale = 1.0 if isinstance(scale, dict) else scale
+        if isinstance(scale, dict):
+            unknown = [k for k in scale if k not in self.names]
+            if unknown:
+                raise ValueError(f"scale names unknown parameters {unknown}; parameters are "
+                                 f"{', '.join(self.names)}")
+            per_name = {k: check_scalar(v, f"scale[{k!r}]") for k, v in scale.items()}
+            sigma_scale = 1.0
+        else:
+            sigma_scale = check_scalar(scale, "scale")
+            per_name = dict.fromkeys(self.names, sigma_scale)
+        if not isinstance(unit, str):
+            raise ValueError(f"unit must be text, got {unit!r}")
         se = self.standard_errors
         lines = [f"{'parameter':12s} {'estimate':>14s} {'std error':>12s}  {unit}".rstrip()]
         for k, name in enumerate(self.names):
@@ -212,14 +244,28 @@ class Identification:
 # -- rank analysis shared by the linear and nonlinear problems --------------------------------
 
 
-def _column_scales(J, rank_tol=1e-8):
-    """Column norms of J and which columns are not zero.
+def _norm(v, axis=None):
+    """Euclidean norm(s) of ``v`` without overflow or underflow: each vector is divided by
+    its largest entry first (infinite if an entry is)."""
+    big = np.max(np.abs(v), axis=axis, keepdims=True, initial=0.0)
+    safe = np.where((big > 0.0) & (big < np.inf), big, 1.0)
+    with np.errstate(over="ignore"):
+        out = np.linalg.norm(v / safe, axis=axis, keepdims=True) * np.minimum(big, safe)
+    out = np.where(big == np.inf, np.inf, out)
+    return out.reshape(np.shape(out)[:0] if axis is None else np.delete(np.shape(out), axis))
 
-    A column whose norm is below ``rank_tol`` times the largest is a parameter without
-    effect (its entries are rounding errors); its scale is set to 1.
+
+def _column_scales(J, zero_tol):
+    """Column norms of J and which columns have an effect.
+
+    A column is without effect when its norm is at most ``zero_tol`` times the largest
+    (its scale is then set to 1): ``zero_tol = 0`` for a regressor given by the caller,
+    whose columns may be in any units (only a zero column has no effect); ``rank_tol`` for
+    the identification Jacobian, whose columns share the chain's units and where a
+    parameter without effect shows as rounding noise.
     """
-    norms = np.linalg.norm(J, axis=0)
-    nonzero = norms > rank_tol * max(float(norms.max(initial=0.0)), 1e-300)
+    norms = _norm(J, axis=0)
+    nonzero = norms > zero_tol * norms.max(initial=0.0)
     return np.where(nonzero, norms, 1.0), nonzero
 
 
@@ -242,7 +288,9 @@ def _select_columns(Js, nonzero, rank_tol):
 
 
 def _rref(M, tol=1e-9):
-    """Reduced row-echelon form of M (rows spanning a subspace), zero rows dropped."""
+    """Reduced row-echelon form of M (rows spanning a subspace), zero rows dropped.
+
+    ``tol`` is absolute: M must be of order 1 (see :func:`_rref_in_units`)."""
     M = np.array(M, dtype=float)
     rows, cols = M.shape
     r = 0
@@ -263,6 +311,22 @@ def _rref(M, tol=1e-9):
     return M
 
 
+def _rref_in_units(M_scaled, factor):
+    """The reduced row-echelon form of ``M_scaled * factor`` (columns multiplied by
+    ``factor``), found in the scaled space where the entries are of order 1.
+
+    If :math:`E_s` is the RREF of :math:`M_s`, then :math:`E_s F` is row-equivalent to
+    :math:`M_s F` with zeros in the pivot columns but the pivots' own rows; dividing each row
+    by its pivot's factor makes the pivots 1. So the tolerance of the elimination does not
+    depend on the units of the parameters."""
+    E = _rref(M_scaled)
+    if E.size == 0:
+        return np.zeros((0, M_scaled.shape[1]))
+    pivots = np.argmax(E != 0.0, axis=1)
+    with np.errstate(over="ignore"):
+        return E * factor[None, :] / factor[pivots][:, None]
+
+
 def _label(row, names):
     """A combination as text: ``[1, 0, -1] -> "a - c"``."""
     text = ""
@@ -278,12 +342,12 @@ def _label(row, names):
     return text
 
 
-def _rank_analysis(J, names, free, rank_tol):
+def _rank_analysis(J, names, free, rank_tol, zero_tol):
     """Singular values, kept columns, null space and named combinations of a regressor.
 
     ``free`` marks the parameters the caller lets vary; the others are fixed and do not take
-    part. Returns a dict."""
-    scales, nonzero = _column_scales(J, rank_tol)
+    part; ``zero_tol`` is that of :func:`_column_scales`. Returns a dict."""
+    scales, nonzero = _column_scales(J, zero_tol)
     Js = np.where(nonzero, J / scales, 0.0)
     Jf = Js[:, free]
     _, s, Vt = np.linalg.svd(Jf, full_matrices=True)
@@ -296,16 +360,17 @@ def _rank_analysis(J, names, free, rank_tol):
         rank = min(rank, kept.size)
         kept = kept[:rank]
     p = J.shape[1]
-    # null space and row space in parameter units (undo the column scaling)
-    null_scaled = Vt[rank:].T                                     # (f, f - rank)
-    null = np.zeros((p, null_scaled.shape[1]))
-    null[free_idx] = null_scaled / scales[free_idx, None]
-    null /= np.maximum(np.linalg.norm(null, axis=0), 1e-300)
-    row_scaled = Vt[:rank]                                        # (rank, f)
-    rows = np.zeros((rank, p))
-    rows[:, free_idx] = row_scaled * scales[free_idx]
-    identifiable_rows = _rref(rows)
-    unidentifiable_rows = _rref(null.T) if null.size else np.zeros((0, p))
+    # null space and row space, scaled (J_s n_s = 0, rows r_s of J_s), as (p,) vectors
+    null_scaled = np.zeros((p, Vt.shape[0] - rank))
+    null_scaled[free_idx] = Vt[rank:].T
+    rows_scaled = np.zeros((rank, p))
+    rows_scaled[:, free_idx] = Vt[:rank]
+    # in parameter units: n = D^-1 n_s (unit columns), r = r_s D
+    with np.errstate(under="ignore"):
+        null = null_scaled / scales[:, None]
+    null = null / np.where(_norm(null, axis=0) > 0.0, _norm(null, axis=0), 1.0)
+    identifiable_rows = _rref_in_units(rows_scaled, scales)
+    unidentifiable_rows = _rref_in_units(null_scaled.T, 1.0 / scales)
     full_s = np.zeros(p)
     full_s[: s.size] = s
     return {
@@ -324,19 +389,38 @@ def _kept_condition(J, kept, scales):
     return float(s[0] / s[-1]) if s[-1] > 0 else math.inf
 
 
-def _unit_covariance(J, kept, scales, p):
-    """(J_k^T J_k)^-1 embedded in a (p, p) matrix, by the SVD of the scaled columns."""
+def _scaled_unit_covariance(J, kept, scales, p):
+    """:math:`(J_{s,K}^T J_{s,K})^{-1}` of the kept scaled columns, embedded in (p, p)."""
     Js = J[:, kept] / scales[kept]
     _, s, Vt = np.linalg.svd(Js, full_matrices=False)
-    inner = (Vt.T / s**2) @ Vt
     cov = np.zeros((p, p))
-    cov[np.ix_(kept, kept)] = inner / np.outer(scales[kept], scales[kept])
+    cov[np.ix_(kept, kept)] = (Vt.T / s**2) @ Vt
     return cov
+
+
+def _sigma(residuals, dof):
+    r""":math:`\hat\sigma = \lVert r \rVert / \sqrt{k - r}`."""
+    return float(_norm(residuals) / math.sqrt(dof))
+
+
+def _check_rank_tol(rank_tol, max_condition):
+    rank_tol = check_tolerance(rank_tol, "rank_tol")
+    if not rank_tol < 1.0:
+        raise ValueError(f"rank_tol must be a relative threshold in [0, 1), got {rank_tol!r}")
+    return rank_tol, check_tolerance(max_condition, "max_condition")
+
+
+def _finite_result(estimate, sigma):
+    if not (np.isfinite(estimate).all() and math.isfinite(sigma)):
+        raise ValueError("the identification overflows: the measurements or the regressor "
+                         "are too large for the estimate or its residuals to be represented")
 
 
 def _check_names(names, p):
     if names is None:
         return tuple(f"x{k}" for k in range(p))
+    if isinstance(names, (str, bytes)) or not hasattr(names, "__iter__"):
+        raise ValueError(f"names must be a sequence of {p} strings, got {names!r}")
     names = tuple(str(n) for n in names)
     if len(names) != p:
         raise ValueError(f"names must have one entry per column of A ({p}), got {len(names)}")
@@ -446,26 +530,30 @@ def fit_linear(A, b, *, names=None, reference=None, rank_tol=1e-8, max_condition
     x0 = np.zeros(p) if reference is None else as_float_array(reference, "reference")
     if x0.shape != (p,):
         raise ValueError(f"reference must have shape ({p},), got shape {x0.shape}")
+    rank_tol, max_condition = _check_rank_tol(rank_tol, max_condition)
     if k == 0 or p == 0:
         raise ValueError(f"A must have at least one row and one column, got shape {A.shape}")
     _check_equations(k, p)
-    info = _rank_analysis(A, names, np.ones(p, dtype=bool), rank_tol)
+    info = _rank_analysis(A, names, np.ones(p, dtype=bool), rank_tol, zero_tol=0.0)
     kept, scales = info["kept"], info["scales"]
     _check_enough(k, kept.size, "a least-squares fit")
     estimated = np.zeros(p, dtype=bool)
     estimated[kept] = True
-    rhs = b - A[:, ~estimated] @ x0[~estimated]
-    solution, *_ = np.linalg.lstsq(A[:, kept] / scales[kept], rhs, rcond=None)
-    estimate = x0.copy()
-    estimate[kept] = solution / scales[kept]
-    residuals = b - A @ estimate
+    with np.errstate(over="ignore", invalid="ignore"):
+        rhs = b - A[:, ~estimated] @ x0[~estimated]
+        solution, *_ = np.linalg.lstsq(A[:, kept] / scales[kept], rhs, rcond=None)
+        estimate = x0.copy()
+        estimate[kept] = solution / scales[kept]
+        residuals = b - A @ estimate
     dof = k - kept.size
-    sigma = float(np.sqrt(residuals @ residuals / dof))
+    sigma = _sigma(residuals, dof)
+    _finite_result(estimate, sigma)
     cond = _kept_condition(A, kept, scales)
     _warn_condition(cond, max_condition)
     return Identification(
         names=names, estimate=estimate, estimated=estimated,
-        unit_covariance=_unit_covariance(A, kept, scales, p), sigma=sigma,
+        scaled_unit_covariance=_scaled_unit_covariance(A, kept, scales, p),
+        column_scales=scales, sigma=sigma,
         residuals=residuals, singular_values=info["singular_values"], rank=int(kept.size),
         condition_number=cond, null_space=info["null_space"],
         unidentifiable=info["unidentifiable"], identifiable_rows=info["identifiable_rows"],
@@ -594,6 +682,7 @@ def dh_parameter_names(robot):
     >>> dh_parameter_names(desk_arm())[:5]
     ('theta1', 'd1', 'a1', 'alpha1', 'theta2')
     """
+    check_instance(robot, Robot, "robot")
     return tuple(f"{kind}{i}" for i in range(1, robot.n + 1) for kind in _KINDS)
 
 
@@ -610,6 +699,7 @@ def dh_parameters(robot):
     >>> dh_parameters(ur3())[:4]
     array([0.        , 0.1519    , 0.        , 1.57079633])
     """
+    check_instance(robot, Robot, "robot")
     return np.array([[lk.theta_offset, lk.d, lk.a, lk.alpha] for lk in robot.links]).ravel()
 
 
@@ -636,6 +726,7 @@ def robot_from_dh_parameters(robot, parameters):
     >>> round(float(longer.fk([0] * 6)[2, 3] - nominal.fk([0] * 6)[2, 3]), 12)
     0.001
     """
+    check_instance(robot, Robot, "robot")
     x = as_float_array(parameters, "parameters", (4 * robot.n,))
     if x.ndim != 1:
         raise ValueError(f"parameters must have shape ({4 * robot.n},), got shape {x.shape}")
@@ -648,7 +739,7 @@ def robot_from_dh_parameters(robot, parameters):
 
 
 def _check_measure(measure):
-    if measure not in ("position", "pose"):
+    if not isinstance(measure, str) or measure not in ("position", "pose"):
         raise ValueError(f"measure must be 'position' or 'pose', got {measure!r}")
 
 
@@ -698,6 +789,7 @@ def identification_jacobian(robot, q, *, measure="position"):
     >>> J[:, 1]                                  # d1 lifts the whole arm
     array([0., 0., 1.])
     """
+    check_instance(robot, Robot, "robot")
     _check_measure(measure)
     q = robot.check_joints(q)
     frames = robot.fk(q, all_frames=True)                   # (..., n + 1, 4, 4), last = TCP
@@ -723,15 +815,14 @@ def identification_jacobian(robot, q, *, measure="position"):
     return np.swapaxes(J.reshape(lead + (4 * robot.n, J.shape[-1])), -1, -2)
 
 
-def _rotation_vector(R):
-    """Rotation vectors of rotation matrices (..., 3, 3) -> (..., 3), by the quaternion."""
-    r = quaternion_from_matrix(R)                # w >= 0
-    v = r[..., 1:]
-    s = np.linalg.norm(v, axis=-1)
-    w = r[..., 0]
-    factor = np.where(s > 1e-12, 2.0 * np.arctan2(s, w) / np.where(s > 1e-12, s, 1.0),
-                      2.0 / np.maximum(w, 1e-300))
-    return v * factor[..., None]
+def _levenberg_marquardt_step(H, g, lam):
+    r"""The scaled step :math:`\delta` of
+    :math:`(H + \lambda \operatorname{diag} H)\,\delta = g` (least squares if singular)."""
+    A = H + lam * np.diag(np.diag(H))
+    try:
+        return np.linalg.solve(A, g)
+    except np.linalg.LinAlgError:
+        return np.linalg.lstsq(A, g, rcond=None)[0]
 
 
 def _residuals(robot, q, measured, measure, rotation_scale):
@@ -739,8 +830,9 @@ def _residuals(robot, q, measured, measure, rotation_scale):
     dp = measured[..., :3, 3] - X[..., :3, 3] if measure == "pose" else measured - X[..., :3, 3]
     if measure == "position":
         return dp.reshape(-1)
-    dr = _rotation_vector(measured[..., :3, :3] @ np.swapaxes(X[..., :3, :3], -1, -2))
-    return np.concatenate([dp, rotation_scale * dr], axis=-1).reshape(-1)
+    R = measured[..., :3, :3] @ np.swapaxes(X[..., :3, :3], -1, -2)
+    dr = stack_components(rotation_vector_from_matrix_entries(*components(R.reshape(-1, 9))))
+    return np.concatenate([dp.reshape(-1, 3), rotation_scale * dr], axis=-1).reshape(-1)
 
 
 def _stacked_jacobian(robot, q, measure, rotation_scale):
@@ -829,6 +921,7 @@ def calibrate(robot, q, measured, *, measure="position", fixed=(), rotation_scal
     >>> fit.unidentifiable
     ('d2 - d4', 'd3 - d4', 'theta5 + 0.0819 a5', 'd5 - 12.21 alpha5', 'theta6', 'alpha6')
     """
+    check_instance(robot, Robot, "robot")
     _check_measure(measure)
     q = robot.check_joints(q)
     if q.ndim != 2:
@@ -845,8 +938,17 @@ def calibrate(robot, q, measured, *, measure="position", fixed=(), rotation_scal
             raise ValueError(f"measured poses must have shape ({m}, 4, 4) to match q, "
                              f"got shape {measured.shape}")
         measured = check_transform(measured, tol=1e-6, name="measured")
+    rotation_scale = check_scalar(rotation_scale, "rotation_scale", minimum=0, strict=True)
+    rank_tol, max_condition = _check_rank_tol(rank_tol, max_condition)
+    tol = check_scalar(tol, "tol", minimum=0)     # finite: inf would stop at the first step
+    max_iter = check_scalar(max_iter, "max_iter", minimum=1, integer=True)
+    if fixed is None:
+        fixed = ()
     if isinstance(fixed, str):
         fixed = (fixed,)
+    if not hasattr(fixed, "__iter__"):
+        raise ValueError(f"fixed must be a parameter name or a sequence of them, got "
+                         f"{fixed!r}")
     names = dh_parameter_names(robot)
     unknown = [f for f in fixed if f not in names]
     if unknown:
@@ -857,35 +959,44 @@ def calibrate(robot, q, measured, *, measure="position", fixed=(), rotation_scal
     p = x.size
     J = _stacked_jacobian(robot, q, measure, rotation_scale)
     _check_equations(J.shape[0], int(free.sum()))
-    info = _rank_analysis(J, names, free, rank_tol)
+    info = _rank_analysis(J, names, free, rank_tol, zero_tol=rank_tol)
     kept = info["kept"]
     _check_enough(J.shape[0], kept.size, "the calibration")
 
     current = robot
     r = _residuals(current, q, measured, measure, rotation_scale)
-    cost = 0.5 * r @ r
+    cost = _norm(r)                    # the cost is 0.5 cost**2; the norm does not overflow
+    if not math.isfinite(cost):
+        raise ValueError("measured: the residuals overflow (the measurements are too large "
+                         "for the model)")
     lam = 1e-3
     converged = False
     iterations = 0
     while iterations < max_iter:
         iterations += 1
         Jk = _stacked_jacobian(current, q, measure, rotation_scale)[:, kept]
-        D = np.linalg.norm(Jk, axis=0)
+        D = _norm(Jk, axis=0)
         D = np.where(D > 0.0, D, 1.0)
         Js = Jk / D                                  # unit columns: a well-scaled system
         g = Js.T @ r
         H = Js.T @ Js
         while True:
-            step_s = np.linalg.solve(H + lam * np.diag(np.diag(H)), g)
+            step_s = _levenberg_marquardt_step(H, g, lam)
             trial_x = x.copy()
-            trial_x[kept] += step_s / D
-            trial = robot_from_dh_parameters(robot, trial_x)
-            r_trial = _residuals(trial, q, measured, measure, rotation_scale)
-            cost_trial = 0.5 * r_trial @ r_trial
+            with np.errstate(over="ignore"):
+                trial_x[kept] += step_s / D
+            cost_trial, trial, r_trial = math.inf, None, None
+            if np.isfinite(trial_x).all():
+                trial = robot_from_dh_parameters(robot, trial_x)
+                with np.errstate(over="ignore", invalid="ignore"):
+                    r_trial = _residuals(trial, q, measured, measure, rotation_scale)
+                if np.isfinite(r_trial).all():
+                    cost_trial = _norm(r_trial)
             if cost_trial <= cost or lam > 1e12:
                 break
             lam *= 10.0
-        small_step = np.linalg.norm(step_s) <= tol * (1.0 + np.linalg.norm(x[kept] * D))
+        with np.errstate(over="ignore"):
+            small_step = _norm(step_s) <= tol * (1.0 + _norm(x[kept] * D))
         if cost_trial <= cost:
             x, current, r, cost = trial_x, trial, r_trial, cost_trial
             lam = max(lam / 10.0, 1e-12)
@@ -898,14 +1009,16 @@ def calibrate(robot, q, measured, *, measure="position", fixed=(), rotation_scal
     J_final = _stacked_jacobian(current, q, measure, rotation_scale)
     scales_final, _ = _column_scales(J_final, rank_tol)
     dof = J_final.shape[0] - kept.size
-    sigma = float(np.sqrt(r @ r / dof))
+    sigma = _sigma(r, dof)
+    _finite_result(x, sigma)
     cond = _kept_condition(J_final, kept, scales_final)
     _warn_condition(cond, max_condition)
     estimated = np.zeros(p, dtype=bool)
     estimated[kept] = True
     return Identification(
         names=names, estimate=x, estimated=estimated,
-        unit_covariance=_unit_covariance(J_final, kept, scales_final, p), sigma=sigma,
+        scaled_unit_covariance=_scaled_unit_covariance(J_final, kept, scales_final, p),
+        column_scales=scales_final, sigma=sigma,
         residuals=r, singular_values=info["singular_values"], rank=int(kept.size),
         condition_number=cond, null_space=info["null_space"],
         unidentifiable=info["unidentifiable"], identifiable_rows=info["identifiable_rows"],

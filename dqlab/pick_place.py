@@ -3,7 +3,7 @@ r"""A pick-and-place task for the desktop arm, driven by its closed-form inverse
 The lab report drives its arm with a list of rows ``[x, y, z, suction, q3]``: go to the
 point, then switch the suction cup on (1) or off (0); ``q3`` turns the cup about the
 vertical. This module turns such a list into a timed joint trajectory that a robot may be
-sent, in three steps (chapter 12):
+sent, in two steps (chapter 12):
 
 1. :func:`joint_targets` -- every point to a joint target by
    :func:`dqlab.ik.desk_arm_closed_form.desk_arm`,
@@ -12,9 +12,9 @@ sent, in three steps (chapter 12):
 2. :func:`plan_pick_place` -- rest-to-rest segments between consecutive targets with the
    quintic time law of :func:`dqlab.trajectory.joint.joint_trajectory` (chapter 10), a dwell
    where the cup switches, and the object carried by the cup
-   while the suction is on; the result is checked once more (finite, within limits);
-3. :func:`animate_pick_place` -- a :class:`dqlab.viz.scene.Scene` animation of the arm, the cup
-   and the object.
+   while the suction is on; the result is checked once more (finite, within limits).
+
+:func:`dqlab.viz.pick_place.animate_pick_place` plays a plan in a 3D scene.
 
 A target is four numbers: the chain angles :math:`(\theta_1, \theta_2, \theta_3)` of
 :func:`dqlab.models.desk_arm` and the wrist (cup) angle. The cup hangs vertically below the
@@ -28,11 +28,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import ik
-from ._checks import as_float_array
+from ._checks import as_float_array, check_instance, check_scalar, check_tolerance
+from .robot import Robot
 from .trajectory import Trajectory, joint_trajectory
+from .trajectory.time_laws import MAX_SAMPLES
+from .transforms import check_transform
 
 __all__ = ["PickPlaceTask", "PickPlacePlan", "task_from_lab", "joint_targets",
-           "cup_poses", "plan_pick_place", "animate_pick_place", "BRANCH_NAMES"]
+           "cup_poses", "plan_pick_place", "BRANCH_NAMES"]
 
 #: The rows of :func:`dqlab.ik.desk_arm_closed_form.desk_arm`'s solutions, by name.
 BRANCH_NAMES = ("facing, elbow up", "facing, elbow down", "turned away, elbow up",
@@ -62,16 +65,14 @@ class PickPlaceTask:
         if p.ndim != 2 or len(p) == 0:
             raise ValueError(f"positions must have shape (K, 3) with K >= 1, got {p.shape}")
         k = len(p)
-        s = np.asarray(self.suction)
-        if s.shape != (k,):
-            raise ValueError(f"suction must have shape ({k},), got {s.shape}")
-        if s.dtype != bool:
-            s_num = as_float_array(s, "suction")
-            if not np.all((s_num == 0) | (s_num == 1)):
-                bad = int(np.flatnonzero((s_num != 0) & (s_num != 1))[0])
-                raise ValueError(f"suction must be 0 (off) or 1 (on); step {bad} has "
-                                 f"{float(s_num[bad]):g}")
-            s = s_num == 1
+        s_num = as_float_array(self.suction, "suction")
+        if s_num.shape != (k,):
+            raise ValueError(f"suction must have shape ({k},), got {s_num.shape}")
+        if not np.all((s_num == 0) | (s_num == 1)):
+            bad = int(np.flatnonzero((s_num != 0) & (s_num != 1))[0])
+            raise ValueError(f"suction must be 0 (off) or 1 (on); step {bad} has "
+                             f"{float(s_num[bad]):g}")
+        s = s_num == 1
         w = as_float_array(self.wrist, "wrist")
         if w.shape != (k,):
             raise ValueError(f"wrist must have shape ({k},), got {w.shape}")
@@ -113,15 +114,28 @@ def task_from_lab(rows):
     rows = as_float_array(rows, "rows", (5,))
     if rows.ndim != 2:
         raise ValueError(f"rows must have shape (K, 5), got shape {rows.shape}")
-    return PickPlaceTask(positions=rows[:, :3] / 1000.0, suction=rows[:, 3],
-                         wrist=np.radians(rows[:, 4]))
+    try:
+        return PickPlaceTask(positions=rows[:, :3] / 1000.0, suction=rows[:, 3],
+                             wrist=np.radians(rows[:, 4]))
+    except ValueError as exc:
+        raise ValueError(f"rows: {exc}") from None
 
 
 def _check_wrist_limits(wrist_limits):
-    lo, hi = (float(v) for v in wrist_limits)
-    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-        raise ValueError(f"wrist_limits must be finite with lo < hi, got {wrist_limits!r}")
-    return lo, hi
+    limits = as_float_array(wrist_limits, "wrist_limits")
+    if limits.shape != (2,) or not limits[0] < limits[1]:
+        raise ValueError(f"wrist_limits must be two finite numbers (lo, hi) with lo < hi, got "
+                         f"{wrist_limits!r}")
+    return float(limits[0]), float(limits[1])
+
+
+def _check_branch(branch):
+    if isinstance(branch, str) and branch == "closest":
+        return branch
+    if (isinstance(branch, (int, np.integer)) and not isinstance(branch, (bool, np.bool_))
+            and 0 <= branch < len(BRANCH_NAMES)):
+        return int(branch)
+    raise ValueError(f"branch must be 0, 1, 2, 3 or 'closest', got {branch!r}")
 
 
 def joint_targets(robot, task, *, branch=0, wrist_limits=(-math.pi, math.pi), tol=1e-9):
@@ -170,11 +184,11 @@ def joint_targets(robot, task, *, branch=0, wrist_limits=(-math.pi, math.pi), to
     ...
     ValueError: step 1: (400, 0, 0) mm is unreachable: facing it, 0.02883 m beyond the ...
     """
-    if not isinstance(task, PickPlaceTask):
-        raise TypeError(f"task must be a PickPlaceTask, got {type(task).__name__}")
-    if branch != "closest" and branch not in range(4):
-        raise ValueError(f"branch must be 0, 1, 2, 3 or 'closest', got {branch!r}")
+    check_instance(robot, Robot, "robot")
+    check_instance(task, PickPlaceTask, "task")
+    branch = _check_branch(branch)
     lo, hi = _check_wrist_limits(wrist_limits)
+    tol = check_scalar(tol, "tol", minimum=0)     # finite: inf would accept any solution
     result = ik.desk_arm(robot, task.positions, tol=tol)
     targets = np.empty((len(task), 4))
     previous = None
@@ -182,7 +196,8 @@ def joint_targets(robot, task, *, branch=0, wrist_limits=(-math.pi, math.pi), to
         where = "(" + ", ".join(f"{v:.4g}" for v in task.positions[k] * 1000) + ") mm"
         if not result.success[k]:
             reason = str(result.reason[k]).removeprefix("unreachable: ")
-            raise ValueError(f"step {k}: {where} is unreachable: {reason}")
+            raise ValueError(f"step {k}: {where} is unreachable: {reason} (position "
+                             f"tolerance tol = {tol:g} m)")
         if branch == "closest":
             rows = np.flatnonzero(result.valid[k])
             if previous is None:
@@ -200,7 +215,7 @@ def joint_targets(robot, task, *, branch=0, wrist_limits=(-math.pi, math.pi), to
         w = task.wrist[k]
         if not lo <= w <= hi:
             raise ValueError(f"step {k}: wrist angle {math.degrees(w):.6g} deg is outside "
-                             f"the wrist limits [{math.degrees(lo):.6g}, "
+                             f"wrist_limits [{math.degrees(lo):.6g}, "
                              f"{math.degrees(hi):.6g}] deg")
         targets[k, :3] = result.solutions[k, row]
         targets[k, 3] = w
@@ -231,6 +246,7 @@ def cup_poses(robot, q):
     >>> (X_WC[:3, 3] * 1000).round() + 0.0, X_WC[:3, 2].round(12) + 0.0
     (array([226.,   0.,   0.]), array([ 0.,  0., -1.]))
     """
+    check_instance(robot, Robot, "robot")
     q = as_float_array(q, "q", (4,))
     p = robot.fk(q[..., :3])[..., :3, 3]
     yaw = q[..., 0] + q[..., 3]
@@ -365,13 +381,18 @@ def plan_pick_place(robot, task, *, object_pose=None, branch=0,
     >>> (plan.object[-1, :3, 3] * 1000).round(3) + 0.0     # left at the place point
     array([   0., -170.,   35.])
     """
-    if not isinstance(task, PickPlaceTask):
-        raise TypeError(f"task must be a PickPlaceTask, got {type(task).__name__}")
-    for value, name in ((v_max, "v_max"), (a_max, "a_max"), (dt, "dt")):
-        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-            raise ValueError(f"{name} must be a positive number, got {value!r}")
-    if not (isinstance(dwell, (int, float)) and math.isfinite(dwell) and dwell >= 0):
-        raise ValueError(f"dwell must be a number >= 0, got {dwell!r}")
+    check_instance(robot, Robot, "robot")
+    check_instance(task, PickPlaceTask, "task")
+    v_max = check_scalar(v_max, "v_max", minimum=0, strict=True)
+    a_max = check_scalar(a_max, "a_max", minimum=0, strict=True)
+    dt = check_scalar(dt, "dt", minimum=0, strict=True)
+    dwell = check_scalar(dwell, "dwell", minimum=0)
+    grasp_tol = check_tolerance(grasp_tol, "grasp_tol")
+    if object_pose is not None:
+        object_pose = check_transform(object_pose, name="object_pose")
+        if object_pose.shape != (4, 4):
+            raise ValueError(f"object_pose must be one (4, 4) transform, got shape "
+                             f"{object_pose.shape}")
     targets = joint_targets(robot, task, branch=branch, wrist_limits=wrist_limits)
 
     # sampled motion: start at step 0, then one segment (and maybe a dwell) per step
@@ -398,6 +419,9 @@ def plan_pick_place(robot, task, *, object_pose=None, branch=0,
             state = bool(task.suction[k])
             hold = max(dwell, dt)
             count = max(1, math.ceil(hold / dt - 1e-9))
+            if count > MAX_SAMPLES:
+                raise ValueError(f"dwell / dt = {dwell:g} s / {dt:g} s: {count:.3g} samples is "
+                                 f"too large (at most {MAX_SAMPLES:.0e})")
             ts.append(now + np.linspace(hold / count, hold, count))
             qs.append(np.repeat(targets[k:k + 1], count, axis=0))
             qds.append(np.zeros((count, 4)))
@@ -405,8 +429,12 @@ def plan_pick_place(robot, task, *, object_pose=None, branch=0,
             steps.append(np.full(count, k))
             states.append(np.full(count, state))
             now += hold
-    trajectory = Trajectory(t=np.concatenate(ts), q=np.concatenate(qs),
-                            qd=np.concatenate(qds), qdd=np.concatenate(qdds))
+    t = np.concatenate(ts)
+    if not np.all(np.diff(t) > 0.0):
+        raise ValueError(f"dt = {dt:g} s and dwell = {dwell:g} s are too large for the motion: "
+                         f"its instants can no longer be told apart in floating point")
+    trajectory = Trajectory(t=t, q=np.concatenate(qs), qd=np.concatenate(qds),
+                            qdd=np.concatenate(qdds))
     t, q = trajectory.t, trajectory.q
     step = np.concatenate(steps)
     suction = np.concatenate(states)
@@ -419,9 +447,7 @@ def plan_pick_place(robot, task, *, object_pose=None, branch=0,
     if object_pose is None:
         X_WO = cup_poses(robot, targets[switch_on[0] if switch_on else 0])
     else:
-        X_WO = as_float_array(object_pose, "object_pose", (4, 4))
-        if X_WO.shape != (4, 4):
-            raise ValueError(f"object_pose must be one (4, 4) transform, got {X_WO.shape}")
+        X_WO = object_pose
     obj = np.empty_like(cup)
     X_CO = None
     grasps = []
@@ -459,89 +485,3 @@ def _check_samples(robot, q, wrist_limits):
         i, j = np.argwhere(bad)[0]
         raise ValueError(f"sample {i}: joint {j + 1} = {q[i, j]:.6g} rad is beyond its "
                          f"limits [{lo[j]:.6g}, {hi[j]:.6g}]")
-
-
-def animate_pick_place(scene, robot, plan, *, size=(0.06, 0.04, 0.004), name="robot",
-                       object_color=0x2E86C1, stride=1, loop=True):
-    """Animate a plan in a :class:`dqlab.viz.scene.Scene`: the arm, its cup, the object, pads.
-
-    Draws the arm (:meth:`~dqlab.viz.scene.Scene.add_robot`) and plays ``plan.q`` on it; a cup
-    (a short cylinder, red while sucking) follows ``plan.cup``; the object, a box of
-    ``size`` whose top face is at its frame, follows ``plan.object``; a grey pad supports
-    the object where it starts and where it is left; the cup's path is drawn in orange.
-
-    Parameters
-    ----------
-    scene : dqlab.viz.Scene
-    robot : Robot
-    plan : PickPlacePlan
-    size : (float, float, float), optional
-        The object's length, width and thickness, metres.
-    name : str, optional
-        The robot's name in the scene.
-    object_color : int, optional
-    stride : int, optional
-        Animate every ``stride``-th sample (and the last): a lighter view for the book; the
-        viewer interpolates between the kept samples.
-    loop : bool, optional
-        Repeat the animation.
-
-    Examples
-    --------
-    >>> from dqlab import viz
-    >>> from dqlab.models import desk_arm
-    >>> task = task_from_lab([[0, 170, 80, 0, 0], [0, 170, 30, 1, 0], [0, -170, 35, 0, 180]])
-    >>> scene = viz.Scene(grid_size=0.8, grid_step=0.05)
-    >>> animate_pick_place(scene, desk_arm(), plan_pick_place(desk_arm(), task), stride=2)
-    >>> paths = {c.get("path", "") for c in scene.commands()}
-    >>> {"/meshcat/cup/on", "/meshcat/object/box", "/meshcat/pads/start"} <= paths
-    True
-    """
-    import meshcat.geometry as g
-
-    from .viz.scene import PATH_COLOR
-
-    if not (isinstance(stride, int) and stride >= 1):
-        raise ValueError(f"stride must be an integer >= 1, got {stride!r}")
-    keep = np.unique(np.append(np.arange(0, len(plan.t), stride), len(plan.t) - 1))
-    t, q, suction = plan.t[keep], plan.q[keep], plan.suction[keep]
-    cup, obj = plan.cup[keep], plan.object[keep]
-    lx, ly, lz = (float(v) for v in size)
-    scene.add_robot(robot, q[0, :3], name=name)
-    scene.animate(q[:, :3], name=name, times=t, loop=loop)
-    scene.add_path(plan.cup[:, :3, 3], name="cup_path", color=PATH_COLOR)
-
-    def material(color):
-        return g.MeshLambertMaterial(color=int(color))
-
-    # the cup: a cylinder (three.js cylinders run along y) just above the cup point
-    turn = np.eye(4)
-    turn[:3, :3] = [[1, 0, 0], [0, 0, -1], [0, 1, 0]]              # y -> -z (upwards)
-    turn[:3, 3] = [0.0, 0.0, -0.01]
-    for state, color in (("off", 0x555555), ("on", 0xC0392B)):
-        node = scene.vis["cup"][state]
-        node.set_object(g.Cylinder(0.02, 0.012), material(color))
-        node.set_transform(turn)
-    hidden = np.diag([1e-6, 1e-6, 1e-6, 1.0]) @ turn              # shrunk to nothing
-    sucking = suction[:, None, None]
-    scene.animate_transforms("cup", cup, times=t, loop=loop)
-    scene.animate_transforms("cup/on", np.where(sucking, turn, hidden), times=t, loop=loop)
-    scene.animate_transforms("cup/off", np.where(sucking, hidden, turn), times=t, loop=loop)
-
-    # the object: a box whose frame is the centre of its top face
-    box = np.eye(4)
-    box[2, 3] = -lz / 2
-    scene.vis["object"]["box"].set_object(g.Box([lx, ly, lz]), material(object_color))
-    scene.vis["object"]["box"].set_transform(box)
-    scene.animate_transforms("object", obj, times=t, loop=loop)
-
-    # pads under the object where it starts and where it is left
-    for label, X in (("start", plan.object[0]), ("end", plan.object[-1])):
-        height = float(X[2, 3]) - lz
-        if height <= 1e-4:
-            continue
-        pad = np.eye(4)
-        pad[:3, 3] = [X[0, 3], X[1, 3], height / 2]
-        scene.vis["pads"][label].set_object(g.Box([lx * 1.3, ly * 1.3, height]),
-                                            material(0xB3B6B7))
-        scene.vis["pads"][label].set_transform(pad)

@@ -1,58 +1,56 @@
-r"""Beyond one machine: dqlab's batch functions on dask arrays, and the UR3's reachability map.
+r"""Beyond one machine: dqlab's batch functions on dask arrays, chunk by chunk.
 
 Every batch function of dqlab works on the leading axes of its arrays, pose by pose, with
 no coupling between poses. That is exactly what `dask.array
 <https://docs.dask.org/en/stable/array.html>`_ distributes: an array cut into chunks along
 its leading (batch) axes, one task per chunk. The functions here take dask arrays chunked
-that way and call the unchanged numpy function on each chunk
-(``dask.array.blockwise``, the general form of ``dask.array.map_blocks``), so that
+that way, call the unchanged numpy function on each chunk (``dask.array.blockwise``, the
+general form of ``dask.array.map_blocks``) and return lazy dask arrays -- hence the
+``_dask`` in their names:
 
-- :func:`fk` is :meth:`dqlab.robot.Robot.fk`, :func:`ik_ur` is
-  :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>` and :func:`dexterity` is
-  :func:`pose_dexterity`, chunk by chunk, and their results are those of the numpy call on
-  the whole batch, number for number;
+- :func:`fk_dask` is :meth:`dqlab.robot.Robot.fk`, :func:`ik_ur_dask` is
+  :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>` and :func:`dexterity_dask` is
+  :func:`dqlab.reachability.pose_dexterity`, chunk by chunk, and their results are those
+  of the numpy call on the whole batch, number for number;
+- :func:`reachability_map` runs :func:`dqlab.reachability.reachability_statistics` on
+  chunks of a grid of tool positions and gathers the statistics into one
+  :class:`~dqlab.reachability.ReachabilityMap`, equal to the numpy map number for number
+  (chapter 11 plots a map of :math:`10^7` samples made by
+  ``benchmarks/bench_reachability.py``);
 - nothing here schedules anything: the chunks run on whatever dask scheduler is asked for
   or active -- the synchronous one (examples, debugging), threads, processes, a
   ``distributed.LocalCluster`` on one machine, or a cluster whose scheduler listens at an
   address such as ``"tcp://scheduler-host:8786"``, with the same code.
 
-:func:`reachability_map` applies this to a question of the book: over a grid of tool
-positions and a set of orientations, how many inverse-kinematics branches reach each pose,
-and how well conditioned is the best of them (:func:`pose_dexterity`)? It reduces the
-samples to statistics per position (:class:`ReachabilityMap`);
-:func:`reachability_statistics` is the same computation with numpy in one process, the
-reference the dask version is checked against. Chapter 11 plots a map of :math:`10^7`
-samples made by ``benchmarks/bench_reachability.py``.
-
 dask is an optional dependency (the extra ``scale``: ``pip install 'dqlab[scale]'``). This
 module imports numpy alone; dask is imported when a function that needs it is called, and
-its absence is reported with the command that installs it. :func:`pose_dexterity`,
-:func:`reachability_statistics`, :func:`super_fibonacci_quaternions` and
-:class:`ReachabilityMap` need numpy only.
+its absence is reported with the command that installs it. The map itself, and the numpy
+functions it is made of, are in :mod:`dqlab.reachability`.
 """
 
 import functools
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
-from ._checks import as_float_array
+from ._checks import as_float_array, check_instance, check_scalar
 from .ik import ur
-from .jacobian import manipulability
-from .quaternion import check_unit_quaternion, matrix_from_quaternion
+from .reachability import (
+    BLOCK,
+    ReachabilityMap,
+    check_ik_options,
+    pose_dexterity,
+    reachability_statistics,
+)
 from .robot import Robot
 
-__all__ = [
-    "fk", "ik_ur", "IKArrays", "dexterity", "pose_dexterity", "reachability_map",
-    "reachability_statistics", "ReachabilityMap", "super_fibonacci_quaternions",
-]
+__all__ = ["fk_dask", "ik_ur_dask", "IKArrays", "dexterity_dask", "reachability_map"]
 
 #: The command that installs what this module needs, quoted in its error messages.
 INSTALL = "pip install 'dqlab[scale]'"
 
 _SAMPLES_PER_TASK = 2 ** 16       # default work of one task of reachability_map (~1 s)
-_BLOCK = 8192                     # poses per numpy call inside a task: small temporaries
 _SCHEDULER_NAMES = ("synchronous", "sync", "single-threaded", "threads", "threading",
                     "processes", "multiprocessing", "distributed", "dask.distributed")
 
@@ -121,7 +119,7 @@ def _fk_block(robot, q):
     return robot.fk(q)
 
 
-def fk(robot: Robot, q):
+def fk_dask(robot: Robot, q):
     r"""Forward kinematics of a dask array of joint vectors, chunk by chunk.
 
     :meth:`dqlab.robot.Robot.fk` on every chunk: :math:`X_{WT}(q)`, the pose of the tool
@@ -156,12 +154,13 @@ def fk(robot: Robot, q):
     >>> from dqlab.models import ur3
     >>> robot = ur3()
     >>> q = np.random.default_rng(1).uniform(-np.pi, np.pi, (10, 6))
-    >>> X = fk(robot, da.from_array(q, chunks=(4, 6)))
+    >>> X = fk_dask(robot, da.from_array(q, chunks=(4, 6)))
     >>> X.shape, X.chunks
     ((10, 4, 4), ((4, 4, 2), (4,), (4,)))
     >>> bool(np.array_equal(X.compute(scheduler="synchronous"), robot.fk(q)))
     True
     """
+    check_instance(robot, Robot, "robot")
     q = _as_dask(q, "q")
     _check_trailing(q, "q", [(robot.n,)])
     return _map_leading(functools.partial(_fk_block, robot), q, 1, (4, 4), np.float64)
@@ -197,7 +196,10 @@ class IKArrays:
 
 
 def _ik_block(robot, options, dtype, poses):
-    result = ur(robot, poses, **options)
+    try:
+        result = ur(robot, poses, **options)
+    except (ValueError, TypeError) as exc:     # the solver calls its argument "target"
+        raise type(exc)(f"poses: {exc}") from None
     out = np.empty(result.valid.shape[:-1], dtype=dtype)
     for name in ("solutions", "valid", "position_error", "rotation_error"):
         out[name] = getattr(result, name)
@@ -206,27 +208,7 @@ def _ik_block(robot, options, dtype, poses):
     return out
 
 
-def _probe_pose(robot, kind):
-    """A pose of ``robot`` in the form ``kind`` (``(4, 4)`` or ``(8,)``), to check the
-    arguments of a solver before the chunks are computed."""
-    X = robot.fk(np.zeros(robot.n))
-    if kind == (4, 4):
-        return X
-    from .dualquat import dual_quaternion_from_transform
-    return dual_quaternion_from_transform(X)
-
-
-def _check_ik_options(robot, kind, options):
-    """Solve one pose with ``options`` (raising what ``dqlab.ik.ur`` raises for a wrong
-    robot or option); ``q_ref`` must be one joint vector."""
-    q_ref = options.get("q_ref")
-    if q_ref is not None and np.shape(q_ref) != (6,):
-        raise ValueError(f"q_ref must be one joint vector of shape (6,) here (the same "
-                         f"reference for every pose), got shape {np.shape(q_ref)}")
-    return ur(robot, _probe_pose(robot, kind), **options)
-
-
-def ik_ur(robot: Robot, poses, **options) -> IKArrays:
+def ik_ur_dask(robot: Robot, poses, **options) -> IKArrays:
     r"""Every closed-form UR solution of a dask array of poses, chunk by chunk.
 
     :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>` on every chunk of ``poses``; the arrays of its
@@ -276,15 +258,15 @@ def ik_ur(robot: Robot, poses, **options) -> IKArrays:
     >>> far = np.eye(4)
     >>> far[:3, 3] = [1.0, 0.0, 0.2]
     >>> poses = da.from_array(np.stack([X[0], X[1], far]), chunks=(2, 4, 4))
-    >>> result = ik_ur(robot, poses)
+    >>> result = ik_ur_dask(robot, poses)
     >>> count, singular = dask.compute(result.count, result.flags["wrist_singular"],
     ...                                scheduler="synchronous")
     >>> count, singular
     (array([8, 8, 0]), array([False,  True, False]))
     """
+    probe = check_ik_options(robot, options, (4, 4))
     poses = _as_dask(poses, "poses")
     kind = _check_trailing(poses, "poses", [(4, 4), (8,)])
-    probe = _check_ik_options(robot, kind, options)
     k, n = probe.solutions.shape[-2:]
     dtype = np.dtype([("solutions", np.float64, (k, n)), ("valid", np.bool_, (k,)),
                       ("position_error", np.float64, (k,)),
@@ -299,79 +281,14 @@ def ik_ur(robot: Robot, poses, **options) -> IKArrays:
 
 
 # -- the dexterity of a pose -------------------------------------------------------------
-
-def pose_dexterity(robot: Robot, poses: ArrayLike, **options
-                   ) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
-    r"""How many UR inverse-kinematics branches reach each pose, and the best manipulability.
-
-    For a pose :math:`X`, with :math:`q_1, \dots, q_c` the valid rows of
-    ``dqlab.ik.ur(robot, X)`` (:math:`0 \le c \le 8`):
-
-    .. math::
-
-        c(X) = \#\{\text{valid rows}\},\qquad
-        w(X) = \max_{1 \le i \le c} \sqrt{\det\bigl(J(q_i)\, J(q_i)^\top\bigr)}
-             = \max_i\, \lvert\det J(q_i)\rvert ,\qquad w = 0 \text{ when } c = 0,
-
-    with :math:`J` the full :math:`6 \times 6` geometric Jacobian
-    (:meth:`dqlab.robot.Robot.jacobian`, linear rows first) and the measure computed by
-    :func:`dqlab.jacobian.manipulability` (Yoshikawa's, as the product of the singular
-    values). Why the full :math:`J` and not its linear rows :math:`J_v`: a pose fixes the
-    orientation too, and :math:`w` must vanish at every singularity of the arm -- wrist,
-    elbow and shoulder -- while :math:`\sqrt{\det J_v J_v^\top}` stays positive at the wrist
-    singularity (three of six joints suffice for the position). Units: the linear rows are
-    metres per radian and the angular rows radians per radian, so :math:`w` is in
-    :math:`\mathrm m^3`; and since :math:`J` is square, :math:`\lvert\det J\rvert` does not
-    depend on the point of the tool chosen as TCP nor on the orientation of the world frame
-    (both multiply :math:`J` by a matrix of determinant 1): it is a property of the
-    configuration. The maximum is over branches because a task can choose its branch: it
-    measures the best way the arm can hold the pose.
-
-    Branches that coincide at a singularity are counted once per row, as ``IKResult.count``
-    does (see :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>`).
-
-    Parameters
-    ----------
-    robot : dqlab.robot.Robot
-        A UR-family arm.
-    poses : array_like, shape (..., 4, 4) or (..., 8)
-        Target poses (see :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>`).
-    **options
-        Passed to :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>`.
-
-    Returns
-    -------
-    count : ndarray of int, shape (...)
-        :math:`c`, the number of valid branches.
-    manipulability : ndarray, shape (...)
-        :math:`w` in :math:`\mathrm m^3`.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from dqlab.models import ur3
-    >>> robot = ur3()
-    >>> q = np.array([[0.3, -1.2, 1.1, -0.4, 0.9, 0.2],     # regular
-    ...               [0.0, -np.pi / 2, 0.0, -np.pi / 2, 0.0, 0.0]])  # every singularity
-    >>> count, w = pose_dexterity(robot, robot.fk(q))
-    >>> count, (w * 1e3).round(3)
-    (array([8, 8]), array([16.03,  0.  ]))
-    """
-    result = ur(robot, poses, **options)
-    w = np.zeros(result.valid.shape)
-    if result.valid.any():
-        w[result.valid] = manipulability(robot.jacobian(result.solutions[result.valid]))
-    return result.count, w.max(axis=-1, initial=0.0)
-
-
 def _dexterity_block(robot, options, dtype, poses):
     out = np.empty(poses.shape[:-2] if poses.shape[-1] == 4 else poses.shape[:-1], dtype)
     out["count"], out["manipulability"] = pose_dexterity(robot, poses, **options)
     return out
 
 
-def dexterity(robot: Robot, poses, **options):
-    r""":func:`pose_dexterity` of a dask array of poses, chunk by chunk.
+def dexterity_dask(robot: Robot, poses, **options):
+    r""":func:`dqlab.reachability.pose_dexterity` of a dask array of poses, chunk by chunk.
 
     Parameters
     ----------
@@ -391,7 +308,7 @@ def dexterity(robot: Robot, poses, **options):
     Raises
     ------
     ValueError
-        As :func:`ik_ur`.
+        As :func:`ik_ur_dask`.
     ImportError
         Without dask (install the extra: ``pip install 'dqlab[scale]'``).
 
@@ -403,15 +320,16 @@ def dexterity(robot: Robot, poses, **options):
     >>> from dqlab.models import ur3
     >>> robot = ur3()
     >>> q = np.random.default_rng(3).uniform(-np.pi, np.pi, (6, 6))
-    >>> count, w = dexterity(robot, da.from_array(robot.fk(q), chunks=(4, 4, 4)))
+    >>> count, w = dexterity_dask(robot, da.from_array(robot.fk(q), chunks=(4, 4, 4)))
     >>> count, w = dask.compute(count, w, scheduler="synchronous")
+    >>> from dqlab.reachability import pose_dexterity
     >>> count_np, w_np = pose_dexterity(robot, robot.fk(q))
     >>> bool(np.array_equal(count, count_np) and np.array_equal(w, w_np))
     True
     """
+    check_ik_options(robot, options)
     poses = _as_dask(poses, "poses")
     kind = _check_trailing(poses, "poses", [(4, 4), (8,)])
-    _check_ik_options(robot, kind, options)
     dtype = np.dtype([("count", np.int64), ("manipulability", np.float64)])
     records = _map_leading(functools.partial(_dexterity_block, robot, options, dtype), poses,
                            len(kind), (), dtype)
@@ -419,255 +337,6 @@ def dexterity(robot: Robot, poses, **options):
 
 
 # -- the reachability map ------------------------------------------------------------------
-
-def super_fibonacci_quaternions(k: int) -> NDArray[np.float64]:
-    r"""``k`` unit quaternions spread evenly over the rotations (a super-Fibonacci spiral).
-
-    Point :math:`i` of Alexa's spiral (CVPR 2022), with :math:`s = i + \frac12`,
-    :math:`\phi = \sqrt2` and :math:`\psi \approx 1.533751168755204`:
-
-    .. math::
-
-        q_i = \Bigl(\sqrt{s/k}\,\sin\frac{2\pi s}{\phi},\ \sqrt{s/k}\,\cos\frac{2\pi s}{\phi},\
-              \sqrt{1 - s/k}\,\sin\frac{2\pi s}{\psi},\
-              \sqrt{1 - s/k}\,\cos\frac{2\pi s}{\psi}\Bigr),
-
-    read as :math:`(w, x, y, z)`. The points cover the unit sphere of quaternions evenly (low
-    discrepancy, nearly equal Voronoi cells), so the rotations cover SO(3) evenly: a
-    deterministic stand-in for ``k`` uniformly random orientations.
-
-    Parameters
-    ----------
-    k : int
-        Number of orientations, at least 1.
-
-    Returns
-    -------
-    ndarray, shape (k, 4)
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> q = super_fibonacci_quaternions(100)
-    >>> q.shape, bool(np.allclose(np.linalg.norm(q, axis=1), 1.0))
-    ((100, 4), True)
-    """
-    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
-        raise ValueError(f"k must be an int >= 1, got {k!r}")
-    s = np.arange(k) + 0.5
-    r, rr = np.sqrt(s / k), np.sqrt(1.0 - s / k)
-    alpha = 2.0 * np.pi * s / np.sqrt(2.0)
-    beta = 2.0 * np.pi * s / 1.533751168755204288118041
-    return np.stack([r * np.sin(alpha), r * np.cos(alpha), rr * np.sin(beta),
-                     rr * np.cos(beta)], axis=-1)
-
-
-@dataclass
-class ReachabilityMap:
-    r"""Statistics of a UR arm's reach and dexterity per tool position.
-
-    Made by :func:`reachability_map` (dask) or :func:`reachability_statistics` (numpy)
-    from the :math:`M \times K` samples :math:`X_{mk} = (R(q_k), p_m)`: every position
-    :math:`p_m` with every orientation :math:`q_k`, each scored by :func:`pose_dexterity`
-    (:math:`c_{mk}` branches, manipulability :math:`w_{mk}`).
-
-    Attributes
-    ----------
-    positions : ndarray, shape (..., 3)
-        The tool positions :math:`p_m` in the world frame (metres), any leading shape (a 3D
-        grid: ``(nx, ny, nz, 3)``).
-    orientations : ndarray, shape (K, 4)
-        The tool orientations :math:`q_k`, unit quaternions ``(w, x, y, z)``.
-    reachable : ndarray of int, shape (...)
-        How many of the K orientations have at least one valid branch at each position.
-    branches : ndarray of int, shape (...)
-        :math:`\sum_k c_{mk}`, the valid branches over all K orientations.
-    median_manipulability : ndarray, shape (...)
-        Median of :math:`w_{mk}` (:math:`\mathrm m^3`) over the reachable orientations at
-        each position; NaN where none is reachable.
-    metadata : dict
-        Anything stored with the map (how and when it was computed), numbers and text.
-    """
-
-    positions: np.ndarray
-    orientations: np.ndarray
-    reachable: np.ndarray
-    branches: np.ndarray
-    median_manipulability: np.ndarray
-    metadata: dict = field(default_factory=dict)
-
-    _ARRAYS = ("positions", "orientations", "reachable", "branches", "median_manipulability")
-
-    @property
-    def samples(self) -> int:
-        """The number of poses scored, :math:`M K`."""
-        return int(self.reachable.size * len(self.orientations))
-
-    @property
-    def fraction(self) -> NDArray[np.float64]:
-        """The fraction of the orientations reachable at each position, shape (...)."""
-        return self.reachable / len(self.orientations)
-
-    @property
-    def mean_count(self) -> NDArray[np.float64]:
-        """The mean number of valid branches over the orientations, shape (...)."""
-        return self.branches / len(self.orientations)
-
-    def save(self, path, **metadata) -> None:
-        """Write the map (and ``metadata``: numbers or text) to a compressed ``.npz`` file.
-
-        Examples
-        --------
-        >>> import tempfile, pathlib
-        >>> from dqlab.models import ur3
-        >>> grid = [[0.0, -0.35, 0.25], [0.9, 0.0, 0.2]]
-        >>> rmap = reachability_statistics(ur3(), grid, super_fibonacci_quaternions(8))
-        >>> path = pathlib.Path(tempfile.mkdtemp()) / "map.npz"
-        >>> rmap.save(path, command="an example")
-        >>> back = ReachabilityMap.load(path)
-        >>> back.reachable, back.metadata["command"]
-        (array([8, 0]), 'an example')
-        """
-        meta = {**self.metadata, **metadata}
-        arrays = {name: getattr(self, name) for name in self._ARRAYS}
-        for key, value in meta.items():
-            value = np.asarray(value)
-            if value.dtype.kind not in "biufU":
-                raise ValueError(f"metadata {key!r} must be numbers or text, got {value.dtype}")
-            arrays["meta_" + key] = value
-        np.savez_compressed(path, **arrays)
-
-    @classmethod
-    def load(cls, path) -> "ReachabilityMap":
-        """Read a map written by :meth:`save` (numbers and text only, no pickles)."""
-        with np.load(path, allow_pickle=False) as data:
-            arrays = {name: data[name] for name in cls._ARRAYS}
-            meta = {key[5:]: data[key][()] if data[key].ndim == 0 else data[key]
-                    for key in data.files if key.startswith("meta_")}
-        meta = {key: value.item() if isinstance(value, np.generic) else value
-                for key, value in meta.items()}
-        return cls(**arrays, metadata=meta)
-
-
-def _check_grid(positions, orientations):
-    """``positions`` (..., 3) and ``orientations`` (K, 4), checked."""
-    positions = as_float_array(positions, "positions", (3,))
-    orientations = check_unit_quaternion(orientations, name="orientations")
-    if orientations.ndim != 2 or len(orientations) == 0:
-        raise ValueError(f"orientations must have shape (K, 4) with K >= 1, got shape "
-                         f"{orientations.shape}")
-    return positions, orientations
-
-
-def _check_count(value, name):
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise ValueError(f"{name} must be an int >= 1, got {value!r}")
-    return int(value)
-
-
-def _median_of_reachable(w, ok):
-    """Median over axis 1 of ``w`` where ``ok`` (the number ``np.median`` gives for those
-    values), NaN where none is."""
-    s = np.sort(np.where(ok, w, np.inf), axis=1)
-    r = ok.sum(axis=1)
-    rows = np.arange(len(s))
-    lo = s[rows, np.maximum(r - 1, 0) // 2]
-    hi = s[rows, r // 2]
-    return np.where(r > 0, (lo + hi) / 2, np.nan)
-
-
-def _statistics(robot, positions, R, block, options):
-    """reachable, branches, median manipulability (m,) of positions (m, 3) over the
-    orientations R (K, 3, 3), ``block`` samples at a time."""
-    m, k = len(positions), len(R)
-    reachable = np.zeros(m, dtype=np.int64)
-    branches = np.zeros(m, dtype=np.int64)
-    median = np.full(m, np.nan)
-    step = max(1, block // k)
-    for start in range(0, m, step):
-        part = slice(start, min(start + step, m))
-        p = positions[part]
-        X = np.zeros((len(p), k, 4, 4))
-        X[..., :3, :3] = R
-        X[..., :3, 3] = p[:, None, :]
-        X[..., 3, 3] = 1.0
-        count, w = pose_dexterity(robot, X, **options)
-        ok = count > 0
-        reachable[part] = ok.sum(axis=1)
-        branches[part] = count.sum(axis=1)
-        median[part] = _median_of_reachable(w, ok)
-    return reachable, branches, median
-
-
-_STATISTICS = np.dtype([("reachable", np.int64), ("branches", np.int64),
-                        ("median_manipulability", np.float64)])
-
-
-def _statistics_block(robot, R, block, options, positions):
-    out = np.empty(len(positions), dtype=_STATISTICS)
-    (out["reachable"], out["branches"],
-     out["median_manipulability"]) = _statistics(robot, positions, R, block, options)
-    return out
-
-
-def reachability_statistics(robot: Robot, positions: ArrayLike, orientations: ArrayLike, *,
-                            block: int = _BLOCK, **options) -> ReachabilityMap:
-    r"""The reachability map with numpy, in this process (the reference of
-    :func:`reachability_map`).
-
-    Scores every pose :math:`X_{mk} = (R(q_k), p_m)` -- the tool at position :math:`p_m`
-    with orientation :math:`q_k` -- by :func:`pose_dexterity` and reduces over the
-    orientations: see :class:`ReachabilityMap`. The poses are built as 4x4 transforms with
-    :func:`dqlab.quaternion.matrix_from_quaternion`, ``block`` of them per call of
-    :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>`.
-
-    Parameters
-    ----------
-    robot : dqlab.robot.Robot
-        A UR-family arm.
-    positions : array_like, shape (..., 3)
-        Tool positions in the world frame (metres).
-    orientations : array_like, shape (K, 4)
-        Tool orientations as unit quaternions (for example
-        :func:`super_fibonacci_quaternions`).
-    block : int
-        Poses per call (memory: about 3 kB each).
-    **options
-        Passed to :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>`.
-
-    Returns
-    -------
-    ReachabilityMap
-
-    Raises
-    ------
-    ValueError
-        Wrong shapes, NaN, non-unit quaternions, a robot that is not UR-shaped.
-
-    Examples
-    --------
-    The centre of chapter 11's circle, and a point out of reach:
-
-    >>> from dqlab.models import ur3
-    >>> rmap = reachability_statistics(ur3(), [[0.0, -0.35, 0.25], [0.9, 0.0, 0.2]],
-    ...                                super_fibonacci_quaternions(64))
-    >>> rmap.samples, rmap.reachable, rmap.mean_count
-    (128, array([64,  0]), array([7.53125, 0.     ]))
-    >>> (rmap.median_manipulability * 1e3).round(2)
-    array([13.91,   nan])
-    """
-    positions, orientations = _check_grid(positions, orientations)
-    block = _check_count(block, "block")
-    _check_ik_options(robot, (4, 4), options)
-    R = matrix_from_quaternion(orientations)
-    flat = positions.reshape(-1, 3)
-    reachable, branches, median = _statistics(robot, flat, R, block, options)
-    lead = positions.shape[:-1]
-    return ReachabilityMap(positions=positions, orientations=orientations,
-                           reachable=reachable.reshape(lead), branches=branches.reshape(lead),
-                           median_manipulability=median.reshape(lead))
-
-
 def _compute(scheduler, *arrays):
     """``dask.compute(*arrays)`` on ``scheduler``: None (the active one), a name, a
     ``distributed.Client`` or the address of a scheduler (connected for this call)."""
@@ -685,17 +354,17 @@ def _compute(scheduler, *arrays):
 
 
 def reachability_map(robot: Robot, positions: ArrayLike, orientations: ArrayLike, *,
-                     chunk: int | None = None, scheduler=None, block: int = _BLOCK,
+                     chunk: int | None = None, scheduler=None, block: int = BLOCK,
                      **options) -> ReachabilityMap:
     r"""The reachability and dexterity map of a UR arm, computed by dask.
 
     For every tool position :math:`p_m` (``positions``, any grid) and orientation
     :math:`q_k` (``orientations``), the pose :math:`X_{mk} = (R(q_k), p_m)` is scored by
-    :func:`pose_dexterity`: :math:`c_{mk}`, the number of valid inverse-kinematics
-    branches of :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>` (0 to 8), and :math:`w_{mk}`, the
-    largest manipulability :math:`\lvert\det J\rvert` over them (:math:`\mathrm m^3`, 0 when
-    :math:`c_{mk} = 0`). Each position is then summarised over the :math:`K` orientations
-    (:class:`ReachabilityMap`):
+    :func:`~dqlab.reachability.pose_dexterity`: :math:`c_{mk}`, the number of valid
+    inverse-kinematics branches of :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>` (0 to 8),
+    and :math:`w_{mk}`, the largest manipulability :math:`\lvert\det J\rvert` over them
+    (:math:`\mathrm m^3`, 0 when :math:`c_{mk} = 0`). Each position is then summarised over
+    the :math:`K` orientations (:class:`~dqlab.reachability.ReachabilityMap`):
 
     .. math::
 
@@ -705,10 +374,10 @@ def reachability_map(robot: Robot, positions: ArrayLike, orientations: ArrayLike
 
     whose ratios to :math:`K` are the fraction of orientations reachable and the mean
     branch count. The positions are cut into chunks of ``chunk`` positions; one task scores
-    the ``chunk`` :math:`\times K` samples of a chunk (with
-    :func:`reachability_statistics`'s numpy code) and returns only their statistics, so
-    the samples never travel. The result equals :func:`reachability_statistics` number for
-    number.
+    the ``chunk`` :math:`\times K` samples of a chunk with
+    :func:`~dqlab.reachability.reachability_statistics` (the numpy code) and returns only
+    their statistics, so the samples never travel. The result equals
+    :func:`~dqlab.reachability.reachability_statistics` of the whole grid number for number.
 
     Parameters
     ----------
@@ -761,6 +430,7 @@ def reachability_map(robot: Robot, positions: ArrayLike, orientations: ArrayLike
 
     >>> import numpy as np
     >>> from dqlab.models import ur3
+    >>> from dqlab.reachability import reachability_statistics, super_fibonacci_quaternions
     >>> robot, quats = ur3(), super_fibonacci_quaternions(16)
     >>> grid = [[0.0, -0.35, 0.25], [0.0, -0.35, 0.45], [0.9, 0.0, 0.2]]
     >>> rmap = reachability_map(robot, grid, quats, chunk=2, scheduler="synchronous")
@@ -776,18 +446,20 @@ def reachability_map(robot: Robot, positions: ArrayLike, orientations: ArrayLike
     reachability_map(robot, grid, quats, scheduler=client)``.
     """
     da = _dask_array()
-    positions, orientations = _check_grid(positions, orientations)
-    block = _check_count(block, "block")
+    positions = as_float_array(positions, "positions", (3,))
+    # the numpy reference checks the robot, the orientations, block and the options
+    orientations = reachability_statistics(robot, np.zeros((0, 3)), orientations, block=block,
+                                           **options).orientations
     k = len(orientations)
-    chunk = max(1, _SAMPLES_PER_TASK // k) if chunk is None else _check_count(chunk, "chunk")
+    chunk = (max(1, _SAMPLES_PER_TASK // k) if chunk is None
+             else check_scalar(chunk, "chunk", minimum=1, integer=True))
     if not (scheduler is None or isinstance(scheduler, str) or hasattr(scheduler, "get")
             or callable(scheduler)):
         raise ValueError(f"scheduler must be None, a name, a distributed.Client or an "
                          f"address, got {scheduler!r}")
-    _check_ik_options(robot, (4, 4), options)
-    R = matrix_from_quaternion(orientations)
     flat = positions.reshape(-1, 3)
-    records = _map_leading(functools.partial(_statistics_block, robot, R, block, options),
+    records = _map_leading(functools.partial(_statistics_block, robot, orientations, block,
+                                             options),
                            da.from_array(flat, chunks=(chunk, 3)), 1, (), _STATISTICS)
     (out,) = _compute(scheduler, records)
     lead = positions.shape[:-1]
@@ -796,3 +468,17 @@ def reachability_map(robot: Robot, positions: ArrayLike, orientations: ArrayLike
         reachable=out["reachable"].reshape(lead), branches=out["branches"].reshape(lead),
         median_manipulability=out["median_manipulability"].reshape(lead))
 
+
+_STATISTICS = np.dtype([("reachable", np.int64), ("branches", np.int64),
+                        ("median_manipulability", np.float64)])
+
+
+def _statistics_block(robot, orientations, block, options, positions):
+    """:func:`dqlab.reachability.reachability_statistics` of one chunk of positions, as an
+    array of records (one task's whole result)."""
+    rmap = reachability_statistics(robot, positions, orientations, block=block, **options)
+    out = np.empty(len(positions), dtype=_STATISTICS)
+    out["reachable"] = rmap.reachable
+    out["branches"] = rmap.branches
+    out["median_manipulability"] = rmap.median_manipulability
+    return out

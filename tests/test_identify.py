@@ -473,3 +473,68 @@ def test_non_convergence_is_reported():
     with pytest.warns(idf.IllConditionedWarning, match="did not converge"):
         fit = idf.calibrate(nominal, q, real.fk(q)[:, :3, 3], max_iter=1)
     assert not fit.converged and fit.iterations == 1
+
+
+# --- scale invariance and the tolerances --------------------------------------------------
+
+@pytest.mark.parametrize("scale", [1e-160, 1e160])
+def test_fit_linear_gives_the_same_answer_in_any_units(scale):
+    """The same problem with A and b scaled together: the same estimate, rank, combinations
+    and standard errors (the column norms and the covariance never overflow or underflow)."""
+    rng = np.random.default_rng(4)
+    t = np.linspace(0.0, 1.0, 20)
+    A = np.column_stack([np.ones(20), t, t**2, np.ones(20)])
+    b = 1.0 + 2.0 * t - 3.0 * t**2 + rng.normal(scale=1e-3, size=20)
+    names = ["a", "b", "c", "d"]
+    reference = idf.fit_linear(A, b, names=names)
+    fit = idf.fit_linear(A * scale, b * scale, names=names)
+    assert fit.rank == reference.rank == 3
+    assert fit.unidentifiable == reference.unidentifiable == ("a - d",)
+    assert fit.identifiable == reference.identifiable
+    np.testing.assert_allclose(fit.estimate, reference.estimate, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(fit.standard_errors, reference.standard_errors, rtol=1e-9)
+    assert fit.sigma == pytest.approx(reference.sigma * scale, rel=1e-9)
+    np.testing.assert_allclose([s for *_, s in fit.combinations()],
+                               [s for *_, s in reference.combinations()], rtol=1e-9)
+
+
+def test_a_column_in_smaller_units_still_has_an_effect():
+    """Column scaling is documented: a length given in nanometres is estimated, in
+    nanometres, not declared without effect."""
+    t = np.linspace(0.0, 1.0, 12)
+    A = np.column_stack([np.ones(12), t, 1e-9 * t**2])
+    b = 1.0 + 2.0 * t - 3.0 * t**2
+    fit = idf.fit_linear(A, b, names=["a", "b", "c"])
+    assert fit.held == () and fit.rank == 3
+    assert fit.value("c") == pytest.approx(-3e9, rel=1e-9)
+
+
+@pytest.mark.parametrize("bad", [np.nan, -1.0, 1j, "x", None, 1.0])
+def test_rank_tol_must_be_a_relative_threshold(bad):
+    with pytest.raises(ValueError, match="^rank_tol must be"):
+        idf.fit_linear(np.eye(3), np.ones(3), rank_tol=bad)
+
+
+@pytest.mark.parametrize("bad", [np.nan, 0.0, -0.1, np.inf, 1j])
+def test_calibrate_refuses_a_rotation_scale_that_is_not_a_positive_number(bad):
+    robot = desk_arm()
+    q = np.random.default_rng(2).uniform(0.2, 1.2, (8, 3))
+    with pytest.raises(ValueError, match="^rotation_scale must be a finite number > 0"):
+        idf.calibrate(robot, q, robot.fk(q), measure="pose", rotation_scale=bad)
+
+
+@pytest.mark.parametrize("name, bad", [("tol", np.inf), ("tol", -1.0), ("max_iter", 2.5),
+                                        ("max_iter", 0), ("max_condition", np.nan)])
+def test_calibrate_refuses_bad_iteration_settings(name, bad):
+    robot = desk_arm()
+    q = np.random.default_rng(2).uniform(0.2, 1.2, (8, 3))
+    with pytest.raises(ValueError, match=f"^{name} must be"):
+        idf.calibrate(robot, q, robot.fk(q)[:, :3, 3], **{name: bad})
+
+
+def test_identification_functions_refuse_a_robot_that_is_none():
+    for call in (lambda: idf.dh_parameter_names(None), lambda: idf.dh_parameters(None),
+                 lambda: idf.identification_jacobian(None, np.zeros(3)),
+                 lambda: idf.calibrate(None, np.zeros((8, 3)), np.zeros((8, 3)))):
+        with pytest.raises(TypeError, match="^robot must be a Robot, got None"):
+            call()

@@ -155,10 +155,10 @@ def test_suction_without_an_object_under_the_cup_is_refused(arm):
 
 
 @pytest.mark.parametrize(("kwargs", "message"), [
-    ({"v_max": 0.0}, "v_max must be a positive number"),
-    ({"a_max": np.nan}, "a_max must be a positive number"),
-    ({"dt": -0.1}, "dt must be a positive number"),
-    ({"dwell": -1.0}, "dwell must be a number >= 0"),
+    ({"v_max": 0.0}, "v_max must be a finite number > 0"),
+    ({"a_max": np.nan}, "a_max must be a finite number > 0"),
+    ({"dt": -0.1}, "dt must be a finite number > 0"),
+    ({"dwell": -1.0}, "dwell must be a finite number >= 0"),
     ({"branch": 4}, "branch must be"),
     ({"wrist_limits": (1.0, 0.0)}, "wrist_limits must be"),
 ])
@@ -186,7 +186,7 @@ def test_random_reachable_tasks_never_give_nan_or_out_of_limit_samples(arm):
 def test_animation_records_the_arm_the_cup_and_the_object(arm, plan):
     viz = pytest.importorskip("dqlab.viz")
     scene = viz.Scene(grid_size=0.8, grid_step=0.05)
-    pp.animate_pick_place(scene, arm, plan)
+    viz.animate_pick_place(scene, arm, plan)
     paths = {c.get("path", "") for c in scene.commands()}
     assert any(p.endswith("/object/box") for p in paths)
     assert any(p.endswith("/cup/on") for p in paths)
@@ -194,7 +194,31 @@ def test_animation_records_the_arm_the_cup_and_the_object(arm, plan):
     animation = [c for c in scene.commands() if c["type"] == "set_animation"]
     assert len(animation) == 1
     light = viz.Scene()
-    pp.animate_pick_place(light, arm, plan, stride=4)
+    viz.animate_pick_place(light, arm, plan, stride=4)
     assert len(light.html(bundle="none")) < len(scene.html(bundle="none"))
     with pytest.raises(ValueError, match="stride must be"):
-        pp.animate_pick_place(viz.Scene(), arm, plan, stride=0)
+        viz.animate_pick_place(viz.Scene(), arm, plan, stride=0)
+
+
+@pytest.mark.parametrize("branch", [1.0, True, "1", None, 4, -1])
+def test_a_branch_that_is_not_a_row_number_is_refused(arm, branch):
+    with pytest.raises(ValueError, match="^branch must be 0, 1, 2, 3 or 'closest'"):
+        pp.joint_targets(arm, pp.task_from_lab(LAB_ROWS), branch=branch)
+
+
+def test_functions_that_take_a_robot_refuse_none(plan):
+    task = pp.task_from_lab(LAB_ROWS)
+    for call in (lambda: pp.joint_targets(None, task), lambda: pp.cup_poses(None, plan.targets),
+                 lambda: pp.plan_pick_place(None, task)):
+        with pytest.raises(TypeError, match="^robot must be a Robot, got None"):
+            call()
+
+
+def test_instants_that_cannot_be_told_apart_are_refused(arm):
+    with pytest.raises(ValueError, match="dt = 1e.199 s and dwell = 0.3 s are too large"):
+        pp.plan_pick_place(arm, pp.task_from_lab(LAB_ROWS), dt=1e199)
+
+
+def test_a_tolerance_of_infinity_would_accept_any_target_and_is_refused(arm):
+    with pytest.raises(ValueError, match="^tol must be a finite number >= 0, got inf"):
+        pp.joint_targets(arm, pp.task_from_lab(LAB_ROWS), tol=np.inf)

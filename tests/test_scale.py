@@ -1,6 +1,7 @@
-"""dqlab.scale: the batch functions on dask arrays equal the numpy ones number for number, on
-any chunking and scheduler; the reachability map against a direct computation; the message
-without dask. Tests that need dask skip one by one when the extra ``scale`` is absent."""
+"""dqlab.scale and dqlab.reachability: the batch functions on dask arrays equal the numpy ones
+number for number, on any chunking and scheduler; the reachability map against a direct
+computation; the message without dask. Tests that need dask skip one by one when the extra
+``scale`` is absent."""
 
 import subprocess
 import sys
@@ -15,16 +16,13 @@ from dqlab.ik import ur
 from dqlab.jacobian import manipulability
 from dqlab.models import scara_rsm5, ur3
 from dqlab.quaternion import matrix_from_quaternion
-from dqlab.scale import (
+from dqlab.reachability import (
     ReachabilityMap,
-    dexterity,
-    fk,
-    ik_ur,
     pose_dexterity,
-    reachability_map,
     reachability_statistics,
     super_fibonacci_quaternions,
 )
+from dqlab.scale import dexterity_dask, fk_dask, ik_ur_dask, reachability_map
 
 ROOT = Path(__file__).resolve().parents[1]
 ROBOT = ur3()
@@ -71,7 +69,7 @@ def compute(*arrays):
 def test_fk_equals_numpy_on_every_chunking(chunks):
     da = dask_array()
     q = joint_vectors()
-    X = fk(ROBOT, da.from_array(q, chunks=(chunks, 6)))
+    X = fk_dask(ROBOT, da.from_array(q, chunks=(chunks, 6)))
     assert X.shape == (21, 4, 4) and X.chunks[0] == da.from_array(q, chunks=(chunks, 6)).chunks[0]
     assert np.array_equal(compute(X)[0], ROBOT.fk(q))
 
@@ -79,10 +77,10 @@ def test_fk_equals_numpy_on_every_chunking(chunks):
 def test_fk_two_leading_axes_and_a_chunked_joint_axis():
     da = dask_array()
     q = joint_vectors(24).reshape(4, 6, 6)
-    X = fk(ROBOT, da.from_array(q, chunks=(3, 4, 2)))       # joints cut in three chunks too
+    X = fk_dask(ROBOT, da.from_array(q, chunks=(3, 4, 2)))       # joints cut in three chunks too
     assert X.chunks == ((3, 1), (4, 2), (4,), (4,))
     assert np.array_equal(compute(X)[0], ROBOT.fk(q))
-    assert np.array_equal(compute(fk(ROBOT, q))[0], ROBOT.fk(q))   # numpy in: one chunk
+    assert np.array_equal(compute(fk_dask(ROBOT, q))[0], ROBOT.fk(q))   # numpy in: one chunk
 
 
 def assert_ik_equal(lazy, result):
@@ -108,14 +106,14 @@ def test_ik_ur_equals_numpy_with_singular_and_unreachable_poses(chunks):
     assert result.flags["elbow_singular"][3] and result.flags["wrist_singular"][5]
     assert result.flags["elbow_singular"][8]
     assert result.flags["unreachable"][-2:].all() and result.count[-2:].sum() == 0
-    assert_ik_equal(ik_ur(ROBOT, da.from_array(POSES, chunks=(chunks, 4, 4))), result)
+    assert_ik_equal(ik_ur_dask(ROBOT, da.from_array(POSES, chunks=(chunks, 4, 4))), result)
 
 
 def test_ik_ur_dual_quaternions_leading_axes_and_options():
     da = dask_array()
     Q = dual_quaternion_from_transform(POSES[:22]).reshape(2, 11, 8)
     options = dict(tol=1e-8, residuals="fk", q_ref=[0.0, -1.0, 1.0, 0.0, 1.0, 0.5])
-    lazy = ik_ur(ROBOT, da.from_array(Q, chunks=(1, 4, 3)), **options)
+    lazy = ik_ur_dask(ROBOT, da.from_array(Q, chunks=(1, 4, 3)), **options)
     assert lazy.solutions.shape == (2, 11, 8, 6) and lazy.valid.chunks[:2] == ((1, 1), (4, 4, 3))
     assert_ik_equal(lazy, ur(ROBOT, Q, **options))
 
@@ -124,7 +122,7 @@ def test_ik_ur_with_a_tool():
     da = dask_array()
     X_6T = transform_from(np.eye(3), [0.0, 0.0, 0.1])
     X = ROBOT.fk(joint_vectors()) @ X_6T
-    assert_ik_equal(ik_ur(ROBOT, da.from_array(X, chunks=(5, 4, 4)), tool=X_6T),
+    assert_ik_equal(ik_ur_dask(ROBOT, da.from_array(X, chunks=(5, 4, 4)), tool=X_6T),
                     ur(ROBOT, X, tool=X_6T))
 
 
@@ -132,7 +130,7 @@ def test_a_pose_that_is_not_rigid_raises_when_computed():
     da = dask_array()
     X = POSES[:4].copy()
     X[2, 0, 0] = 2.0
-    lazy = ik_ur(ROBOT, da.from_array(X, chunks=(2, 4, 4)))     # nothing computed yet
+    lazy = ik_ur_dask(ROBOT, da.from_array(X, chunks=(2, 4, 4)))     # nothing computed yet
     with pytest.raises(ValueError):
         compute(lazy.valid)
 
@@ -175,7 +173,7 @@ def test_pose_dexterity_is_det_j_and_does_not_depend_on_the_tcp():
 @pytest.mark.parametrize("chunks", [1, 6, 23])
 def test_dexterity_equals_pose_dexterity(chunks):
     da = dask_array()
-    count, w = compute(*dexterity(ROBOT, da.from_array(POSES, chunks=(chunks, 4, 4))))
+    count, w = compute(*dexterity_dask(ROBOT, da.from_array(POSES, chunks=(chunks, 4, 4))))
     count_np, w_np = pose_dexterity(ROBOT, POSES)
     assert np.array_equal(count, count_np) and np.array_equal(w, w_np)
 
@@ -240,7 +238,7 @@ def test_the_same_code_on_a_distributed_cluster_by_client_and_by_address():
         with distributed.Client(cluster, set_as_default=False) as client:
             assert_maps_equal(reachability_map(ROBOT, GRID, QUATS, chunk=4,
                                                scheduler=client), reference)
-            lazy = ik_ur(ROBOT, __import__("dask.array").array.from_array(
+            lazy = ik_ur_dask(ROBOT, __import__("dask.array").array.from_array(
                 POSES, chunks=(6, 4, 4)))
             valid, count = client.compute([lazy.valid, lazy.count], sync=True)
             assert np.array_equal(valid, ur(ROBOT, POSES).valid)
@@ -261,6 +259,61 @@ def test_reachability_map_save_and_load(tmp_path):
         rmap.save(tmp_path / "bad.npz", robot=ROBOT)
 
 
+def _saved_arrays(rmap, **changes):
+    arrays = {name: getattr(rmap, name) for name in ("positions", "orientations", "reachable",
+                                                     "branches", "median_manipulability")}
+    arrays.update(changes)
+    return arrays
+
+
+@pytest.mark.parametrize("change, match", [
+    ({"reachable": np.zeros(3, dtype=int)}, "reachable must have shape"),
+    ({"branches": np.array([7.5, 0.0])}, "branches must be an array of integers"),
+    ("negative", "reachable must be between 0 and 4"),
+    ("more reachable than branches", "branches must be >= reachable"),
+    ({"orientations": np.ones((4, 4))}, "orientations must be a unit quaternion"),
+    ({"median_manipulability": np.zeros(2)}, "median_manipulability must be NaN exactly"),
+    ({"positions": np.full((2, 3), np.nan)}, "positions contains NaN"),
+])
+def test_a_map_of_inconsistent_arrays_is_refused_by_load_naming_the_file(tmp_path, change,
+                                                                        match):
+    rmap = reachability_statistics(ROBOT, [[0.0, -0.35, 0.25], [0.9, 0.0, 0.2]],
+                                   super_fibonacci_quaternions(4))
+    if change == "negative":
+        change = {"reachable": np.array([-1, 0])}
+    elif change == "more reachable than branches":
+        change = {"branches": np.array([3, 0])}
+    np.savez(tmp_path / "bad.npz", **_saved_arrays(rmap, **change))
+    with pytest.raises(ValueError, match=f"bad.npz: {match}"):
+        ReachabilityMap.load(tmp_path / "bad.npz")
+
+
+def test_a_file_that_is_not_a_map_is_refused_naming_it(tmp_path):
+    rmap = reachability_statistics(ROBOT, [[0.0, -0.35, 0.25]], super_fibonacci_quaternions(4))
+    rmap.save(tmp_path / "good.npz")
+    data = (tmp_path / "good.npz").read_bytes()
+    files = {"noise.npz": np.random.default_rng(0).bytes(300), "cut.npz": data[:len(data) // 2],
+             "empty.npz": b""}
+    for name, content in files.items():
+        (tmp_path / name).write_bytes(content)
+    np.save(tmp_path / "array.npy", np.zeros(3))
+    objects = np.array([{}], dtype=object)
+    np.savez(tmp_path / "objects.npz", **_saved_arrays(rmap, reachable=objects))
+    np.savez(tmp_path / "missing.npz", positions=rmap.positions)
+    for name, match in [("noise.npz", "not a reachability map"),
+                        ("cut.npz", "not a reachability map"),
+                        ("empty.npz", "not a reachability map"),
+                        ("array.npy", "a single array"),
+                        ("objects.npz", "stored as Python objects"),
+                        ("missing.npz", "no array orientations")]:
+        with pytest.raises(ValueError, match=f"{name}.*{match}"):
+            ReachabilityMap.load(tmp_path / name)
+    with pytest.raises(FileNotFoundError):
+        ReachabilityMap.load(tmp_path / "absent.npz")
+    with pytest.raises(ValueError, match="is a directory"):
+        rmap.save(tmp_path)
+
+
 def test_super_fibonacci_quaternions_cover_the_rotations_evenly():
     q = super_fibonacci_quaternions(2000)
     assert np.allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-15)
@@ -274,12 +327,13 @@ def test_super_fibonacci_quaternions_cover_the_rotations_evenly():
 # -- arguments and the optional dependency ------------------------------------------------
 
 @pytest.mark.parametrize("call, match", [
-    (lambda da: fk(ROBOT, da.zeros((4, 5))), r"q must have shape \(\.\.\., 6\)"),
-    (lambda da: ik_ur(ROBOT, da.zeros((4, 3, 3))), r"poses must have shape \(\.\.\., 4, 4\) or"),
-    (lambda da: dexterity(ROBOT, da.zeros((4, 7))), "poses must have shape"),
-    (lambda da: ik_ur(ROBOT, da.from_array(POSES), q_ref=np.zeros((2, 6))), "q_ref"),
-    (lambda da: ik_ur(ROBOT, da.from_array(POSES), tol=-1.0), "tol"),
-    (lambda da: ik_ur(scara_rsm5(), da.from_array(POSES)), "UR|joint"),
+    (lambda da: fk_dask(ROBOT, da.zeros((4, 5))), r"q must have shape \(\.\.\., 6\)"),
+    (lambda da: ik_ur_dask(ROBOT, da.zeros((4, 3, 3))),
+     r"poses must have shape \(\.\.\., 4, 4\) or"),
+    (lambda da: dexterity_dask(ROBOT, da.zeros((4, 7))), "poses must have shape"),
+    (lambda da: ik_ur_dask(ROBOT, da.from_array(POSES), q_ref=np.zeros((2, 6))), "q_ref"),
+    (lambda da: ik_ur_dask(ROBOT, da.from_array(POSES), tol=-1.0), "tol"),
+    (lambda da: ik_ur_dask(scara_rsm5(), da.from_array(POSES)), "UR|joint"),
     (lambda da: reachability_map(ROBOT, GRID[..., :2], QUATS), "positions must have shape"),
     (lambda da: reachability_map(ROBOT, GRID, QUATS[:, :3]), "orientations"),
     (lambda da: reachability_map(ROBOT, GRID, 2 * QUATS), "orientations"),
@@ -297,21 +351,21 @@ def test_wrong_arguments_raise_value_errors_naming_them(call, match):
 
 
 def test_wrong_count_of_orientations():
-    with pytest.raises(ValueError, match="k must be an int >= 1"):
+    with pytest.raises(ValueError, match="k must be an integer >= 1"):
         super_fibonacci_quaternions(0)
 
 
 def test_text_is_refused():
     da = dask_array()
     with pytest.raises(TypeError, match="q must hold real numbers"):
-        fk(ROBOT, da.from_array(np.array([["a"] * 6])))
+        fk_dask(ROBOT, da.from_array(np.array([["a"] * 6])))
 
 
 def test_without_dask_the_message_names_the_extra(monkeypatch):
     for name in ("dask", "dask.array"):
         monkeypatch.setitem(sys.modules, name, None)          # `import dask` now fails
     with pytest.raises(ImportError, match=r"pip install 'dqlab\[scale\]'") as info:
-        fk(ROBOT, np.zeros((3, 6)))
+        fk_dask(ROBOT, np.zeros((3, 6)))
     assert info.value.__cause__ is None and info.value.__suppress_context__
     with pytest.raises(ImportError, match=r"dqlab\[scale\]"):
         reachability_map(ROBOT, GRID, QUATS)
@@ -327,7 +381,7 @@ def test_an_address_without_distributed_names_the_extra(monkeypatch):
 
 
 def test_importing_dqlab_scale_does_not_import_dask():
-    code = ("import sys, numpy as np, dqlab.scale as s, dqlab.models as m; "
+    code = ("import sys, numpy as np, dqlab.scale, dqlab.reachability as s, dqlab.models as m; "
             "r = m.ur3(); s.pose_dexterity(r, r.fk(np.zeros(6))); "
             "print(sorted(k for k in ('dask', 'distributed') if k in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,

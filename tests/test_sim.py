@@ -599,3 +599,89 @@ def test_a_link_of_a_micrometre_is_not_drawn_but_kept_in_the_kinematics():
     data.qpos[:] = [0.3, -0.2]
     mujoco.mj_kinematics(model, data)
     np.testing.assert_allclose(site_pose(model, data), robot.fk([0.3, -0.2]), atol=1e-15)
+
+
+# -- nothing returned silently wrong, no failure hidden -----------------------------------------
+
+from dqlab.sim import SimulationError, urdf_from_robot  # noqa: E402
+
+Q_BENT = np.array([0.0, -1.5, 1.0, -1.0, -1.5, 0.0])
+
+
+@pytest.mark.parametrize("method, args", [
+    ("inverse_dynamics", (Q_BENT, np.zeros(6), np.zeros(6))),
+    ("gravity_torque", (Q_BENT,)),
+    ("mass_matrix", (Q_BENT,)),
+    ("flange_positions", (Q_BENT,)),
+])
+def test_dynamics_refuse_nan_and_complex_joints(ur3_sim, method, args):
+    bad = np.array(args[0])
+    bad[2] = np.nan
+    with pytest.raises(ValueError, match="^q contains NaN or infinity"):
+        getattr(ur3_sim, method)(bad, *args[1:])
+    with pytest.raises(TypeError, match="^q must hold real numbers"):
+        getattr(ur3_sim, method)(args[0] + 1e-3j, *args[1:])
+
+
+def test_flange_positions_keep_the_leading_shape(ur3_sim):
+    one = ur3_sim.flange_positions(Q_BENT)
+    assert one.shape == (3,)
+    np.testing.assert_allclose(one, models.ur3().fk(Q_BENT)[:3, 3], atol=1e-12)
+    assert ur3_sim.flange_positions(np.stack([[Q_BENT] * 3] * 2)).shape == (2, 3, 3)
+
+
+def test_the_time_step_is_written_exactly_and_bounded():
+    assert 'timestep="1.25e-05"' in mjcf_from_robot(models.ur3(), timestep=1.25e-5)
+    for bad in (1e-16, 0.0, 2.0, np.nan):
+        with pytest.raises(ValueError, match="^timestep must be a finite number >= 1e-09"):
+            mjcf_from_robot(models.ur3(), timestep=bad)
+
+
+def test_complex_masses_and_a_name_that_is_not_text_are_refused():
+    with pytest.raises(TypeError, match="^masses must hold real numbers"):
+        mjcf_from_robot(models.ur3(), masses=np.ones(6) + 1j)
+    for generate in (mjcf_from_robot, urdf_from_robot):
+        with pytest.raises(ValueError, match="^name must be text"):
+            generate(models.ur3(), name=123)
+        with pytest.raises(TypeError, match="^robot must be a Robot, got None"):
+            generate(None)
+
+
+def test_a_control_that_mujoco_would_ignore_is_refused(ur3_sim):
+    ur3_sim.reset(Q_BENT)
+    with pytest.raises(ValueError, match="torque: joint 2 = 1e\\+11 is too large"):
+        ur3_sim.step([0.0, 1e11, 0.0, 0.0, 0.0, 0.0])
+    assert np.array_equal(ur3_sim.q, Q_BENT)
+
+
+def test_unstable_gains_raise_instead_of_returning_a_reset_arm(ur3_sim, tmp_path, monkeypatch):
+    """kp = 2000, kd = 100 at 1 ms: the state blows up, MuJoCo resets it to q = 0 and goes
+    on; the run is reported as failed, and MuJoCo writes no log file."""
+    monkeypatch.chdir(tmp_path)
+    move = SimpleNamespace(t=np.linspace(0.0, 1.0, 201), q=np.tile(Q_BENT, (201, 1)),
+                           qd=np.zeros((201, 6)), qdd=np.zeros((201, 6)))
+    with pytest.raises(SimulationError, match="diverged in the step from t = .* an "
+                                              "acceleration became NaN, infinite"):
+        track(ur3_sim, move, JointPD(kp=2000.0, kd=100.0))
+    assert list(tmp_path.iterdir()) == []
+    # the same trajectory with gains the step can integrate is tracked
+    result = track(ur3_sim, move, JointPD(kp=200.0, kd=20.0, gravity_compensation=True))
+    assert result.max_error.max() < 1e-6
+
+
+def test_a_failed_run_restores_the_payload(ur3_sim):
+    move = smooth_trajectory(duration=0.2)
+    with pytest.raises(SimulationError):
+        track(ur3_sim, move, ComputedTorque(kp=1e12, kd=1e6), payload=np.full(len(move.t), 2.0))
+    assert ur3_sim.payload == 0.0
+
+
+def test_runs_of_less_than_one_step_or_too_many_are_refused(ur3_sim):
+    short = SimpleNamespace(t=np.array([0.0, 1e-4]), q=np.tile(Q_BENT, (2, 1)),
+                            qd=np.zeros((2, 6)), qdd=np.zeros((2, 6)))
+    with pytest.raises(ValueError, match="less than one time step"):
+        track(ur3_sim, short, ComputedTorque())
+    long = SimpleNamespace(t=np.array([0.0, 1e5]), q=np.tile(Q_BENT, (2, 1)),
+                           qd=np.zeros((2, 6)), qdd=np.zeros((2, 6)))
+    with pytest.raises(ValueError, match="time steps of 0.001 s is too large"):
+        track(ur3_sim, long, ComputedTorque())

@@ -201,9 +201,10 @@ def test_time_law_errors(call, match):
         call()
 
 
-def test_time_law_type_errors():
-    with pytest.raises(TypeError, match="duration"):
-        cubic("1 s")
+def test_a_scalar_that_is_not_a_number_is_a_value_error_like_any_other_mistake():
+    for bad in ("1 s", None, 1j, True, [1.0, 2.0]):
+        with pytest.raises(ValueError, match="^duration must be a finite number > 0"):
+            cubic(bad)
 
 
 # --------------------------------------------------------------------------------------
@@ -431,7 +432,7 @@ def test_circle_in_other_planes(plane, axes):
     (lambda: circle_three_phase([0, 0, 0], 0.1, 0.0), "speed"),
     (lambda: circle_three_phase([0, 0, 0], 0.1, 0.05, dt=0), "dt"),
     (lambda: circle_three_phase([0, 0, 0], 0.1, 0.05, plane="xx"), "plane"),
-    (lambda: circle_three_phase([0, 0, 0], 0.1, 0.05, orientation=np.eye(2)), "rotation"),
+    (lambda: circle_three_phase([0, 0, 0], 0.1, 0.05, orientation=np.eye(2)), "orientation"),
     (lambda: line_slerp(np.eye(4), np.eye(4)), "duration"),
     (lambda: line_slerp(np.eye(4), np.eye(4), law=quintic(1.0, 2.0)), "from 0 to 1"),
     (lambda: screw_path(np.eye(4), 2 * np.eye(4), duration=1.0), "X_B"),
@@ -692,3 +693,145 @@ def test_following_refuses_to_leave_the_joint_limits(robot):
     q_path = np.linspace([0.4, -1.3, 1.4, -1.2, 1.0, 6.1], [0.4, -1.3, 1.4, -1.2, 1.0, 6.5], 30)
     with pytest.raises(ValueError, match="joint 6 .* limits|limits: joint 6"):
         follow_path_ur(robot, pose_path(robot, q_path), q_start=q_path[0])
+
+
+# --------------------------------------------------------------------------------------
+# overflow, underflow and the first instant
+
+
+def test_time_grid_keeps_the_first_instant_however_short_the_motion():
+    assert time_grid(1e-12, 0.005).tolist() == [0.0, 1e-12]
+    assert time_grid(0.0, 0.005).tolist() == [0.0]
+    traj = joint_trajectory([0.0, 0.0], [1.0, -1.0], duration=2.0, dt=1e9)
+    assert traj.t.tolist() == [0.0, 2.0]
+    assert traj.q.tolist() == [[0.0, 0.0], [1.0, -1.0]]
+
+
+def test_via_points_a_picosecond_apart_keep_every_knot():
+    traj = via_points([[0.0], [1e-12], [1.0]], [0.0, 1e-12, 1.0], dt=0.1)
+    assert traj.t[0] == 0.0 and traj.t[1] == 1e-12 and traj.t[-1] == 1.0
+    assert traj.q[[0, 1, -1], 0].tolist() == [0.0, 1e-12, 1.0]
+
+
+def test_time_grid_refuses_more_samples_than_it_can_hold():
+    with pytest.raises(ValueError, match="too large"):
+        time_grid(1e200, 0.005)
+
+
+@pytest.mark.parametrize("T", [1e-100, 1e-3, 1.0, 1e70, 1e100, 1e150])
+def test_polynomial_laws_of_any_duration_are_exact(T):
+    """No power of the duration in the coefficients: no overflow, no underflow."""
+    for law, c_v, c_a in ((cubic(T, 2.0), 1.5, 6.0), (quintic(T, 2.0), 1.875, 10 / 3**0.5)):
+        assert law.distance == pytest.approx(2.0, rel=1e-15)
+        assert float(law.position(T / 2)) == pytest.approx(1.0, rel=1e-15)
+        assert law.peak_speed == pytest.approx(c_v * 2.0 / T, rel=1e-12)
+        assert law.peak_acceleration == pytest.approx(c_a * 2.0 / T / T, rel=1e-12)
+        assert np.all(np.isfinite(law(np.linspace(0.0, T, 11))))
+
+
+def test_a_law_whose_derivatives_overflow_is_refused():
+    with pytest.raises(ValueError, match="overflows"):
+        cubic(1e-200)
+    with pytest.raises(ValueError, match="overflows"):
+        quintic(1.0, 1e307)
+    with pytest.raises(ValueError, match="too large"):
+        quintic(1.0, 1e308)
+
+
+def test_a_trapezoid_with_an_unrepresentable_phase_names_its_cause():
+    with pytest.raises(ValueError, match="accel_fraction = 1e-300"):
+        trapezoidal(1.0, duration=1.0, accel_fraction=1e-300)
+    law = trapezoidal(1.0, duration=1.0, a_max=1e12)     # a tiny ramp, well computed
+    assert law.switch_times[0] == pytest.approx(1e-12, rel=1e-6)
+    assert law.peak_acceleration == pytest.approx(1e12, rel=1e-9)
+
+
+@pytest.mark.parametrize("scale", [1e-160, 1.0, 1e160])
+def test_joint_velocities_do_not_overflow_or_underflow(scale):
+    x = np.array([0.3, -0.2, 0.1, 0.05, 0.0, -0.4])
+    J = ur3().jacobian(np.array([0.3, -1.2, 1.1, -0.4, 0.9, 0.2]))
+    reference = np.linalg.solve(J, x)
+    assert np.allclose(joint_velocities(scale * J, x) * scale, reference, rtol=1e-10)
+    np.testing.assert_allclose(joint_velocities(scale * np.eye(6), x), x / scale, rtol=1e-14)
+
+
+def test_joint_velocities_with_damping_far_above_the_singular_values():
+    J = np.diag([1e-3, 2e-3])
+    x = np.array([1.0, 1.0])
+    lam = 1e120                                   # lambda^2 / sigma^2 beyond 1e200
+    np.testing.assert_allclose(joint_velocities(J, x, damping=lam), J.T @ x / lam**2,
+                               rtol=1e-12)
+
+
+def test_joint_velocities_name_a_one_dimensional_j():
+    with pytest.raises(ValueError, match="^J must have shape"):
+        joint_velocities(np.ones(6), np.ones(6))
+
+
+def test_track_branches_refuses_a_short_t_and_a_float_branch(robot):
+    q_path = np.linspace([0.4, -1.3, 1.4, -1.2, 1.0, -2.5], [0.5, -1.2, 1.3, -1.0, 1.2, -2.2], 5)
+    result = ur(robot, robot.fk(q_path))
+    with pytest.raises(ValueError, match="^t must have shape \\(5,\\)"):
+        track_branches(result, t=[0.0, 0.1])
+    for branch in (1.0, True, "up"):
+        with pytest.raises(ValueError, match="^branch must be"):
+            track_branches(result, branch=branch)
+    with pytest.raises(TypeError, match="^result must be a IKResult"):
+        track_branches(q_path)
+
+
+def test_paths_need_their_position_velocity_and_acceleration():
+    with pytest.raises(ValueError, match="^velocity is required"):
+        CartesianPath(t=[0.0], position=[[0.0, 0, 0]], velocity=None,
+                      acceleration=[[0.0, 0, 0]])
+
+
+def test_every_function_that_takes_a_robot_refuses_none(robot):
+    path = line_slerp(transform_from(rot_x(np.pi / 2), [0.0, -0.3, 0.3]),
+                      transform_from(rot_x(np.pi / 2), [0.05, -0.3, 0.3]), duration=0.1,
+                      dt=0.05)
+    for call in (lambda: follow_path_ur(None, path),
+                 lambda: ur_singularity_margins(None, np.zeros(6)),
+                 lambda: follow_path_numerical(None, path, np.zeros(6))):
+        with pytest.raises(TypeError, match="^robot must be a Robot, got None"):
+            call()
+
+
+def test_a_csv_file_that_is_not_utf8_is_refused_naming_the_file_and_line(tmp_path):
+    path = tmp_path / "traj.csv"
+    joint_trajectory([0.0], [1.0], duration=1.0, dt=0.5).save_csv(path)
+    data = path.read_bytes().split(b"\n")
+    data[2] = data[2][:3] + b"\xff" + data[2][3:]
+    path.write_bytes(b"\n".join(data))
+    with pytest.raises(ValueError, match=r"traj\.csv, line 3: byte 0xff at column 4 is not "
+                                         r"UTF-8"):
+        Trajectory.load_csv(path)
+    with pytest.raises(TypeError, match="^path must be a file path"):
+        Trajectory.load_csv(None)
+
+
+@settings(max_examples=30, deadline=None)
+@given(L=st.floats(0.01, 1.0), V=st.floats(0.01, 1.0), A=st.floats(0.05, 5.0))
+def test_a_line_run_at_a_tool_speed_stays_within_it(L, V, A):
+    X_A = transform_from(rot_x(0.3), [0.1, -0.2, 0.3])
+    X_B = transform_from(rot_x(0.3) @ rot_z(0.5), X_A[:3, 3] + L * np.array([0.6, 0.0, 0.8]))
+    path = line_slerp(X_A, X_B, speed=V, acceleration=A, dt=0.002)
+    t = np.linspace(0.0, path.law.duration, 4001)
+    s, sd, sdd = path.law(t)
+    assert np.max(np.abs(sd)) * L <= V * (1 + 1e-9)
+    assert np.max(np.abs(sdd)) * L <= A * (1 + 1e-9)
+    T = L / V + V / A if L > V * V / A else 2 * np.sqrt(L / A)      # the shortest motion
+    assert path.law.duration == pytest.approx(T, rel=1e-12)
+    assert np.allclose(path.position[-1], X_B[:3, 3], atol=1e-15)
+
+
+def test_a_line_takes_one_timing():
+    X_B = transform_from(np.eye(3), [0.3, 0.0, 0.0])
+    for kwargs in ({"duration": 1.0, "law": quintic(1.0)}, {"duration": 1.0, "speed": 0.1,
+                                                             "acceleration": 1.0},
+                   {"speed": 0.1}):
+        with pytest.raises(ValueError, match="give"):
+            line_slerp(np.eye(4), X_B, **kwargs)
+    with pytest.raises(ValueError, match="^speed: the line has length 0"):
+        line_slerp(np.eye(4), transform_from(rot_z(1.0), [0.0, 0.0, 0.0]), speed=0.1,
+                   acceleration=1.0)

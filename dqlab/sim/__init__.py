@@ -32,6 +32,7 @@ from .simulation import (
     ComputedTorque,
     DynamicsModel,
     JointPD,
+    SimulationError,
     TrackingResult,
     check_trajectory,
     require_mujoco,
@@ -43,5 +44,5 @@ __all__ = [
     "mjcf_from_robot", "urdf_from_robot", "link_placements", "default_masses", "robot_inertias",
     "UR3_LINK_MASSES", "UR3_PAYLOAD", "UR3_BASE_MASS",
     "ArmSimulation", "JointPD", "ComputedTorque", "DynamicsModel", "TrackingResult", "track",
-    "check_trajectory", "require_mujoco", "MujocoBackend", "UR3_HOME",
+    "check_trajectory", "require_mujoco", "SimulationError", "MujocoBackend", "UR3_HOME",
 ]

@@ -1,41 +1,38 @@
-"""Argument checks shared by the modules of :mod:`dqlab.sim` (clear ``ValueError`` s that
-name the argument)."""
-
-import math
+"""Argument checks of :mod:`dqlab.sim`: joint-space vectors (clear errors that name the
+argument). Scalars go through :func:`dqlab._checks.check_scalar`, like everywhere else."""
 
 import numpy as np
 
+from .._checks import check_scalar, real_array
+
+_FLOAT64 = np.dtype(np.float64)
+
 
 def number(value, name, *, minimum=0.0, strict=True):
-    """``value`` as a finite float above ``minimum`` (or equal, if not ``strict``).
+    """``value`` as a finite float above ``minimum`` (or equal, if not ``strict``): the call
+    of :func:`dqlab._checks.check_scalar` that :mod:`dqlab.sim.backend` makes (new code
+    calls ``check_scalar`` itself).
 
     >>> number(0.5, "dt")
     0.5
     >>> number(0.0, "payload", strict=False)
     0.0
     """
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
-    ok = value > minimum if strict else value >= minimum
-    if not (math.isfinite(value) and ok):
-        relation = ">" if strict else ">="
-        raise ValueError(f"{name} must be a finite number {relation} {minimum:g}, "
-                         f"got {value!r}")
-    return value
+    return check_scalar(value, name, minimum=minimum, strict=strict)
 
 
 def vector(value, n, name):
     """``value`` as a finite float array of shape (n,); a single number is repeated.
+    Complex numbers, text and None are refused (``TypeError``), like every array of dqlab.
 
     >>> vector(2.0, 3, "kp")
     array([2., 2., 2.])
     """
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be numbers, got {value!r}") from None
+    if type(value) is np.ndarray and value.dtype is _FLOAT64 and value.shape == (n,):
+        total = sum(value.tolist())                   # a float: fast for a few joints
+        if total - total == 0.0:                      # NaN or inf, or an overflow: check
+            return value
+    arr = real_array(value, name)
     if arr.ndim == 0:
         arr = np.full(n, float(arr))
     if arr.shape != (n,):
@@ -45,15 +42,20 @@ def vector(value, n, name):
     return arr
 
 
-def per_joint(value, n, name, *, positive):
-    """Like :func:`vector`, and every entry > 0 (``positive``) or >= 0.
+def per_joint(value, n, name, *, positive, minimum=None):
+    """Like :func:`vector`, and every entry > 0 (``positive``) or >= 0, and >= ``minimum``
+    when given.
 
     >>> per_joint([1.0, 0.0], 2, "damping", positive=False)
     array([1., 0.])
     """
     arr = vector(value, n, name)
     bad = (arr <= 0) if positive else (arr < 0)
+    if minimum is not None:
+        bad |= arr < minimum
     if bad.any():
         kind = "> 0" if positive else ">= 0"
+        if minimum is not None:
+            kind += f" and >= {minimum:g}"
         raise ValueError(f"{name} must be {kind}, got {arr.tolist()}")
     return arr

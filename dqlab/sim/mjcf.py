@@ -43,13 +43,15 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from .._checks import check_instance, check_scalar
 from ..models import UR_DYNAMICS, rod_link_inertias
 from ..quaternion import quaternion_from_matrix
 from ..robot import Robot
-from ._checks import number, per_joint
+from ._checks import per_joint
 
 __all__ = ["mjcf_from_robot", "link_placements", "default_masses", "robot_inertias",
-           "UR3_LINK_MASSES", "UR3_PAYLOAD", "UR3_BASE_MASS"]
+           "UR3_LINK_MASSES", "UR3_PAYLOAD", "UR3_BASE_MASS", "MIN_MASS", "MIN_RADIUS",
+           "MAX_RADIUS", "MIN_TIMESTEP", "MAX_TIMESTEP"]
 
 #: Masses of the UR3's six moving links in kg, from Universal Robots' table of dynamic
 #: parameters (the ``ur_dh`` reference; :data:`dqlab.models.UR_DYNAMICS`, which
@@ -61,6 +63,18 @@ UR3_PAYLOAD = 3.0
 #: Mass of the fixed base housing in kg: the data sheet's 11 kg minus the moving links (it
 #: carries the cable's share too). Fixed to the world, it never enters the dynamics.
 UR3_BASE_MASS = 11.0 - sum(UR3_LINK_MASSES)
+
+#: The lightest link mass accepted, kg (MuJoCo refuses a moving body whose mass or inertia
+#: is below its ``mjMINVAL``, 1e-15).
+MIN_MASS = 1e-6
+#: The smallest radius of the drawn links, metres.
+MIN_RADIUS = 1e-3
+#: The largest radius of the drawn links, metres.
+MAX_RADIUS = 1.0
+#: The shortest simulation time step, seconds.
+MIN_TIMESTEP = 1e-9
+#: The longest simulation time step, seconds.
+MAX_TIMESTEP = 1.0
 
 _LINK_COLOR = "0.62 0.66 0.72 1"
 _HOUSING_COLOR = "0.20 0.45 0.75 1"
@@ -112,8 +126,7 @@ def link_placements(robot):
     >>> np.allclose(X_BnT, np.eye(4))       # no tool: the TCP is body 6's origin
     True
     """
-    if not isinstance(robot, Robot):
-        raise TypeError(f"robot must be a dqlab Robot, got {type(robot).__name__}")
+    check_instance(robot, Robot, "robot")
     corners = [np.eye(4)]
     lefts = []
     for link in robot.links:
@@ -213,6 +226,7 @@ def default_masses(robot):
     >>> default_masses(ur3())
     array([2.  , 3.42, 1.26, 0.8 , 0.8 , 0.35])
     """
+    check_instance(robot, Robot, "robot")
     return np.array([inertia.mass for inertia in robot_inertias(robot)])
 
 
@@ -247,7 +261,7 @@ def mjcf_from_robot(robot, *, masses=None, payload=0.0, radius=None, damping=0.1
         Joint viscous damping (N m s/rad) and armature, the reflected rotor inertia that
         MuJoCo adds to the diagonal of the mass matrix (kg m^2).
     timestep : float, optional
-        Simulation step in seconds.
+        Simulation step in seconds, written exactly.
     integrator : {"implicitfast", "implicit", "RK4", "Euler"}, optional
         ``implicitfast`` (default) treats damping implicitly, the choice for stiff joints.
     gravity : float, optional
@@ -268,8 +282,12 @@ def mjcf_from_robot(robot, *, masses=None, payload=0.0, radius=None, damping=0.1
     TypeError
         If ``robot`` is not a :class:`~dqlab.robot.Robot`.
     ValueError
-        If a mass, radius, damping, armature or time step is negative, not finite or of the
-        wrong length, or the integrator is unknown.
+        If a mass, radius, damping, armature or time step is negative, not finite, of the
+        wrong length or outside its range (a link mass below :data:`MIN_MASS`, a radius
+        outside [:data:`MIN_RADIUS`, :data:`MAX_RADIUS`], a time step outside
+        [:data:`MIN_TIMESTEP`, :data:`MAX_TIMESTEP`]: MuJoCo refuses bodies too light for
+        it, and a step it would write as 0 or take as the whole motion simulates nothing),
+        ``name`` is not text, or the integrator is unknown.
 
     See Also
     --------
@@ -294,30 +312,31 @@ def mjcf_from_robot(robot, *, masses=None, payload=0.0, radius=None, damping=0.1
     is_ur3 = _is_ur3(robot)
     if radius is None:
         radius = min(max(0.05 * total_length, 0.01), 0.05)
-    radius = number(radius, "radius")
+    radius = check_scalar(radius, "radius", minimum=MIN_RADIUS, maximum=MAX_RADIUS)
     inertias = robot_inertias(robot)
     if masses is not None:
-        masses = per_joint(masses, n, "masses", positive=True)
+        masses = per_joint(masses, n, "masses", positive=True, minimum=MIN_MASS)
         inertias = [inertia.scaled(m / inertia.mass) if inertia.mass > 0
                     else type(inertia).sphere(m, inertia.com)
                     for inertia, m in zip(inertias, masses, strict=True)]
     damping = per_joint(damping, n, "damping", positive=False)
     armature = per_joint(armature, n, "armature", positive=False)
-    payload = number(payload, "payload", strict=False)
-    timestep = number(timestep, "timestep")
-    gravity = number(gravity, "gravity", strict=False)
+    payload = check_scalar(payload, "payload", minimum=0)
+    timestep = check_scalar(timestep, "timestep", minimum=MIN_TIMESTEP, maximum=MAX_TIMESTEP)
+    gravity = check_scalar(gravity, "gravity", minimum=0)
     if base_mass is None:
         base_mass = UR3_BASE_MASS if is_ur3 else 1.0
-    base_mass = number(base_mass, "base_mass")
-    if integrator not in ("implicitfast", "implicit", "RK4", "Euler"):
+    base_mass = check_scalar(base_mass, "base_mass", minimum=0, strict=True)
+    if not isinstance(integrator, str) or integrator not in (
+            "implicitfast", "implicit", "RK4", "Euler"):
         raise ValueError("integrator must be 'implicitfast', 'implicit', 'RK4' or 'Euler', "
                          f"got {integrator!r}")
-    model_name = quoteattr(name if name is not None else (robot.name or "robot"))
+    model_name = quoteattr(model_name_of(robot, name))
 
     lines = [
         f"<mujoco model={model_name}>",
         '  <compiler angle="radian" autolimits="true"/>',
-        f'  <option timestep="{xml_number(timestep)}" integrator="{integrator}" '
+        f'  <option timestep="{timestep!r}" integrator="{integrator}" '
         f'gravity="0 0 {xml_number(-gravity)}"/>',
         "  <default>",
         '    <geom contype="0" conaffinity="0"/>',
@@ -374,6 +393,15 @@ def _inertial(inertia, X_BF):
     full = (I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2])
     return (f'<inertial pos="{xml_vector(com)}" mass="{xml_number(inertia.mass)}" '
             f'fullinertia="{xml_vector(full)}"/>')
+
+
+def model_name_of(robot, name):
+    """The name a generated model takes: ``name`` (text), else the robot's."""
+    if name is None:
+        return robot.name or "robot"
+    if not isinstance(name, str):
+        raise ValueError(f"name must be text (the model's name), got {name!r}")
+    return name
 
 
 def _housing_and_path(indent, name, mass, radius, path, color):

@@ -28,17 +28,38 @@ and returns a :class:`TrackingResult` of arrays.
 """
 
 import math
+from collections import deque
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from .. import dynamics
-from ._checks import number, vector
+from .._checks import as_float_array, check_instance, check_scalar
+from ..robot import Robot
+from ._checks import per_joint, vector
 from .mjcf import mjcf_from_robot
 
 __all__ = ["ArmSimulation", "JointPD", "ComputedTorque", "DynamicsModel", "TrackingResult",
            "track",
-           "check_trajectory", "sample_reference", "require_mujoco"]
+           "check_trajectory", "sample_reference", "require_mujoco", "SimulationError",
+           "MAX_CONTROL", "MAX_STEPS"]
+
+#: The largest torque (N m, or force in N) MuJoCo applies: a larger control is set to 0 with
+#: a warning (its ``mjMAXVAL``), so :meth:`ArmSimulation.step` refuses it.
+MAX_CONTROL = 1e10
+#: The most time steps :func:`track` simulates in one run.
+MAX_STEPS = 10 ** 7
+# MuJoCo's warnings that mean the state or the control was bad and was reset or ignored
+_FAILURES = {"mjWARN_BADQACC": "an acceleration", "mjWARN_BADQVEL": "a velocity",
+             "mjWARN_BADQPOS": "a position", "mjWARN_BADCTRL": "a control"}
+
+
+class SimulationError(ValueError):
+    """The simulation failed: its state diverged (NaN, infinity or a value beyond
+    MuJoCo's 1e10, after which MuJoCo silently resets the arm to q = 0), or a controller
+    asked for a torque MuJoCo would ignore. A ``ValueError``, since the cause lies in the
+    inputs: gains too high for the time step, torques or a model out of range.
+    """
 
 
 def require_mujoco():
@@ -96,6 +117,7 @@ class ArmSimulation:
     """
 
     def __init__(self, robot, **model_options):
+        check_instance(robot, Robot, "robot")
         mujoco = require_mujoco()
         self._mj = mujoco
         self.robot = robot
@@ -112,12 +134,17 @@ class ArmSimulation:
         self._payload_body = self.model.body("payload").id
         self._payload_radius = float(self.model.geom("payload").size[0])
         self._lo, self._hi = robot.limits.T
+        self._n = robot.n
+        self._failures = {int(getattr(mujoco.mjtWarning, key)): what
+                          for key, what in _FAILURES.items()}
+        self._mujoco_messages = deque(maxlen=16)
         mujoco.mj_forward(self.model, self.data)
 
     # -- state -----------------------------------------------------------------------------
     @property
     def n(self):
-        return self.robot.n
+        """Number of joints."""
+        return self._n
 
     @property
     def timestep(self):
@@ -150,11 +177,16 @@ class ArmSimulation:
         """
         q = self.check_target(q, "q")
         qd = np.zeros(self.n) if qd is None else vector(qd, self.n, "qd")
+        time = check_scalar(time, "time")
         self._mj.mj_resetData(self.model, self.data)
         self.data.qpos[:] = q
         self.data.qvel[:] = qd
-        self.data.time = float(time)
-        self._mj.mj_forward(self.model, self.data)
+        self.data.time = time
+        previous = self._keep_mujoco_warnings()
+        try:
+            self._mj.mj_forward(self.model, self.data)
+        finally:
+            self._mj.set_mju_user_warning(previous)
 
     def check_target(self, q, name="q"):
         """``q`` as a float array of shape (n,), or a ValueError naming ``name``: wrong
@@ -169,17 +201,24 @@ class ArmSimulation:
 
     def flange_positions(self, q):
         """Positions of the flange site (the TCP) in the world for joint vectors ``q``
-        (N, n), shape (N, 3), by MuJoCo's forward kinematics (equal to ``robot.fk``; no
+        (..., n), shape (..., 3), by MuJoCo's forward kinematics (equal to ``robot.fk``; no
         limit check, so a sample a hair beyond a prismatic joint's travel is fine).
+
+        Raises
+        ------
+        ValueError
+            If ``q`` does not end with n joints or holds NaN or infinity (``TypeError`` for
+            complex numbers or text).
         """
-        q = np.asarray(q, dtype=float)
+        q = as_float_array(q, "q", (self.n,))
         scratch = self._scratch
-        out = np.empty((len(q), 3))
-        for k, q_k in enumerate(q):
+        flat = q.reshape(-1, self.n)
+        out = np.empty((len(flat), 3))
+        for k, q_k in enumerate(flat):
             scratch.qpos[:] = q_k
             self._mj.mj_kinematics(self.model, scratch)
             out[k] = scratch.site_xpos[self._flange]
-        return out
+        return out.reshape(q.shape[:-1] + (3,))
 
     def flange_pose(self):
         """:math:`X_{WT}`, the pose of the flange site (the TCP) in the world, shape (4, 4)."""
@@ -197,12 +236,16 @@ class ArmSimulation:
 
     @payload.setter
     def payload(self, mass):
-        mass = number(mass, "payload", strict=False)
+        mass = check_scalar(mass, "payload", minimum=0)
         self.model.body_mass[self._payload_body] = mass
         self.model.body_inertia[self._payload_body] = 0.4 * mass * self._payload_radius ** 2
         # recompute the model's derived constants on the scratch data (mj_setConst moves the
         # data it is given to the reference configuration)
-        self._mj.mj_setConst(self.model, self._scratch)
+        previous = self._keep_mujoco_warnings()
+        try:
+            self._mj.mj_setConst(self.model, self._scratch)
+        finally:
+            self._mj.set_mju_user_warning(previous)
 
     # -- dynamics ----------------------------------------------------------------------------
     def step(self, torque, steps=1):
@@ -211,11 +254,59 @@ class ArmSimulation:
         Raises
         ------
         ValueError
-            If ``torque`` has the wrong shape or holds NaN or infinity.
+            If ``torque`` has the wrong shape, holds NaN or infinity or a value beyond
+            :data:`MAX_CONTROL` (which MuJoCo would set to 0), or ``steps`` is not an
+            integer >= 0.
+        SimulationError
+            If the state diverges during a step (MuJoCo's warnings: NaN, infinity or a
+            value beyond 1e10 in an acceleration, velocity or position, after which it
+            resets the arm to q = 0 and goes on); the step that failed is the last one
+            taken.
         """
-        self.data.ctrl[:] = vector(torque, self.n, "torque")
-        for _ in range(int(steps)):
-            self._mj.mj_step(self.model, self.data)
+        torque = vector(torque, self.n, "torque")
+        values = torque.tolist()
+        if max(values) > MAX_CONTROL or min(values) < -MAX_CONTROL:
+            j = int(np.argmax(np.abs(torque)))
+            raise ValueError(f"torque: joint {j + 1} = {torque[j]:.6g} is too large: MuJoCo "
+                             f"ignores controls beyond {MAX_CONTROL:g}")
+        steps = check_scalar(steps, "steps", minimum=0, integer=True)
+        self.data.ctrl[:] = torque
+        counts = self.data.warning.number            # MuJoCo's warning counters (a view)
+        before = counts.tolist()
+        previous = self._keep_mujoco_warnings()
+        try:
+            for _ in range(steps):
+                start = self.data.time
+                self._mj.mj_step(self.model, self.data)
+                after = counts.tolist()
+                if after != before:
+                    self._raise_if_failed(before, after, start)
+                    before = after
+        finally:
+            self._mj.set_mju_user_warning(previous)
+
+    def _keep_mujoco_warnings(self):
+        """Keep MuJoCo's warnings (the last few, for the errors of :meth:`step`) instead of
+        having them printed and appended to ``MUJOCO_LOG.TXT`` in the working directory;
+        returns the handler to put back with ``mujoco.set_mju_user_warning``."""
+        previous = self._mj.get_mju_user_warning()
+        self._mj.set_mju_user_warning(self._mujoco_messages.append)
+        return previous
+
+    def _raise_if_failed(self, before, after, start):
+        """SimulationError if one of MuJoCo's failure counters went up during the step that
+        began at the time ``start``."""
+        what = [w for i, w in self._failures.items() if after[i] != before[i]]
+        if not what:
+            return
+        said = f" (MuJoCo: {self._mujoco_messages[-1]})" if self._mujoco_messages else ""
+        self._mujoco_messages.clear()
+        raise SimulationError(
+            f"the simulation diverged in the step from t = {start:.6g} s: "
+            f"{' and '.join(what)} became NaN, infinite or beyond 1e10 and MuJoCo reset the "
+            f"arm to q = 0{said}; the gains "
+            f"may be too high for the time step {self.timestep:g} s, or the torques too large "
+            f"for the arm")
 
     def inverse_dynamics(self, q, qd, qdd):
         r"""The joint torques :math:`\tau` that give the acceleration ``qdd`` at ``(q, qd)``.
@@ -233,13 +324,27 @@ class ArmSimulation:
         Returns
         -------
         ndarray, shape (n,)
+
+        Raises
+        ------
+        ValueError
+            If an argument does not have shape (n,), holds NaN or infinity, or the torques
+            overflow (``TypeError`` for complex numbers or text).
         """
         scratch = self._scratch
-        scratch.qpos[:] = q
-        scratch.qvel[:] = qd
-        scratch.qacc[:] = qdd
-        self._mj.mj_inverse(self.model, scratch)
-        return scratch.qfrc_inverse.copy()
+        scratch.qpos[:] = vector(q, self.n, "q")
+        scratch.qvel[:] = vector(qd, self.n, "qd")
+        scratch.qacc[:] = vector(qdd, self.n, "qdd")
+        previous = self._keep_mujoco_warnings()
+        try:
+            self._mj.mj_inverse(self.model, scratch)
+        finally:
+            self._mj.set_mju_user_warning(previous)
+        tau = scratch.qfrc_inverse.copy()
+        total = sum(tau.tolist())
+        if not total - total == 0.0 and not np.isfinite(tau).all():
+            raise ValueError("the inverse dynamics overflow: q, qd or qdd is too large")
+        return tau
 
     def gravity_torque(self, q):
         """:math:`g(q)`, the torques that hold the arm still at ``q``, shape (n,)."""
@@ -249,8 +354,12 @@ class ArmSimulation:
     def mass_matrix(self, q):
         """:math:`M(q)`, shape (n, n), armature included."""
         scratch = self._scratch
-        scratch.qpos[:] = q
-        self._mj.mj_fwdPosition(self.model, scratch)
+        scratch.qpos[:] = vector(q, self.n, "q")
+        previous = self._keep_mujoco_warnings()
+        try:
+            self._mj.mj_fwdPosition(self.model, scratch)
+        finally:
+            self._mj.set_mju_user_warning(previous)
         M = np.empty((self.n, self.n))
         try:
             self._mj.mj_fullM(self.model, scratch, M)             # MuJoCo 4
@@ -259,17 +368,27 @@ class ArmSimulation:
         return M
 
 
-def _gains(controller, n):
-    """The controller's ``kp`` and ``kd`` as checked arrays of shape (n,), checked once per
-    number of joints and kept with the (immutable) controller."""
-    cache = controller.__dict__.setdefault("_gain_vectors", {})
-    if n not in cache:
-        cache[n] = (vector(controller.kp, n, "kp"), vector(controller.kd, n, "kd"))
-    return cache[n]
+class _Gains:
+    """The gains ``kp`` and ``kd`` of a controller as (n,) arrays >= 0, checked once for a
+    number of joints and kept (the controllers are frozen: their gains do not change)."""
+
+    def _gains(self, n):
+        checked = getattr(self, "_checked_gains", None)
+        if checked is None or checked[0] != n:
+            checked = (n, per_joint(self.kp, n, "kp", positive=False),
+                       per_joint(self.kd, n, "kd", positive=False))
+            object.__setattr__(self, "_checked_gains", checked)
+        return checked[1], checked[2]
+
+    def _reference(self, sim, q_d, qd_d, qdd_d):
+        """The arguments of ``torque``, checked: a simulation and three (n,) vectors."""
+        check_instance(sim, ArmSimulation, "sim")
+        n = sim.n
+        return vector(q_d, n, "q_d"), vector(qd_d, n, "qd_d"), vector(qdd_d, n, "qdd_d")
 
 
 @dataclass(frozen=True)
-class JointPD:
+class JointPD(_Gains):
     r"""Joint PD control, :math:`\tau = K_p (q_d - q) + K_d (\dot q_d - \dot q)`,
     plus :math:`g(q)` when ``gravity_compensation`` is true.
 
@@ -304,7 +423,8 @@ class JointPD:
 
     def torque(self, sim, q_d, qd_d, qdd_d):
         """Motor torques for the reference ``(q_d, qd_d, qdd_d)``, shape (n,)."""
-        kp, kd = _gains(self, sim.n)
+        q_d, qd_d, qdd_d = self._reference(sim, q_d, qd_d, qdd_d)
+        kp, kd = self._gains(sim.n)
         q = sim.data.qpos
         tau = kp * (q_d - q) + kd * (qd_d - sim.data.qvel)
         if self.gravity_compensation:
@@ -313,7 +433,7 @@ class JointPD:
 
 
 @dataclass(frozen=True)
-class ComputedTorque:
+class ComputedTorque(_Gains):
     r"""Computed-torque control by inverse dynamics,
     :math:`\tau = \mathrm{ID}\bigl(q, \dot q,\ \ddot q_d + K_d \dot e + K_p e\bigr)`.
 
@@ -347,7 +467,8 @@ class ComputedTorque:
 
     def torque(self, sim, q_d, qd_d, qdd_d):
         """Motor torques for the reference ``(q_d, qd_d, qdd_d)``, shape (n,)."""
-        kp, kd = _gains(self, sim.n)
+        q_d, qd_d, qdd_d = self._reference(sim, q_d, qd_d, qdd_d)
+        kp, kd = self._gains(sim.n)
         q, qd = sim.data.qpos, sim.data.qvel
         qdd_cmd = qdd_d + kd * (qd_d - qd) + kp * (q_d - q)
         return (self.model or sim).inverse_dynamics(q, qd, qdd_cmd)
@@ -395,10 +516,12 @@ class DynamicsModel:
     _prepared: object = field(init=False, repr=False, compare=False, default=None)
 
     def __post_init__(self):
+        check_instance(self.robot, Robot, "robot")
         n = self.robot.n
-        g = (0.0, 0.0, -number(self.gravity, "gravity", strict=False))
+        g = (0.0, 0.0, -check_scalar(self.gravity, "gravity", minimum=0))
         prepared = (dynamics.NewtonEuler(self.robot, gravity=g),
-                    vector(self.armature, n, "armature"), vector(self.damping, n, "damping"))
+                    per_joint(self.armature, n, "armature", positive=False),
+                    per_joint(self.damping, n, "damping", positive=False))
         object.__setattr__(self, "_prepared", prepared)
 
     @classmethod
@@ -482,8 +605,10 @@ class TrackingResult:
             The joint positions reached at those times, for
             :meth:`dqlab.viz.scene.Scene.animate` (``scene.animate(q, times=times)``).
         """
-        if not (math.isfinite(fps) and fps > 0):
-            raise ValueError(f"fps must be a positive number, got {fps!r}")
+        fps = check_scalar(fps, "fps", minimum=0, strict=True)
+        if (self.t[-1] - self.t[0]) * fps > MAX_STEPS:
+            raise ValueError(f"fps = {fps:g} is too large for a run of "
+                             f"{self.t[-1] - self.t[0]:g} s (more than {MAX_STEPS:.0e} frames)")
         wanted = np.arange(self.t[0], self.t[-1] + 1e-12, 1.0 / fps)
         index = np.searchsorted(self.t, wanted - 1e-9)      # the first step at or after
         index = np.unique(np.clip(index, 0, self.t.size - 1))
@@ -516,16 +641,12 @@ def check_trajectory(trajectory, robot):
     ...
     ValueError: trajectory.q: joint 1 (revolute) = 7 is beyond its limits [-6.28319, 6.28319]
     """
+    check_instance(robot, Robot, "robot")
     arrays = {}
     for key in ("t", "q", "qd", "qdd"):
         if not hasattr(trajectory, key):
             raise ValueError(f"trajectory must have arrays t, q, qd and qdd; no {key!r}")
-        try:
-            arrays[key] = np.asarray(getattr(trajectory, key), dtype=float)
-        except (TypeError, ValueError):
-            raise ValueError(f"trajectory.{key} must be an array of numbers") from None
-        if not np.isfinite(arrays[key]).all():
-            raise ValueError(f"trajectory.{key} contains NaN or infinity")
+        arrays[key] = as_float_array(getattr(trajectory, key), f"trajectory.{key}")
     t = arrays["t"]
     if t.ndim != 1 or t.size < 2:
         raise ValueError(f"trajectory.t must have shape (N,) with N >= 2, got {t.shape}")
@@ -571,9 +692,21 @@ def sample_reference(t, q, qd, qdd, times, *, velocity_lag=0.0):
     >>> q, qd, qdd                              # the cubic 3 t^2 - 2 t^3 at t = 0.5
     (array([[0.5]]), array([[0.]]), array([[0.]]))
     """
-    t = np.asarray(t, dtype=float)
-    q, qd, qdd = (np.asarray(x, dtype=float) for x in (q, qd, qdd))
-    times = np.asarray(times, dtype=float)
+    t = as_float_array(t, "t")
+    if t.ndim != 1 or t.size < 2 or not (np.diff(t) > 0).all():
+        raise ValueError(f"t must be increasing sample times of shape (N,) with N >= 2, got "
+                         f"shape {t.shape}")
+    q, qd, qdd = (as_float_array(x, name) for x, name in ((q, "q"), (qd, "qd"), (qdd, "qdd")))
+    for x, name in ((q, "q"), (qd, "qd"), (qdd, "qdd")):
+        if x.ndim != 2 or x.shape[0] != t.size:
+            raise ValueError(f"{name} must have shape ({t.size}, n), one row per sample of t, "
+                             f"got shape {x.shape}")
+        if x.shape != q.shape:
+            raise ValueError(f"{name} must have the shape of q, {q.shape}, got {x.shape}")
+    times = as_float_array(times, "times")
+    if times.ndim != 1:
+        raise ValueError(f"times must have shape (k,), got shape {times.shape}")
+    velocity_lag = check_scalar(velocity_lag, "velocity_lag")
 
     def locate(times):
         times = np.clip(times, t[0], t[-1])
@@ -632,7 +765,14 @@ def track(sim, trajectory, controller, *, start_from_trajectory=True, payload=No
     ------
     ValueError
         If the trajectory is misshapen, holds NaN or infinity, or leaves the joint limits
-        (see :func:`check_trajectory`); nothing is simulated then.
+        (see :func:`check_trajectory`), is shorter than one time step or needs more than
+        :data:`MAX_STEPS` of them, or ``payload`` is not one mass >= 0 per sample; nothing
+        is simulated then.
+    SimulationError
+        If the run fails: the controller asks for a torque beyond :data:`MAX_CONTROL`
+        (which MuJoCo would ignore), or the state diverges (see :meth:`ArmSimulation.step`),
+        for instance with gains too high for the time step. No result is returned for a
+        failed run.
 
     Examples
     --------
@@ -652,17 +792,28 @@ def track(sim, trajectory, controller, *, start_from_trajectory=True, payload=No
     >>> bool(result.max_error.max() < 5e-5)              # rad
     True
     """
+    check_instance(sim, ArmSimulation, "sim")
+    if not callable(getattr(controller, "torque", None)):
+        raise TypeError(f"controller must have a method torque(sim, q_d, qd_d, qdd_d), got "
+                        f"{type(controller).__name__}")
     t, q, qd, qdd = check_trajectory(trajectory, sim.robot)
     masses = None
     if payload is not None:
-        masses = np.asarray(payload, dtype=float)
-        if masses.shape != t.shape or not np.isfinite(masses).all() or (masses < 0).any():
+        masses = as_float_array(payload, "payload")
+        if masses.shape != t.shape or (masses < 0).any():
             raise ValueError(f"payload must hold {t.size} finite masses >= 0 (one per "
                              f"trajectory sample), got shape {masses.shape}")
+    dt = sim.timestep
+    count = (t[-1] - t[0]) / dt
+    if count > MAX_STEPS:
+        raise ValueError(f"the trajectory lasts {t[-1] - t[0]:g} s: {count:.3g} time steps of "
+                         f"{dt:g} s is too large (at most {MAX_STEPS:.0e})")
+    steps = int(math.floor(count + 1e-9))
+    if steps < 1:
+        raise ValueError(f"the trajectory lasts {t[-1] - t[0]:g} s, less than one time step "
+                         f"({dt:g} s): there is nothing to simulate")
     if start_from_trajectory:
         sim.reset(q[0], qd[0], time=t[0])
-    dt = sim.timestep
-    steps = int(math.floor((t[-1] - t[0]) / dt + 1e-9))
     times = sim.time + dt * np.arange(steps + 1)
     q_ref, qd_ref, qdd_ref = sample_reference(t, q, qd, qdd, times - sim.time + t[0],
                                               velocity_lag=dt / 2)
@@ -670,23 +821,17 @@ def track(sim, trajectory, controller, *, start_from_trajectory=True, payload=No
     q_out = np.empty((steps + 1, n))
     qd_out = np.empty((steps + 1, n))
     tau_out = np.empty((steps + 1, n))
-    data = sim.data
+    saved_payload = sim.payload
+    carried = None
     if masses is not None:
-        saved_payload = sim.payload
         sample = np.clip(np.searchsorted(t, times - sim.time + t[0] + 1e-12, side="right") - 1,
                          0, t.size - 1)
         carried = masses[sample]
-    for k in range(steps + 1):
-        if masses is not None and (k == 0 or carried[k] != carried[k - 1]):
-            sim.payload = carried[k]
-        q_out[k] = data.qpos
-        qd_out[k] = data.qvel
-        tau = controller.torque(sim, q_ref[k], qd_ref[k], qdd_ref[k])
-        tau_out[k] = tau
-        if k < steps:
-            sim.step(tau)
-    if masses is not None:
-        sim.payload = saved_payload
+    try:
+        _run(sim, controller, times, q_ref, qd_ref, qdd_ref, carried, q_out, qd_out, tau_out)
+    finally:
+        if carried is not None:
+            sim.payload = saved_payload            # restored after a failed run too
     # (after mj_step, MuJoCo's site positions still belong to the state before the step:
     # both are recomputed from the joints)
     tcp, tcp_desired = sim.flange_positions(q_out), sim.flange_positions(q_ref)
@@ -694,3 +839,25 @@ def track(sim, trajectory, controller, *, start_from_trajectory=True, payload=No
                           qd_desired=qd_ref, tcp=tcp, tcp_desired=tcp_desired,
                           flange_error=np.linalg.norm(tcp - tcp_desired, axis=-1),
                           controller=getattr(controller, "name", type(controller).__name__))
+
+
+def _run(sim, controller, times, q_ref, qd_ref, qdd_ref, carried, q_out, qd_out, tau_out):
+    """The loop of :func:`track`: state, torque and step at every instant of ``times``
+    (``carried``: the payload at each, or None), written into the ``*_out`` arrays."""
+    data = sim.data
+    steps = len(times) - 1
+    for k in range(steps + 1):
+        if carried is not None and (k == 0 or carried[k] != carried[k - 1]):
+            sim.payload = carried[k]
+        q_out[k] = data.qpos
+        qd_out[k] = data.qvel
+        tau = controller.torque(sim, q_ref[k], qd_ref[k], qdd_ref[k])
+        tau_out[k] = tau
+        values = tau_out[k].tolist()
+        if not (max(values) <= MAX_CONTROL and min(values) >= -MAX_CONTROL):
+            raise SimulationError(
+                f"the controller asked for a torque of {np.abs(tau_out[k]).max():.3g} at t = "
+                f"{times[k]:.6g} s, too large: MuJoCo ignores controls beyond "
+                f"{MAX_CONTROL:g} (gains too high, or the arm far from the reference)")
+        if k < steps:
+            sim.step(tau)

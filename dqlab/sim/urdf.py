@@ -14,10 +14,19 @@ PyBullet.
 import math
 from xml.sax.saxutils import quoteattr
 
-import numpy as np
-
+from .._checks import check_instance
+from ..robot import Robot
 from ..rotations import rpy_from_matrix
-from .mjcf import default_masses, link_placements, robot_inertias, xml_number, xml_vector
+from ._checks import per_joint
+from .mjcf import (
+    MIN_MASS,
+    default_masses,
+    link_placements,
+    model_name_of,
+    robot_inertias,
+    xml_number,
+    xml_vector,
+)
 
 __all__ = ["urdf_from_robot"]
 
@@ -52,13 +61,13 @@ def urdf_from_robot(robot, *, masses=None, name=None):
     >>> urdf.count('<joint name="joint'), 'type="prismatic"' in urdf
     (4, True)
     """
+    check_instance(robot, Robot, "robot")
     placements, X_BnT, corners = link_placements(robot)
-    masses = default_masses(robot) if masses is None else np.asarray(masses, dtype=float)
-    if masses.shape != (robot.n,) or not np.isfinite(masses).all() or (masses <= 0).any():
-        raise ValueError(f"masses must be {robot.n} positive finite numbers, got {masses!r}")
+    masses = default_masses(robot) if masses is None else masses
+    masses = per_joint(masses, robot.n, "masses", positive=True, minimum=MIN_MASS)
     inertias = [inertia.scaled(m / inertia.mass) if inertia.mass > 0 else inertia
                 for inertia, m in zip(robot_inertias(robot), masses, strict=True)]
-    label = quoteattr(name if name is not None else (robot.name or "robot"))
+    label = quoteattr(model_name_of(robot, name))
     lines = ['<?xml version="1.0"?>', f"<robot name={label}>", '  <link name="world"/>',
              '  <link name="base"/>',
              '  <joint name="base_joint" type="fixed">',

@@ -13,7 +13,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .._checks import as_float_array
+from .._checks import as_float_array, check_scalar
 from ..dualquat import (
     dual_quaternion_conjugate,
     dual_quaternion_from_transform,
@@ -24,15 +24,16 @@ from ..dualquat import (
 )
 from ..quaternion import (
     axis_angle_from_quaternion,
+    check_unit_quaternion,
     matrix_from_quaternion,
     quaternion_conjugate,
     quaternion_from_matrix,
     quaternion_product,
     slerp,
 )
+from ..rotations import check_rotation_matrix
 from ..transforms import check_transform
 from . import time_laws
-from ._args import positive
 
 __all__ = ["CartesianPath", "line_slerp", "screw_path", "circle_three_phase"]
 
@@ -83,10 +84,13 @@ class CartesianPath:
         for name, shape in shapes.items():
             value = getattr(self, name)
             if value is None:
+                if name in ("position", "velocity", "acceleration"):
+                    raise ValueError(f"{name} is required: an array of shape {shape}")
                 continue
             a = as_float_array(value, name)
             if a.shape != shape:
-                raise ValueError(f"{name} must have shape {shape}, got {a.shape}")
+                raise ValueError(f"{name} must have shape {shape} (one row per instant of "
+                                 f"t), got {a.shape}")
             object.__setattr__(self, name, a)
         if self.orientation is not None and self.angular_velocity is None:
             raise ValueError("an orientation needs its angular_velocity (zeros if fixed)")
@@ -130,27 +134,35 @@ class CartesianPath:
         -------
         CartesianPath
         """
-        q = _orientation(rotation)
+        q = _orientation(rotation, "rotation")
         return replace(self, orientation=np.broadcast_to(q, (len(self), 4)).copy(),
                        angular_velocity=np.zeros((len(self), 3)))
 
 
-def _orientation(rotation):
-    r = as_float_array(rotation, "rotation")
+def _orientation(rotation, name):
+    r = as_float_array(rotation, name)
     if r.shape == (3, 3):
-        return quaternion_from_matrix(r)
+        return quaternion_from_matrix(check_rotation_matrix(r, name=name))
     if r.shape == (4,):
-        if abs(np.linalg.norm(r) - 1.0) > 1e-9:
-            raise ValueError(f"rotation quaternion must be unit, norm {np.linalg.norm(r):.6g}")
-        return r
-    raise ValueError(f"rotation must be a (3, 3) matrix or a (4,) quaternion, got {r.shape}")
+        return check_unit_quaternion(r, name=name)
+    raise ValueError(f"{name} must be a (3, 3) matrix or a (4,) quaternion, got shape "
+                     f"{r.shape}")
+
+
+def _one_transform(X, name):
+    X = check_transform(X, name=name)
+    if X.shape != (4, 4):
+        raise ValueError(f"{name} must be one (4, 4) transform, got shape {X.shape}")
+    return X
 
 
 def _normalised_law(law, duration):
     if law is None:
         if duration is None:
             raise ValueError("give a duration or a normalised time law")
-        return time_laws.quintic(positive(duration, "duration"))
+        return time_laws.quintic(check_scalar(duration, "duration", minimum=0, strict=True))
+    if duration is not None:
+        raise ValueError("give a duration or a law, not both (the law has its duration)")
     if not isinstance(law, time_laws.TimeLaw):
         raise TypeError(f"law must be a TimeLaw, got {type(law).__name__}")
     if abs(law.distance - 1.0) > 1e-12:
@@ -158,7 +170,8 @@ def _normalised_law(law, duration):
     return law
 
 
-def line_slerp(X_A, X_B, *, duration=None, law=None, dt=0.005):
+def line_slerp(X_A, X_B, *, duration=None, law=None, speed=None, acceleration=None,
+               dt=0.005):
     r"""Straight line for the tool point, SLERP for its orientation.
 
     With :math:`s(t)` from 0 to 1 and :math:`q_B q_A^* = (\cos\frac\theta2,
@@ -169,20 +182,35 @@ def line_slerp(X_A, X_B, *, duration=None, law=None, dt=0.005):
         p = p_A + s\,(p_B - p_A),\qquad q = (q_B q_A^*)^s\, q_A,\qquad
         \dot p = \dot s\,(p_B - p_A),\qquad \omega = \dot s\,\theta\,\mathbf u .
 
+    The timing is given one of three ways: a ``duration`` (a quintic law), a normalised
+    ``law``, or the tool's ``speed`` and ``acceleration`` along the line (metres per second
+    and per second squared): the shortest trapezoidal law within both,
+    :func:`~dqlab.trajectory.time_laws.trapezoidal` with :math:`v_{max} = V / L` and
+    :math:`a_{max} = A / L` for the length :math:`L = \lVert p_B - p_A\rVert`, so that
+    :math:`\lVert\dot p\rVert \le V` and :math:`\lVert\ddot p\rVert \le A`.
+
     Parameters
     ----------
     X_A, X_B : array_like, shape (4, 4)
         Start and end poses :math:`X_{WT}`.
     duration : float, optional
-        Duration in seconds of a quintic law (used when ``law`` is None).
+        Duration in seconds of a quintic law.
     law : TimeLaw, optional
         A normalised law (``distance`` 1).
+    speed, acceleration : float, optional
+        Largest tool speed (m/s) and acceleration (m/s^2) along the line, given together.
     dt : float
         Sampling period in seconds.
 
     Returns
     -------
     CartesianPath
+
+    Raises
+    ------
+    ValueError
+        If the poses are not rigid transforms, more or less than one timing is given, or a
+        speed is given for a line of zero length (a turn on the spot: give a duration).
 
     Examples
     --------
@@ -192,11 +220,20 @@ def line_slerp(X_A, X_B, *, duration=None, law=None, dt=0.005):
     ...                   duration=1.0, dt=0.5)
     >>> path.position[:, 0], path.angular_velocity[1].round(6)
     (array([0.  , 0.15, 0.3 ]), array([0.      , 0.      , 2.945243]))
+    >>> path = line_slerp(np.eye(4), transform_from(np.eye(3), [0.3, 0, 0]), speed=0.25,
+    ...                   acceleration=0.5, dt=0.01)
+    >>> round(path.law.duration, 6), round(float(path.speed.max()), 6)     # 0.3/0.25 + 0.5
+    (1.7, 0.25)
     """
-    X_A = check_transform(X_A, name="X_A")
-    X_B = check_transform(X_B, name="X_B")
+    X_A = _one_transform(X_A, "X_A")
+    X_B = _one_transform(X_B, "X_B")
+    if speed is not None or acceleration is not None:
+        if law is not None or duration is not None:
+            raise ValueError("give a duration, a law, or a speed and an acceleration: one "
+                             "timing, not several")
+        law = _line_law(X_A, X_B, speed, acceleration)
     law = _normalised_law(law, duration)
-    t, s, sd, sdd = law.sample(positive(dt, "dt"))
+    t, s, sd, sdd = law.sample(check_scalar(dt, "dt", minimum=0, strict=True))
     p_A, p_B = X_A[:3, 3], X_B[:3, 3]
     q_A, q_B = quaternion_from_matrix(X_A[:3, :3]), quaternion_from_matrix(X_B[:3, :3])
     if np.dot(q_A, q_B) < 0:
@@ -206,6 +243,19 @@ def line_slerp(X_A, X_B, *, duration=None, law=None, dt=0.005):
         t=t, position=p_A + s[:, None] * (p_B - p_A), velocity=sd[:, None] * (p_B - p_A),
         acceleration=sdd[:, None] * (p_B - p_A), orientation=slerp(q_A, q_B, s),
         angular_velocity=(sd * angle)[:, None] * axis, s=s, sd=sd, sdd=sdd, law=law)
+
+
+def _line_law(X_A, X_B, speed, acceleration):
+    """The normalised trapezoid of a line of length L run within ``speed`` (m/s) and
+    ``acceleration`` (m/s^2)."""
+    if speed is None or acceleration is None:
+        raise ValueError("give the speed and the acceleration together")
+    V = check_scalar(speed, "speed", minimum=0, strict=True)
+    A = check_scalar(acceleration, "acceleration", minimum=0, strict=True)
+    L = float(np.linalg.norm(X_B[:3, 3] - X_A[:3, 3]))
+    if L == 0.0:
+        raise ValueError("speed: the line has length 0 (a turn on the spot): give a duration")
+    return time_laws.trapezoidal(1.0, v_max=V / L, a_max=A / L)
 
 
 def screw_path(X_A, X_B, *, duration=None, law=None, dt=0.005):
@@ -251,10 +301,10 @@ def screw_path(X_A, X_B, *, duration=None, law=None, dt=0.005):
     >>> screw_path(X_A, X_B, duration=1.0, dt=0.5).position[1].round(6)
     array([0.212132, 0.212132, 0.      ])
     """
-    X_A = check_transform(X_A, name="X_A")
-    X_B = check_transform(X_B, name="X_B")
+    X_A = _one_transform(X_A, "X_A")
+    X_B = _one_transform(X_B, "X_B")
     law = _normalised_law(law, duration)
-    t, s, sd, sdd = law.sample(positive(dt, "dt"))
+    t, s, sd, sdd = law.sample(check_scalar(dt, "dt", minimum=0, strict=True))
     Q_A, Q_B = dual_quaternion_from_transform(X_A), dual_quaternion_from_transform(X_B)
     if np.dot(Q_A[:4], Q_B[:4]) < 0:
         Q_B = -Q_B
@@ -325,10 +375,10 @@ def circle_three_phase(center, radius, speed, dt=0.005, plane="xz", *,
     c = as_float_array(center, "center", (3,))
     if c.shape != (3,):
         raise ValueError(f"center must have shape (3,), got {c.shape}")
-    R = positive(radius, "radius")
-    V = positive(speed, "speed")
-    dt = positive(dt, "dt")
-    if plane not in _PLANES:
+    R = check_scalar(radius, "radius", minimum=0, strict=True)
+    V = check_scalar(speed, "speed", minimum=0, strict=True)
+    dt = check_scalar(dt, "dt", minimum=0, strict=True)
+    if not isinstance(plane, str) or plane not in _PLANES:
         raise ValueError(f"plane must be one of {sorted(_PLANES)}, got {plane!r}")
     law = time_laws.three_phase(2 * np.pi * R, V, fractions)
     t, s, sd, sdd = law.sample(dt, endpoint=False)
@@ -348,5 +398,7 @@ def circle_three_phase(center, radius, speed, dt=0.005, plane="xz", *,
     path = CartesianPath(t=t, position=position, velocity=velocity, acceleration=acceleration,
                          s=s, sd=sd, sdd=sdd, law=law)
     if orientation is not None:
-        path = path.with_orientation(orientation)
+        q = _orientation(orientation, "orientation")
+        path = replace(path, orientation=np.broadcast_to(q, (len(path), 4)).copy(),
+                       angular_velocity=np.zeros((len(path), 3)))
     return path

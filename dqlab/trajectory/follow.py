@@ -18,8 +18,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._checks import as_float_array
-from ..ik import SOLUTION_ORDER, numerical, ur
+from .._checks import as_float_array, check_instance, check_scalar
+from ..ik import SOLUTION_ORDER, IKResult, numerical, ur
+from ..robot import Robot
 from ..rotations import wrap_angle
 from .cartesian import CartesianPath
 from .joint import Trajectory
@@ -65,20 +66,34 @@ def joint_velocities(J, twist, *, damping=0.0):
     """
     J = as_float_array(J, "J")
     x = as_float_array(twist, "twist")
-    if J.ndim < 2 or x.shape[-1:] != J.shape[-2:-1]:
+    if J.ndim < 2:
+        raise ValueError(f"J must have shape (..., m, n), got shape {J.shape}")
+    if x.shape[-1:] != J.shape[-2:-1]:
         raise ValueError(f"twist must have shape (..., {J.shape[-2]}) to match J of shape "
                          f"{J.shape}, got {x.shape}")
-    lam = float(damping)
-    if not np.isfinite(lam) or lam < 0:
-        raise ValueError(f"damping must be a finite number >= 0, got {damping!r}")
-    m = J.shape[-2]
-    Jt = np.swapaxes(J, -1, -2)
-    A = J @ Jt + lam ** 2 * np.eye(m)
-    try:
-        y = np.linalg.solve(A, x[..., None])
-    except np.linalg.LinAlgError:                 # exactly rank deficient: J^+ by SVD
-        return (np.linalg.pinv(J) @ x[..., None])[..., 0]
-    return (Jt @ y)[..., 0]
+    lam = check_scalar(damping, "damping", minimum=0)
+    # q_dot does not change when J, twist and lambda are divided by the same number, and
+    # (J / k)(J / k)^T neither overflows nor underflows for k the largest |J_ij|
+    k = np.max(np.abs(J), axis=(-2, -1), keepdims=True)
+    k = np.where(k > 0.0, k, 1.0)
+    Js, xs = J / k, x[..., None] / k
+    with np.errstate(over="ignore", under="ignore"):
+        lam_s = lam / k
+        # lambda far above every singular value (|J_s| <= 1): q_dot = J^T x / lambda^2
+        huge = lam_s > 1e100
+        Jt = np.swapaxes(Js, -1, -2)
+        A = Js @ Jt + np.where(huge, 1.0, lam_s) ** 2 * np.eye(J.shape[-2])
+        try:
+            q_dot = (Jt @ np.linalg.solve(A, xs))[..., 0]
+        except np.linalg.LinAlgError:             # exactly rank deficient: J^+ by SVD
+            q_dot = (np.linalg.pinv(Js) @ xs)[..., 0]
+        if huge.any():
+            q_dot = np.where(huge[..., 0], (Jt @ xs)[..., 0] / lam_s[..., 0] / lam_s[..., 0],
+                             q_dot)
+    if not np.isfinite(q_dot).all():
+        raise ValueError("the joint velocities overflow: the twist is too large for J "
+                         "(or J too close to singular without damping)")
+    return q_dot
 
 
 def ur_singularity_margins(robot, q):
@@ -115,6 +130,7 @@ def ur_singularity_margins(robot, q):
     >>> {k: round(float(v), 4) for k, v in m.items()}
     {'wrist': 0.7833, 'elbow': 0.8912, 'reach': 0.0671, 'shoulder': 0.2471}
     """
+    check_instance(robot, Robot, "robot")
     q = robot.check_joints(q)
     links = robot.links
     if len(links) != 6:
@@ -212,7 +228,7 @@ class FollowReport:
 
 
 def _row_index(branch):
-    if isinstance(branch, (int, np.integer)):
+    if isinstance(branch, (int, np.integer)) and not isinstance(branch, (bool, np.bool_)):
         if not 0 <= branch < 8:
             raise ValueError(f"branch must be a row 0..7 or a label tuple, got {branch!r}")
         return int(branch)
@@ -224,8 +240,13 @@ def _row_index(branch):
 
 
 def _check_path(path):
-    if not isinstance(path, CartesianPath):
-        raise TypeError(f"path must be a CartesianPath, got {type(path).__name__}")
+    check_instance(path, CartesianPath, "path")
+
+
+def _acceptance_tolerance(tol):
+    """``tol`` of a solver that accepts a solution within it: a number >= 0 and finite (with
+    an infinite tolerance any joint vector would pass for a solution)."""
+    return check_scalar(tol, "tol", minimum=0)
 
 
 def track_branches(result, *, q_start=None, branch=None, max_step=0.1, t=None):
@@ -278,17 +299,21 @@ def track_branches(result, *, q_start=None, branch=None, max_step=0.1, t=None):
     >>> bool(np.allclose(q, q_path)), set(rows.tolist()), switches
     (True, {4}, [])
     """
+    check_instance(result, IKResult, "result")
     sol, valid = result.solutions, result.valid
-    if sol.ndim != 3 or sol.shape[1:] != (8, 6):
+    if sol.ndim != 3 or sol.shape[1:] != (8, 6) or valid.shape != sol.shape[:2]:
         raise ValueError(f"result must hold solutions of shape (N, 8, 6), got {sol.shape}")
     N = sol.shape[0]
+    if N == 0:
+        raise ValueError("result holds no point (N = 0): there is nothing to track")
     if not np.all(valid.any(axis=-1)):
         i = int(np.argmin(valid.any(axis=-1)))
         raise ValueError(f"point {i} has no valid solution: {result.reason[i]}")
     t = np.arange(N, dtype=float) if t is None else as_float_array(t, "t")
-    max_step = float(max_step)
-    if not max_step > 0:
-        raise ValueError(f"max_step must be > 0, got {max_step!r}")
+    if t.shape != (N,):
+        raise ValueError(f"t must have shape ({N},), one instant per point of result, "
+                         f"got shape {t.shape}")
+    max_step = check_scalar(max_step, "max_step", minimum=0, strict=True, finite=False)
     if q_start is not None:
         q_start = as_float_array(q_start, "q_start")
         if q_start.shape != (6,):
@@ -402,7 +427,9 @@ def follow_path_ur(robot, path, *, q_start=None, branch=None, max_step=0.1, damp
     >>> len(traj), len(report.switches), bool(report.position_error.max() < 1e-9)
     (440, 0, True)
     """
+    check_instance(robot, Robot, "robot")
     _check_path(path)
+    tol = _acceptance_tolerance(tol)
     poses = path.poses
     N = len(path)
     res = ur(robot, poses, tol=tol)
@@ -412,7 +439,7 @@ def follow_path_ur(robot, path, *, q_start=None, branch=None, max_step=0.1, damp
                          f"{np.round(path.position[i], 6).tolist()}) has no IK solution: "
                          f"{res.reason[i]}")
     if q_start is not None:
-        q_start = robot.check_joints(q_start)
+        q_start = robot.check_joints(q_start, name="q_start")
     q, rows, switches = track_branches(res, q_start=q_start, branch=branch,
                                        max_step=max_step, t=path.t)
     lo, hi = robot.limits.T
@@ -480,8 +507,14 @@ def follow_path_numerical(robot, path, q_start, *, damping=0.0, tol=1e-10, max_i
     >>> len(traj), bool(report.position_error.max() <= 1e-10)
     (44, True)
     """
+    check_instance(robot, Robot, "robot")
     _check_path(path)
-    q_prev = robot.check_joints(q_start)
+    q_prev = robot.check_joints(q_start, name="q_start")
+    if q_prev.shape != (robot.n,):
+        raise ValueError(f"q_start must have shape ({robot.n},), got shape {q_prev.shape}")
+    damping = check_scalar(damping, "damping", minimum=0)
+    tol = _acceptance_tolerance(tol)
+    max_iter = check_scalar(max_iter, "max_iter", minimum=1, integer=True)
     N = len(path)
     q = np.empty((N, robot.n))
     error = np.empty(N)
@@ -489,8 +522,9 @@ def follow_path_numerical(robot, path, q_start, *, damping=0.0, tol=1e-10, max_i
         res = numerical(robot, path.position[k], q_prev, position_only=True, tol=tol,
                         max_iter=max_iter)
         if not res.valid[0]:
-            raise ValueError(f"path point {k} (t = {path.t[k]:.4g} s) not reached from the "
-                             f"previous point: {res.reason}")
+            start = "q_start" if k == 0 else "the previous point"
+            raise ValueError(f"path point {k} (t = {path.t[k]:.4g} s) not reached from {start} "
+                             f"with tol = {tol:g} m and max_iter = {max_iter}: {res.reason}")
         q_prev = q[k] = res.solutions[0]
         error[k] = res.position_error[0]
     J_v = robot.jacobian(q)[:, :3, :]

@@ -7,14 +7,13 @@ A point-to-point motion moves every joint along the straight line of joint space
 Chapter 10 of the book derives them.
 """
 
+import math
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-from .._checks import as_float_array
+from .._checks import as_float_array, check_path, check_scalar
 from . import time_laws
-from ._args import positive
 
 __all__ = ["Trajectory", "joint_trajectory", "via_points"]
 
@@ -71,7 +70,8 @@ class Trajectory:
                              f"t[{i - 1}] = {t[i - 1]:.9g}")
         q = as_float_array(self.q, "q")
         if q.ndim != 2 or q.shape[0] != t.size or q.shape[1] == 0:
-            raise ValueError(f"q must have shape (N, n) = ({t.size}, n), got shape {q.shape}")
+            raise ValueError(f"q must have shape (N, n) = ({t.size}, n), one row per instant of "
+                             f"t, got shape {q.shape}")
         fields = {"t": t, "q": q}
         for name in ("qd", "qdd"):
             a = as_float_array(getattr(self, name), name)
@@ -81,8 +81,8 @@ class Trajectory:
         if self.poses is not None:
             fields["poses"] = as_float_array(self.poses, "poses", (4, 4))
             if fields["poses"].shape != (t.size, 4, 4):
-                raise ValueError(f"poses must have shape ({t.size}, 4, 4), got "
-                                 f"{fields['poses'].shape}")
+                raise ValueError(f"poses must have shape ({t.size}, 4, 4), one pose per instant "
+                                 f"of t, got {fields['poses'].shape}")
         for name, a in fields.items():
             a = np.array(a, dtype=float)
             a.flags.writeable = False
@@ -131,6 +131,7 @@ class Trajectory:
         >>> bool(np.array_equal(back.q, traj.q))
         True
         """
+        path = check_path(path)
         blocks = [self.t[:, None], self.q, self.qd, self.qdd]
         if self.poses is not None:
             from ..quaternion import quaternion_from_matrix
@@ -149,10 +150,11 @@ class Trajectory:
         Raises
         ------
         ValueError
-            Naming the file and the line: an empty file, a header that is not the one
-            :meth:`save_csv` writes, a row with the wrong number of values, a value that is
-            not a finite number, instants that do not increase, or a last line without its
-            line end (a truncated file, even if the cut fell inside the last number).
+            Naming the file and the line: an empty file, bytes that are not UTF-8 text,
+            a header that is not the one :meth:`save_csv` writes, a row with the wrong
+            number of values, a value that is not a finite number, instants that do not
+            increase, or a last line without its line end (a truncated file, even if the
+            cut fell inside the last number).
 
         Examples
         --------
@@ -165,10 +167,19 @@ class Trajectory:
         ...
         ValueError: .../bad.csv, line 3: expected 4 values, got 3 (truncated or corrupt row)
         """
-        path = Path(path)
-        with open(path, encoding="utf-8") as f:
-            text = f.read()
-        lines = text.splitlines()
+        path = check_path(path)
+        raw = path.read_bytes()
+        lines = []
+        for number, line in enumerate(raw.split(b"\n"), start=1):
+            try:
+                lines.append(line.decode("utf-8").rstrip("\r"))
+            except UnicodeDecodeError as exc:
+                raise ValueError(f"{path}, line {number}: byte {line[exc.start]:#04x} at "
+                                 f"column {exc.start + 1} is not UTF-8 text (a binary or "
+                                 f"damaged file?)") from None
+        ends_with_newline = raw.endswith(b"\n")
+        if ends_with_newline:
+            lines.pop()
         if not lines or not lines[0].strip():
             raise ValueError(f"{path}, line 1: empty file, expected the header line")
         header = [c.strip() for c in lines[0].split(",")]
@@ -204,7 +215,7 @@ class Trajectory:
             rows.append(values)
         if not rows:
             raise ValueError(f"{path}, line 2: no data rows after the header")
-        if not text.endswith("\n"):
+        if not ends_with_newline:
             raise ValueError(f"{path}, line {len(lines)}: the last line has no line end: the "
                              f"file is truncated (its last value may be cut)")
         table = np.array(rows)
@@ -305,35 +316,21 @@ def joint_trajectory(q_start, q_goal, *, duration=None, v_max=None, a_max=None,
     if q_start.ndim != 1 or q_start.shape != q_goal.shape:
         raise ValueError(f"q_start and q_goal must have the same shape (n,), got "
                          f"{q_start.shape} and {q_goal.shape}")
-    if law not in _LAWS:
+    if not isinstance(law, str) or law not in _LAWS:
         raise ValueError(f"law must be one of {_LAWS}, got {law!r}")
-    dt = positive(dt, "dt")
+    dt = check_scalar(dt, "dt", minimum=0, strict=True)
     n = q_start.size
     v_lim = _joint_limits(v_max, "v_max", n)
     a_lim = _joint_limits(a_max, "a_max", n)
-    delta = q_goal - q_start
+    with np.errstate(over="ignore"):
+        delta = q_goal - q_start
+    if not np.isfinite(delta).all():
+        raise ValueError("q_goal - q_start overflows: the joint values are too large")
     span = np.abs(delta)
     if duration is not None:
-        unit = _unit_law(law, positive(duration, "duration"))
+        unit = _unit_law(law, check_scalar(duration, "duration", minimum=0, strict=True))
     else:
-        if not np.any(span > 0):
-            raise ValueError("q_start equals q_goal: give a duration to hold the pose")
-        if law == "trapezoidal":
-            if v_lim is None or a_lim is None:
-                raise ValueError("a trapezoidal law without duration needs v_max and a_max")
-            moving = span > 0
-            unit = time_laws.trapezoidal(1.0, v_max=np.min(v_lim[moving] / span[moving]),
-                                         a_max=np.min(a_lim[moving] / span[moving]))
-        else:
-            if v_lim is None and a_lim is None:
-                raise ValueError("give a duration, or v_max and/or a_max")
-            shape = _unit_law(law, 1.0)
-            T = 0.0
-            if v_lim is not None:
-                T = max(T, shape.peak_speed * np.max(span / v_lim))
-            if a_lim is not None:
-                T = max(T, np.sqrt(shape.peak_acceleration * np.max(span / a_lim)))
-            unit = _unit_law(law, T)
+        unit = _shortest_unit_law(law, span, v_lim, a_lim)
     for lim, peak, name, unit_name in ((v_lim, unit.peak_speed, "v_max", "rad/s"),
                                        (a_lim, unit.peak_acceleration, "a_max", "rad/s^2")):
         if lim is not None and duration is not None:
@@ -347,6 +344,36 @@ def joint_trajectory(q_start, q_goal, *, duration=None, v_max=None, a_max=None,
     t, s, sd, sdd = unit.sample(dt)
     return Trajectory(t=t, q=q_start + s[:, None] * delta, qd=sd[:, None] * delta,
                       qdd=sdd[:, None] * delta)
+
+
+def _shortest_unit_law(law, span, v_lim, a_lim):
+    """The normalised law of the shortest motion over ``span`` within the limits."""
+    if not np.any(span > 0):
+        raise ValueError("q_start equals q_goal: give a duration to hold the pose")
+    moving = span > 0
+    with np.errstate(over="ignore", divide="ignore"):
+        v_unit = None if v_lim is None else float(np.min(v_lim[moving] / span[moving]))
+        a_unit = None if a_lim is None else float(np.min(a_lim[moving] / span[moving]))
+    for value, name in ((v_unit, "v_max"), (a_unit, "a_max")):
+        if value is not None and not 0.0 < value < math.inf:
+            raise ValueError(f"{name} / |q_goal - q_start| = {value:g} is out of range: the "
+                             f"limits and the distance differ too much (overflow)")
+    if law == "trapezoidal":
+        if v_unit is None or a_unit is None:
+            raise ValueError("a trapezoidal law without duration needs v_max and a_max")
+        return time_laws.trapezoidal(1.0, v_max=v_unit, a_max=a_unit)
+    if v_unit is None and a_unit is None:
+        raise ValueError("give a duration, or v_max and/or a_max")
+    shape = _unit_law(law, 1.0)
+    T = 0.0
+    if v_unit is not None:
+        T = max(T, shape.peak_speed / v_unit)
+    if a_unit is not None:
+        T = max(T, math.sqrt(shape.peak_acceleration / a_unit))
+    if not T < math.inf:
+        raise ValueError("the motion's duration overflows: the distance is too large for "
+                         "the limits")
+    return _unit_law(law, T)
 
 
 def via_points(q_points, times, *, dt=0.005, method="spline"):
@@ -400,8 +427,18 @@ def via_points(q_points, times, *, dt=0.005, method="spline"):
         raise ValueError("times must increase strictly")
     if method not in ("spline", "stop"):
         raise ValueError(f"method must be 'spline' or 'stop', got {method!r}")
-    dt = positive(dt, "dt")
+    dt = check_scalar(dt, "dt", minimum=0, strict=True)
     h = np.diff(tk)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        t, q, qd, qdd = _via_point_samples(Q, tk, h, dt, method)
+    if not (np.isfinite(qd).all() and np.isfinite(qdd).all()):
+        raise ValueError(f"times: via-points {h.min():g} s apart are too close for the motion "
+                         f"between them (the speeds or accelerations overflow)")
+    return Trajectory(t=t, q=q, qd=qd, qdd=qdd)
+
+
+def _via_point_samples(Q, tk, h, dt, method):
+    """The sampled motion of :func:`via_points`: ``(t, q, qd, qdd)``."""
     m = Q.shape[0]
     if method == "spline":
         V = np.zeros_like(Q)
@@ -441,9 +478,10 @@ def via_points(q_points, times, *, dt=0.005, method="spline"):
                   + d11[:, None] * v1) / h[k]
             qdd = (e00[:, None] * q0 + e10[:, None] * v0 + e01[:, None] * q1
                    + e11[:, None] * v1) / h[k] ** 2
-        ts.append(tk[k] + local)
+        t = tk[k] + local
+        t[-1] = tk[k + 1]                           # the knot itself, not a rounding of it
+        ts.append(t)
         qs.append(q)
         qds.append(qd)
         qdds.append(qdd)
-    return Trajectory(t=np.concatenate(ts), q=np.concatenate(qs), qd=np.concatenate(qds),
-                      qdd=np.concatenate(qdds))
+    return np.concatenate(ts), np.concatenate(qs), np.concatenate(qds), np.concatenate(qdds)

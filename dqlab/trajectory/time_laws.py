@@ -17,15 +17,15 @@ on any time grid. The constructors are:
 Chapter 10 of the book derives them.
 """
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from .._checks import as_float_array
-from ._args import finite as _finite
-from ._args import positive as _positive
+from .._checks import as_float_array, check_scalar
 
-__all__ = ["TimeLaw", "cubic", "quintic", "trapezoidal", "three_phase", "time_grid"]
+__all__ = ["TimeLaw", "cubic", "quintic", "trapezoidal", "three_phase", "time_grid",
+           "MAX_SAMPLES"]
 
 
 def time_grid(duration, dt, *, endpoint=True):
@@ -39,13 +39,21 @@ def time_grid(duration, dt, *, endpoint=True):
         Sampling period in seconds (> 0).
     endpoint : bool
         With True, ``duration`` itself is appended when the regular grid stops short of it
-        (the last step is then shorter than ``dt``). With False the grid is
-        ``numpy.arange(0, duration, dt)``, as in the UR3 report (its last instant lies less
-        than ``dt`` before the end).
+        (the last step is then shorter than ``dt``; a last instant within
+        :math:`10^{-9}\,\delta t` of the end is moved onto it rather than followed by a
+        sliver of a step). With False the grid is ``numpy.arange(0, duration, dt)``, as in
+        the UR3 report (its last instant lies less than ``dt`` before the end). The first
+        instant is always 0.
 
     Returns
     -------
     ndarray, shape (N,)
+
+    Raises
+    ------
+    ValueError
+        On a negative or non-finite ``duration``, a ``dt`` that is not > 0, or more than
+        :data:`MAX_SAMPLES` instants.
 
     Examples
     --------
@@ -53,37 +61,64 @@ def time_grid(duration, dt, *, endpoint=True):
     array([0.   , 0.008, 0.016, 0.02 ])
     >>> time_grid(0.02, 0.008, endpoint=False)
     array([0.   , 0.008, 0.016])
+    >>> time_grid(1e-12, 0.005)                 # much shorter than dt: both ends kept
+    array([0.e+00, 1.e-12])
     """
-    dt = _positive(dt, "dt")
-    duration = _finite(duration, "duration")
-    if duration < 0.0:
-        raise ValueError(f"duration must be >= 0, got {duration!r}")
+    dt = check_scalar(dt, "dt", minimum=0, strict=True)
+    duration = check_scalar(duration, "duration", minimum=0)
+    count = duration / dt
+    if count > MAX_SAMPLES:
+        raise ValueError(f"duration / dt = {duration:g} s / {dt:g} s: {count:.3g} samples is "
+                         f"too large (at most {MAX_SAMPLES:.0e}); give a larger dt")
     t = np.arange(0.0, duration, dt)
     if not endpoint:
         return t if t.size else np.zeros(1)
-    if t.size and duration - t[-1] <= 1e-9 * dt:
+    if t.size > 1 and duration - t[-1] <= 1e-9 * dt:
         t[-1] = duration
-    else:
+    elif duration > 0.0 or t.size == 0:
         t = np.append(t, duration)
     return t
+
+
+#: The largest number of instants :func:`time_grid` makes (8 bytes each per array).
+MAX_SAMPLES = 10 ** 8
 
 
 @dataclass(frozen=True)
 class TimeLaw:
     r"""A rest-to-rest time law :math:`s(t)`, piecewise polynomial.
 
-    On segment :math:`k`, :math:`t_k \le t \le t_{k+1}`,
-    :math:`s(t) = \sum_j c_{kj} (t - t_k)^j`. Before 0 the law holds :math:`s = 0`, after
-    :attr:`duration` it holds :math:`s = \Delta`, both at rest.
+    On segment :math:`k`, :math:`t_k \le t \le t_{k+1}`, of length
+    :math:`h_k = t_{k+1} - t_k` and local time :math:`u = (t - t_k) / h_k \in [0, 1]`:
+
+    .. math::
+
+        s(t) = \sum_j c_{kj}\, u^j,\qquad
+        \frac{d^r s}{dt^r} = \frac{1}{h_k^r} \sum_{j \ge r} c_{kj}\,
+        \frac{j!}{(j-r)!}\, u^{j-r} .
+
+    The coefficients are in the units of :math:`s` (no power of a duration in them), so
+    that a law of any duration is represented without overflow or underflow: a cubic of
+    :math:`10^{100}` s has the coefficients :math:`(0, 0, 3\Delta, -2\Delta)` like one of
+    a second, and its speed :math:`\dot s` is divided by :math:`h` once, its acceleration
+    twice. Before 0 the law holds :math:`s = 0`, after :attr:`duration` it holds
+    :math:`s = \Delta`, both at rest.
 
     Attributes
     ----------
     breaks : ndarray, shape (m + 1,)
         Segment boundaries :math:`0 = t_0 < t_1 < \dots < t_m = T` in seconds.
     coefficients : ndarray, shape (m, 6)
-        :math:`c_{kj}`, ascending powers of the local time :math:`t - t_k`.
+        :math:`c_{kj}`, ascending powers of the local time :math:`u`.
     name : str
         What law it is (for printing).
+
+    Raises
+    ------
+    ValueError
+        If the shapes do not match, a value is NaN or infinite, the breaks do not start at
+        0 and increase, or the speed, acceleration or jerk of a segment overflows (a segment
+        too short for its distance).
     """
 
     breaks: np.ndarray
@@ -99,6 +134,17 @@ class TimeLaw:
                 f"{breaks.shape} and {coefficients.shape}")
         if breaks[0] != 0.0 or np.any(np.diff(breaks) <= 0.0):
             raise ValueError("breaks must start at 0 and increase strictly")
+        h = np.diff(breaks)
+        for order, what in ((1, "speed"), (2, "acceleration"), (3, "jerk")):
+            with np.errstate(over="ignore"):
+                bound = np.abs(_derivative(coefficients, order)).sum(axis=-1)
+                for _ in range(order):
+                    bound = bound / h
+            if not np.all(np.isfinite(bound)):
+                k = int(np.argmin(np.isfinite(bound)))
+                raise ValueError(
+                    f"the time law's {what} overflows: segment {k} lasts {h[k]:g} s, too "
+                    f"short for the distance it covers ({np.abs(coefficients[k]).max():g})")
         object.__setattr__(self, "breaks", breaks)
         object.__setattr__(self, "coefficients", coefficients)
 
@@ -123,15 +169,12 @@ class TimeLaw:
         tc = np.clip(t, 0.0, T)
         k = np.clip(np.searchsorted(self.breaks, tc, side="right") - 1, 0,
                     len(self.coefficients) - 1)
-        tau = tc - self.breaks[k]
-        c = self.coefficients[k]                                   # (..., 6)
-        powers = np.arange(6)
-        # d^order/dtau^order of sum c_j tau^j = sum c_j j!/(j-order)! tau^(j-order)
-        factor = np.ones(6)
-        for i in range(order):
-            factor = factor * np.maximum(powers - i, 0)
-        exponent = np.maximum(powers - order, 0)
-        value = np.sum(c * factor * tau[..., None] ** exponent, axis=-1)
+        h = np.diff(self.breaks)[k]
+        u = np.minimum((tc - self.breaks[k]) / h, 1.0)
+        c = _derivative(self.coefficients, order)[k]              # (..., 6 - order)
+        value = np.sum(c * u[..., None] ** np.arange(c.shape[-1]), axis=-1)
+        for _ in range(order):
+            value = value / h
         # from T on the law holds its end at rest (exactly, whatever the rounding)
         end = self._end_position() if order == 0 else 0.0
         value = np.where(t >= T, end, value)
@@ -140,9 +183,7 @@ class TimeLaw:
         return value
 
     def _end_position(self):
-        c = self.coefficients[-1]
-        h = self.breaks[-1] - self.breaks[-2]
-        return float(np.polynomial.polynomial.polyval(h, c))
+        return float(np.sum(self.coefficients[-1]))
 
     def position(self, t):
         """:math:`s(t)`, same shape as ``t``."""
@@ -173,15 +214,18 @@ class TimeLaw:
     def _extremes(self, order):
         """Largest absolute value of the ``order``-th derivative (exact, from the roots)."""
         best = 0.0
-        for k, c in enumerate(self.coefficients):
-            h = self.breaks[k + 1] - self.breaks[k]
-            poly = np.polynomial.Polynomial(c).deriv(order)
-            candidates = [0.0, h]
+        for k, c in enumerate(_derivative(self.coefficients, order)):
+            h = float(self.breaks[k + 1] - self.breaks[k])
+            poly = np.polynomial.Polynomial(c)
+            candidates = [0.0, 1.0]
             if poly.degree() >= 1:
                 roots = poly.deriv().roots()
                 roots = roots[np.abs(roots.imag) < 1e-12].real
-                candidates += [r for r in roots if 0.0 <= r <= h]
-            best = max(best, float(np.max(np.abs(poly(np.array(candidates))))))
+                candidates += [r for r in roots if 0.0 <= r <= 1.0]
+            peak = float(np.max(np.abs(poly(np.array(candidates)))))
+            for _ in range(order):
+                peak = peak / h
+            best = max(best, peak)
         return best
 
     @property
@@ -199,11 +243,19 @@ class TimeLaw:
                 f"{self.duration:.6g} s, switches at {np.round(self.switch_times, 6).tolist()})")
 
 
+def _derivative(coefficients, order):
+    """Coefficients (m, 6 - order) of :math:`d^r/du^r` of the segments' polynomials."""
+    return np.polynomial.polynomial.polyder(coefficients, order, axis=-1)
+
+
 def _polynomial_law(duration, distance, unit_coefficients, name):
-    T = _positive(duration, "duration")
-    D = _finite(distance, "distance")
-    scale = D / T ** np.arange(6)
-    return TimeLaw(np.array([0.0, T]), (np.asarray(unit_coefficients) * scale)[None], name)
+    T = check_scalar(duration, "duration", minimum=0, strict=True)
+    D = check_scalar(distance, "distance")
+    with np.errstate(over="ignore"):
+        coefficients = np.asarray(unit_coefficients, dtype=float) * D
+    if not np.isfinite(coefficients).all():
+        raise ValueError(f"distance = {D:g} is too large: the law's coefficients overflow")
+    return TimeLaw(np.array([0.0, T]), coefficients[None], name)
 
 
 def cubic(duration, distance=1.0):
@@ -265,22 +317,39 @@ def quintic(duration, distance=1.0):
     return _polynomial_law(duration, distance, [0, 0, 0, 10, -15, 6], "quintic")
 
 
-def _three_segments(t_acc, t_cruise, t_dec, v, name, sign=1.0):
-    """Accelerate to ``v`` in ``t_acc``, cruise ``t_cruise``, stop in ``t_dec`` (>0 each)."""
-    a, d = v / t_acc, v / t_dec
-    s1 = 0.5 * v * t_acc
-    s2 = s1 + v * t_cruise
-    rows = [[0.0, 0.0, 0.5 * a, 0, 0, 0]]
-    lengths = [t_acc]
-    if t_cruise > 0.0:
-        rows.append([s1, v, 0.0, 0, 0, 0])
-        lengths.append(t_cruise)
-    rows.append([s2, v, -0.5 * d, 0, 0, 0])
-    lengths.append(t_dec)
-    breaks = np.concatenate([[0.0], np.cumsum(lengths)])
+def _three_segments(t_acc, t_cruise, t_dec, v, name, sign=1.0, culprit="the limits"):
+    r"""Accelerate to ``v`` in ``t_acc``, cruise ``t_cruise``, stop in ``t_dec``.
+
+    Each phase starts at :math:`(s_0, \dot s_0)` with a constant :math:`\ddot s_0`
+    (:math:`a = v / t_{acc}`, 0, :math:`-v / t_{dec}`); on its segment of length :math:`h`
+    (the breaks as rounded) it is :math:`s_0 + \dot s_0 h\,u + \frac12 \ddot s_0 h^2 u^2`,
+    so that the speed and acceleration at its start are exactly those of the phase.
+    ``culprit`` names the argument blamed when a phase is too short to be represented.
+    """
+    if not all(math.isfinite(x) for x in (v, t_acc, t_cruise, t_dec)):
+        raise ValueError(f"the time law overflows: speed {v:g}, phases of {t_acc:g}, "
+                         f"{t_cruise:g} and {t_dec:g} s")
+    breaks = np.concatenate([[0.0], np.cumsum([t_acc, t_cruise, t_dec])])
     keep = np.diff(breaks) > 0.0          # a cruise too short to move the sum is dropped
-    return TimeLaw(np.concatenate([[0.0], breaks[1:][keep]]), sign * np.array(rows)[keep],
-                   name)
+    if not (keep[0] and keep[-1]):
+        raise ValueError(
+            f"{culprit}: an acceleration phase of {min(t_acc, t_dec):g} s is too short to be "
+            f"represented in a motion of {breaks[-1]:g} s (their ratio is too large for "
+            f"floating point)")
+    with np.errstate(over="ignore"):
+        a, d = v / t_acc, v / t_dec
+    if not (math.isfinite(a) and math.isfinite(d)):
+        raise ValueError(f"the time law's acceleration overflows: speed {v:g} reached in "
+                         f"{min(t_acc, t_dec):g} s")
+    breaks = np.concatenate([[0.0], breaks[1:][keep]])
+    h = np.diff(breaks)
+    phases = [(0.0, a)] + ([(v, 0.0)] if keep[1] else []) + [(v, -d)]
+    rows, s0 = [], 0.0
+    for (v0, a0), hk in zip(phases, h, strict=True):
+        row = [s0, v0 * hk, 0.5 * a0 * hk * hk, 0.0, 0.0, 0.0]
+        rows.append(row)
+        s0 = row[0] + row[1] + row[2]
+    return TimeLaw(breaks, sign * np.array(rows), name)
 
 
 def trapezoidal(distance=1.0, *, v_max=None, a_max=None, duration=None, accel_fraction=None):
@@ -338,35 +407,40 @@ def trapezoidal(distance=1.0, *, v_max=None, a_max=None, duration=None, accel_fr
     ...
     ValueError: a_max = 3 cannot cover the distance 1 in 1 s: it needs a_max >= ... = 4
     """
-    D = _finite(distance, "distance")
+    D = check_scalar(distance, "distance")
     if D == 0.0:
         raise ValueError("distance must not be 0 (a law that does not move has no timing)")
-    sign, D = np.sign(D), abs(D)
-    v = None if v_max is None else _positive(v_max, "v_max")
-    a = None if a_max is None else _positive(a_max, "a_max")
+    sign, D = math.copysign(1.0, D), abs(D)
+    v = None if v_max is None else check_scalar(v_max, "v_max", minimum=0, strict=True)
+    a = None if a_max is None else check_scalar(a_max, "a_max", minimum=0, strict=True)
     if duration is None:
         if accel_fraction is not None:
             raise ValueError("accel_fraction needs a duration")
         if v is None or a is None:
             raise ValueError("give v_max and a_max, or a duration")
         if D <= v * v / a:                       # triangular: the cruise speed is not reached
-            t_a = np.sqrt(D / a)
-            return _three_segments(t_a, 0.0, t_a, a * t_a, "trapezoidal (triangular)", sign)
-        return _three_segments(v / a, D / v - v / a, v / a, v, "trapezoidal", sign)
-    T = _positive(duration, "duration")
+            t_a = math.sqrt(D / a)
+            return _three_segments(t_a, 0.0, t_a, a * t_a, "trapezoidal (triangular)", sign,
+                                   "a_max")
+        return _three_segments(v / a, D / v - v / a, v / a, v, "trapezoidal", sign,
+                               "v_max and a_max")
+    T = check_scalar(duration, "duration", minimum=0, strict=True)
     if a is not None:
         if accel_fraction is not None:
             raise ValueError("give a_max or accel_fraction with a duration, not both")
-        if a < 4.0 * D / T ** 2 * (1 - 1e-12):
+        need = 4.0 * D / T / T                   # the smallest a_max that covers D in T
+        if a < need * (1 - 1e-12):
             raise ValueError(
                 f"a_max = {a:g} cannot cover the distance {D:g} in {T:g} s: it needs "
-                f"a_max >= 4 |distance| / duration^2 = {4.0 * D / T ** 2:g}")
-        t_a = T / 2 - np.sqrt(max(T * T / 4 - D / a, 0.0))
+                f"a_max >= 4 |distance| / duration^2 = {need:g}")
+        # t_a = T/2 - sqrt(T^2/4 - D/a), written without the cancellation for a large a_max
+        t_a = (D / a) / (0.5 * T * (1.0 + math.sqrt(max(1.0 - need / a, 0.0))))
         cruise = D / (T - t_a)
         if v is not None and cruise > v * (1 + 1e-12):
             raise ValueError(
                 f"with a_max = {a:g} the cruise speed {cruise:g} exceeds v_max = {v:g}; "
                 f"a longer duration or a larger a_max is needed")
+        culprit = f"a_max = {a:g}"
     elif v is not None:
         if accel_fraction is not None:
             raise ValueError("give v_max or accel_fraction with a duration, not both")
@@ -375,19 +449,20 @@ def trapezoidal(distance=1.0, *, v_max=None, a_max=None, duration=None, accel_fr
                 f"v_max = {v:g} cannot cover the distance {D:g} in {T:g} s: it needs "
                 f"v_max > |distance| / duration = {D / T:g}")
         t_a = T - D / min(v, 2.0 * D / T)
+        culprit = f"v_max = {v:g}"
     else:
-        f = 1.0 / 3.0 if accel_fraction is None else _positive(accel_fraction,
-                                                                 "accel_fraction")
-        if f > 0.5:
-            raise ValueError(f"accel_fraction must be in (0, 0.5], got {accel_fraction!r}")
+        f = 1.0 / 3.0 if accel_fraction is None else check_scalar(
+            accel_fraction, "accel_fraction", minimum=0, strict=True, maximum=0.5)
         t_a = f * T
+        culprit = f"accel_fraction = {f:g}"
     t_a = min(t_a, T / 2)
     cruise_time = max(T - 2 * t_a, 0.0)
-    if cruise_time < 1e-12 * T:
-        cruise_time = 0.0
+    if cruise_time < 1e-12 * T:                   # triangular: stop in what is left
+        cruise_time, t_dec = 0.0, T - t_a
+    else:                                         # symmetric (T - t_a - cruise would cancel)
+        t_dec = t_a
     v_peak = D / (T - t_a)
-    return _three_segments(t_a, cruise_time, T - t_a - cruise_time, v_peak, "trapezoidal",
-                           sign)
+    return _three_segments(t_a, cruise_time, t_dec, v_peak, "trapezoidal", sign, culprit)
 
 
 def three_phase(distance, speed, fractions=(0.25, 0.25, 0.5)):
@@ -429,8 +504,8 @@ def three_phase(distance, speed, fractions=(0.25, 0.25, 0.5)):
     >>> law.switch_times.round(4)
     array([6.2832, 9.4248])
     """
-    D = _positive(distance, "distance")
-    V = _positive(speed, "speed")
+    D = check_scalar(distance, "distance", minimum=0, strict=True)
+    V = check_scalar(speed, "speed", minimum=0, strict=True)
     f = as_float_array(fractions, "fractions")
     if f.shape != (3,):
         raise ValueError(f"fractions must hold 3 numbers, got shape {f.shape}")
@@ -439,4 +514,4 @@ def three_phase(distance, speed, fractions=(0.25, 0.25, 0.5)):
     if abs(f.sum() - 1.0) > 1e-12:
         raise ValueError(f"fractions must sum to 1, got {f} (sum {f.sum():.15g})")
     d1, d2, d3 = f * D
-    return _three_segments(2 * d1 / V, d2 / V, 2 * d3 / V, V, "three-phase")
+    return _three_segments(2 * d1 / V, d2 / V, 2 * d3 / V, V, "three-phase", culprit="fractions")

@@ -29,6 +29,7 @@ if _missing:
     raise ImportError("dqlab.viz needs the viz extra: pip install 'dqlab[viz]' "
                       f"(missing: {', '.join(_missing)})")
 
+from .pick_place import animate_pick_place  # noqa: E402, F401
 from .plots import (  # noqa: E402
     axes_3d,
     plot_arm,
