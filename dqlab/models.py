@@ -26,7 +26,7 @@ from .robot import PRISMATIC, Link, Robot
 
 __all__ = [
     "ur3", "ur5", "ur10", "ur3_mdh", "desk_arm", "scara_rsm5", "six_r",
-    "UR_DH", "UR_ALPHA", "UR3_MDH", "DESK_ARM", "SCARA_RSM5",
+    "UR_DH", "UR_ALPHA", "UR_MAX_JOINT_SPEED_DEG", "UR3_MDH", "DESK_ARM", "SCARA_RSM5",
     "desk_arm_joints_from_lab", "desk_arm_lab_from_joints",
     "ChainShape", "UR_SHAPE", "DESK_ARM_SHAPE", "SCARA_SHAPE",
 ]
@@ -44,6 +44,17 @@ UR_DH = {
 }
 #: The link twists shared by every UR arm (standard DH), radians.
 UR_ALPHA = (PI / 2, 0.0, 0.0, PI / 2, -PI / 2, 0.0)
+
+#: Universal Robots' published maximum joint speeds, degrees per second, joints 1 to 6 (base,
+#: shoulder, elbow, wrists 1-3): the technical specifications of the UR3, UR5 and UR10 user
+#: manuals (CB3, version 3.13), as transcribed in the joint-limit files of Universal Robots'
+#: ROS description (``Universal_Robots_ROS2_Description``, ``config/urX/joint_limits.yaml``).
+#: The models carry them, in rad/s, as the ``max_speed`` of their links.
+UR_MAX_JOINT_SPEED_DEG = {
+    "UR3": (180.0, 180.0, 180.0, 360.0, 360.0, 360.0),
+    "UR5": (180.0,) * 6,
+    "UR10": (120.0, 120.0, 180.0, 180.0, 180.0, 180.0),
+}
 
 #: The UR3 report's modified-DH lengths in metres.
 UR3_MDH = {"r1": 0.152, "r2": 0.120, "a2": 0.244, "a3": 0.213,
@@ -66,8 +77,10 @@ SCARA_RSM5 = {"l1": 0.350, "l2": 0.260, "z_low": 0.180, "stroke": 0.150,
 
 def _ur(name, label):
     p = UR_DH[name]
-    links = [Link(a=a, alpha=alpha, d=d, limits=(-2 * PI, 2 * PI))
-             for a, alpha, d in zip(p["a"], UR_ALPHA, p["d"], strict=True)]
+    speeds = [math.radians(v) for v in UR_MAX_JOINT_SPEED_DEG[name]] \
+        if name in UR_MAX_JOINT_SPEED_DEG else [None] * 6
+    links = [Link(a=a, alpha=alpha, d=d, limits=(-2 * PI, 2 * PI), max_speed=speed)
+             for a, alpha, d, speed in zip(p["a"], UR_ALPHA, p["d"], speeds, strict=True)]
     return Robot(links, convention="dh", name=label)
 
 
@@ -86,7 +99,8 @@ def ur3() -> Robot:
     ==  ==========  ==========  ===========
 
     No tool: :meth:`~dqlab.robot.Robot.fk` returns the flange pose. The base frame sits at the
-    foot of the first joint's axis, z up. Joint limits are :math:`\pm 2\pi`. These are also
+    foot of the first joint's axis, z up. Joint limits are :math:`\pm 2\pi`; the joints'
+    rated speeds (:data:`UR_MAX_JOINT_SPEED_DEG`) are the links' ``max_speed``. These are also
     the conventions of ``ur_analytic_ik``: its ``ur3.forward_kinematics(q1, ..., q6)``
     returns the same base-to-flange matrix as :meth:`~dqlab.robot.Robot.fk` (the tests
     check 1,000 random configurations to 1e-13).

@@ -91,12 +91,15 @@ class Link:
         Lowest and highest joint value (radians or metres). Default: no limit.
     name : str, optional
         A label printed in :meth:`Robot.dh_table`.
+    max_speed : float, optional
+        The joint's rated speed limit, rad/s (m/s for a prismatic joint), > 0; ``None`` (the
+        default) when not known. Read by :meth:`dqlab.ur.script.SafetyLimits.for_robot`.
 
     Raises
     ------
     ValueError
-        If a parameter is not a finite number, the joint type is unknown or the limits are
-        not ordered.
+        If a parameter is not a finite number, the joint type is unknown, the limits are
+        not ordered or ``max_speed`` is not a positive number.
 
     Notes
     -----
@@ -112,7 +115,8 @@ class Link:
     1
     """
 
-    def __init__(self, a, alpha, d, theta_offset=0.0, joint=REVOLUTE, limits=None, name=""):
+    def __init__(self, a, alpha, d, theta_offset=0.0, joint=REVOLUTE, limits=None, name="",
+                 max_speed=None):
         values = {"a": a, "alpha": alpha, "d": d, "theta_offset": theta_offset}
         for key, value in values.items():
             try:
@@ -144,6 +148,14 @@ class Link:
         set_(self, "joint", joint)
         set_(self, "limits", (lo, hi))
         set_(self, "name", str(name))
+        if max_speed is not None:
+            try:
+                max_speed = float(max_speed)
+            except (TypeError, ValueError):
+                raise ValueError(f"Link max_speed must be a number, got {max_speed!r}") from None
+            if not (math.isfinite(max_speed) and max_speed > 0.0):
+                raise ValueError(f"Link max_speed must be a finite number > 0, got {max_speed!r}")
+        set_(self, "max_speed", max_speed)
 
     def __setattr__(self, key, value):
         raise AttributeError("Link is immutable (a Robot precomputes its constant parts); "
