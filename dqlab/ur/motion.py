@@ -261,19 +261,26 @@ class SplinePath:
             u = -c2 / (3.0 * c3)
         return np.where((u > 0.0) & (u < 1.0), u, np.nan)
 
-    def slope_bound(self):
-        r""":math:`\max_\sigma |q_i'(\sigma)|` (exact), shape (n,)."""
+    def piece_slopes(self):
+        r""":math:`\max |q_i'|` on each piece (exact), shape (K-1, n)."""
         c1, c2, c3 = self._c
         u = self._vertex()
         inner = np.abs(c1 + u * (2.0 * c2 + 3.0 * u * c3)) / self._h
-        ends = np.max(np.abs(self.slope), axis=0)
-        return np.maximum(ends, np.nanmax(np.where(np.isnan(inner), 0.0, inner), axis=0))
+        ends = np.maximum(np.abs(self.slope[:-1]), np.abs(self.slope[1:]))
+        return np.maximum(ends, np.where(np.isnan(inner), 0.0, inner))
+
+    def piece_curvatures(self):
+        r""":math:`\max |q_i''|` on each piece (exact: it is linear there), shape (K-1, n)."""
+        _, c2, c3 = self._c
+        return np.maximum(np.abs(2.0 * c2), np.abs(2.0 * c2 + 6.0 * c3)) / (self._h * self._h)
+
+    def slope_bound(self):
+        r""":math:`\max_\sigma |q_i'(\sigma)|` (exact), shape (n,)."""
+        return np.max(self.piece_slopes(), axis=0)
 
     def curvature_bound(self):
         r""":math:`\max_\sigma |q_i''(\sigma)|` (exact), shape (n,)."""
-        _, c2, c3 = self._c
-        h2 = self._h * self._h
-        return np.max(np.maximum(np.abs(2.0 * c2), np.abs(2.0 * c2 + 6.0 * c3)) / h2, axis=0)
+        return np.max(self.piece_curvatures(), axis=0)
 
     def joint_range(self):
         """Lowest and highest value of each joint along the path (exact), shape (2, n)."""
@@ -378,15 +385,56 @@ class Motion:
         docstring)."""
         if self.law is None:
             return np.zeros_like(self.q_start)
-        return self.path.slope_bound() * self.law.peak_speed
+        pieces = self._piece_law()
+        if pieces is None:
+            return self.path.slope_bound() * self.law.peak_speed
+        speed2, _ = pieces
+        return np.max(self.path.piece_slopes() * np.sqrt(speed2)[:, None], axis=0)
 
     def peak_joint_acceleration(self):
         r"""Bound on :math:`|\ddot q_i|` over the motion (inside it: not the speed change at
         a ``servoj``'s ends), rad/s^2, shape (n,)."""
         if self.law is None:
             return np.zeros_like(self.q_start)
-        v, a = self.law.peak_speed, self.law.peak_acceleration
-        return self.path.curvature_bound() * v * v + self.path.slope_bound() * a
+        pieces = self._piece_law()
+        if pieces is None:
+            v, a = self.law.peak_speed, self.law.peak_acceleration
+            return self.path.curvature_bound() * v * v + self.path.slope_bound() * a
+        speed2, accel = pieces
+        return np.max(self.path.piece_curvatures() * speed2[:, None]
+                      + self.path.piece_slopes() * accel[:, None], axis=0)
+
+    def _piece_law(self):
+        r"""On each piece of a :class:`SplinePath`, :math:`\max \dot\sigma^2` and
+        :math:`\max |\ddot\sigma|`, or None (a joint line, or a law that is not piecewise
+        quadratic).
+
+        On a segment of the law where :math:`\ddot\sigma` is a constant :math:`\alpha_j`,
+        :math:`\dot\sigma^2 = \dot\sigma_j^2 + 2\alpha_j(\sigma - \sigma_j)` is linear in
+        :math:`\sigma`: over all segments it is piecewise linear, with its maxima on a piece
+        at the piece's ends or at a segment boundary inside it.
+        """
+        if not isinstance(self.path, SplinePath):
+            return None
+        law = self.law
+        if np.any(law.coefficients[:, 3:] != 0.0):
+            return None
+        c = law.coefficients
+        s_knots = np.append(c[:, 0], law.distance)          # sigma at the segments' ends
+        v_last = c[-1, 1] + 2.0 * c[-1, 2] * (law.breaks[-1] - law.breaks[-2])
+        speed2_knots = np.append(c[:, 1], v_last) ** 2
+        sigma = self.path.sigma
+        a_seg = np.abs(2.0 * c[:, 2])
+        lo, hi = sigma[:-1], sigma[1:]
+        speed2 = np.maximum(np.interp(lo, s_knots, speed2_knots),
+                            np.interp(hi, s_knots, speed2_knots))
+        accel = np.zeros_like(lo)
+        for j in range(len(a_seg)):             # the law's segments overlapping each piece
+            overlap = (lo <= s_knots[j + 1]) & (hi >= s_knots[j])
+            accel = np.where(overlap, np.maximum(accel, a_seg[j]), accel)
+            inside = (lo < s_knots[j]) & (s_knots[j] < hi)
+            speed2 = np.where(inside, np.maximum(speed2, speed2_knots[j]), speed2)
+        return speed2 * (1.0 + 1e-12), accel
 
     def joint_range(self):
         """Lowest and highest value of each joint during the motion, shape (2, n)."""

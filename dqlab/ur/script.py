@@ -66,6 +66,10 @@ UR3_JOINT_LIMITS = np.array([[-2 * np.pi, 2 * np.pi]] * 5 + [[-np.inf, np.inf]])
 #: :data:`dqlab.models.UR_MAX_JOINT_SPEED_DEG`.
 UR3_MAX_JOINT_SPEED = np.radians(UR_MAX_JOINT_SPEED_DEG["UR3"])
 
+#: Relative allowance for rounding when a speed or acceleration is compared with its limit
+#: (a motion planned exactly at a limit is not refused for a rounding of its last digit).
+ROUNDING = 1e-12
+
 LOOKAHEAD_RANGE = (0.03, 0.2)
 GAIN_RANGE = (100.0, 2000.0)
 
@@ -126,12 +130,12 @@ class SafetyLimits:
             raise ValueError(f"max_joint_speed must have {len(lim)} values (one per joint), "
                              f"got shape {speed.shape}") from None
         if not np.all((speed > 0) & np.isfinite(speed)):
-            raise ValueError(f"max_joint_speed must be finite and positive, got {speed!r}")
+            raise ValueError(f"max_joint_speed must be positive and finite, got {speed!r}")
         for key in ("max_joint_acceleration", "max_joint_step", "max_tcp_speed",
                     "max_tcp_acceleration"):
             value = _number(getattr(self, key), key, "SafetyLimits")
             if not (value > 0 and math.isfinite(value)):
-                raise ValueError(f"{key} must be finite and positive, got {value!r}")
+                raise ValueError(f"{key} must be positive and finite, got {value!r}")
             object.__setattr__(self, key, value)
         if self.robot is not None and getattr(self.robot, "n", None) != len(lim):
             raise ValueError(f"robot must be a Robot with {len(lim)} joints, got "
@@ -342,7 +346,7 @@ def check_joint_targets(q, *, limits=None, q_from=None, command="movej", times=N
         path = np.concatenate([start[None], targets])
         offset = 1
     steps = np.abs(np.diff(path, axis=0))
-    jump = steps > limits.max_joint_step
+    jump = ~(steps <= limits.max_joint_step)
     if jump.any():
         k, j = np.argwhere(jump)[0]
         frm = "the current position" if (offset and k == 0) else f"target {k - offset}"
@@ -365,7 +369,7 @@ def _check_sample_rates(targets, times, limits, where, at_rest, command):
         k = int(np.argmax(dt <= 0)) + 1
         raise UnsafeTargetError(f"{where(k)}: time {float(t[k])!r} s does not increase")
     qd = np.diff(targets, axis=0) / dt[:, None]
-    fast = np.abs(qd) > limits.max_joint_speed
+    fast = ~(np.abs(qd) <= limits.max_joint_speed * (1.0 + ROUNDING))
     if fast.any():
         k, j = np.argwhere(fast)[0]
         raise UnsafeTargetError(
@@ -380,7 +384,7 @@ def _check_sample_rates(targets, times, limits, where, at_rest, command):
         first = 1
     if len(qd) > 1:
         qdd = np.abs(np.diff(qd, axis=0)) / (0.5 * (dt[1:] + dt[:-1]))[:, None]
-        hard = qdd > limits.max_joint_acceleration
+        hard = ~(qdd <= limits.max_joint_acceleration * (1.0 + ROUNDING))
         if hard.any():
             k, j = np.argwhere(hard)[0]
             k = k + first                   # the sample where the speed changes
@@ -423,7 +427,7 @@ def check_motion(m, limits, command="movej"):
     dqlab.ur.script.UnsafeTargetError: movej: joint 1 speed 6 rad/s exceeds 3.14159 rad/s ...
     """
     lo, hi = m.joint_range()
-    below, above = lo < limits.joint_limits[:, 0], hi > limits.joint_limits[:, 1]
+    below, above = ~(lo >= limits.joint_limits[:, 0]), ~(hi <= limits.joint_limits[:, 1])
     if below.any() or above.any():
         j = int(np.argmax(below | above))
         value = lo[j] if below[j] else hi[j]
@@ -432,22 +436,23 @@ def check_motion(m, limits, command="movej"):
             f"limits [{limits.joint_limits[j, 0]:.6g}, {limits.joint_limits[j, 1]:.6g}] rad")
     why = f" (the motion lasts {m.duration:.6g} s)" if m.duration else ""
     speed = m.peak_joint_speed()
-    fast = speed > limits.max_joint_speed
+    fast = ~(speed <= limits.max_joint_speed * (1.0 + ROUNDING))
     if fast.any():
         j = int(np.argmax(fast))
         raise UnsafeTargetError(f"{command}: joint {j + 1} speed {speed[j]:.6g} rad/s exceeds "
                                 f"{limits.max_joint_speed[j]:.6g} rad/s at its peak{why}")
     acc = m.peak_joint_acceleration()
-    hard = acc > limits.max_joint_acceleration
+    hard = ~(acc <= limits.max_joint_acceleration * (1.0 + ROUNDING))
     if hard.any():
         j = int(np.argmax(hard))
         raise UnsafeTargetError(
             f"{command}: joint {j + 1} acceleration {acc[j]:.6g} rad/s^2 exceeds "
             f"{limits.max_joint_acceleration:.6g} rad/s^2 at its peak{why}")
-    if m.tcp_unit == "m" and m.tcp_peak_speed > limits.max_tcp_speed:
+    if m.tcp_unit == "m" and not m.tcp_peak_speed <= limits.max_tcp_speed * (1.0 + ROUNDING):
         raise UnsafeTargetError(f"{command}: TCP speed {m.tcp_peak_speed:.6g} m/s exceeds "
                                 f"max_tcp_speed = {limits.max_tcp_speed:.6g} m/s{why}")
-    if m.tcp_unit == "m" and m.tcp_peak_acceleration > limits.max_tcp_acceleration:
+    if m.tcp_unit == "m" and \
+            not m.tcp_peak_acceleration <= limits.max_tcp_acceleration * (1.0 + ROUNDING):
         raise UnsafeTargetError(
             f"{command}: TCP acceleration {m.tcp_peak_acceleration:.6g} m/s^2 exceeds "
             f"max_tcp_acceleration = {limits.max_tcp_acceleration:.6g} m/s^2{why}")
@@ -531,21 +536,6 @@ def _movel_target(pose):
     return p
 
 
-def _joints_at_pose(robot, pose, q_ref, limits):
-    """The IK solution of a UR pose nearest ``q_ref`` within the joint limits."""
-    from .. import ik
-
-    result = ik.ur(robot, motion.world_transform(robot, pose))
-    if not bool(result.success):
-        raise UnsafeTargetError(f"movel target {urscript_pose(pose)}: out of the "
-                                f"{robot.name or 'robot'}'s reach (no inverse-kinematics "
-                                f"solution: {result.reason})")
-    try:
-        return ik.closest_solution(result, q_ref, limits.joint_limits)
-    except ValueError as exc:
-        raise UnsafeTargetError(f"movel target {urscript_pose(pose)}: {exc}") from None
-
-
 def movel(pose, a=MOVEL_A, v=MOVEL_V, t=0.0, r=0.0, *, limits=None, robot=None, q_from=None):
     """The URScript ``movel`` line for a TCP pose, after the safety checks.
 
@@ -567,8 +557,8 @@ def movel(pose, a=MOVEL_A, v=MOVEL_V, t=0.0, r=0.0, *, limits=None, robot=None, 
     q_from : array_like, shape (6,), optional
         The arm's joints before the move: the line's motion is then planned
         (:func:`dqlab.ur.motion.plan_movel`) and checked all along -- reach, joint limits,
-        singularities, the joints' peak speeds and accelerations, the TCP's -- and the end
-        joints (the solution nearest ``q_from``) for a jump.
+        singularities and jumps of the tracked joints, the joints' peak speeds and
+        accelerations, the TCP's.
 
     Returns
     -------
@@ -587,22 +577,25 @@ def movel(pose, a=MOVEL_A, v=MOVEL_V, t=0.0, r=0.0, *, limits=None, robot=None, 
     a, v, t, r = _movel_args(a, v, t, r, limits)
     p = _movel_target(pose)
     robot = _robot_for(robot, limits, "movel")
-    if q_from is None:
-        from .. import ik
-
-        if not bool(ik.ur(robot, motion.world_transform(robot, p)).success):
-            raise UnsafeTargetError(f"movel target {urscript_pose(p)}: out of the "
-                                    f"{robot.name or 'robot'}'s reach (no inverse-kinematics "
-                                    "solution)")
-    else:
+    _check_reach(robot, p)
+    if q_from is not None:
         q_from = check_joint_targets(q_from, limits=limits, command="movel (q_from)")
-        q_goal = _joints_at_pose(robot, p, q_from, limits)
-        check_joint_targets(q_goal, limits=limits, q_from=q_from, command="movel")
         _plan_movel(robot, q_from, p, a, v, t, limits)
     return f"movel({urscript_pose(p)}, a={_fmt(a)}, v={_fmt(v)}, t={_fmt(t)}, r={_fmt(r)})"
 
 
+def _check_reach(robot, p):
+    from .. import ik
+
+    result = ik.ur(robot, motion.world_transform(robot, p))
+    if not bool(result.success):
+        raise UnsafeTargetError(f"movel target {urscript_pose(p)}: out of the "
+                                f"{robot.name or 'robot'}'s reach (no inverse-kinematics "
+                                f"solution: {result.reason})")
+
+
 def _plan_movel(robot, q_from, p, a, v, t, limits):
+    _check_reach(robot, p)
     try:
         m = motion.plan_movel(robot, q_from, p, a, v, t)
     except ValueError as exc:
@@ -812,7 +805,7 @@ def check_trajectory(trajectory, *, limits=None, robot=None, command="trajectory
         p = robot.fk(q)[:, :3, 3]
         speed = np.linalg.norm(np.diff(p, axis=0), axis=-1) / np.diff(t)
         k = int(np.argmax(speed))
-        if speed[k] > limits.max_tcp_speed:
+        if not speed[k] <= limits.max_tcp_speed * (1.0 + ROUNDING):
             raise UnsafeTargetError(
                 f"{command} target {k + 1} (t = {t[k + 1]:.6g} s): TCP speed {speed[k]:.6g} "
                 f"m/s exceeds max_tcp_speed = {limits.max_tcp_speed:.6g} m/s")
@@ -877,8 +870,6 @@ def plan_command(name, target, kwargs=None, *, q_from, limits=None, robot=None):
                                  kw.get("t", 0.0), kw.get("r", 0.0), limits)
         p = _movel_target(target)
         robot = _robot_for(robot, limits, "movel")
-        q_goal = _joints_at_pose(robot, p, q_from, limits)
-        check_joint_targets(q_goal, limits=limits, q_from=q_from, command="movel")
         return _plan_movel(robot, q_from, p, a, v, t, limits)
     if name == "servoj":
         kw = take("a", "v", "t", "lookahead_time", "gain")    # a, v: not used by servoj
@@ -902,7 +893,9 @@ def plan_program(commands, *, q_now, qd_now=None, limits=None, robot=None, strea
     motion first (every joint along its direction, the fastest at
     ``limits.max_joint_acceleration``, :func:`dqlab.ur.motion.plan_stop`) -- unless the
     program starts with ``servoj``, which takes over from the motion -- then each command
-    from where the previous one ends (:func:`plan_command`; a ``stopj`` brakes at its ``a``).
+    from where the previous one ends (:func:`plan_command`; a ``stopj`` first in the program
+    brakes the arm at its ``a``, after another command it holds: every motion ends at rest, a
+    ``servoj`` when its time is up).
     Between them the speed must not jump by more than ``max_joint_acceleration`` times the
     servo period: :math:`|\dot q_{next} - \dot q_{prev}| / T` with :math:`T` the mean period
     of the ``servoj`` on either side (the acceleration of a ``servoj`` stream, as
@@ -966,9 +959,10 @@ def plan_program(commands, *, q_now, qd_now=None, limits=None, robot=None, strea
     for k, command in enumerate(commands, start=1):
         try:
             name, target, kw = command
-            if name == "stopj":
-                m = motion.plan_stop(q, qd, _stopj_arg(dict(kw or {}).get("a", STOPJ_A),
-                                                       limits))
+            if name == "stopj":      # brakes the arm's motion; after a motion, it is at rest
+                moving = qd if (k == 1 and not motions and qd is not None) else 0.0 * q
+                m = motion.plan_stop(q, moving, _stopj_arg(dict(kw or {}).get("a", STOPJ_A),
+                                                           limits))
             else:
                 m = plan_command(name, target, kw, q_from=q, limits=limits, robot=robot)
             if check_speed_changes:
@@ -990,12 +984,12 @@ def _check_junction(v0, before, after, limits):
     program) to the start of ``after`` (None: rest after the program)."""
     v1 = after.qd_start if after is not None else np.zeros_like(v0)
     jump = np.abs(v1 - v0)
-    if not np.any(jump > 0.0):
+    if np.all(jump == 0.0):
         return
     periods = [m.duration for m in (before, after) if m is not None and m.command == "servoj"]
     period = float(np.mean(periods)) if periods else 0.0
     acc = jump / period if period > 0.0 else np.where(jump > 0.0, np.inf, 0.0)
-    hard = acc > limits.max_joint_acceleration
+    hard = ~(acc <= limits.max_joint_acceleration * (1.0 + ROUNDING))
     if hard.any():
         j = int(np.argmax(hard))
         where = "to rest" if after is None else "from the previous motion"
