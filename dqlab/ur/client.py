@@ -273,8 +273,9 @@ class URClient:
 
         The whole trajectory is checked first (:func:`dqlab.ur.script.check_trajectory`, as
         :func:`~dqlab.ur.script.program_from_trajectory` does: from rest to rest); its first
-        sample must be where the arm is, at rest (within ``start_tol`` rad, speeds below
-        ``tol``: move there with :meth:`movej` first). Then sample ``k`` is sent when the
+        sample must be where the arm is (within ``start_tol`` rad: move there with
+        :meth:`movej` first), and the arm's speed may differ from the first sample's only by
+        what the acceleration limit allows in one sample period. Then sample ``k`` is sent when the
         controller's time reaches ``t[k-1]`` after the start, to be reached
         ``t[k] - t[k-1]`` later.
 
@@ -305,9 +306,15 @@ class URClient:
             raise UnsafeTargetError(
                 f"servoj_stream: the first sample is {gap[j]:.3g} rad from the arm at joint "
                 f"{j + 1} (more than start_tol = {start_tol:g}); movej to q[0] first")
-        if not np.max(np.abs(state.qd)) <= self.tol:
-            raise UnsafeTargetError("servoj_stream: the arm is moving; a stream starts from "
-                                    "rest (wait for the arm to stop)")
+        if len(q) > 1:          # the first speed change, from the arm's actual speed
+            dt = float(t[1] - t[0])
+            acc = np.abs((q[1] - q[0]) / dt - state.qd) / dt
+            if not np.max(acc) <= self.limits.max_joint_acceleration:
+                j = int(np.argmax(acc))
+                raise UnsafeTargetError(
+                    f"servoj_stream: the arm moves at {state.qd[j]:.3g} rad/s at joint {j + 1};"
+                    f" the first sample would change that by {acc[j]:.3g} rad/s^2, above "
+                    f"{self.limits.max_joint_acceleration:g} (wait for the arm to stop)")
         timeout = self._timeout(timeout, float(t[-1] - t[0]))
         deadline = time.monotonic() + timeout
         t0 = state.time

@@ -590,7 +590,7 @@ def _check_reach(robot, p):
     result = ik.ur(robot, motion.world_transform(robot, p))
     if not bool(result.success):
         raise UnsafeTargetError(f"movel target {urscript_pose(p)}: out of the "
-                                f"{robot.name or 'robot'}'s reach (no inverse-kinematics "
+                                f"{robot.name or 'robot'}'s reach (the pose has no IK "
                                 f"solution: {result.reason})")
 
 
@@ -984,7 +984,7 @@ def _check_junction(v0, before, after, limits):
     program) to the start of ``after`` (None: rest after the program)."""
     v1 = after.qd_start if after is not None else np.zeros_like(v0)
     jump = np.abs(v1 - v0)
-    if np.all(jump == 0.0):
+    if np.all(jump <= ROUNDING * (1.0 + np.abs(v0) + np.abs(v1))):   # continuous, to rounding
         return
     periods = [m.duration for m in (before, after) if m is not None and m.command == "servoj"]
     period = float(np.mean(periods)) if periods else 0.0
