@@ -320,7 +320,7 @@ class URClient:
         t0 = state.time
         log = [state]
         for k in range(1, len(q)):
-            while state.time < t0 + (t[k - 1] - t[0]):
+            while state.time < t0 + (t[k - 1] - t[0]) - 1e-9:     # (clock rounding)
                 if time.monotonic() > deadline:
                     raise TimeoutError(f"servoj_stream: controller time did not advance to "
                                        f"sample {k} within {timeout:.3g} s")

@@ -291,7 +291,7 @@ class RTDEReader:
         self._pending.clear()
         self._sock.setblocking(False)
         try:
-            while time.monotonic() <= deadline:     # what is waiting, until the deadline
+            while True:                             # what is waiting, until the deadline
                 try:
                     data = self._sock.recv(65536)
                 except (BlockingIOError, InterruptedError):
@@ -301,6 +301,8 @@ class RTDEReader:
                 for rtype, body in self._buffer.feed(data):
                     if rtype == DATA_PACKAGE:
                         newest = body
+                if time.monotonic() > deadline:
+                    break
         finally:
             if self._sock is not None:
                 self._sock.setblocking(True)
