@@ -39,9 +39,10 @@ from .._kernels import (
     rotation_vector_from_matrix_entries,
     rotation_vector_from_quaternion_entries,
 )
-from ..dualquat import dual_quaternion_from_transform, transform_from_dual_quaternion
+from ..dualquat import transform_from_dual_quaternion
 from ..quaternion import matrix_from_quaternion
 from ..rotations import check_rotation_matrix, matrix_from_rpy, rpy_from_matrix
+from ..transforms import check_transform
 
 __all__ = [
     "check_pose", "quaternion_from_rotation_vector", "rotation_vector_from_quaternion",
@@ -231,7 +232,12 @@ def rotation_vector_from_matrix(R, *, tol=1e-9, half_turn_tol=1e-12):
     """
     tol = check_tolerance(tol, "tol")
     half_turn_tol = check_tolerance(half_turn_tol, "half_turn_tol")
-    R = check_rotation_matrix(R, tol=tol)
+    return _rotation_vectors(check_rotation_matrix(R, tol=tol), half_turn_tol)
+
+
+def _rotation_vectors(R, half_turn_tol):
+    """Rotation vectors of checked rotation matrices ``(..., 3, 3)``: the kernel, then the
+    half-turn rule."""
     entries = components(R.reshape(R.shape[:-2] + (9,)))
     r = stack_components(list(rotation_vector_from_matrix_entries(*entries)))
     return _half_turn(r, half_turn_tol)
@@ -273,8 +279,11 @@ def pose_from_transform(T, *, tol=1e-9, half_turn_tol=1e-12):
     >>> pose_from_transform(X_WF).round(5) + 0.0
     array([ 0.     , -0.19425,  0.69415,  0.     , -2.22144,  2.22144])
     """
-    Q = dual_quaternion_from_transform(T, tol=tol)
-    return pose_from_dual_quaternion(Q, half_turn_tol=half_turn_tol)
+    tol = check_tolerance(tol, "tol")
+    half_turn_tol = check_tolerance(half_turn_tol, "half_turn_tol")
+    T = check_transform(T, tol=tol)
+    r = _rotation_vectors(T[..., :3, :3], half_turn_tol)
+    return np.concatenate([T[..., :3, 3], r], axis=-1)
 
 
 def transform_from_pose(p):
