@@ -70,6 +70,9 @@ def check_tolerance(value, name):
     ...
     ValueError: tol must be a number >= 0, got nan
     """
+    if isinstance(value, (complex, np.complexfloating)) or (
+            isinstance(value, np.ndarray) and value.dtype.kind == "c"):
+        raise ValueError(f"{name} must be a number >= 0, got {value!r}")
     try:
         v = float(value)
     except (TypeError, ValueError):

@@ -220,7 +220,7 @@ def test_kinematic_backend_refuses_out_of_limit_targets_itself():
     backend.connect()
     with pytest.raises(ValueError, match="outside its limits"):
         backend.movej([9.0, 0, 0, 0, 0, 0], a=1.0, v=1.0, t=0, r=0)
-    with pytest.raises(ValueError, match="speedup must be positive"):
+    with pytest.raises(ValueError, match="speedup must be a finite number > 0"):
         KinematicBackend(speedup=0)
 
 

@@ -40,9 +40,11 @@ from .._checks import real_array
 from ..models import ur3
 from ..transforms import transform_inverse
 from ..ur import ROBOT_MODE_RUNNING, URState, check_pose, pose_from_transform
+from ..ur._args import real_number
 from ..ur.motion import (
     GAIN,
     LOOKAHEAD_TIME,
+    MAX_DURATION,
     MOVEJ_A,
     MOVEJ_V,
     MOVEL_A,
@@ -63,12 +65,9 @@ UR3_HOME = (0.0, -math.pi / 2, math.pi / 2, -math.pi / 2, -math.pi / 2, 0.0)
 
 
 def _number(value, name, strict=True):
-    """:func:`~dqlab.sim._checks.number`, after refusing complex numbers, text and bools (a
-    complex numpy scalar would otherwise lose its imaginary part silently)."""
-    if isinstance(value, (bool, np.bool_, str, bytes, complex, np.complexfloating)) or (
-            np.ndim(value) != 0) or np.iscomplexobj(value):
-        raise TypeError(f"{name} must be a real number, got {value!r}")
-    return number(value, name, strict=strict)
+    """:func:`~dqlab.sim._checks.number`, after refusing complex numbers, text, bools and
+    sequences by name (a complex numpy scalar would otherwise lose its imaginary part)."""
+    return number(real_number(value, name), name, strict=strict)
 
 
 class MujocoBackend:
@@ -177,13 +176,17 @@ class MujocoBackend:
     def advance(self, duration):
         """Run the simulation for ``duration`` seconds under the controller."""
         self._require_connected()
+        duration = _number(duration, "duration", strict=False)
+        if duration > MAX_DURATION:
+            raise ValueError(f"duration = {duration!r} s is longer than {MAX_DURATION:g} s")
         sim = self.sim
-        steps = int(round(_number(duration, "duration", strict=False) / sim.timestep))
+        steps = int(round(duration / sim.timestep))
         controller = self.controller
-        times = sim.time + sim.timestep * np.arange(steps)
-        q_d, qd_d, qdd_d = self.reference(times, sim.timestep / 2)
-        for k in range(steps):
-            sim.step(controller.torque(sim, q_d[k], qd_d[k], qdd_d[k]))
+        for first in range(0, steps, 4096):          # the reference, a block at a time
+            times = sim.time + sim.timestep * np.arange(min(4096, steps - first))
+            q_d, qd_d, qdd_d = self.reference(times, sim.timestep / 2)
+            for k in range(len(times)):
+                sim.step(controller.torque(sim, q_d[k], qd_d[k], qdd_d[k]))
 
     @property
     def is_moving(self):

@@ -58,6 +58,14 @@ class Backend(typing.Protocol):
     def stop(self, a: float) -> None: ...
 
 
+def _duration(value, name):
+    """A finite number of seconds >= 0 (named in the error)."""
+    value = check_tolerance(value, name)
+    if not np.isfinite(value):
+        raise ValueError(f"{name} must be a finite number of seconds, got {value!r}")
+    return value
+
+
 _BACKEND_METHODS = ("connect", "close", "read_state", "movej", "movel", "servoj", "stop")
 
 
@@ -121,8 +129,8 @@ class URClient:
                             f"{type(robot).__name__}")
         self.robot = robot
         self.tol = check_tolerance(tol, "tol")
-        self.poll_interval = check_tolerance(poll_interval, "poll_interval")
-        self.connect_timeout = check_tolerance(connect_timeout, "connect_timeout")
+        self.poll_interval = _duration(poll_interval, "poll_interval")
+        self.connect_timeout = _duration(connect_timeout, "connect_timeout")
         self._connected = False
 
     # connection ------------------------------------------------------------------------
@@ -261,7 +269,11 @@ class URClient:
         from .. import ik
 
         q_ref = self.actual_q() if q_ref is None else q_ref
-        result = ik.ur(self.robot, motion.world_transform(self.robot, check_pose(pose)))
+        try:
+            X = motion.world_transform(self.robot, check_pose(pose, "pose"))
+        except ValueError as exc:
+            raise UnsafeTargetError(f"pose: {exc}") from None
+        result = ik.ur(self.robot, X)
         try:
             return ik.closest_solution(result, q_ref, self.limits.joint_limits)
         except ValueError as exc:

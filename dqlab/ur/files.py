@@ -151,11 +151,12 @@ def _check_values(kind, row, *, max_reach, unit_tol):
     qr, qd = np.asarray(row[:4]), np.asarray(row[4:])
     norm = float(np.linalg.norm(qr))
     if abs(norm - 1.0) > unit_tol:
-        return f"q_r has norm {norm:.12g}, not 1 within {unit_tol:g} (not a unit dual quaternion)"
+        return (f"q_r has norm {norm:.12g}, not 1 within unit_tol = {unit_tol:g} (not a unit "
+                "dual quaternion)")
     dot = float(qr @ qd)
     if abs(dot) > unit_tol:
-        return (f"q_r . q_d = {dot:.3g}, not 0 within {unit_tol:g} (not a unit dual "
-                "quaternion)")
+        return (f"q_r . q_d = {dot:.3g}, not 0 within unit_tol = {unit_tol:g} (not a unit "
+                "dual quaternion)")
     reach = 2.0 * float(np.linalg.norm(qd))  # |p| = 2 |q_d| for a unit q_r
     if reach > max_reach:
         return (f"position is {reach:.6g} m from the base, beyond max_reach = {max_reach:g} m "

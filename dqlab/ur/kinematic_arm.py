@@ -11,8 +11,7 @@ of speed between them -- and only then executed; a program refused anywhere move
 import math
 import time
 
-import numpy as np
-
+from ._args import positive_number
 from .motion import (
     GAIN,
     LOOKAHEAD_TIME,
@@ -45,11 +44,7 @@ class StepClock:
     """
 
     def __init__(self, dt):
-        if isinstance(dt, (bool, str, bytes, complex)) or np.ndim(dt) != 0:
-            raise TypeError(f"dt must be a number, got {dt!r}")
-        if not (float(dt) > 0 and math.isfinite(float(dt))):
-            raise ValueError(f"dt must be a finite number > 0, got {dt!r}")
-        self.dt = float(dt)
+        self.dt = positive_number(dt, "dt")
         self._k = 0
 
     def __call__(self):
@@ -112,13 +107,9 @@ class KinematicBackend:
         self.robot = robot
         q0 = HOME if q0 is None else q0
         self._q0 = check_joint_targets(q0, limits=self.limits, command="q0")
-        if isinstance(speedup, (bool, str, bytes, complex)) or np.ndim(speedup) != 0:
-            raise TypeError(f"speedup must be a number, got {speedup!r}")
-        if not (float(speedup) > 0 and math.isfinite(float(speedup))):
-            raise ValueError(f"speedup must be positive, got {speedup!r}")
+        self.speedup = positive_number(speedup, "speedup")
         if clock is not None and not callable(clock):
             raise TypeError(f"clock must be a callable returning seconds, got {clock!r}")
-        self.speedup = float(speedup)
         self._clock = clock if clock is not None else (
             lambda: time.monotonic() * self.speedup)
         self._t_connect = None

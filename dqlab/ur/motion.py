@@ -81,8 +81,8 @@ from .poses import pose_from_transform, transform_from_pose
 
 __all__ = [
     "MOVEJ_A", "MOVEJ_V", "MOVEL_A", "MOVEL_V", "SERVOJ_T", "LOOKAHEAD_TIME", "GAIN",
-    "STOPJ_A", "move_law", "LinePath", "SplinePath", "Motion", "Timeline", "plan_movej",
-    "plan_movel", "plan_servoj", "plan_stop", "plan_hold", "controller_pose",
+    "STOPJ_A", "MAX_DURATION", "move_law", "LinePath", "SplinePath", "Motion", "Timeline",
+    "plan_movej", "plan_movel", "plan_servoj", "plan_stop", "plan_hold", "controller_pose",
     "world_transform",
 ]
 
@@ -113,6 +113,9 @@ _KNOT_ANGLE = 1e-3
 _MIN_KNOTS = 8
 #: Below this translation (m) a ``movel`` is a pure rotation, timed on its angle.
 _PURE_ROTATION = 1e-9
+#: The longest motion planned, s (about 11 days): beyond, the spacing of floats near the
+#: end time exceeds a microsecond, and the motion is a mistake anyway.
+MAX_DURATION = 1e6
 
 
 def _uniform_law():
@@ -138,6 +141,11 @@ def move_law(distance, a, v, t=0.0):
     TimeLaw or None
         :math:`\sigma(t)` from 0 to :math:`D` (None for :math:`D = 0`).
 
+    Raises
+    ------
+    ValueError
+        For a motion longer than :data:`MAX_DURATION`, or a ``t`` too short to be planned.
+
     Examples
     --------
     >>> law = move_law(3.0, 1.4, 1.05)
@@ -155,7 +163,22 @@ def move_law(distance, a, v, t=0.0):
     if distance == 0.0:
         return None
     if t > 0.0:
-        return trapezoidal(distance, duration=t, a_max=max(a, 4.0 * distance / (t * t)))
+        if t > MAX_DURATION:
+            raise ValueError(f"t = {t!r} s is longer than {MAX_DURATION:g} s, the longest "
+                             "motion planned")
+        needed = 4.0 * distance / (t * t) if t * t > distance * 1e-300 else math.inf
+        if not math.isfinite(needed):
+            raise ValueError(f"t = {t!r} s is too short to move by {distance:.6g} (it would "
+                             "take an infinite acceleration)")
+        return trapezoidal(distance, duration=t, a_max=max(a, needed))
+    try:
+        duration = distance / v + v / a if distance * a >= v * v else 2.0 * math.sqrt(
+            distance / a)
+    except (ZeroDivisionError, OverflowError):
+        duration = math.inf
+    if not duration <= MAX_DURATION:
+        raise ValueError(f"with v = {v!r} and a = {a!r} the move would last {duration:.3g} s,"
+                         f" longer than {MAX_DURATION:g} s, the longest motion planned")
     return trapezoidal(distance, v_max=v, a_max=a)
 
 
@@ -542,10 +565,15 @@ def plan_servoj(q_from, q, t=SERVOJ_T):
     """
     path = LinePath(_joints(q_from, "q_from"), _joints(q, "q"))
     t = float(t)
+    if not 0.0 < t <= MAX_DURATION:
+        raise ValueError(f"t = {t!r} s must be > 0 and at most {MAX_DURATION:g} s")
     if path.length == 0.0:
         return Motion("servoj", path, None, t)
-    law = TimeLaw(np.array([0.0, t]), np.array([[0.0, path.length / t, 0, 0, 0, 0]]),
-                  "constant speed")
+    speed = path.length / t if t > path.length * 1e-300 else math.inf
+    if not math.isfinite(speed):
+        raise ValueError(f"t = {t!r} s is too short to move by {path.length:.6g} (an "
+                         "infinite speed)")
+    law = TimeLaw(np.array([0.0, t]), np.array([[0.0, speed, 0, 0, 0, 0]]), "constant speed")
     return Motion("servoj", path, law, t)
 
 
@@ -564,7 +592,10 @@ def plan_stop(q, qd, a=STOPJ_A):
     if speed == 0.0:
         return plan_hold(q)
     a = float(a)
-    T = speed / a
+    T = speed / a if a > speed * 1e-300 else math.inf
+    if not (T <= MAX_DURATION and a > 0.0):
+        raise ValueError(f"a = {a!r}: braking from {speed:.6g} would take {T:.3g} s, longer "
+                         f"than {MAX_DURATION:g} s")
     distance = 0.5 * speed * T
     law = TimeLaw(np.array([0.0, T]), np.array([[0.0, speed, -0.5 * a, 0, 0, 0]]), "stop")
     return Motion("stopj", LinePath(q, q + qd / speed * distance), law, T)
@@ -667,6 +698,7 @@ def plan_movel(robot, q_from, pose, a=MOVEL_A, v=MOVEL_V, t=0.0):
     distance = length if unit == "m" else angle
     if distance == 0.0:
         return Motion("movel", LinePath(q_from, q_from), None, float(t))
+    law = move_law(distance, a, v, t)              # (an impossible law fails before the IK)
     pieces = max(_MIN_KNOTS, math.ceil(length / _KNOT_LENGTH), math.ceil(angle / _KNOT_ANGLE))
     geometry = line_slerp(X_A, X_B, law=_uniform_law(), dt=1.0 / pieces)
     trajectory, report = follow_path_ur(robot, geometry, q_start=q_from)
@@ -682,7 +714,6 @@ def plan_movel(robot, q_from, pose, a=MOVEL_A, v=MOVEL_V, t=0.0):
     # constant (the uniform law's end sample reports a law at rest, so it is read at 0)
     slope = joint_velocities(robot.jacobian(q), geometry.twist[0]) / distance
     path = SplinePath(geometry.t * distance, q, slope)
-    law = move_law(distance, a, v, t)
     return Motion("movel", path, law, law.duration, tcp_distance=distance, tcp_unit=unit)
 
 

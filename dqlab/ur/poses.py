@@ -101,14 +101,19 @@ def quaternion_from_rotation_vector(r):
     >>> quaternion_from_rotation_vector([0, 0, np.pi]).round(12) + 0.0
     array([0., 0., 0., 1.])
     """
-    r = as_float_array(r, "r", (3,))
+    return _quaternions(as_float_array(r, "r", (3,)), "r")
+
+
+def _quaternions(r, name):
+    """:func:`quaternion_from_rotation_vector` of checked rotation vectors; ``name`` is what
+    an error message calls them."""
     scale = np.max(np.abs(r), axis=-1, initial=0.0)
     safe = np.where(scale > 0.0, scale, 1.0)[..., None]
     theta = scale * np.sqrt(np.sum((r / safe) ** 2, axis=-1))     # |r| without overflow
     if np.any(theta > _MAX_ANGLE):
-        raise ValueError(f"r is too long: |r| = {float(np.max(theta)):.3g} rad is beyond "
-                         f"{_MAX_ANGLE:g} rad, where a float no longer determines the "
-                         "rotation to 1e-9 rad (the angle is too large)")
+        raise ValueError(f"{name} is too long: a rotation vector of {float(np.max(theta)):.3g}"
+                         f" rad is beyond {_MAX_ANGLE:g} rad, where a float no longer "
+                         "determines the rotation to 1e-9 rad (the angle is too large)")
     w = np.cos(0.5 * theta)
     xyz = r * (0.5 * np.sinc(theta / (2.0 * np.pi)))[..., None]
     return np.concatenate([w[..., None], xyz], axis=-1)
@@ -162,7 +167,8 @@ def rotation_vector_from_quaternion(q, *, tol=1e-9, half_turn_tol=1e-12):
     tol = check_tolerance(tol, "tol")
     half_turn_tol = check_tolerance(half_turn_tol, "half_turn_tol")
     q = as_float_array(q, "q", (4,))
-    norm = np.sqrt(np.sum(q * q, axis=-1))
+    with np.errstate(over="ignore"):
+        norm = np.sqrt(np.sum(q * q, axis=-1))
     bad = ~(np.abs(norm - 1.0) <= tol)
     if np.any(bad):
         worst = float(np.max(np.abs(norm - 1.0)))
@@ -314,7 +320,7 @@ def transform_from_pose(p):
     """
     p = check_pose(p, "p")
     T = np.zeros(p.shape[:-1] + (4, 4))
-    T[..., :3, :3] = matrix_from_rotation_vector(p[..., 3:])
+    T[..., :3, :3] = matrix_from_quaternion(_quaternions(p[..., 3:], "the rotation p[..., 3:]"))
     T[..., :3, 3] = p[..., :3]
     T[..., 3, 3] = 1.0
     return T
@@ -341,6 +347,8 @@ def pose_from_dual_quaternion(Q, *, tol=1e-9, half_turn_tol=1e-12):
     >>> pose_from_dual_quaternion([1, 0, 0, 0, 0, 0.05, 0, 0])
     array([0.1, 0. , 0. , 0. , 0. , 0. ])
     """
+    tol = check_tolerance(tol, "tol")
+    half_turn_tol = check_tolerance(half_turn_tol, "half_turn_tol")
     Q = as_float_array(Q, "Q", (8,))
     T = transform_from_dual_quaternion(Q, tol=tol)  # checks that Q is a unit dual quaternion
     r = rotation_vector_from_quaternion(Q[..., :4], tol=tol, half_turn_tol=half_turn_tol)
@@ -367,7 +375,7 @@ def dual_quaternion_from_pose(p):
     array([1.  , 0.  , 0.  , 0.  , 0.  , 0.05, 0.  , 0.  ])
     """
     p = check_pose(p, "p")
-    qr = quaternion_from_rotation_vector(p[..., 3:])
+    qr = _quaternions(p[..., 3:], "the rotation p[..., 3:]")
     w, x, y, z = np.moveaxis(qr, -1, 0)
     tx, ty, tz = np.moveaxis(0.5 * p[..., :3], -1, 0)
     # q_d = (0, t/2) q_r, written out (Hamilton product with a pure quaternion)
@@ -402,6 +410,7 @@ def rpy_from_rotation_vector(r, *, singular_tol=1e-12):
     >>> rpy_from_rotation_vector([0, 0, 0.3]).round(12) + 0.0
     array([0. , 0. , 0.3])
     """
+    singular_tol = check_tolerance(singular_tol, "singular_tol")
     return rpy_from_matrix(matrix_from_rotation_vector(r), singular_tol=singular_tol)
 
 
@@ -425,4 +434,5 @@ def rotation_vector_from_rpy(rpy, *, half_turn_tol=1e-12):
     >>> rotation_vector_from_rpy([np.pi, 0, 0]).round(12) + 0.0
     array([3.14159265, 0.        , 0.        ])
     """
+    half_turn_tol = check_tolerance(half_turn_tol, "half_turn_tol")
     return rotation_vector_from_matrix(matrix_from_rpy(rpy), half_turn_tol=half_turn_tol)

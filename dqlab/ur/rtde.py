@@ -37,6 +37,7 @@ import time
 import numpy as np
 
 from .._checks import check_tolerance
+from ._args import real_number
 
 __all__ = ["RTDEError", "RTDEReader", "PROTOCOL_VERSION", "TYPES", "pack", "PacketBuffer",
            "REQUEST_PROTOCOL_VERSION", "GET_URCONTROL_VERSION", "TEXT_MESSAGE", "DATA_PACKAGE",
@@ -156,8 +157,9 @@ class RTDEReader:
     """
 
     def __init__(self, host, port=30004, variables=STATE_VARIABLES, frequency=125.0):
-        if not isinstance(host, str):
-            raise TypeError(f"host must be a str, got {host!r}")
+        if not isinstance(host, str) or not host:
+            raise TypeError(f"host must be a host name or address (a non-empty str), got "
+                            f"{host!r}")
         if isinstance(port, (bool, np.bool_)) or not isinstance(port, (int, np.integer)) \
                 or not 0 <= port <= 65535:
             raise ValueError(f"port must be a TCP port number (an int in 0..65535), got "
@@ -166,8 +168,7 @@ class RTDEReader:
                 isinstance(v, str) and v.isidentifier() and v.isascii() for v in variables):
             raise ValueError(f"variables must be a sequence of RTDE output names, got "
                              f"{variables!r}")
-        if isinstance(frequency, (bool, str, bytes, complex)) or np.ndim(frequency) != 0 \
-                or not np.isfinite(float(frequency)):
+        if not np.isfinite(real_number(frequency, "frequency")):
             raise ValueError(f"frequency must be a finite number (Hz), got {frequency!r}")
         self.host, self.port = host, int(port)
         self.variables = tuple(variables)

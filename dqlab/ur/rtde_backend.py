@@ -1,11 +1,11 @@
 """A UR controller through the ``ur_rtde`` package (optional extra ``robot``)."""
 
 import importlib
-import math
 import time
 
 import numpy as np
 
+from ._args import positive_number
 from .motion import GAIN, LOOKAHEAD_TIME, MOVEJ_A, MOVEJ_V, MOVEL_A, MOVEL_V, SERVOJ_T, STOPJ_A
 from .state import URState
 
@@ -30,15 +30,6 @@ def _floats(values, name, n):
     if a.dtype.kind not in "iuf" or a.shape != (n,) or not np.all(np.isfinite(a)):
         raise ValueError(f"{name} must be {n} finite real numbers, got {values!r}")
     return [float(x) for x in a]
-
-
-def _positive(value, name):
-    if isinstance(value, (bool, str, bytes, complex)) or np.ndim(value) != 0:
-        raise TypeError(f"{name} must be a number, got {value!r}")
-    x = float(value)
-    if not (x > 0 and math.isfinite(x)):
-        raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
-    return x
 
 
 class RTDEBackend:
@@ -106,19 +97,19 @@ class RTDEBackend:
         if t or r:
             raise ValueError("RTDEBackend.movej: ur_rtde takes no t or r; use "
                              "SecondaryInterfaceBackend for timed or blended moves")
-        self._control("movej").moveJ(_floats(q, "q", 6), _positive(v, "v"),
-                                     _positive(a, "a"), True)
+        self._control("movej").moveJ(_floats(q, "q", 6), positive_number(v, "v"),
+                                     positive_number(a, "a"), True)
 
     def movel(self, pose, *, a=MOVEL_A, v=MOVEL_V, t=0.0, r=0.0):
         if t or r:
             raise ValueError("RTDEBackend.movel: ur_rtde takes no t or r")
-        self._control("movel").moveL(_floats(pose, "pose", 6), _positive(v, "v"),
-                                     _positive(a, "a"), True)
+        self._control("movel").moveL(_floats(pose, "pose", 6), positive_number(v, "v"),
+                                     positive_number(a, "a"), True)
 
     def servoj(self, q, *, t=SERVOJ_T, lookahead_time=LOOKAHEAD_TIME, gain=GAIN):
-        self._control("servoj").servoJ(_floats(q, "q", 6), 0.0, 0.0, _positive(t, "t"),
-                                       _positive(lookahead_time, "lookahead_time"),
-                                       _positive(gain, "gain"))
+        self._control("servoj").servoJ(_floats(q, "q", 6), 0.0, 0.0, positive_number(t, "t"),
+                                       positive_number(lookahead_time, "lookahead_time"),
+                                       positive_number(gain, "gain"))
 
     def stop(self, a=STOPJ_A):
-        self._control("stop").stopJ(_positive(a, "a"))
+        self._control("stop").stopJ(positive_number(a, "a"))

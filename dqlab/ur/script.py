@@ -49,8 +49,9 @@ import numpy as np
 from .._checks import real_array
 from ..models import UR_MAX_JOINT_SPEED_DEG
 from . import motion
+from ._args import real_number
 from .motion import GAIN, LOOKAHEAD_TIME, MOVEJ_A, MOVEJ_V, MOVEL_A, MOVEL_V, SERVOJ_T, STOPJ_A
-from .poses import check_pose
+from .poses import check_pose, transform_from_pose
 
 __all__ = [
     "UR3_JOINT_LIMITS", "UR3_MAX_JOINT_SPEED", "SafetyLimits", "UnsafeTargetError",
@@ -235,13 +236,7 @@ def urscript_pose(p):
 def _number(value, name, command):
     """``value`` as a float, or ``TypeError`` naming the argument for anything but a real
     number (text, bool, complex, None, arrays)."""
-    if isinstance(value, (bool, np.bool_, str, bytes, complex, np.complexfloating)) or (
-            np.ndim(value) != 0):
-        raise TypeError(f"{command}: {name} must be a number, got {value!r}")
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        raise TypeError(f"{command}: {name} must be a number, got {value!r}") from None
+    return real_number(value, f"{command}: {name}")
 
 
 def _scalar(value, name, command, *, lo=0.0, hi=np.inf, lo_open=False):
@@ -343,6 +338,11 @@ def check_joint_targets(q, *, limits=None, q_from=None, command="movej", times=N
         if start.shape != (n,) or not np.all(np.isfinite(start)):
             raise UnsafeTargetError(f"{command}: q_from (where the arm is) must be {n} finite "
                                     f"numbers, got {start.tolist()}")
+        if not np.all((start >= lo) & (start <= hi)):
+            j = int(np.argmax(~((start >= lo) & (start <= hi))))
+            raise UnsafeTargetError(f"{command}: q_from (where the arm is) has joint {j + 1} = "
+                                    f"{start[j]:.6g} rad, outside its limits [{lo[j]:.6g}, "
+                                    f"{hi[j]:.6g}] rad")
         path = np.concatenate([start[None], targets])
         offset = 1
     steps = np.abs(np.diff(path, axis=0))
@@ -408,7 +408,7 @@ def _robot_for(robot, limits, command):
     return robot
 
 
-def check_motion(m, limits, command="movej"):
+def check_motion(m, limits, command="movej", t=0.0):
     r"""Check a planned :class:`~dqlab.ur.motion.Motion` against ``limits``: the joints stay
     within their limits all along, and the peaks of its joint speeds and accelerations
     (and, for ``movel``, of the TCP's speed and acceleration) stay within the limits.
@@ -434,7 +434,8 @@ def check_motion(m, limits, command="movej"):
         raise UnsafeTargetError(
             f"{command}: joint {j + 1} would reach {value:.6g} rad on the way, outside its "
             f"limits [{limits.joint_limits[j, 0]:.6g}, {limits.joint_limits[j, 1]:.6g}] rad")
-    why = f" (the motion lasts {m.duration:.6g} s)" if m.duration else ""
+    why = f" (with t = {t:.6g} s)" if t > 0 else (
+        f" (the motion lasts {m.duration:.6g} s)" if m.duration else "")
     speed = m.peak_joint_speed()
     fast = ~(speed <= limits.max_joint_speed * (1.0 + ROUNDING))
     if fast.any():
@@ -515,9 +516,18 @@ def movej(q, a=MOVEJ_A, v=MOVEJ_V, t=0.0, r=0.0, *, limits=None, q_from=None):
     a, v, t, r = _movej_args(a, v, t, r, limits)
     q = check_joint_targets(q, limits=limits, q_from=q_from, command="movej")
     if q_from is not None:
-        check_motion(motion.plan_movej(_joint_array(q_from, "q_from", "movej"), q, a, v, t),
-                     limits, "movej")
+        check_motion(_plan(motion.plan_movej, "movej", q_from, q, a, v, t), limits, "movej",
+                     t)
     return f"movej({urscript_list(q)}, a={_fmt(a)}, v={_fmt(v)}, t={_fmt(t)}, r={_fmt(r)})"
+
+
+def _plan(planner, command, *args):
+    """A planned motion; the planner's ValueError (an impossible time law) as an
+    UnsafeTargetError naming the command."""
+    try:
+        return planner(*args)
+    except ValueError as exc:
+        raise UnsafeTargetError(f"{command}: {exc}") from None
 
 
 def _movel_args(a, v, t, r, limits):
@@ -533,6 +543,10 @@ def _movel_target(pose):
         raise UnsafeTargetError(str(exc)) from None
     if p.shape != (6,):
         raise UnsafeTargetError(f"movel target must be one pose (6,), got shape {p.shape}")
+    try:
+        transform_from_pose(p)
+    except ValueError as exc:
+        raise UnsafeTargetError(f"movel target: {exc}") from None
     return p
 
 
@@ -600,7 +614,7 @@ def _plan_movel(robot, q_from, p, a, v, t, limits):
         m = motion.plan_movel(robot, q_from, p, a, v, t)
     except ValueError as exc:
         raise UnsafeTargetError(f"movel target {urscript_pose(p)}: {exc}") from None
-    check_motion(m, limits, "movel")
+    check_motion(m, limits, "movel", t)
     return m
 
 
@@ -649,8 +663,7 @@ def servoj(q, t=SERVOJ_T, lookahead_time=LOOKAHEAD_TIME, gain=GAIN, *, limits=No
     t, lookahead_time, gain = _servoj_args(t, lookahead_time, gain)
     q = check_joint_targets(q, limits=limits, q_from=q_from, command="servoj")
     if q_from is not None:
-        check_motion(motion.plan_servoj(_joint_array(q_from, "q_from", "servoj"), q, t),
-                     limits, "servoj")
+        check_motion(_plan(motion.plan_servoj, "servoj", q_from, q, t), limits, "servoj", t)
     return (f"servoj({urscript_list(q)}, t={_fmt(t)}, lookahead_time={_fmt(lookahead_time)}, "
             f"gain={_fmt(gain)})")
 
@@ -861,8 +874,8 @@ def plan_command(name, target, kwargs=None, *, q_from, limits=None, robot=None):
         a, v, t, _ = _movej_args(kw.get("a", MOVEJ_A), kw.get("v", MOVEJ_V),
                                  kw.get("t", 0.0), kw.get("r", 0.0), limits)
         q = check_joint_targets(target, limits=limits, q_from=q_from, command="movej")
-        m = motion.plan_movej(q_from, q, a, v, t)
-        check_motion(m, limits, "movej")
+        m = _plan(motion.plan_movej, "movej", q_from, q, a, v, t)
+        check_motion(m, limits, "movej", t)
         return m
     if name == "movel":
         kw = take("a", "v", "t", "r")
@@ -876,8 +889,8 @@ def plan_command(name, target, kwargs=None, *, q_from, limits=None, robot=None):
         t, _, _ = _servoj_args(kw.get("t", SERVOJ_T), kw.get("lookahead_time", LOOKAHEAD_TIME),
                                kw.get("gain", GAIN))
         q = check_joint_targets(target, limits=limits, q_from=q_from, command="servoj")
-        m = motion.plan_servoj(q_from, q, t)
-        check_motion(m, limits, "servoj")
+        m = _plan(motion.plan_servoj, "servoj", q_from, q, t)
+        check_motion(m, limits, "servoj", t)
         return m
     if name == "stopj":
         kw = take("a")
@@ -961,8 +974,8 @@ def plan_program(commands, *, q_now, qd_now=None, limits=None, robot=None, strea
             name, target, kw = command
             if name == "stopj":      # brakes the arm's motion; after a motion, it is at rest
                 moving = qd if (k == 1 and not motions and qd is not None) else 0.0 * q
-                m = motion.plan_stop(q, moving, _stopj_arg(dict(kw or {}).get("a", STOPJ_A),
-                                                           limits))
+                a = _stopj_arg(dict(kw or {}).get("a", STOPJ_A), limits)
+                m = _plan(motion.plan_stop, "stopj", q, moving, a)
             else:
                 m = plan_command(name, target, kw, q_from=q, limits=limits, robot=robot)
             if check_speed_changes:

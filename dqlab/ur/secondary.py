@@ -170,8 +170,9 @@ class SecondaryInterfaceBackend:
 
     def __init__(self, host, port=30002, *, rtde_port=30004, frequency=125.0, robot=None,
                  limits=None):
-        if not isinstance(host, str):
-            raise TypeError(f"host must be a str, got {host!r}")
+        if not isinstance(host, str) or not host:
+            raise TypeError(f"host must be a host name or address (a non-empty str), got "
+                            f"{host!r}")
         self.host, self.port, self.rtde_port = host, _port(port, "port"), \
             _port(rtde_port, "rtde_port")
         self.limits = as_safety_limits(limits, robot)

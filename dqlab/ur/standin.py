@@ -45,6 +45,7 @@ import numpy as np
 
 from .._checks import real_array
 from . import rtde
+from ._args import positive_number
 from .kinematic_arm import KinematicBackend
 from .secondary import SecondaryInterfaceBackend, version_message
 from .state import HOME
@@ -260,11 +261,11 @@ class ControllerStandIn:
             raise ValueError(f"controller_version must be 4 ints (major, minor, bugfix, build),"
                              f" got {controller_version!r}")
         self._config = {"model": model, "q0": q0.tolist(),
-                        "speedup": _positive(speedup, "speedup"),
+                        "speedup": positive_number(speedup, "speedup"),
                         "secondary_port": _port(secondary_port, "secondary_port"),
                         "rtde_port": _port(rtde_port, "rtde_port"),
                         "controller_version": [int(v) for v in version]}
-        self.start_timeout = _positive(start_timeout, "start_timeout")
+        self.start_timeout = positive_number(start_timeout, "start_timeout")
         self.secondary_port = self.rtde_port = None
         self._proc = None
         self._log_file = None
@@ -375,15 +376,6 @@ class ControllerStandIn:
 
 # --------------------------------------------------------------------------------------
 # The server (runs in the stand-in's own process)
-
-
-def _positive(value, name):
-    if isinstance(value, (bool, str, bytes, complex)) or np.ndim(value) != 0:
-        raise TypeError(f"{name} must be a number, got {value!r}")
-    x = float(value)
-    if not (x > 0 and np.isfinite(x)):
-        raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
-    return x
 
 
 def _port(value, name):
