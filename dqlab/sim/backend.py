@@ -65,7 +65,7 @@ UR3_HOME = (0.0, -math.pi / 2, math.pi / 2, -math.pi / 2, -math.pi / 2, 0.0)
 
 
 def _number(value, name, strict=True):
-    """:func:`~dqlab.sim._checks.number`, after refusing complex numbers, text, bools and
+    """``dqlab.sim._checks.number``, after refusing complex numbers, text, bools and
     sequences by name (a complex numpy scalar would otherwise lose its imaginary part)."""
     return number(real_number(value, name), name, strict=strict)
 

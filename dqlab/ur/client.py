@@ -84,8 +84,9 @@ class URClient:
     Parameters
     ----------
     backend : Backend
-        :class:`~dqlab.ur.KinematicBackend`, :class:`~dqlab.ur.SecondaryInterfaceBackend`,
-        :class:`~dqlab.ur.RTDEBackend`, or the MuJoCo back end of ``dqlab.sim``.
+        :class:`~dqlab.ur.kinematic_arm.KinematicBackend`,
+        :class:`~dqlab.ur.secondary.SecondaryInterfaceBackend`,
+        :class:`~dqlab.ur.rtde_backend.RTDEBackend`, or the MuJoCo back end of ``dqlab.sim``.
     robot : dqlab.robot.Robot, optional
         The arm's model, for inverse kinematics, reach and the limits (default
         :func:`dqlab.models.ur3`). Poses are in its base frame (DH frame 0), not in the world
@@ -259,7 +260,7 @@ class URClient:
 
     def closest_joints(self, pose, q_ref=None):
         """The inverse-kinematics solution of a pose nearest ``q_ref`` (default: the current
-        joints) within the joint limits (:func:`dqlab.ik.closest_solution`).
+        joints) within the joint limits (:func:`dqlab.ik.solutions.closest_solution`).
 
         Raises
         ------

@@ -1,13 +1,14 @@
 r"""How a UR controller executes ``movej``, ``movel``, ``servoj`` and ``stopj``: the motion laws.
 
 This is the one planner of :mod:`dqlab.ur`. The safety checks of :mod:`dqlab.ur.script` check
-the motions planned here, the in-process kinematic arm (:class:`dqlab.ur.KinematicBackend`,
-hence the controller stand-in) executes them, and so does the MuJoCo back end
-(:class:`dqlab.sim.MujocoBackend`) as its reference: what is checked is what runs.
+the motions planned here, the in-process kinematic arm
+(:class:`dqlab.ur.kinematic_arm.KinematicBackend`, hence the controller stand-in) executes
+them, and so does the MuJoCo back end
+(:class:`dqlab.sim.backend.MujocoBackend`) as its reference: what is checked is what runs.
 
 Every motion is a **joint path** :math:`q(\sigma)` followed along its parameter
 :math:`\sigma \in [0, D]` by a **time law** :math:`\sigma(t)`
-(:class:`dqlab.trajectory.TimeLaw`):
+(:class:`dqlab.trajectory.time_laws.TimeLaw`):
 
 .. math::
 
@@ -23,10 +24,10 @@ Every motion is a **joint path** :math:`q(\sigma)` followed along its parameter
     together.
 ``movel(pose, a, v, t)``
     The TCP on the straight line to ``pose`` with its orientation by SLERP
-    (:func:`dqlab.trajectory.line_slerp`), :math:`\sigma` its length in metres (or its
+    (:func:`dqlab.trajectory.cartesian.line_slerp`), :math:`\sigma` its length in metres (or its
     rotation angle in radians for a pure rotation); the joints at knots every millimetre
     and milliradian by the closed-form inverse kinematics with branch tracking
-    (:func:`dqlab.trajectory.follow_path_ur`), with their slopes
+    (:func:`dqlab.trajectory.follow.follow_path_ur`), with their slopes
     :math:`q' = J^{-1}\,\mathrm d X / \mathrm d\sigma`, and between knots the cubic Hermite
     curve through them (continuous slope); the trapezoid of :func:`move_law` on the length.
 ``servoj(q, t)``
@@ -38,7 +39,7 @@ Every motion is a **joint path** :math:`q(\sigma)` followed along its parameter
 
 **The time law** of ``movej`` and ``movel`` (:func:`move_law`): the rest-to-rest trapezoid
 that accelerates at ``a`` to the cruise speed ``v`` and brakes at ``a``
-(:func:`dqlab.trajectory.trapezoidal`; a triangle when ``v`` is not reached). With a time
+(:func:`dqlab.trajectory.time_laws.trapezoidal`; a triangle when ``v`` is not reached). With a time
 ``t > 0`` the time has priority, as in URScript: the trapezoid of duration ``t`` that
 accelerates at ``a`` when ``a`` can cover the distance in ``t``
 (:math:`a \ge 4D/t^2`), else the triangle of duration ``t`` (acceleration
@@ -480,10 +481,11 @@ class Motion:
 
 
 def _law_values(law, t):
-    r""":math:`(\sigma, \dot\sigma, \ddot\sigma)` of a :class:`~dqlab.trajectory.TimeLaw` at
-    the times ``t`` in :math:`[0, T]`, in one pass (Horner's rule on the piece of each time):
-    the values of ``law(t)``, several times faster for one instant (the kinematic arm reads
-    one per state; tested equal to ``law(t)``)."""
+    r""":math:`(\sigma, \dot\sigma, \ddot\sigma)` of a
+    :class:`~dqlab.trajectory.time_laws.TimeLaw` at the times ``t`` in :math:`[0, T]`, in one
+    pass (Horner's rule on the piece of each time): the values of ``law(t)``, several times
+    faster for one instant (the kinematic arm reads one per state; tested equal to
+    ``law(t)``)."""
     c = law.coefficients
     k = np.clip(np.searchsorted(law.breaks, t, side="right") - 1, 0, len(c) - 1)
     tau = t - law.breaks[k]

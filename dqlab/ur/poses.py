@@ -216,7 +216,7 @@ def matrix_from_rotation_vector(r):
 
 def rotation_vector_from_matrix(R, *, tol=1e-9, half_turn_tol=1e-12):
     r"""Rotation vectors of rotation matrices (through Shepperd's quaternion: the kernel
-    :func:`dqlab._kernels.rotation_vector_from_matrix_entries`, shared with the rest of
+    ``dqlab._kernels.rotation_vector_from_matrix_entries``, shared with the rest of
     dqlab, and the half-turn rule of the module docstring).
 
     Parameters

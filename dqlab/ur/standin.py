@@ -146,8 +146,8 @@ def parse_urscript(text):
     Returns
     -------
     list of (name, target, kwargs)
-        As :meth:`dqlab.ur.KinematicBackend.run` takes them: targets are lists of numbers,
-        arguments numbers.
+        As :meth:`dqlab.ur.kinematic_arm.KinematicBackend.run` takes them: targets are lists
+        of numbers, arguments numbers.
 
     Raises
     ------
@@ -362,7 +362,7 @@ class ControllerStandIn:
         self.stop()
 
     def backend(self, **kwargs):
-        """A :class:`~dqlab.ur.SecondaryInterfaceBackend` for this stand-in (for its arm:
+        """A :class:`~dqlab.ur.secondary.SecondaryInterfaceBackend` for this stand-in (for its arm:
         ``robot`` defaults to the stand-in's model; other arguments are passed on)."""
         if not self.running:
             raise RuntimeError("the stand-in is not running")
