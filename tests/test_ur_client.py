@@ -1,5 +1,7 @@
 """URClient and the in-process kinematic arm: motions, waiting, and checks before sending."""
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
@@ -231,3 +233,79 @@ def test_rtde_backend_without_ur_rtde_names_the_extra(monkeypatch):
     monkeypatch.setitem(sys.modules, "rtde_control", None)
     with pytest.raises(ImportError, match=r"extra 'robot' \(pip install 'dqlab\[robot\]'\)"):
         dqlab.ur.RTDEBackend("127.0.0.1")
+
+
+# --- frames, limits from the robot, and NaN never switching a check off ---------------------
+
+def _mounted():
+    """A UR3 mounted in a cell: 0.8 m up on a pedestal at (1, 0.5), turned a quarter turn."""
+    robot = dqlab.models.ur3()
+    robot.base = dqlab.transform_from(dqlab.rot_z(np.pi / 2), [1.0, 0.5, 0.8])
+    return robot
+
+
+def test_poses_are_in_the_controllers_base_frame_for_an_arm_mounted_in_a_cell():
+    mounted, floor = _mounted(), dqlab.models.ur3()
+    q0 = np.array([0.4, -1.3, 1.1, -1.2, -1.4, 0.6])
+    arm = KinematicBackend(mounted, q0=q0, clock=StepClock(0.02))
+    with URClient(arm, mounted, poll_interval=0) as ur:
+        pose = ur.actual_tcp_pose()
+        # the controller reports the pose in its base frame (DH frame 0), not the world's
+        np.testing.assert_allclose(pose, dqlab.ur.pose_from_transform(floor.fk(q0)),
+                                   atol=1e-15)
+        # and takes its targets there: a base-frame pose is reached, not refused
+        goal = pose + [0.03, -0.02, -0.04, 0, 0, 0]
+        final = ur.movel(goal, v=0.1)
+        np.testing.assert_allclose(final.tcp_pose, goal, atol=1e-9)
+        np.testing.assert_allclose(mounted.fk(final.q),
+                                   mounted.base @ dqlab.ur.transform_from_pose(goal),
+                                   atol=1e-9)
+        # the world pose of the same target is somewhere else, out of the arm's reach
+        world = dqlab.ur.pose_from_transform(mounted.base @ dqlab.ur.transform_from_pose(goal))
+        with pytest.raises(UnsafeTargetError, match="out of the UR3's reach"):
+            ur.movel(world)
+    assert dqlab.ur.movel(goal, robot=mounted).startswith("movel(")
+
+
+def test_the_limits_are_the_robots_own():
+    ur5 = dqlab.models.ur5()
+    limits = dqlab.ur.SafetyLimits.for_robot(ur5)
+    np.testing.assert_allclose(limits.max_joint_speed, np.pi)           # 180 deg/s, all six
+    np.testing.assert_allclose(dqlab.ur.SafetyLimits.for_robot(dqlab.models.ur10())
+                               .max_joint_speed[:2], np.radians(120))
+    assert URClient(RecordingBackend(), ur5).limits.max_joint_speed[5] == pytest.approx(np.pi)
+    assert URClient(RecordingBackend()).limits.max_joint_speed[5] == pytest.approx(2 * np.pi)
+    with pytest.raises(ValueError, match=r"no rated speed for joints \[1, 2, 3, 4, 5, 6\] "
+                                         r"\(Link.max_speed\): give max_joint_speed="):
+        dqlab.ur.SafetyLimits.for_robot(dqlab.models.ur3_mdh())
+    custom = dqlab.ur.SafetyLimits.for_robot(dqlab.models.ur3_mdh(), max_joint_speed=1.0)
+    assert custom.robot.name and np.all(custom.max_joint_speed == 1.0)
+    # reach is checked against the robot given, never silently a UR3
+    far = dqlab.ur.pose_from_transform(dqlab.models.ur10().fk([0, -0.3, 0.3, 0, 1.0, 0]))
+    with pytest.raises(UnsafeTargetError, match="out of the UR3's reach"):
+        dqlab.ur.movel(far)
+    assert dqlab.ur.movel(far, limits=dqlab.ur.SafetyLimits.for_robot(dqlab.models.ur10()))
+    with pytest.raises(ValueError, match="which robot"):
+        dqlab.ur.movel(far, limits=dqlab.ur.SafetyLimits())
+
+
+def test_nan_and_negative_values_never_switch_a_check_off():
+    backend = RecordingBackend()
+    with URClient(backend) as ur:
+        for a in (np.nan, -5.0, 0.0, 50.0):
+            with pytest.raises(UnsafeTargetError, match="stopj: a = "):
+                ur.stop(a)
+        with pytest.raises(ValueError, match="start_tol must be a number >= 0, got nan"):
+            ur.servoj_stream(SimpleNamespace(t=[0.0, 0.1], q=[HOME, HOME]), start_tol=np.nan)
+        with pytest.raises(UnsafeTargetError, match=r"q must have shape \(N, 6\) with N >= 1"):
+            ur.servoj_stream(SimpleNamespace(t=[], q=np.zeros((0, 6))))
+    assert [c[0] for c in backend.calls] == ["connect", "close"]
+    with pytest.raises(UnsafeTargetError, match=r"q_from \(where the arm is\) must be 6 finite"):
+        dqlab.ur.movej(HOME, q_from=[np.nan] * 6)
+    for tol in (np.nan, -1.0):
+        with pytest.raises(ValueError, match="tol must be a number >= 0"):
+            URClient(RecordingBackend(), tol=tol)
+        with pytest.raises(ValueError, match="tol must be a number >= 0"):
+            dqlab.ur.rotation_vector_from_quaternion([1.0, 0, 0, 0], tol=tol)
+    with pytest.raises(TypeError, match="must hold real numbers, got complex"):
+        dqlab.ur.movej(np.add(HOME, 1j))

@@ -240,3 +240,17 @@ def test_a_trajectory_streamed_to_the_mujoco_backend():
     assert_within_limits(np.r_[knots[0] - (traj.t[1] - traj.t[0]), knots,
                                knots[-1] + traj.t[-1] - traj.t[-2]], rest, servo=True)
     assert math.isfinite(log[-1].time)
+
+
+def test_the_mujoco_backend_reports_and_takes_poses_in_the_base_frame():
+    mounted = ur3()
+    mounted.base = __import__("dqlab").transform_from(
+        __import__("dqlab").rot_z(np.pi / 2), [1.0, 0.5, 0.8])
+    arm = sim.MujocoBackend(mounted, q_home=Q_MID, limits=SafetyLimits.for_robot(mounted))
+    arm.connect()
+    state = arm.read_state()
+    np.testing.assert_allclose(state.tcp_pose, M.controller_pose(ROBOT, state.q), atol=1e-9)
+    goal = state.tcp_pose + [0.02, 0.0, -0.02, 0, 0, 0]
+    arm.movel(goal, a=0.5, v=0.1)
+    arm.advance(arm.timeline.end_time - arm.sim.time + 0.5)
+    np.testing.assert_allclose(arm.read_state().tcp_pose[:3], goal[:3], atol=1e-4)

@@ -183,3 +183,23 @@ def test_safety_limits_validate_themselves():
         S.SafetyLimits(max_joint_step=0.0)
     with pytest.raises(ValueError, match="joint_limits"):
         S.SafetyLimits(joint_limits=[[1.0, -1.0]] * 6)
+
+
+@pytest.mark.parametrize("name", ["end", "def", "while", "thread", "halt", "True"])
+def test_program_names_may_not_be_keywords(name):
+    with pytest.raises(ValueError, match="not a keyword"):
+        S.program_from_trajectory(_traj(), name=name)
+
+
+def test_a_program_starts_and_ends_at_rest_and_keeps_the_tcp_speed():
+    # leaving the movej's rest at full speed: 2 rad/s after the first 10 ms is 200 rad/s^2
+    t = np.arange(5) * 0.01
+    q = np.tile(HOME, (5, 1)) + np.outer(t * 2.0, [1, 0, 0, 0, 0, 0])
+    with pytest.raises(UnsafeTargetError, match=r"trajectory target 0 \(t = 0 s\): joint 1 "
+                                                r"acceleration 200 rad/s\^2 \(from rest\)"):
+        S.program_from_trajectory(SimpleNamespace(t=t, q=q))
+    # a TCP faster than max_tcp_speed (1 m/s): the wrist 1 sweeps the arm's end
+    tr = _traj()
+    limits = S.SafetyLimits(max_tcp_speed=0.05, robot=dqlab.models.ur3())
+    with pytest.raises(UnsafeTargetError, match="TCP speed .* exceeds max_tcp_speed = 0.05"):
+        S.program_from_trajectory(tr, limits=limits)

@@ -165,20 +165,28 @@ class KinematicBackend:
         return self._t_connect is not None and self._now() < self._timeline.end_time
 
     def read_state(self):
+        """The arm's :class:`~dqlab.ur.state.URState` now: joints, speeds, and the TCP pose in
+        the controller's base frame (the robot's DH frame 0,
+        :func:`dqlab.ur.motion.controller_pose`)."""
         now = self._now()
         q, qd, _ = self._timeline.state(now)
         return URState(time=now, q=q, qd=qd, tcp_pose=controller_pose(self.robot, q),
                        robot_mode=ROBOT_MODE_RUNNING)
 
     def movej(self, q, *, a=MOVEJ_A, v=MOVEJ_V, t=0.0, r=0.0):
+        """Start ``movej(q, a, v, t, r)`` (a one-line program: see :meth:`run`)."""
         self.run([("movej", q, {"a": a, "v": v, "t": t, "r": r})])
 
     def movel(self, pose, *, a=MOVEL_A, v=MOVEL_V, t=0.0, r=0.0):
+        """Start ``movel(pose, a, v, t, r)``; ``pose`` is a UR pose vector
+        ``[x, y, z, rx, ry, rz]`` of the TCP in the controller's base frame."""
         self.run([("movel", pose, {"a": a, "v": v, "t": t, "r": r})])
 
     def servoj(self, q, *, t=SERVOJ_T, lookahead_time=LOOKAHEAD_TIME, gain=GAIN):
+        """One ``servoj`` of a stream: from where the arm is to ``q`` in ``t`` seconds."""
         self.run([("servoj", q, {"t": t, "lookahead_time": lookahead_time, "gain": gain})],
                  streaming=True)
 
     def stop(self, a=STOPJ_A):
+        """``stopj(a)``: every joint brakes to rest, the fastest at ``a`` rad/s^2."""
         self.run([("stopj", None, {"a": a})])

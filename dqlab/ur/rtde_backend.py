@@ -101,6 +101,8 @@ class RTDEBackend:
                                      positive_number(a, "a"), True)
 
     def movel(self, pose, *, a=MOVEL_A, v=MOVEL_V, t=0.0, r=0.0):
+        """``moveL``; ``pose`` is a UR pose vector ``[x, y, z, rx, ry, rz]`` of the TCP in the
+        controller's base frame."""
         if t or r:
             raise ValueError("RTDEBackend.movel: ur_rtde takes no t or r")
         self._control("movel").moveL(_floats(pose, "pose", 6), positive_number(v, "v"),

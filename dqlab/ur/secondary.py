@@ -235,6 +235,8 @@ class SecondaryInterfaceBackend:
         self.send_script(script.movej(q, a=a, v=v, t=t, r=r, limits=self.limits))
 
     def movel(self, pose, *, a=MOVEL_A, v=MOVEL_V, t=0.0, r=0.0):
+        """Send ``movel``; ``pose`` is a UR pose vector ``[x, y, z, rx, ry, rz]`` of the TCP in
+        the controller's base frame."""
         self.send_script(script.movel(pose, a=a, v=v, t=t, r=r, limits=self.limits,
                                       robot=self.robot))
 
