@@ -137,7 +137,9 @@ def closest_solution(result, q_ref: ArrayLike, limits: ArrayLike | None = None, 
         lo, hi = bounds
         raise ValueError(f"{target} has no valid solution within the joint limits "
                          f"{np.stack([lo, hi], axis=-1).tolist()}")
-    chosen = rows[np.arange(len(rows)), index].reshape(batch + (n,))
+    columns, targets = rows.transpose(2, 1, 0), np.arange(len(rows))   # the solvers' layout
+    chosen = np.stack([columns[j][index, targets] for j in range(n)], axis=-1)
+    chosen = chosen.reshape(batch + (n,))
     if wrapped:
         return chosen
     ref = np.broadcast_to(q_ref, chosen.shape)
