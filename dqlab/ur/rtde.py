@@ -63,7 +63,7 @@ TYPES = {"DOUBLE": "d", "VECTOR6D": "6d", "VECTOR3D": "3d", "INT32": "i", "UINT3
 #: number of values of the vector types (every other type holds one value)
 COUNTS = {"VECTOR6D": 6, "VECTOR3D": 3, "VECTOR6INT32": 6, "VECTOR6UINT32": 6}
 
-#: the output recipe a :class:`~dqlab.ur.client.URState` is read from
+#: the output recipe a :class:`~dqlab.ur.state.URState` is read from
 STATE_VARIABLES = ("timestamp", "actual_q", "actual_qd", "actual_TCP_pose", "robot_mode")
 
 _HEADER = struct.Struct(">HB")

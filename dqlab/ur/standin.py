@@ -7,13 +7,14 @@ controller's protocols for the client code of :mod:`dqlab.ur.client` to run unch
 - a **script sink** in place of the secondary interface (port 30002 on a robot): it reads
   URScript text, a single line or a ``def name(): ... end`` program; it understands
   ``movej``, ``movel``, ``servoj`` and ``stopj`` with positional or keyword arguments and
-  ``p[...]`` poses, and runs them one after the other on a
-  :class:`~dqlab.ur.client.KinematicBackend` arm (a new program replaces the running one, as
-  on a controller). A program with anything else in it, or with a target the arm's safety
-  checks refuse, is refused as a whole (a message in :meth:`ControllerStandIn.log`) and
-  nothing moves. It
-  sends nothing back (a real controller sends binary state messages, which clients
-  discard).
+  ``p[...]`` poses (numbers and flat lists of numbers only), and runs them one after the
+  other on a :class:`~dqlab.ur.kinematic_arm.KinematicBackend` arm (a new program replaces
+  the running one, as on a controller). The whole program is planned and checked first
+  (:func:`dqlab.ur.script.plan_program`); a program with anything else in it, or with any
+  line the checks refuse, is refused as a whole (a message in
+  :meth:`ControllerStandIn.log`) and nothing moves. On connection it sends the version
+  message a controller sends (:mod:`dqlab.ur.secondary`, where its messages are encoded);
+  clients read and discard it.
 - **RTDE output** (port 30004 on a robot; see :mod:`dqlab.ur.rtde`): protocol version
   negotiation (versions 1 and 2), the controller version (reported as 5.11.0.0 by default),
   output recipe set-up, start and pause, and data packages at the requested frequency (at
@@ -24,9 +25,11 @@ controller's protocols for the client code of :mod:`dqlab.ur.client` to run unch
   recipe cannot be started. Input recipes are answered ``NOT_FOUND`` (nothing can be
   written, so ``ur_rtde``'s control interface does not work with it).
 
-Time in the stand-in runs ``speedup`` times faster than real time, so a notebook does not
-wait for a 3-second move. The process stops when the stand-in is stopped or its parent
-goes away (its standard input closes); it never opens an outgoing connection.
+Whatever a client sends, the stand-in keeps serving: a malformed RTDE package drops that
+client, text that never completes a program (:data:`MAX_PROGRAM_SIZE`) too, each with a
+message in the log. Time in the stand-in runs ``speedup`` times faster than real time, so a
+notebook does not wait for a 3-second move. The process stops when the stand-in is stopped
+or its parent goes away (its standard input closes); it never opens an outgoing connection.
 """
 
 import ast
@@ -204,14 +207,14 @@ class ControllerStandIn:
     """Start and stop a local stand-in for a UR controller (see the module docstring).
 
     Use it as a context manager; inside, :meth:`backend` gives a
-    :class:`~dqlab.ur.client.SecondaryInterfaceBackend` connected to it.
+    :class:`~dqlab.ur.secondary.SecondaryInterfaceBackend` connected to it.
 
     Parameters
     ----------
     model : str
         Name of a function of :mod:`dqlab.models` that builds the arm (default ``"ur3"``).
     q0 : array_like, shape (6,), optional
-        Initial joints, rad (default :data:`dqlab.ur.client.HOME`).
+        Initial joints, rad (default :data:`dqlab.ur.state.HOME`).
     speedup : float
         Simulated seconds per real second.
     secondary_port, rtde_port : int
