@@ -203,3 +203,11 @@ def test_a_program_starts_and_ends_at_rest_and_keeps_the_tcp_speed():
     limits = S.SafetyLimits(max_tcp_speed=0.05, robot=dqlab.models.ur3())
     with pytest.raises(UnsafeTargetError, match="TCP speed .* exceeds max_tcp_speed = 0.05"):
         S.program_from_trajectory(tr, limits=limits)
+
+
+@pytest.mark.parametrize("speed", [-1.0, 0.0, np.nan, np.inf, "fast", [1.0]])
+def test_a_links_rated_speed_is_a_positive_number(speed):
+    with pytest.raises(ValueError, match="Link max_speed must be"):
+        dqlab.robot.Link(0.1, 0.0, 0.0, max_speed=speed)
+    assert dqlab.robot.Link(0.1, 0.0, 0.0).max_speed is None
+    assert dqlab.robot.Link(0.1, 0.0, 0.0, max_speed=2).max_speed == 2.0
