@@ -141,18 +141,16 @@ def quaternion_from_matrix_entries(r00, r01, r02, r10, r11, r12, r20, r21, r22):
     return tuple(c * s for c in row)
 
 
-def rotation_vector_from_matrix_entries(r00, r01, r02, r10, r11, r12, r20, r21, r22):
-    r"""The rotation vector :math:`\theta\,\mathbf u` (axis times angle, :math:`\theta
-    \in [0, \pi]`) of a rotation matrix given by its nine entries: its quaternion
-    :math:`(w, \mathbf v)` (Shepperd, :math:`w \ge 0`), then
+def rotation_vector_from_quaternion_entries(w, x, y, z):
+    r"""The rotation vector :math:`\theta\,\mathbf u` (:math:`\theta \in [0, \pi]`) of a unit
+    quaternion :math:`(w, \mathbf v)` with :math:`w \ge 0`:
     :math:`2 \operatorname{atan2}(\lVert\mathbf v\rVert, w)\,\mathbf v / \lVert\mathbf v
     \rVert`, and 0 for the identity.
 
-    >>> [round(c, 12) for c in rotation_vector_from_matrix_entries(
-    ...     0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)]               # quarter turn about z
+    >>> [round(c, 12) for c in rotation_vector_from_quaternion_entries(
+    ...     math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5))]                     # quarter turn about z
     [0.0, 0.0, 1.570796326795]
     """
-    w, x, y, z = quaternion_from_matrix_entries(r00, r01, r02, r10, r11, r12, r20, r21, r22)
     if type(w) is float:
         norm_v = math.sqrt(x * x + y * y + z * z)
         scale = 2.0 * math.atan2(norm_v, w) / norm_v if norm_v > 0.0 else 2.0
@@ -161,6 +159,19 @@ def rotation_vector_from_matrix_entries(r00, r01, r02, r10, r11, r12, r20, r21, 
         with np.errstate(invalid="ignore", divide="ignore"):
             scale = np.where(norm_v > 0.0, 2.0 * np.arctan2(norm_v, w) / norm_v, 2.0)
     return x * scale, y * scale, z * scale
+
+
+def rotation_vector_from_matrix_entries(r00, r01, r02, r10, r11, r12, r20, r21, r22):
+    r"""The rotation vector :math:`\theta\,\mathbf u` (axis times angle, :math:`\theta
+    \in [0, \pi]`) of a rotation matrix given by its nine entries: its quaternion
+    (Shepperd, :math:`w \ge 0`), then :func:`rotation_vector_from_quaternion_entries`.
+
+    >>> [round(c, 12) for c in rotation_vector_from_matrix_entries(
+    ...     0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)]               # quarter turn about z
+    [0.0, 0.0, 1.570796326795]
+    """
+    return rotation_vector_from_quaternion_entries(
+        *quaternion_from_matrix_entries(r00, r01, r02, r10, r11, r12, r20, r21, r22))
 
 
 def pose_error_entries(a, b):

@@ -53,6 +53,17 @@ UR_DH = {
 #: The link twists shared by every UR arm (standard DH), radians.
 UR_ALPHA = (PI / 2, 0.0, 0.0, PI / 2, -PI / 2, 0.0)
 
+#: Universal Robots' published maximum joint speeds, degrees per second, joints 1 to 6 (base,
+#: shoulder, elbow, wrists 1-3): the technical specifications of the UR3, UR5 and UR10 user
+#: manuals (CB3, version 3.13), as transcribed in the joint-limit files of Universal Robots'
+#: ROS description (``Universal_Robots_ROS2_Description``, ``config/urX/joint_limits.yaml``).
+#: The models carry them, in rad/s, as the ``max_speed`` of their links.
+UR_MAX_JOINT_SPEED_DEG = {
+    "UR3": (180.0, 180.0, 180.0, 360.0, 360.0, 360.0),
+    "UR5": (180.0,) * 6,
+    "UR10": (120.0, 120.0, 180.0, 180.0, 180.0, 180.0),
+}
+
 #: The UR3 report's modified-DH lengths in metres.
 UR3_MDH = {"r1": 0.152, "r2": 0.120, "a2": 0.244, "a3": 0.213,
            "r4": 0.010, "r5": 0.083, "r6": 0.082}
@@ -188,8 +199,12 @@ def _ur(name, label):
     inertias = ([None] * 6 if dynamics is None else
                 ur_link_inertias(dynamics["mass"], dynamics["com"], dynamics.get("tensor"),
                                  a=p["a"]))
-    links = [Link(a=a, alpha=alpha, d=d, limits=(-2 * PI, 2 * PI), inertia=inertia)
-             for a, alpha, d, inertia in zip(p["a"], UR_ALPHA, p["d"], inertias, strict=True)]
+    speeds = [math.radians(v) for v in UR_MAX_JOINT_SPEED_DEG[name]] \
+        if name in UR_MAX_JOINT_SPEED_DEG else [None] * 6
+    links = [Link(a=a, alpha=alpha, d=d, limits=(-2 * PI, 2 * PI), inertia=inertia,
+                  max_speed=speed)
+             for a, alpha, d, inertia, speed in zip(p["a"], UR_ALPHA, p["d"], inertias, speeds,
+                                                    strict=True)]
     return Robot(links, convention="dh", name=label)
 
 
@@ -270,7 +285,8 @@ def ur3() -> Robot:
     ==  ==========  ==========  ===========
 
     No tool: :meth:`~dqlab.robot.Robot.fk` returns the flange pose. The base frame sits at the
-    foot of the first joint's axis, z up. Joint limits are :math:`\pm 2\pi`. These are also
+    foot of the first joint's axis, z up. Joint limits are :math:`\pm 2\pi`; the joints'
+    rated speeds (:data:`UR_MAX_JOINT_SPEED_DEG`) are the links' ``max_speed``. These are also
     the conventions of ``ur_analytic_ik``: its ``ur3.forward_kinematics(q1, ..., q6)``
     returns the same base-to-flange matrix as :meth:`~dqlab.robot.Robot.fk` (the tests
     check 1,000 random configurations to 1e-13).
@@ -358,10 +374,10 @@ UR_CURRENT_DH["UR7e"] = UR_CURRENT_DH["UR5e"]
 UR_CURRENT_DH["UR12e"] = UR_CURRENT_DH["UR10e"]
 UR_DH.update(UR_CURRENT_DH)
 
-#: Published maximum joint speeds of current UR models in degrees per second, joints 1 to 6
-#: (the joint-limit files of Universal Robots' ROS description, from the user manuals), to
-#: be carried by the links once they hold speed limits.
-UR_MAX_JOINT_SPEED_DEG = {
+# The published maximum joint speeds of the current UR models in degrees per second, joints 1
+# to 6 (the joint-limit files of Universal Robots' ROS description, from the user manuals),
+# added to :data:`UR_MAX_JOINT_SPEED_DEG`: the models' links carry them as ``max_speed``.
+UR_MAX_JOINT_SPEED_DEG.update({
     "UR3e": (180.0, 180.0, 180.0, 360.0, 360.0, 360.0),
     "UR5e": (180.0,) * 6,
     "UR10e": (120.0, 120.0, 180.0, 180.0, 180.0, 180.0),
@@ -370,7 +386,8 @@ UR_MAX_JOINT_SPEED_DEG = {
     "UR18": (180.0, 180.0, 240.0, 300.0, 300.0, 300.0),
     "UR20": (120.0, 120.0, 150.0, 210.0, 210.0, 210.0),
     "UR30": (120.0, 120.0, 150.0, 210.0, 210.0, 210.0),
-}
+})
+UR_MAX_JOINT_SPEED_DEG["UR7e"] = UR_MAX_JOINT_SPEED_DEG["UR5e"]      # the same arm, renamed
 
 #: Published link masses (kg) and centres of mass (m, in the DH frame of the link), links 1
 #: to 6, from the same page of Universal Robots as :data:`UR_CURRENT_DH` (which also gives

@@ -97,12 +97,15 @@ class Link:
         The link's mass, centre of mass and inertia tensor in the link's own frame (see
         :mod:`dqlab.inertia`), for :mod:`dqlab.dynamics` and the simulators. None (the
         default): the link has no inertial parameters.
+    max_speed : float, optional
+        The joint's rated speed limit, rad/s (m/s for a prismatic joint), > 0; ``None`` (the
+        default) when not known. Read by :meth:`dqlab.ur.script.SafetyLimits.for_robot`.
 
     Raises
     ------
     ValueError
-        If a parameter is not a finite number, the joint type is unknown or the limits are
-        not ordered.
+        If a parameter is not a finite number, the joint type is unknown, the limits are
+        not ordered or ``max_speed`` is not a positive number.
 
     Notes
     -----
@@ -119,7 +122,7 @@ class Link:
     """
 
     def __init__(self, a, alpha, d, theta_offset=0.0, joint=REVOLUTE, limits=None, name="",
-                 inertia=None):
+                 inertia=None, max_speed=None):
         values = {"a": a, "alpha": alpha, "d": d, "theta_offset": theta_offset}
         for key, value in values.items():
             try:
@@ -151,6 +154,14 @@ class Link:
         set_(self, "joint", joint)
         set_(self, "limits", (lo, hi))
         set_(self, "name", str(name))
+        if max_speed is not None:
+            try:
+                max_speed = float(max_speed)
+            except (TypeError, ValueError):
+                raise ValueError(f"Link max_speed must be a number, got {max_speed!r}") from None
+            if not (math.isfinite(max_speed) and max_speed > 0.0):
+                raise ValueError(f"Link max_speed must be a finite number > 0, got {max_speed!r}")
+        set_(self, "max_speed", max_speed)
         if inertia is not None and not isinstance(inertia, LinkInertia):
             raise ValueError("Link inertia must be a dqlab.inertia.LinkInertia or None, got "
                              f"{type(inertia).__name__}")

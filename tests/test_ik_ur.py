@@ -771,32 +771,6 @@ def test_every_ur_analytic_ik_solution_is_ours(robot):
 # Helpers
 
 
-def test_equivalent_solutions():
-    q = np.array([0.5, -3.0, 0.0, 3.1, -np.pi / 2, 2.0])
-    cands, within = urmod.equivalent_solutions(q)
-    assert cands.shape == (64, 6) and within.all()
-    assert np.allclose(wrapped(cands - q), 0.0)
-    assert len(np.unique(np.round(cands, 12), axis=0)) == 64
-    cands, within = urmod.equivalent_solutions(q, limits=(-np.pi, np.pi))
-    assert within.sum() == 1 and np.array_equal(cands[within][0], q)
-    lim = np.array([[-2 * np.pi, 2 * np.pi]] * 5 + [[-np.pi, np.pi]])
-    assert urmod.equivalent_solutions(q, limits=lim)[1].sum() == 32
-    batch = np.stack([q, -q])
-    assert urmod.equivalent_solutions(batch)[0].shape == (2, 64, 6)
-
-
-def test_closest_solution_is_consistent_with_best(robot):
-    rng = np.random.default_rng(25)
-    q = rng.uniform(-TWO_PI, TWO_PI, (200, 6))
-    T = robot.fk(q)
-    result = ur(robot, T)
-    best = result.best(q)
-    close = urmod.closest_solution(result, q)
-    assert np.allclose(wrapped(close - best), 0.0)
-    np.testing.assert_allclose(close, q, atol=1e-9)     # the unwrapped generating config
-    assert np.all(np.abs(close) <= TWO_PI)
-
-
 def test_distinct_solutions(robot):
     result = ur(robot, robot.fk(np.array([0.3, -1.2, 1.1, -0.4, 0.9, 0.2])))
     assert urmod.distinct_solutions(result).all()

@@ -154,3 +154,23 @@ def test_write_refuses_what_read_would_refuse(tmp_path, values, kwargs, words):
         F.write_poses(path, values, **kwargs)
     assert words in str(info.value)
     assert not path.exists()
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    ({"max_reach": float("nan")}, "max_reach must be a number >= 0, got nan"),
+    ({"max_reach": -1.0}, "max_reach must be a number >= 0, got -1.0"),
+    ({"unit_tol": float("nan")}, "unit_tol must be a number >= 0, got nan"),
+    ({"unit_tol": -1e-9}, "unit_tol must be a number >= 0"),
+])
+def test_tolerances_and_reach_are_checked_numbers(tmp_path, kwargs, words):
+    for call in (lambda: F.write_poses(tmp_path / "p.csv", _poses(2), **kwargs),
+                 lambda: F.append_pose(tmp_path / "p.csv", _poses(1)[0], **kwargs)):
+        with pytest.raises(ValueError, match=words):
+            call()
+    F.write_poses(tmp_path / "ok.csv", _poses(2))
+    with pytest.raises(ValueError, match=words):
+        F.read_poses(tmp_path / "ok.csv", **kwargs)
+    with pytest.raises(TypeError, match="values must hold real numbers, got complex"):
+        F.write_poses(tmp_path / "c.csv", _poses(2) + 1j)
+    with pytest.raises(TypeError, match="value must hold real numbers, got complex"):
+        F.append_pose(tmp_path / "c.csv", _poses(1)[0] + 1j)

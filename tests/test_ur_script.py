@@ -105,7 +105,9 @@ def test_movej_refuses_a_joint_jump_and_a_too_short_time():
         S.movej(far, q_from=HOME)
     near = np.add(HOME, [1.0, 0, 0, 0, 0, 0])
     assert S.movej(near, q_from=HOME, t=1.0)
-    with pytest.raises(UnsafeTargetError, match=r"joint 1 speed 5 rad/s exceeds 3\.14159"):
+    # 1 rad in 0.2 s peaks at 10 rad/s (a triangle), not the average 5 the check once used
+    with pytest.raises(UnsafeTargetError, match=r"joint 1 speed 10 rad/s exceeds 3\.14159 "
+                                                r"rad/s at its peak"):
         S.movej(near, q_from=HOME, t=0.2)
 
 
@@ -140,8 +142,10 @@ def test_servoj_refuses_a_step_faster_than_the_joint_can_go():
 
 
 def _traj(n=50, dt=0.01):
+    """Joints 1 and 2 from rest to rest (a half cosine)."""
     t = np.arange(n) * dt
-    q = np.tile(HOME, (n, 1)) + np.outer(np.sin(t), [0.2, 0.1, 0, 0, 0, 0])
+    s = 0.5 * (1 - np.cos(np.pi * t / t[-1]))
+    q = np.tile(HOME, (n, 1)) + np.outer(s, [0.2, 0.1, 0, 0, 0, 0])
     return SimpleNamespace(t=t, q=q)
 
 
@@ -179,3 +183,31 @@ def test_safety_limits_validate_themselves():
         S.SafetyLimits(max_joint_step=0.0)
     with pytest.raises(ValueError, match="joint_limits"):
         S.SafetyLimits(joint_limits=[[1.0, -1.0]] * 6)
+
+
+@pytest.mark.parametrize("name", ["end", "def", "while", "thread", "halt", "True"])
+def test_program_names_may_not_be_keywords(name):
+    with pytest.raises(ValueError, match="not a keyword"):
+        S.program_from_trajectory(_traj(), name=name)
+
+
+def test_a_program_starts_and_ends_at_rest_and_keeps_the_tcp_speed():
+    # leaving the movej's rest at full speed: 2 rad/s after the first 10 ms is 200 rad/s^2
+    t = np.arange(5) * 0.01
+    q = np.tile(HOME, (5, 1)) + np.outer(t * 2.0, [1, 0, 0, 0, 0, 0])
+    with pytest.raises(UnsafeTargetError, match=r"trajectory target 0 \(t = 0 s\): joint 1 "
+                                                r"acceleration 200 rad/s\^2 \(from rest\)"):
+        S.program_from_trajectory(SimpleNamespace(t=t, q=q))
+    # a TCP faster than max_tcp_speed (1 m/s): the wrist 1 sweeps the arm's end
+    tr = _traj()
+    limits = S.SafetyLimits(max_tcp_speed=0.05, robot=dqlab.models.ur3())
+    with pytest.raises(UnsafeTargetError, match="TCP speed .* exceeds max_tcp_speed = 0.05"):
+        S.program_from_trajectory(tr, limits=limits)
+
+
+@pytest.mark.parametrize("speed", [-1.0, 0.0, np.nan, np.inf, "fast", [1.0]])
+def test_a_links_rated_speed_is_a_positive_number(speed):
+    with pytest.raises(ValueError, match="Link max_speed must be"):
+        dqlab.robot.Link(0.1, 0.0, 0.0, max_speed=speed)
+    assert dqlab.robot.Link(0.1, 0.0, 0.0).max_speed is None
+    assert dqlab.robot.Link(0.1, 0.0, 0.0, max_speed=2).max_speed == 2.0

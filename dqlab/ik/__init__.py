@@ -1,4 +1,4 @@
-"""Inverse kinematics: closed-form solvers and a numerical solver, one contract for all.
+r"""Inverse kinematics: closed-form solvers and a numerical solver, one contract for all.
 
 Every solver is called ``solver(robot, target, *, tol, ...)`` and returns an
 :class:`~dqlab.ik.result.IKResult` (the numerical solver also takes its start ``q0``):
@@ -22,8 +22,10 @@ two-link arm. A closed-form solver checks the robot against its
 these pieces.
 
 Helpers for the UR solutions: ``SOLUTION_ORDER`` (the meaning of the eight rows),
-``ur_parameters``, ``distinct_solutions``, ``equivalent_solutions`` (the 2 pi-equivalents
-within the joint limits) and ``closest_solution``.
+``ur_parameters`` and ``distinct_solutions``. For any solver, :mod:`dqlab.ik.solutions` picks
+the solution to send a robot: ``closest_solution`` (the valid solution nearest a
+configuration, as its :math:`2\pi`-equivalent within the joint limits) and
+``equivalent_solutions`` (every such equivalent).
 """
 
 import sys
@@ -33,12 +35,11 @@ from .damped_least_squares import numerical
 from .desk_arm_closed_form import desk_arm
 from .result import IKResult
 from .scara_closed_form import scara
+from .solutions import closest_solution, equivalent_solutions
 from .targets import pose_errors
 from .ur_closed_form import (
     SOLUTION_ORDER,
-    closest_solution,
     distinct_solutions,
-    equivalent_solutions,
     ur,
     ur_parameters,
 )

@@ -4,9 +4,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._checks import as_float_array
-from ..rotations import wrap_angle
-
 
 @dataclass
 class IKResult:
@@ -57,17 +54,14 @@ class IKResult:
     def best(self, q_ref) -> np.ndarray:
         """The valid solution closest to ``q_ref`` (shape (..., n)) for each target.
 
-        Distance is measured joint-wise with angle wrapping for revolute joints. Raises
-        ``ValueError`` if some target has no valid solution.
+        Distance is measured joint-wise with angle wrapping, and the row is returned as the
+        solver gives it: :func:`dqlab.ik.solutions.closest_solution` with ``wrapped=True``
+        (without it, the row comes as the equivalent nearest ``q_ref``, within joint limits
+        if given). Raises ``ValueError`` if some target has no valid solution.
         """
-        n = np.shape(self.solutions)[-1]
-        q_ref = as_float_array(q_ref, "q_ref", (n,))[..., None, :]
-        if not np.all(self.success):
-            raise ValueError("some targets have no valid solution; check result.reason")
-        diff = wrap_angle(self.solutions - q_ref)
-        dist = np.where(self.valid, np.linalg.norm(diff, axis=-1), np.inf)
-        index = np.argmin(dist, axis=-1)
-        return np.take_along_axis(self.solutions, index[..., None, None], axis=-2)[..., 0, :]
+        from .solutions import closest_solution
+
+        return closest_solution(self, q_ref, wrapped=True)
 
 
 def finish(solutions: np.ndarray, valid: np.ndarray, position_error: np.ndarray,

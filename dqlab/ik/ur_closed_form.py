@@ -39,9 +39,9 @@ Row ``k = 4 s + 2 e + w`` of the ``(..., 8, 6)`` solutions holds
 - ``w`` -- wrist: 0 (not flipped) when :math:`\theta_5 \in [0, \pi]`; 1 (flipped) when
   :math:`\theta_5 \in [-\pi, 0]`.
 
-Angles are wrapped to :math:`(-\pi, \pi]`; :func:`equivalent_solutions` lists their
-:math:`2\pi`-equivalents within the joint limits and :func:`closest_solution` picks the one
-nearest a given configuration.
+Angles are wrapped to :math:`(-\pi, \pi]`; :func:`~dqlab.ik.solutions.equivalent_solutions`
+lists their :math:`2\pi`-equivalents within the joint limits and
+:func:`~dqlab.ik.solutions.closest_solution` picks the one nearest a given configuration.
 
 .. rubric:: Errata of the source
 
@@ -135,8 +135,7 @@ from .result import IKResult, finish
 from .targets import RIGID_TOL, parse_targets, pose_errors
 from .ur_calibrated import calibrated_ur, nominal_ur
 
-__all__ = ["ur", "ur_parameters", "equivalent_solutions", "closest_solution",
-           "distinct_solutions", "SOLUTION_ORDER"]
+__all__ = ["ur", "ur_parameters", "distinct_solutions", "SOLUTION_ORDER"]
 
 _HALF_SQRT2 = math.sqrt(0.5)           # a Python float: it serves floats and arrays
 _FLOAT64 = np.dtype(np.float64)
@@ -906,100 +905,3 @@ def distinct_solutions(result: IKResult, atol: float = 1e-9) -> NDArray[np.bool_
     earlier = np.tril(np.ones((k, k), dtype=bool), -1)
     return valid & ~np.any(same & earlier, axis=-1)
 
-
-def equivalent_solutions(q: ArrayLike, limits: ArrayLike = (-2 * np.pi, 2 * np.pi)
-                         ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
-    r"""All :math:`2\pi`-equivalents of joint vectors within the joint limits.
-
-    A UR joint turns :math:`\pm 360` degrees, so each angle in :math:`(-\pi, \pi]` has one
-    more equivalent, :math:`q_i - 2\pi\operatorname{sgn} q_i`, and a joint vector up to
-    :math:`2^6 = 64`.
-
-    Parameters
-    ----------
-    q : array_like, shape (..., n)
-        Joint vectors (radians).
-    limits : array_like, shape (2,) or (n, 2)
-        Lowest and highest joint value, for all joints or per joint (for example
-        ``robot.limits``). Each joint may have at most two equivalents within the limits
-        (a span of at most :math:`4\pi`).
-
-    Returns
-    -------
-    candidates : ndarray, shape (..., 2**n, n)
-        Candidate ``m`` shifts joint ``i`` by :math:`\pm 2\pi` when bit ``i`` of ``m`` is
-        set (towards zero); candidate 0 is ``q`` itself.
-    within : ndarray of bool, shape (..., 2**n)
-        Which candidates are within the limits.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> cands, ok = equivalent_solutions([0.5, -3.0, 0.0, 1.0, 2.0, -1.0])
-    >>> cands.shape, int(ok.sum())
-    ((64, 6), 64)
-    >>> cands[1].round(4)
-    array([-5.7832, -3.    ,  0.    ,  1.    ,  2.    , -1.    ])
-    """
-    q = as_float_array(q, "q")
-    if q.ndim == 0:
-        raise ValueError("q must have shape (..., n), a joint vector or a batch of them")
-    n = q.shape[-1]
-    if n > _MAX_EQUIVALENT_JOINTS:
-        raise ValueError(f"equivalent_solutions lists 2**n candidates: at most "
-                         f"{_MAX_EQUIVALENT_JOINTS} joints, got {n}")
-    limits = as_float_array(limits, "limits")
-    if limits.shape not in ((2,), (n, 2)):
-        raise ValueError(f"limits must have shape (2,) or ({n}, 2), got {limits.shape}")
-    lo = np.broadcast_to(limits[..., 0], (n,))
-    hi = np.broadcast_to(limits[..., 1], (n,))
-    if np.any(hi - lo > 4 * np.pi + 1e-12):
-        raise ValueError("equivalent_solutions handles joint ranges of at most 4 pi")
-    bits = (np.arange(2 ** n)[:, None] >> np.arange(n)) & 1          # (2**n, n)
-    shift = np.where(q >= 0, -2 * np.pi, 2 * np.pi)[..., None, :]
-    cands = q[..., None, :] + bits * shift
-    within = np.all((cands >= lo) & (cands <= hi), axis=-1)
-    return cands, within
-
-
-def closest_solution(result: IKResult, q_ref: ArrayLike,
-                     limits: ArrayLike = (-2 * np.pi, 2 * np.pi)) -> NDArray[np.float64]:
-    r"""The valid solution nearest ``q_ref``, unwrapped to the equivalent nearest ``q_ref``.
-
-    The branch is chosen exactly as :meth:`~dqlab.ik.result.IKResult.best` does (joint-wise
-    distance modulo :math:`2\pi`); then each joint is replaced by its :math:`2\pi`-equivalent
-    within the limits that is nearest ``q_ref`` (what a robot at ``q_ref`` should be sent, so
-    that no joint turns by more than half a turn when avoidable).
-
-    Parameters
-    ----------
-    result : IKResult
-    q_ref : array_like, shape (..., 6)
-    limits : array_like, shape (2,) or (6, 2)
-
-    Returns
-    -------
-    ndarray, shape (..., 6)
-
-    Raises
-    ------
-    ValueError
-        If some target has no valid solution (as :meth:`~dqlab.ik.result.IKResult.best`).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from dqlab.models import ur3
-    >>> from dqlab.ik import ur
-    >>> robot = ur3()
-    >>> q = np.array([3.0, -1.0, 1.0, -2.0, 1.0, 6.0])      # joint 6 beyond pi
-    >>> closest_solution(ur(robot, robot.fk(q)), q).round(6)
-    array([ 3., -1.,  1., -2.,  1.,  6.])
-    """
-    best = result.best(q_ref)
-    q_ref = as_float_array(q_ref, "q_ref")
-    cands, within = equivalent_solutions(best, limits)
-    dist = np.abs(cands - q_ref[..., None, :]).sum(axis=-1)
-    dist = np.where(within, dist, np.inf)
-    index = np.argmin(dist, axis=-1)
-    return np.take_along_axis(cands, index[..., None, None], axis=-2)[..., 0, :]

@@ -9,23 +9,26 @@ the UR3's CB3 controller) per :meth:`MujocoBackend.read_state` with the default 
 clock, or up to the wall-clock time since :meth:`~MujocoBackend.connect` with
 ``clock="wall"``.
 
-The references are URScript's:
+The references are the motions of :mod:`dqlab.ur.motion`, planned and checked exactly as the
+kinematic arm and the controller stand-in plan and check them
+(:func:`dqlab.ur.script.plan_program`): what the safety checks accept is what this back end
+commands.
 
-- ``movej(q, a, v, t)``: every joint moves from the current target to ``q`` with one
-  trapezoidal speed law, scaled so that all joints start and stop together; the joint that
-  moves most accelerates at ``a`` (rad/s^2) up to ``v`` (rad/s). With ``t > 0`` the move
-  lasts ``t`` seconds instead (a third of it accelerating, a third braking). This is
-  :func:`dqlab.trajectory.joint.joint_trajectory` with the trapezoidal law.
-- ``movel(pose, a, v, t)``: the TCP moves on a straight line while its orientation turns
-  by SLERP (:func:`dqlab.trajectory.cartesian.line_slerp`), with the same speed law on the distance
-  (m/s, m/s^2); the joints follow by the closed-form inverse kinematics with branch
-  tracking (:func:`dqlab.trajectory.follow.follow_path_ur`), from the branch of the start.
-- ``servoj(q, t)``: the target moves linearly to ``q`` in ``t`` seconds (one streaming
-  step).
-- ``stop(a)``: the reference decelerates at ``a`` to rest.
+- ``movej(q, a, v, t)``: every joint moves on the line to ``q`` with the leading joint's
+  trapezoid (acceleration ``a`` up to speed ``v``; with ``t > 0`` the duration ``t``, the
+  time having priority), the others scaled to arrive together.
+- ``movel(pose, a, v, t)``: the TCP moves on a straight line to the pose (a UR pose vector
+  in the controller's base frame) while its orientation turns by SLERP, with the same law on
+  the distance; the joints follow the closed-form inverse kinematics with branch tracking.
+- ``servoj(q, t)``: the reference moves at constant speed to ``q`` in ``t`` seconds (one
+  streaming step).
+- ``stop(a)``: the reference decelerates to rest, the fastest joint at ``a``.
 
-Every target is checked before anything moves: a NaN, an infinity, a wrong shape or a joint
-beyond the robot's limits raises ``ValueError``.
+A ``movej`` or ``movel`` started while the reference moves first brakes it to rest. Every
+target is checked before anything moves: a NaN, an infinity, complex numbers, a wrong shape
+or a joint beyond the robot's limits raises ``ValueError`` (or ``TypeError``); a motion that
+the limits (:class:`dqlab.ur.script.SafetyLimits`) refuse raises
+:class:`~dqlab.ur.script.UnsafeTargetError`.
 """
 
 import math
@@ -33,12 +36,26 @@ import time as _time
 
 import numpy as np
 
+from .._checks import real_array
 from ..models import ur3
-from ..quaternion import quaternion_distance, quaternion_from_matrix
-from ..trajectory import follow_path_ur, joint_trajectory, line_slerp, trapezoidal
-from ..ur import ROBOT_MODE_RUNNING, URState, check_pose, pose_from_transform, transform_from_pose
+from ..transforms import transform_inverse
+from ..ur import ROBOT_MODE_RUNNING, URState, check_pose, pose_from_transform
+from ..ur._args import real_number
+from ..ur.motion import (
+    GAIN,
+    LOOKAHEAD_TIME,
+    MAX_DURATION,
+    MOVEJ_A,
+    MOVEJ_V,
+    MOVEL_A,
+    MOVEL_V,
+    SERVOJ_T,
+    STOPJ_A,
+    Timeline,
+)
+from ..ur.script import UnsafeTargetError, as_safety_limits, plan_program
 from ._checks import number
-from .simulation import ArmSimulation, ComputedTorque, sample_reference
+from .simulation import ArmSimulation, ComputedTorque
 
 __all__ = ["MujocoBackend", "UR3_HOME"]
 
@@ -47,30 +64,10 @@ __all__ = ["MujocoBackend", "UR3_HOME"]
 UR3_HOME = (0.0, -math.pi / 2, math.pi / 2, -math.pi / 2, -math.pi / 2, 0.0)
 
 
-class _Motion:
-    """A joint reference on a grid of times, sampled by cubic Hermite interpolation."""
-
-    def __init__(self, t, q, qd, qdd, end=None):
-        self.t, self.q, self.qd, self.qdd = t, q, qd, qdd
-        self.end = t[-1] if end is None else end     # when the move is over
-
-    @classmethod
-    def hold(cls, t0, q):
-        q = np.asarray(q, dtype=float)
-        zero = np.zeros((2, q.size))
-        return cls(np.array([t0, t0 + 1.0]), np.array([q, q]), zero, zero, end=t0)
-
-    def sample(self, times, velocity_lag=0.0):
-        """Reference positions, velocities (``velocity_lag`` seconds earlier, as in
-        :func:`~dqlab.sim.simulation.track`) and accelerations at ``times`` (shape (k,) -> (k, 6)
-        each). After the last sample the reference holds the last position at rest."""
-        times = np.asarray(times, dtype=float)
-        q, qd, qdd = sample_reference(self.t, self.q, self.qd, self.qdd, times,
-                                      velocity_lag=velocity_lag)
-        over = times >= self.t[-1]
-        qd[over] = 0.0
-        qdd[over] = 0.0
-        return q, qd, qdd
+def _number(value, name, strict=True):
+    """``dqlab.sim._checks.number``, after refusing complex numbers, text, bools and
+    sequences by name (a complex numpy scalar would otherwise lose its imaginary part)."""
+    return number(real_number(value, name), name, strict=strict)
 
 
 class MujocoBackend:
@@ -90,6 +87,10 @@ class MujocoBackend:
         ``"sim"``: each state read advances the simulation by ``period`` (deterministic,
         as fast as the computer allows). ``"wall"``: the simulation keeps up with the wall
         clock since :meth:`connect`.
+    limits : SafetyLimits, optional
+        The limits the moves are checked against (default: ``robot``'s,
+        :meth:`~dqlab.ur.script.SafetyLimits.for_robot`; a robot without rated joint speeds
+        needs them given).
     **model_options
         Passed to :class:`~dqlab.sim.simulation.ArmSimulation` (``payload``, ``timestep``...).
 
@@ -97,6 +98,8 @@ class MujocoBackend:
     ----------
     sim : ArmSimulation
     name : str
+    timeline : dqlab.ur.motion.Timeline
+        The reference being executed (simulation time).
 
     Examples
     --------
@@ -115,28 +118,39 @@ class MujocoBackend:
     """
 
     def __init__(self, robot=None, *, q_home=UR3_HOME, controller=None, period=0.008,
-                 clock="sim", **model_options):
+                 clock="sim", limits=None, **model_options):
         robot = ur3() if robot is None else robot
+        if not hasattr(robot, "fk") or not hasattr(robot, "n"):
+            raise TypeError(f"robot must be a dqlab.robot.Robot, got {type(robot).__name__}")
         if robot.n != 6:
             raise ValueError(f"robot must have 6 joints like a UR arm, it has {robot.n}")
-        if clock not in ("sim", "wall"):
+        if not isinstance(clock, str) or clock not in ("sim", "wall"):
             raise ValueError(f"clock must be 'sim' or 'wall', got {clock!r}")
+        self.limits = as_safety_limits(limits, robot)
         self.name = f"MuJoCo simulation of the {robot.name or 'arm'}"
         self.sim = ArmSimulation(robot, **model_options)
         self.controller = ComputedTorque() if controller is None else controller
-        self.period = number(period, "period")
+        if not callable(getattr(self.controller, "torque", None)):
+            raise TypeError(f"controller must have a torque(sim, q, qd, qdd) method, got "
+                            f"{type(self.controller).__name__}")
+        self.period = _number(period, "period")
         self.clock = clock
-        self.q_home = self.sim.check_target(q_home, "q_home")
+        self.q_home = self._target(q_home, "q_home")
         self._connected = False
-        self._motion = None
+        self.timeline = Timeline(self.q_home)
         self._wall_start = None
+
+    def _target(self, q, name):
+        """A joint target: real numbers (complex refused, not truncated), then the
+        simulation's own check (shape, finite, within the joint limits)."""
+        return self.sim.check_target(real_array(q, name), name)
 
     # -- connection ---------------------------------------------------------------------------
     def connect(self, timeout=1.0):
         """Start the simulation with the arm at rest at ``q_home`` (time 0)."""
-        number(timeout, "timeout")
+        _number(timeout, "timeout", strict=False)
         self.sim.reset(self.q_home)
-        self._motion = _Motion.hold(0.0, self.q_home)
+        self.timeline = Timeline(self.q_home)
         self._connected = True
         self._wall_start = _time.monotonic()
 
@@ -149,21 +163,35 @@ class MujocoBackend:
             raise RuntimeError("the simulated arm is not connected; call connect() first")
 
     # -- running -----------------------------------------------------------------------------
+    def reference(self, times, velocity_lag=0.0):
+        """The commanded ``(q, qd, qdd)`` at the simulation ``times`` (shape (k,) -> (k, 6)
+        each); the velocity ``velocity_lag`` seconds earlier (see
+        :func:`~dqlab.sim.simulation.track`)."""
+        times = np.asarray(times, dtype=float)
+        q, qd, qdd = self.timeline.state(times)
+        if velocity_lag:
+            qd = self.timeline.state(times - velocity_lag)[1]
+        return q, qd, qdd
+
     def advance(self, duration):
         """Run the simulation for ``duration`` seconds under the controller."""
         self._require_connected()
+        duration = _number(duration, "duration", strict=False)
+        if duration > MAX_DURATION:
+            raise ValueError(f"duration = {duration!r} s is longer than {MAX_DURATION:g} s")
         sim = self.sim
-        steps = int(round(number(duration, "duration", strict=False) / sim.timestep))
+        steps = int(round(duration / sim.timestep))
         controller = self.controller
-        times = sim.time + sim.timestep * np.arange(steps)
-        q_d, qd_d, qdd_d = self._motion.sample(times, sim.timestep / 2)
-        for k in range(steps):
-            sim.step(controller.torque(sim, q_d[k], qd_d[k], qdd_d[k]))
+        for first in range(0, steps, 4096):          # the reference, a block at a time
+            times = sim.time + sim.timestep * np.arange(min(4096, steps - first))
+            q_d, qd_d, qdd_d = self.reference(times, sim.timestep / 2)
+            for k in range(len(times)):
+                sim.step(controller.torque(sim, q_d[k], qd_d[k], qdd_d[k]))
 
     @property
     def is_moving(self):
         """True while the reference of the last move is still running."""
-        return self._connected and self.sim.time < self._motion.end
+        return self._connected and self.sim.time < self.timeline.end_time
 
     def read_state(self):
         """Advance the simulation (see ``clock``) and report the state.
@@ -171,113 +199,80 @@ class MujocoBackend:
         Returns
         -------
         URState
-            time (s), q and qd (6,), tcp_pose (6,) as ``[x, y, z, rx, ry, rz]``,
-            robot_mode 7 (running).
+            time (s), q and qd (6,), tcp_pose (6,) as ``[x, y, z, rx, ry, rz]`` in the
+            controller's base frame (the robot's DH frame 0), robot_mode 7 (running).
         """
         self._require_connected()
         if self.clock == "sim":
             self.advance(self.period)
         else:
             self.advance(max(0.0, _time.monotonic() - self._wall_start - self.sim.time))
-        return _state(self.sim.time, self.sim.q, self.sim.qd, self.sim.flange_pose())
+        X_WT = self.sim.flange_pose()
+        base = self.sim.robot.base
+        X_0T = X_WT if np.array_equal(base, np.eye(4)) else transform_inverse(base) @ X_WT
+        return URState(time=self.sim.time, q=self.sim.q, qd=self.sim.qd,
+                       tcp_pose=pose_from_transform(X_0T), robot_mode=ROBOT_MODE_RUNNING)
 
     # -- moves -------------------------------------------------------------------------------
-    def _start(self, motion):
-        self._motion = motion
+    def _run(self, command, *, streaming=False):
+        """Plan and check a command from where the reference is now, then run it."""
+        now = self.sim.time
+        q, qd, _ = self.timeline.state(now)
+        try:
+            motions = plan_program([command], q_now=q, qd_now=qd, limits=self.limits,
+                                   robot=self.sim.robot, streaming=streaming)
+        except UnsafeTargetError as exc:
+            what = "pose" if command[0] == "movel" else "q"
+            raise UnsafeTargetError(f"{what}: {exc}") from None
+        self.timeline.run(motions, now)
 
-    def _current_target(self):
-        """Where the reference is now (a new move starts there)."""
-        q, _, _ = self._motion.sample([self.sim.time])
-        return q[0]
-
-    @property
-    def _dt(self):
-        """Sampling period of the planned references (four simulation steps)."""
-        return 4 * self.sim.timestep
-
-    def _grid(self, duration):
-        count = max(int(math.ceil(duration / self._dt)), 1)
-        return np.linspace(0.0, duration, count + 1)
-
-    def movej(self, q, *, a=1.4, v=1.05, t=0.0, r=0.0):
+    def movej(self, q, *, a=MOVEJ_A, v=MOVEJ_V, t=0.0, r=0.0):
         """Start a move in joint space to ``q`` (rad) with URScript's ``movej`` speed law.
 
         ``r`` (blend radius) is accepted and checked; moves are not blended. A move
-        started while another is running starts where the reference is, from rest (the
-        client waits for each move to end, so this only happens on purpose).
+        started while another is running first brakes the reference to rest.
 
         Raises
         ------
         ValueError
             For a target with NaN or infinity, the wrong shape or a joint beyond its limits,
-            or a non-positive ``a`` or ``v``, negative ``t`` or ``r``.
+            or a non-positive ``a`` or ``v``, negative ``t`` or ``r``; an
+            :class:`~dqlab.ur.script.UnsafeTargetError` for a motion beyond the limits.
+        TypeError
+            For complex numbers or text.
         """
         self._require_connected()
-        target = self.sim.check_target(q, "q")
-        a, v = number(a, "a"), number(v, "v")
-        t, r = number(t, "t", strict=False), number(r, "r", strict=False)
-        start = self._current_target()
-        t0 = self.sim.time
-        if np.array_equal(start, target):
-            self._start(_Motion.hold(t0, target))
-            return
-        if t > 0:                  # URScript: with a time, a and v are not used
-            move = joint_trajectory(start, target, duration=t, law="trapezoidal",
-                                    dt=self._dt)
-        else:
-            move = joint_trajectory(start, target, v_max=v, a_max=a, law="trapezoidal",
-                                    dt=self._dt)
-        self._start(_Motion(t0 + move.t, move.q, move.qd, move.qdd))
+        target = self._target(q, "q")
+        a, v = _number(a, "a"), _number(v, "v")
+        t, r = _number(t, "t", strict=False), _number(r, "r", strict=False)
+        self._run(("movej", target, {"a": a, "v": v, "t": t, "r": r}))
 
-    def movel(self, pose, *, a=1.2, v=0.25, t=0.0, r=0.0):
-        """Start a straight-line move of the TCP to the UR pose vector ``pose``.
+    def movel(self, pose, *, a=MOVEL_A, v=MOVEL_V, t=0.0, r=0.0):
+        """Start a straight-line move of the TCP to a pose.
 
-        The position moves on a line and the orientation by SLERP, both with one speed law
-        on the line's length (m/s and m/s^2; on the rotation angle in rad/s and rad/s^2 for
-        a pure rotation): :func:`dqlab.trajectory.cartesian.line_slerp` with the trapezoidal
-        law. The joints follow the closed-form inverse kinematics with branch tracking
-        (:func:`dqlab.trajectory.follow.follow_path_ur`), from the branch of the start.
+        ``pose`` is a UR pose vector ``[x, y, z, rx, ry, rz]`` in the controller's base frame
+        (the robot's DH frame 0). The position moves on a line and the orientation by SLERP,
+        both with one speed law on the line's length (m/s and m/s^2; on the rotation angle
+        in rad/s and rad/s^2 for a pure rotation); the joints follow the closed-form inverse
+        kinematics with branch tracking (:func:`dqlab.ur.motion.plan_movel`).
 
         Raises
         ------
         ValueError
             For a pose with NaN or infinity or the wrong shape, a pose out of reach, a path
             that leaves the joint limits or would switch branches (a singularity on the way),
-            or bad ``a``, ``v``, ``t``, ``r``.
+            a motion beyond the limits, or bad ``a``, ``v``, ``t``, ``r``.
         """
         self._require_connected()
         pose = check_pose(pose, "pose")
         if pose.shape != (6,):
             raise ValueError(f"pose must be one UR pose vector of shape (6,), got {pose.shape}")
-        a, v = number(a, "a"), number(v, "v")
-        t, r = number(t, "t", strict=False), number(r, "r", strict=False)
-        robot = self.sim.robot
-        q_start = self._current_target()
-        t0 = self.sim.time
-        X_start, X_goal = robot.fk(q_start), transform_from_pose(pose)
-        length = float(np.linalg.norm(X_goal[:3, 3] - X_start[:3, 3]))
-        angle = quaternion_distance(quaternion_from_matrix(X_start[:3, :3]),
-                                    quaternion_from_matrix(X_goal[:3, :3]))
-        distance = length if length > 1e-9 else float(angle)
-        if distance == 0:
-            self._start(_Motion.hold(t0, q_start))
-            return
-        if t > 0:
-            law = trapezoidal(1.0, duration=t)
-        else:                      # the limits on the line, for the normalised law s: 0 -> 1
-            law = trapezoidal(1.0, v_max=v / distance, a_max=a / distance)
-        path = line_slerp(X_start, X_goal, law=law, dt=self._dt)
-        try:
-            move, report = follow_path_ur(robot, path, q_start=q_start)
-        except ValueError as exc:
-            raise ValueError(f"pose: {exc}") from None
-        if report.switches:
-            raise ValueError(f"pose: the line crosses a singularity or needs a jump "
-                             f"({report.switches[0]})")
-        self._start(_Motion(t0 + move.t, move.q, move.qd, move.qdd))
+        a, v = _number(a, "a"), _number(v, "v")
+        t, r = _number(t, "t", strict=False), _number(r, "r", strict=False)
+        self._run(("movel", pose, {"a": a, "v": v, "t": t, "r": r}))
 
-    def servoj(self, q, *, t=0.008, lookahead_time=0.1, gain=300):
-        """One streaming step: the target moves linearly to ``q`` in ``t`` seconds.
+    def servoj(self, q, *, t=SERVOJ_T, lookahead_time=LOOKAHEAD_TIME, gain=GAIN):
+        """One streaming step: the reference moves at constant speed to ``q`` in ``t`` s.
 
         ``lookahead_time`` (0.03-0.2 s) and ``gain`` (100-2000) are checked as URScript does;
         the tracking itself is this back end's controller.
@@ -285,53 +280,29 @@ class MujocoBackend:
         Raises
         ------
         ValueError
-            For a bad target (as :meth:`movej`), ``t <= 0``, or ``lookahead_time`` or
-            ``gain`` out of range.
+            For a bad target (as :meth:`movej`), ``t <= 0``, a speed beyond the limits, or
+            ``lookahead_time`` or ``gain`` out of range.
         """
         self._require_connected()
-        target = self.sim.check_target(q, "q")
-        t = number(t, "t")
-        lookahead_time = number(lookahead_time, "lookahead_time")
-        gain = number(gain, "gain")
+        target = self._target(q, "q")
+        t = _number(t, "t")
+        lookahead_time = _number(lookahead_time, "lookahead_time")
+        gain = _number(gain, "gain")
         if not 0.03 <= lookahead_time <= 0.2:
             raise ValueError(f"lookahead_time must be in [0.03, 0.2] s, got {lookahead_time}")
         if not 100 <= gain <= 2000:
             raise ValueError(f"gain must be in [100, 2000], got {gain}")
-        start = self._current_target()
-        t0 = self.sim.time
-        rate = (target - start) / t
-        # a line to the target at the constant rate, then a hold (the rate drops to 0 within
-        # one simulation step)
-        qd = np.array([rate, rate, np.zeros(6)])
-        self._start(_Motion(np.array([t0, t0 + t, t0 + t + self.sim.timestep]),
-                            np.array([start, target, target]), qd, np.zeros((3, 6))))
+        self._run(("servoj", target, {"t": t, "lookahead_time": lookahead_time, "gain": gain}),
+                  streaming=True)
 
-    def stop(self, a=2.0):
+    def stop(self, a=STOPJ_A):
         """Bring the reference to rest with deceleration ``a`` (rad/s^2) on the fastest joint.
 
         Raises
         ------
         ValueError
-            If ``a`` is not a positive number.
+            If ``a`` is not a positive number (or above the limits' acceleration).
         """
         self._require_connected()
-        a = number(a, "a")
-        t0 = self.sim.time
-        q0, qd0, _ = (x[0] for x in self._motion.sample([t0]))
-        fastest = float(np.abs(qd0).max())
-        if fastest == 0:
-            self._start(_Motion.hold(t0, q0))
-            return
-        duration = fastest / a
-        grid = self._grid(duration)
-        tau = grid[:, None]
-        decel = qd0 / duration
-        q = q0 + qd0 * tau - 0.5 * decel * tau**2
-        qd = qd0 - decel * tau
-        qdd = np.broadcast_to(-decel, q.shape).copy()
-        self._start(_Motion(t0 + grid, q, qd, qdd))
-
-
-def _state(time, q, qd, X_WT):
-    return URState(time=time, q=q, qd=qd, tcp_pose=pose_from_transform(X_WT),
-                   robot_mode=ROBOT_MODE_RUNNING)
+        a = _number(a, "a")
+        self._run(("stopj", None, {"a": a}))

@@ -50,6 +50,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._checks import check_tolerance, real_array
 from ..dualquat import transform_from_dual_quaternion
 from .poses import (
     dual_quaternion_from_pose,
@@ -126,6 +127,12 @@ class PoseFile:
         return transform_from_dual_quaternion(self.values, tol=np.inf)
 
 
+def _path(path):
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"path must be a str or a path-like object, got {path!r}")
+    return Path(path)
+
+
 def _check_values(kind, row, *, max_reach, unit_tol):
     """Why one row of numbers is not a valid pose of ``kind`` (``None`` if it is)."""
     for col, x in zip(COLUMNS[kind], row, strict=True):
@@ -144,11 +151,12 @@ def _check_values(kind, row, *, max_reach, unit_tol):
     qr, qd = np.asarray(row[:4]), np.asarray(row[4:])
     norm = float(np.linalg.norm(qr))
     if abs(norm - 1.0) > unit_tol:
-        return f"q_r has norm {norm:.12g}, not 1 within {unit_tol:g} (not a unit dual quaternion)"
+        return (f"q_r has norm {norm:.12g}, not 1 within unit_tol = {unit_tol:g} (not a unit "
+                "dual quaternion)")
     dot = float(qr @ qd)
     if abs(dot) > unit_tol:
-        return (f"q_r . q_d = {dot:.3g}, not 0 within {unit_tol:g} (not a unit dual "
-                "quaternion)")
+        return (f"q_r . q_d = {dot:.3g}, not 0 within unit_tol = {unit_tol:g} (not a unit "
+                "dual quaternion)")
     reach = 2.0 * float(np.linalg.norm(qd))  # |p| = 2 |q_d| for a unit q_r
     if reach > max_reach:
         return (f"position is {reach:.6g} m from the base, beyond max_reach = {max_reach:g} m "
@@ -189,7 +197,9 @@ def read_poses(path, *, max_reach=2.0, unit_tol=1e-9):
     (('above_box',), array([[ 0.2, -0.1,  0.3,  0. ,  3.1,  0. ]]))
     >>> folder.cleanup()
     """
-    path = Path(path)
+    path = _path(path)
+    max_reach = check_tolerance(max_reach, "max_reach")
+    unit_tol = check_tolerance(unit_tol, "unit_tol")
 
     def fail(line, message):
         raise PoseFileError(path, line, message)
@@ -327,10 +337,13 @@ def write_poses(path, values, *, kind="ur_pose", names=None, robot="UR3", frame=
     # end: 1
     >>> folder.cleanup()
     """
-    if kind not in COLUMNS:
+    if not isinstance(kind, str) or kind not in COLUMNS:
         raise ValueError(f"kind must be one of {tuple(COLUMNS)}, got {kind!r}")
+    max_reach = check_tolerance(max_reach, "max_reach")
+    unit_tol = check_tolerance(unit_tol, "unit_tol")
+    path = _path(path)
     width = len(COLUMNS[kind])
-    values = np.asarray(values, dtype=float)
+    values = real_array(values, "values")
     if values.ndim == 1:
         values = values[None, :]
     if values.ndim != 2 or values.shape[1] != width:
@@ -358,7 +371,6 @@ def write_poses(path, values, *, kind="ur_pose", names=None, robot="UR3", frame=
     lines += [",".join([name] + [repr(float(x)) for x in row])
               for name, row in zip(names, values, strict=True)]
     lines.append(f"# end: {len(values)}")
-    path = Path(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent or ".")
     try:
         with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as f:
@@ -403,7 +415,13 @@ def append_pose(path, value, *, name=None, kind="ur_pose", robot="UR3", frame="b
     ('pose_1', 'next')
     >>> folder.cleanup()
     """
-    path = Path(path)
+    path = _path(path)
+    if not isinstance(kind, str) or kind not in COLUMNS:
+        raise ValueError(f"kind must be one of {tuple(COLUMNS)}, got {kind!r}")
+    value = real_array(value, "value")
+    if value.shape != (len(COLUMNS[kind]),):
+        raise ValueError(f"value must be one pose of shape ({len(COLUMNS[kind])},) for kind "
+                         f"{kind!r}, got shape {value.shape}")
     if path.exists():
         old = read_poses(path, max_reach=max_reach, unit_tol=unit_tol)
         for key, want in (("kind", kind), ("robot", robot), ("frame", frame), ("tcp", tcp)):
@@ -413,7 +431,7 @@ def append_pose(path, value, *, name=None, kind="ur_pose", robot="UR3", frame="b
     else:
         names, values = [], []
     name = f"pose_{len(names) + 1}" if name is None else str(name)
-    values.append(np.asarray(value, dtype=float))
+    values.append(value)
     write_poses(path, np.array(values), kind=kind, names=names + [name], robot=robot,
                 frame=frame, tcp=tcp, max_reach=max_reach, unit_tol=unit_tol)
     return name

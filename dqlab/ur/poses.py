@@ -34,10 +34,15 @@ unchanged *exactly* and :math:`|\mathbf r|` may exceed :math:`\pi` by at most
 
 import numpy as np
 
-from .._checks import as_float_array
-from ..dualquat import dual_quaternion_from_transform, transform_from_dual_quaternion
-from ..quaternion import matrix_from_quaternion, quaternion_from_matrix
-from ..rotations import matrix_from_rpy, rpy_from_matrix
+from .._checks import as_float_array, check_tolerance, components, stack_components
+from .._kernels import (
+    rotation_vector_from_matrix_entries,
+    rotation_vector_from_quaternion_entries,
+)
+from ..dualquat import transform_from_dual_quaternion
+from ..quaternion import matrix_from_quaternion
+from ..rotations import check_rotation_matrix, matrix_from_rpy, rpy_from_matrix
+from ..transforms import check_transform
 
 __all__ = [
     "check_pose", "quaternion_from_rotation_vector", "rotation_vector_from_quaternion",
@@ -47,6 +52,8 @@ __all__ = [
 ]
 
 _AXIS_ZERO = 1e-9  # an axis component below this counts as zero in the half-turn sign rule
+#: Longest rotation vector accepted, rad: beyond it the spacing of floats exceeds 1e-9 rad.
+_MAX_ANGLE = 1e6
 
 
 def check_pose(p, name="pose"):
@@ -74,8 +81,9 @@ def quaternion_from_rotation_vector(r):
         \qquad \theta = |\mathbf r|,
 
     with :math:`\sin(\theta/2)/\theta = \tfrac12\operatorname{sinc}(\theta / 2\pi)`
-    (``numpy.sinc``), exact at and near :math:`\theta = 0`. Any length is accepted
-    (:math:`|\mathbf r| > \pi` is a valid, non-canonical rotation vector).
+    (``numpy.sinc``), exact at and near :math:`\theta = 0`. Any length up to
+    :math:`10^6` rad is accepted (:math:`|\mathbf r| > \pi` is a valid, non-canonical
+    rotation vector; far beyond, a float no longer determines the rotation).
 
     Parameters
     ----------
@@ -93,8 +101,19 @@ def quaternion_from_rotation_vector(r):
     >>> quaternion_from_rotation_vector([0, 0, np.pi]).round(12) + 0.0
     array([0., 0., 0., 1.])
     """
-    r = as_float_array(r, "r", (3,))
-    theta = np.sqrt(np.sum(r * r, axis=-1))
+    return _quaternions(as_float_array(r, "r", (3,)), "r")
+
+
+def _quaternions(r, name):
+    """:func:`quaternion_from_rotation_vector` of checked rotation vectors; ``name`` is what
+    an error message calls them."""
+    scale = np.max(np.abs(r), axis=-1, initial=0.0)
+    safe = np.where(scale > 0.0, scale, 1.0)[..., None]
+    theta = scale * np.sqrt(np.sum((r / safe) ** 2, axis=-1))     # |r| without overflow
+    if np.any(theta > _MAX_ANGLE):
+        raise ValueError(f"{name} is too long: a rotation vector of {float(np.max(theta)):.3g}"
+                         f" rad is beyond {_MAX_ANGLE:g} rad, where a float no longer "
+                         "determines the rotation to 1e-9 rad (the angle is too large)")
     w = np.cos(0.5 * theta)
     xyz = r * (0.5 * np.sinc(theta / (2.0 * np.pi)))[..., None]
     return np.concatenate([w[..., None], xyz], axis=-1)
@@ -145,26 +164,32 @@ def rotation_vector_from_quaternion(q, *, tol=1e-9, half_turn_tol=1e-12):
     >>> rotation_vector_from_quaternion([0, 0, 0, -1]).round(12) + 0.0
     array([0.        , 0.        , 3.14159265])
     """
+    tol = check_tolerance(tol, "tol")
+    half_turn_tol = check_tolerance(half_turn_tol, "half_turn_tol")
     q = as_float_array(q, "q", (4,))
-    norm = np.sqrt(np.sum(q * q, axis=-1))
-    if np.any(np.abs(norm - 1.0) > tol):
+    with np.errstate(over="ignore"):
+        norm = np.sqrt(np.sum(q * q, axis=-1))
+    bad = ~(np.abs(norm - 1.0) <= tol)
+    if np.any(bad):
         worst = float(np.max(np.abs(norm - 1.0)))
         raise ValueError(f"q must be a unit quaternion: | |q| - 1 | = {worst:.3g} > tol = {tol:g}")
     q = np.where((q[..., :1] < 0.0), -q, q)
-    w, u = q[..., 0], q[..., 1:]
-    s = np.sqrt(np.sum(u * u, axis=-1))
-    theta = 2.0 * np.arctan2(s, w)
-    some = s > 0.0
-    factor = np.where(some, theta / np.where(some, s, 1.0), 2.0 / np.where(some, 1.0, w))
-    r = u * factor[..., None]
-    # the half turn: point the axis into the upper half-space, keeping the rotation exact
-    n = u / np.where(s > 0.0, s, 1.0)[..., None]
+    r = stack_components(list(rotation_vector_from_quaternion_entries(*components(q))))
+    return _half_turn(r, half_turn_tol)
+
+
+def _half_turn(r, half_turn_tol):
+    """Within ``half_turn_tol`` of a half turn, point the axis into the upper half-space,
+    keeping the rotation exact (see the module docstring)."""
+    theta = np.sqrt(np.sum(r * r, axis=-1))
+    n = r / np.where(theta > 0.0, theta, 1.0)[..., None]
     nx, ny, nz = n[..., 0], n[..., 1], n[..., 2]
     zero_z, zero_y = np.abs(nz) <= _AXIS_ZERO, np.abs(ny) <= _AXIS_ZERO
     upper = (nz > _AXIS_ZERO) | (zero_z & (ny > _AXIS_ZERO)) | (zero_z & zero_y & (nx > 0.0))
     flip = (np.pi - theta <= half_turn_tol) & ~upper
-    r_flipped = -(2.0 * np.pi - theta)[..., None] * n
-    return np.where(flip[..., None], r_flipped, r)
+    if not np.any(flip):
+        return r
+    return np.where(flip[..., None], -(2.0 * np.pi - theta)[..., None] * n, r)
 
 
 def matrix_from_rotation_vector(r):
@@ -190,7 +215,9 @@ def matrix_from_rotation_vector(r):
 
 
 def rotation_vector_from_matrix(R, *, tol=1e-9, half_turn_tol=1e-12):
-    r"""Rotation vectors of rotation matrices (through Shepperd's quaternion).
+    r"""Rotation vectors of rotation matrices (through Shepperd's quaternion: the kernel
+    ``dqlab._kernels.rotation_vector_from_matrix_entries``, shared with the rest of
+    dqlab, and the half-turn rule of the module docstring).
 
     Parameters
     ----------
@@ -209,8 +236,17 @@ def rotation_vector_from_matrix(R, *, tol=1e-9, half_turn_tol=1e-12):
     >>> rotation_vector_from_matrix(np.diag([1.0, -1.0, -1.0])).round(12) + 0.0
     array([3.14159265, 0.        , 0.        ])
     """
-    return rotation_vector_from_quaternion(quaternion_from_matrix(R, tol=tol),
-                                           half_turn_tol=half_turn_tol)
+    tol = check_tolerance(tol, "tol")
+    half_turn_tol = check_tolerance(half_turn_tol, "half_turn_tol")
+    return _rotation_vectors(check_rotation_matrix(R, tol=tol), half_turn_tol)
+
+
+def _rotation_vectors(R, half_turn_tol):
+    """Rotation vectors of checked rotation matrices ``(..., 3, 3)``: the kernel, then the
+    half-turn rule."""
+    entries = components(R.reshape(R.shape[:-2] + (9,)))
+    r = stack_components(list(rotation_vector_from_matrix_entries(*entries)))
+    return _half_turn(r, half_turn_tol)
 
 
 def pose_from_transform(T, *, tol=1e-9, half_turn_tol=1e-12):
@@ -249,8 +285,11 @@ def pose_from_transform(T, *, tol=1e-9, half_turn_tol=1e-12):
     >>> pose_from_transform(X_WF).round(5) + 0.0
     array([ 0.     , -0.19425,  0.69415,  0.     , -2.22144,  2.22144])
     """
-    Q = dual_quaternion_from_transform(T, tol=tol)
-    return pose_from_dual_quaternion(Q, half_turn_tol=half_turn_tol)
+    tol = check_tolerance(tol, "tol")
+    half_turn_tol = check_tolerance(half_turn_tol, "half_turn_tol")
+    T = check_transform(T, tol=tol)
+    r = _rotation_vectors(T[..., :3, :3], half_turn_tol)
+    return np.concatenate([T[..., :3, 3], r], axis=-1)
 
 
 def transform_from_pose(p):
@@ -281,7 +320,7 @@ def transform_from_pose(p):
     """
     p = check_pose(p, "p")
     T = np.zeros(p.shape[:-1] + (4, 4))
-    T[..., :3, :3] = matrix_from_rotation_vector(p[..., 3:])
+    T[..., :3, :3] = matrix_from_quaternion(_quaternions(p[..., 3:], "the rotation p[..., 3:]"))
     T[..., :3, 3] = p[..., :3]
     T[..., 3, 3] = 1.0
     return T
@@ -308,6 +347,8 @@ def pose_from_dual_quaternion(Q, *, tol=1e-9, half_turn_tol=1e-12):
     >>> pose_from_dual_quaternion([1, 0, 0, 0, 0, 0.05, 0, 0])
     array([0.1, 0. , 0. , 0. , 0. , 0. ])
     """
+    tol = check_tolerance(tol, "tol")
+    half_turn_tol = check_tolerance(half_turn_tol, "half_turn_tol")
     Q = as_float_array(Q, "Q", (8,))
     T = transform_from_dual_quaternion(Q, tol=tol)  # checks that Q is a unit dual quaternion
     r = rotation_vector_from_quaternion(Q[..., :4], tol=tol, half_turn_tol=half_turn_tol)
@@ -334,7 +375,7 @@ def dual_quaternion_from_pose(p):
     array([1.  , 0.  , 0.  , 0.  , 0.  , 0.05, 0.  , 0.  ])
     """
     p = check_pose(p, "p")
-    qr = quaternion_from_rotation_vector(p[..., 3:])
+    qr = _quaternions(p[..., 3:], "the rotation p[..., 3:]")
     w, x, y, z = np.moveaxis(qr, -1, 0)
     tx, ty, tz = np.moveaxis(0.5 * p[..., :3], -1, 0)
     # q_d = (0, t/2) q_r, written out (Hamilton product with a pure quaternion)
@@ -369,6 +410,7 @@ def rpy_from_rotation_vector(r, *, singular_tol=1e-12):
     >>> rpy_from_rotation_vector([0, 0, 0.3]).round(12) + 0.0
     array([0. , 0. , 0.3])
     """
+    singular_tol = check_tolerance(singular_tol, "singular_tol")
     return rpy_from_matrix(matrix_from_rotation_vector(r), singular_tol=singular_tol)
 
 
@@ -392,4 +434,5 @@ def rotation_vector_from_rpy(rpy, *, half_turn_tol=1e-12):
     >>> rotation_vector_from_rpy([np.pi, 0, 0]).round(12) + 0.0
     array([3.14159265, 0.        , 0.        ])
     """
+    half_turn_tol = check_tolerance(half_turn_tol, "half_turn_tol")
     return rotation_vector_from_matrix(matrix_from_rpy(rpy), half_turn_tol=half_turn_tol)

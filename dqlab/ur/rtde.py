@@ -36,10 +36,14 @@ import time
 
 import numpy as np
 
+from .._checks import check_tolerance
+from ._args import real_number
+
 __all__ = ["RTDEError", "RTDEReader", "PROTOCOL_VERSION", "TYPES", "pack", "PacketBuffer",
            "REQUEST_PROTOCOL_VERSION", "GET_URCONTROL_VERSION", "TEXT_MESSAGE", "DATA_PACKAGE",
            "CONTROL_PACKAGE_SETUP_OUTPUTS", "CONTROL_PACKAGE_SETUP_INPUTS",
-           "CONTROL_PACKAGE_START", "CONTROL_PACKAGE_PAUSE", "STATE_VARIABLES"]
+           "CONTROL_PACKAGE_START", "CONTROL_PACKAGE_PAUSE", "STATE_VARIABLES",
+           "MAX_PACKAGE_SIZE"]
 
 PROTOCOL_VERSION = 2
 REQUEST_PROTOCOL_VERSION = ord("V")
@@ -59,10 +63,13 @@ TYPES = {"DOUBLE": "d", "VECTOR6D": "6d", "VECTOR3D": "3d", "INT32": "i", "UINT3
 #: number of values of the vector types (every other type holds one value)
 COUNTS = {"VECTOR6D": 6, "VECTOR3D": 3, "VECTOR6INT32": 6, "VECTOR6UINT32": 6}
 
-#: the output recipe a :class:`~dqlab.ur.client.URState` is read from
+#: the output recipe a :class:`~dqlab.ur.state.URState` is read from
 STATE_VARIABLES = ("timestamp", "actual_q", "actual_qd", "actual_TCP_pose", "robot_mode")
 
 _HEADER = struct.Struct(">HB")
+
+#: The largest package the header's ``uint16`` size can describe, bytes.
+MAX_PACKAGE_SIZE = 0xFFFF
 
 
 class RTDEError(ConnectionError):
@@ -77,7 +84,11 @@ def pack(ptype, payload=b""):
     >>> pack(REQUEST_PROTOCOL_VERSION, struct.pack(">H", 2))
     b'\\x00\\x05V\\x00\\x02'
     """
-    return _HEADER.pack(_HEADER.size + len(payload), ptype) + payload
+    size = _HEADER.size + len(payload)
+    if size > MAX_PACKAGE_SIZE:
+        raise RTDEError(f"an RTDE package holds at most {MAX_PACKAGE_SIZE} bytes, this one "
+                        f"{size}")
+    return _HEADER.pack(size, ptype) + payload
 
 
 def recipe_struct(types):
@@ -146,8 +157,23 @@ class RTDEReader:
     """
 
     def __init__(self, host, port=30004, variables=STATE_VARIABLES, frequency=125.0):
+        if not isinstance(host, str) or not host:
+            raise TypeError(f"host must be a host name or address (a non-empty str), got "
+                            f"{host!r}")
+        if isinstance(port, (bool, np.bool_)) or not isinstance(port, (int, np.integer)) \
+                or not 0 <= port <= 65535:
+            raise ValueError(f"port must be a TCP port number (an int in 0..65535), got "
+                             f"{port!r}")
+        if isinstance(variables, (str, bytes)) or not all(
+                isinstance(v, str) and v.isidentifier() and v.isascii() for v in variables):
+            raise ValueError(f"variables must be a sequence of RTDE output names, got "
+                             f"{variables!r}")
+        if not np.isfinite(real_number(frequency, "frequency")):
+            raise ValueError(f"frequency must be a finite number (Hz), got {frequency!r}")
         self.host, self.port = host, int(port)
         self.variables = tuple(variables)
+        if not self.variables:
+            raise ValueError("variables must name at least one RTDE output")
         self.frequency = float(frequency)
         self.controller_version = None
         self.types = None
@@ -159,6 +185,7 @@ class RTDEReader:
 
     def connect(self, timeout=5.0):
         """Open the connection and run the handshake; the stream is started."""
+        timeout = check_tolerance(timeout, "timeout")
         deadline = time.monotonic() + timeout
         self._sock = socket.create_connection((self.host, self.port), timeout=timeout)
         try:
@@ -168,12 +195,23 @@ class RTDEReader:
             if reply[:1] != b"\x01":
                 raise RTDEError(f"controller refused RTDE protocol version {PROTOCOL_VERSION}")
             reply = self._request(GET_URCONTROL_VERSION, b"", deadline)
-            self.controller_version = struct.unpack(">IIII", reply[:16])
+            if len(reply) != 16:
+                raise RTDEError(f"controller version reply of {len(reply)} bytes, not 16")
+            self.controller_version = struct.unpack(">IIII", reply)
             names = ",".join(self.variables).encode()
             reply = self._request(CONTROL_PACKAGE_SETUP_OUTPUTS,
                                   struct.pack(">d", self.frequency) + names, deadline)
+            if not reply:
+                raise RTDEError("empty reply to the output set-up")
             self._recipe_id = reply[0]
-            self.types = tuple(reply[1:].decode().split(","))
+            try:
+                types = tuple(reply[1:].decode("ascii").split(","))
+            except UnicodeDecodeError:
+                raise RTDEError("the output set-up reply is not ASCII text") from None
+            if len(types) != len(self.variables):
+                raise RTDEError(f"the controller answered {len(types)} types for "
+                                f"{len(self.variables)} outputs")
+            self.types = types
             missing = [v for v, t in zip(self.variables, self.types, strict=True)
                        if t == "NOT_FOUND"]
             if missing:
@@ -214,12 +252,17 @@ class RTDEReader:
                 if rtype == ptype:
                     return body
                 if rtype == DATA_PACKAGE:
-                    self._pending.append(body)
+                    self._pending = [body]          # only the newest is ever used
                 # text messages and anything else during the handshake are skipped
 
     def _decode(self, body):
+        if not body:
+            raise RTDEError("empty RTDE data package")
         if body[0] != self._recipe_id:
             raise RTDEError(f"data package of unknown recipe {body[0]}")
+        if len(body) - 1 != self._struct.size:
+            raise RTDEError(f"data package of {len(body) - 1} bytes; the recipe "
+                            f"{self.types} needs {self._struct.size}")
         flat = self._struct.unpack(body[1:])
         out, k = {}, 0
         for name, rtype in zip(self.variables, self.types, strict=True):
@@ -232,15 +275,24 @@ class RTDEReader:
         """The newest data package as a dict of variable values (waits for one if needed).
 
         Packages that arrived since the last call are read and all but the newest dropped.
+        The call returns within ``timeout`` seconds (plus one socket read), whatever the
+        peer sends.
+
+        Raises
+        ------
+        RTDEError
+            If no data package arrived in time, the connection closed, or the peer sent a
+            package that does not fit the protocol (the message says what).
         """
         if self._sock is None:
             raise RTDEError("not connected")
+        timeout = check_tolerance(timeout, "timeout")
         deadline = time.monotonic() + timeout
         newest = self._pending.pop() if self._pending else None
         self._pending.clear()
         self._sock.setblocking(False)
         try:
-            while True:
+            while True:                             # what is waiting, until the deadline
                 try:
                     data = self._sock.recv(65536)
                 except (BlockingIOError, InterruptedError):
@@ -250,8 +302,11 @@ class RTDEReader:
                 for rtype, body in self._buffer.feed(data):
                     if rtype == DATA_PACKAGE:
                         newest = body
+                if time.monotonic() > deadline:
+                    break
         finally:
-            self._sock.setblocking(True)
+            if self._sock is not None:
+                self._sock.setblocking(True)
         while newest is None:
             remaining = deadline - time.monotonic()
             if remaining <= 0:

@@ -7,13 +7,15 @@ controller's protocols for the client code of :mod:`dqlab.ur.client` to run unch
 - a **script sink** in place of the secondary interface (port 30002 on a robot): it reads
   URScript text, a single line or a ``def name(): ... end`` program; it understands
   ``movej``, ``movel``, ``servoj`` and ``stopj`` with positional or keyword arguments and
-  ``p[...]`` poses, and runs them one after the other on a
-  :class:`~dqlab.ur.client.KinematicBackend` arm (a new program replaces the running one, as
-  on a controller). A program with anything else in it, or with a target the arm's safety
-  checks refuse, is refused as a whole (a message in :meth:`ControllerStandIn.log`) and
-  nothing moves. To each client it sends one binary message, a robot state with the arm's
-  kinematics info (see :mod:`dqlab.ur.calibration`), as a controller does when a client
-  connects, and nothing else.
+  ``p[...]`` poses (numbers and flat lists of numbers only), and runs them one after the
+  other on a :class:`~dqlab.ur.kinematic_arm.KinematicBackend` arm (a new program replaces
+  the running one, as on a controller). The whole program is planned and checked first
+  (:func:`dqlab.ur.script.plan_program`); a program with anything else in it, or with any
+  line the checks refuse, is refused as a whole (a message in
+  :meth:`ControllerStandIn.log`) and nothing moves. On connection it sends what a controller
+  sends: the version message (:mod:`dqlab.ur.secondary`, where its messages are encoded)
+  and a robot state with the arm's kinematics info (:mod:`dqlab.ur.calibration`); the
+  client reads and discards them, :func:`dqlab.ur.calibration` reads the second.
 - **RTDE output** (port 30004 on a robot; see :mod:`dqlab.ur.rtde`): protocol version
   negotiation (versions 1 and 2), the controller version (reported as 5.11.0.0 by default),
   output recipe set-up, start and pause, and data packages at the requested frequency (at
@@ -24,9 +26,11 @@ controller's protocols for the client code of :mod:`dqlab.ur.client` to run unch
   recipe cannot be started. Input recipes are answered ``NOT_FOUND`` (nothing can be
   written, so ``ur_rtde``'s control interface does not work with it).
 
-Time in the stand-in runs ``speedup`` times faster than real time, so a notebook does not
-wait for a 3-second move. The process stops when the stand-in is stopped or its parent
-goes away (its standard input closes); it never opens an outgoing connection.
+Whatever a client sends, the stand-in keeps serving: a malformed RTDE package drops that
+client, text that never completes a program (:data:`MAX_PROGRAM_SIZE`) too, each with a
+message in the log. Time in the stand-in runs ``speedup`` times faster than real time, so a
+notebook does not wait for a 3-second move. The process stops when the stand-in is stopped
+or its parent goes away (its standard input closes); it never opens an outgoing connection.
 """
 
 import ast
@@ -43,13 +47,22 @@ import time
 
 import numpy as np
 
+from .._checks import real_array
 from . import rtde
+from ._args import positive_number
 from .calibration import kinematics_info_from_robot, message_from_kinematics_info
-from .client import HOME, KinematicBackend, SecondaryInterfaceBackend
+from .kinematic_arm import KinematicBackend
+from .secondary import SecondaryInterfaceBackend, version_message
+from .state import HOME
 
-__all__ = ["ControllerStandIn", "SERVED_VARIABLES", "ZERO_VARIABLES", "parse_urscript"]
+__all__ = ["ControllerStandIn", "SERVED_VARIABLES", "ZERO_VARIABLES", "parse_urscript",
+           "MAX_PROGRAM_SIZE"]
 
 LOOPBACK = "127.0.0.1"
+
+#: Longest URScript text the stand-in holds for one client, bytes; a client that sends more
+#: without completing a program is dropped (with a message in the log).
+MAX_PROGRAM_SIZE = 1 << 20
 
 #: RTDE outputs the stand-in serves with the arm's state: name -> (RTDE type, value from the
 #: arm's URState)
@@ -112,6 +125,22 @@ _SIGNATURES = {
 }
 
 
+def _literal(node, line):
+    """A URScript argument: a number, or a flat list of numbers (``p[...]`` for a pose)."""
+    try:
+        value = ast.literal_eval(node)
+    except (ValueError, TypeError, SyntaxError, MemoryError, RecursionError):
+        raise ValueError("an argument is not a literal number or list of numbers") from None
+
+    def number(x):
+        return isinstance(x, (int, float)) and not isinstance(x, bool)
+
+    if number(value) or (isinstance(value, list) and all(number(x) for x in value)):
+        return value
+    raise ValueError(f"an argument must be a number or a list of numbers, got "
+                     f"{type(value).__name__} {str(value)[:40]!r}")
+
+
 def parse_urscript(text):
     """The motion commands of a URScript line or ``def ... end`` program.
 
@@ -122,25 +151,34 @@ def parse_urscript(text):
     Returns
     -------
     list of (name, target, kwargs)
-        As :meth:`dqlab.ur.client.KinematicBackend.run` takes them.
+        As :meth:`dqlab.ur.kinematic_arm.KinematicBackend.run` takes them: targets are lists
+        of numbers, arguments numbers.
 
     Raises
     ------
     ValueError
-        For anything but ``movej``, ``movel``, ``servoj``, ``stopj`` calls with literal
-        arguments (naming the line).
+        For anything but ``movej``, ``movel``, ``servoj``, ``stopj`` calls whose arguments
+        are literal numbers or flat lists of numbers (naming the line).
 
     Examples
     --------
     >>> parse_urscript("movel(p[0.2, 0, 0.3, 0, 3.1, 0], 1.2, v=0.25)")
     [('movel', [0.2, 0, 0.3, 0, 3.1, 0], {'a': 1.2, 'v': 0.25})]
+    >>> parse_urscript("movej('abc')")
+    Traceback (most recent call last):
+    ...
+    ValueError: line 1 "movej('abc')": an argument must be a number or a list of numbers, ...
     """
+    if not isinstance(text, str):
+        raise TypeError(f"text must be a str, got {type(text).__name__}")
     lines = [ln.strip() for ln in text.splitlines()]
     lines = [ln for ln in lines if ln and not ln.startswith("#")]
     if lines and lines[0].startswith("def "):
         if not re.fullmatch(r"def\s+\w+\(\)\s*:", lines[0]) or lines[-1] != "end":
             raise ValueError("a program must be 'def name():' ... 'end'")
         lines = lines[1:-1]
+    if not lines:
+        raise ValueError("no command")
     commands = []
     for k, line in enumerate(lines, start=1):
         try:
@@ -151,16 +189,18 @@ def parse_urscript(text):
             names = _SIGNATURES[node.func.id]
             if len(node.args) > len(names):
                 raise ValueError("too many arguments")
-            values = dict(zip(names, (ast.literal_eval(a) for a in node.args), strict=False))
+            values = dict(zip(names, (_literal(a, line) for a in node.args), strict=False))
             for kw in node.keywords:
                 if kw.arg not in names or kw.arg in values:
                     raise ValueError(f"unexpected argument {kw.arg!r}")
-                values[kw.arg] = ast.literal_eval(kw.value)
-        except (SyntaxError, ValueError) as exc:
-            raise ValueError(f"line {k} {line!r}: {exc}") from None
+                values[kw.arg] = _literal(kw.value, line)
+        except (SyntaxError, ValueError, MemoryError, RecursionError) as exc:
+            message = exc.msg if isinstance(exc, SyntaxError) else str(exc) or \
+                type(exc).__name__
+            raise ValueError(f"line {k} {line[:80]!r}: {message}") from None
         target = values.pop(names[0], None) if names[0] != "a" else None
         if target is None and names[0] != "a":
-            raise ValueError(f"line {k} {line!r}: no target")
+            raise ValueError(f"line {k} {line[:80]!r}: no target")
         commands.append((node.func.id, target, values))
     return commands
 
@@ -169,14 +209,14 @@ class ControllerStandIn:
     """Start and stop a local stand-in for a UR controller (see the module docstring).
 
     Use it as a context manager; inside, :meth:`backend` gives a
-    :class:`~dqlab.ur.client.SecondaryInterfaceBackend` connected to it.
+    :class:`~dqlab.ur.secondary.SecondaryInterfaceBackend` connected to it.
 
     Parameters
     ----------
     model : str
         Name of a function of :mod:`dqlab.models` that builds the arm (default ``"ur3"``).
     q0 : array_like, shape (6,), optional
-        Initial joints, rad (default :data:`dqlab.ur.client.HOME`).
+        Initial joints, rad (default :data:`dqlab.ur.state.HOME`).
     speedup : float
         Simulated seconds per real second.
     secondary_port, rtde_port : int
@@ -209,12 +249,28 @@ class ControllerStandIn:
 
     def __init__(self, model="ur3", q0=None, *, speedup=1.0, secondary_port=0, rtde_port=0,
                  controller_version=(5, 11, 0, 0), start_timeout=30.0):
+        from .. import models
+
+        if not isinstance(model, str) or not callable(getattr(models, model, None)) \
+                or model.startswith("_"):
+            raise ValueError(f"model must name a function of dqlab.models, got {model!r}")
         q0 = HOME if q0 is None else q0
-        self._config = {"model": str(model), "q0": [float(x) for x in np.ravel(q0)],
-                        "speedup": float(speedup), "secondary_port": int(secondary_port),
-                        "rtde_port": int(rtde_port),
-                        "controller_version": [int(v) for v in controller_version]}
-        self.start_timeout = float(start_timeout)
+        q0 = real_array(q0, "q0")
+        if q0.shape != (6,) or not np.all(np.isfinite(q0)):
+            raise ValueError(f"q0 must be 6 finite joint angles, got {q0.tolist()}")
+        version = tuple(controller_version) if isinstance(controller_version,
+                                                          (tuple, list)) else ()
+        if len(version) != 4 or not all(isinstance(v, (int, np.integer)) and
+                                        not isinstance(v, bool) and 0 <= v < 2 ** 32
+                                        for v in version):
+            raise ValueError(f"controller_version must be 4 ints (major, minor, bugfix, build),"
+                             f" got {controller_version!r}")
+        self._config = {"model": model, "q0": q0.tolist(),
+                        "speedup": positive_number(speedup, "speedup"),
+                        "secondary_port": _port(secondary_port, "secondary_port"),
+                        "rtde_port": _port(rtde_port, "rtde_port"),
+                        "controller_version": [int(v) for v in version]}
+        self.start_timeout = positive_number(start_timeout, "start_timeout")
         self.secondary_port = self.rtde_port = None
         self._proc = None
         self._log_file = None
@@ -311,15 +367,37 @@ class ControllerStandIn:
         self.stop()
 
     def backend(self, **kwargs):
-        """A :class:`~dqlab.ur.client.SecondaryInterfaceBackend` for this stand-in."""
+        """A :class:`~dqlab.ur.secondary.SecondaryInterfaceBackend` for this stand-in (for its arm:
+        ``robot`` defaults to the stand-in's model; other arguments are passed on)."""
         if not self.running:
             raise RuntimeError("the stand-in is not running")
+        if "robot" not in kwargs:
+            from .. import models
+
+            kwargs["robot"] = getattr(models, self._config["model"])()
         return SecondaryInterfaceBackend(self.host, self.secondary_port,
                                          rtde_port=self.rtde_port, **kwargs)
 
 
 # --------------------------------------------------------------------------------------
 # The server (runs in the stand-in's own process)
+
+
+def _port(value, name):
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) \
+            or not 0 <= value <= 65535:
+        raise ValueError(f"{name} must be a TCP port number (an int in 0..65535; 0: any free "
+                         f"port), got {value!r}")
+    return int(value)
+
+
+def _names(body, what):
+    """Comma-separated RTDE variable names (``ur_rtde`` ends the list with a comma)."""
+    try:
+        text = body.decode("ascii")
+    except UnicodeDecodeError:
+        raise rtde.RTDEError(f"{what}: variable names must be ASCII text") from None
+    return text.rstrip(",").split(",")
 
 
 class _RTDEConnection:
@@ -333,11 +411,14 @@ class _RTDEConnection:
         self.next_due = 0.0
 
     def handle(self, ptype, body, controller_version):
+        """Answer one package; ``RTDEError`` for a malformed one (the client is dropped)."""
         reply = None
         if os.environ.get("DQLAB_STANDIN_DEBUG"):
             print("RTDE <-", chr(ptype), body[:200], file=sys.stderr)
         if ptype == rtde.REQUEST_PROTOCOL_VERSION:
-            (version,) = struct.unpack(">H", body[:2])
+            if len(body) != 2:
+                raise rtde.RTDEError(f"protocol version request of {len(body)} bytes, not 2")
+            (version,) = struct.unpack(">H", body)
             ok = version in (1, 2)
             if ok:
                 self.version = version
@@ -346,19 +427,24 @@ class _RTDEConnection:
             reply = struct.pack(">IIII", *controller_version)
         elif ptype == rtde.CONTROL_PACKAGE_SETUP_OUTPUTS:
             if self.version >= 2:
+                if len(body) < 8:
+                    raise rtde.RTDEError("output set-up without its frequency")
                 (freq,) = struct.unpack(">d", body[:8])
                 body = body[8:]
                 if freq > 0:
                     self.period = 1.0 / min(freq, 500.0)
-            names = body.decode().rstrip(",").split(",")   # ur_rtde ends the list with ","
-            outputs = [_output(n) for n in names]
+            outputs = [_output(n) for n in _names(body, "output set-up")]
             types = [o[0] if o else "NOT_FOUND" for o in outputs]
             found = "NOT_FOUND" not in types
-            self.recipe = ([o[1] for o in outputs], rtde.recipe_struct(types)) if found else None
+            recipe = rtde.recipe_struct(types) if found else None
+            if recipe is not None and recipe.size + 4 > rtde.MAX_PACKAGE_SIZE:
+                raise rtde.RTDEError(f"a recipe of {len(types)} outputs does not fit in a "
+                                     "data package")
+            self.recipe = ([o[1] for o in outputs], recipe) if found else None
             text = ",".join(types).encode()
             reply = (bytes([1 if found else 0]) + text) if self.version >= 2 else text
         elif ptype == rtde.CONTROL_PACKAGE_SETUP_INPUTS:
-            names = body.decode().rstrip(",").split(",")
+            names = _names(body, "input set-up")
             reply = bytes([0]) + ",".join(["NOT_FOUND"] * len(names)).encode()
         elif ptype == rtde.CONTROL_PACKAGE_START:
             self.started = self.recipe is not None
@@ -381,15 +467,33 @@ class _RTDEConnection:
         return rtde.pack(rtde.DATA_PACKAGE, head + st.pack(*flat))
 
 
+def _greeting(config, robot):
+    """What the stand-in sends a new client of its secondary interface, as a real controller
+    does: the version message, then a robot state with the arm's kinematics info. (The one
+    place where it encodes that stream's messages, with :mod:`dqlab.ur.secondary` and
+    :mod:`dqlab.ur.calibration`.)"""
+    return (version_message(config["controller_version"])
+            + message_from_kinematics_info(kinematics_info_from_robot(robot)))
+
+
+def _log(message):
+    print(f"controller stand-in: {message}", file=sys.stderr, flush=True)
+
+
 def _serve(config_json):
-    """Run the stand-in until told to stop (the body of the stand-in's process)."""
+    """Run the stand-in until told to stop (the body of the stand-in's process).
+
+    Whatever a client sends -- any text, any bytes -- the stand-in answers, refuses or drops
+    that client with a message in its log, and keeps serving: a program is refused as a
+    whole (nothing moves) when any of its lines fails, for any reason.
+    """
     from .. import models
 
     config = json.loads(config_json)
     robot = getattr(models, config["model"])()
     arm = KinematicBackend(robot, config["q0"], speedup=config["speedup"])
-    kinematics_message = message_from_kinematics_info(kinematics_info_from_robot(robot))
     arm.connect()
+    greeting = _greeting(config, robot)
     version = tuple(config["controller_version"])
     sel = selectors.DefaultSelector()
     listeners = []
@@ -408,11 +512,25 @@ def _serve(config_json):
     texts = {}      # secondary-interface socket -> text received so far
     streams = {}    # RTDE socket -> _RTDEConnection
 
-    def drop(sock):
-        sel.unregister(sock)
+    def drop(sock, why=None):
+        if why:
+            _log(why)
+        try:
+            sel.unregister(sock)
+        except (KeyError, ValueError):
+            pass
         texts.pop(sock, None)
         streams.pop(sock, None)
         sock.close()
+
+    def run_program(program):
+        try:
+            commands = parse_urscript(program)
+            single_servo = len(commands) == 1 and commands[0][0] == "servoj" and \
+                not program.lstrip().startswith("def ")
+            arm.run(commands, streaming=single_servo)
+        except Exception as exc:              # any failure refuses the program, nothing moves
+            _log(f"program refused: {type(exc).__name__}: {exc}")
 
     def run_text(sock):
         buf = texts[sock]
@@ -425,11 +543,47 @@ def _serve(config_json):
             else:
                 program, buf = buf.split("\n", 1)
             if program.strip():
-                try:
-                    arm.run(parse_urscript(program))
-                except ValueError as exc:
-                    print(f"controller stand-in: program refused: {exc}", file=sys.stderr)
+                run_program(program)
         texts[sock] = buf
+        if len(buf) > MAX_PROGRAM_SIZE:
+            drop(sock, f"script client dropped: {len(buf)} bytes without a complete program")
+
+    def accept(listener, kind):
+        try:
+            conn, _ = listener.accept()
+        except (BlockingIOError, InterruptedError):
+            return
+        conn.settimeout(2.0)      # a client that stops reading is dropped
+        conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        if kind == "secondary":
+            texts[conn] = ""
+            try:
+                conn.sendall(greeting)
+            except OSError:
+                conn.close()
+                texts.pop(conn, None)
+                return
+        else:
+            streams[conn] = _RTDEConnection(conn)
+        sel.register(conn, selectors.EVENT_READ, ("client", kind))
+
+    def receive(sock, kind):
+        try:
+            data = sock.recv(65536)
+        except OSError:
+            data = b""
+        if not data:
+            drop(sock)
+        elif kind == "secondary":
+            texts[sock] += data.decode("utf-8", errors="replace")
+            run_text(sock)
+        else:
+            conn = streams[sock]
+            try:
+                for ptype, body in conn.buffer.feed(data):
+                    conn.handle(ptype, body, version)
+            except Exception as exc:          # a malformed package: drop that client only
+                drop(sock, f"RTDE client dropped: {type(exc).__name__}: {exc}")
 
     running = True
     try:
@@ -444,38 +598,9 @@ def _serve(config_json):
                     if not data or b"stop" in data:
                         running = False
                 elif role == "listen":
-                    try:
-                        conn, _ = key.fileobj.accept()
-                    except BlockingIOError:
-                        continue
-                    conn.settimeout(2.0)      # a client that stops reading is dropped
-                    conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-                    if kind == "secondary":
-                        texts[conn] = ""
-                        conn.sendall(kinematics_message)    # what a controller sends first
-                    else:
-                        streams[conn] = _RTDEConnection(conn)
-                    sel.register(conn, selectors.EVENT_READ, ("client", kind))
-                else:
-                    sock = key.fileobj
-                    try:
-                        data = sock.recv(65536)
-                    except OSError:
-                        data = b""
-                    if not data:
-                        drop(sock)
-                    elif kind == "secondary":
-                        texts[sock] += data.decode("utf-8", errors="replace")
-                        run_text(sock)
-                    else:
-                        conn = streams[sock]
-                        try:
-                            for ptype, body in conn.buffer.feed(data):
-                                conn.handle(ptype, body, version)
-                        except (rtde.RTDEError, struct.error, OSError) as exc:
-                            print(f"controller stand-in: RTDE client dropped: {exc}",
-                                  file=sys.stderr)
-                            drop(sock)
+                    accept(key.fileobj, kind)
+                elif key.fileobj in texts or key.fileobj in streams:
+                    receive(key.fileobj, kind)
             now = time.monotonic()
             ready = [c for c in streams.values() if c.started and now >= c.next_due]
             if ready:
@@ -484,8 +609,8 @@ def _serve(config_json):
                     try:
                         conn.sock.sendall(conn.data_package(state))
                         conn.next_due = max(conn.next_due + conn.period, now)
-                    except OSError:
-                        drop(conn.sock)
+                    except Exception as exc:
+                        drop(conn.sock, f"RTDE client dropped: {type(exc).__name__}: {exc}")
     finally:
         for sock in list(texts) + list(streams):
             sock.close()

@@ -1,0 +1,250 @@
+r"""Choosing among inverse-kinematics solutions: the one nearest a configuration.
+
+A revolute joint at :math:`\theta` is also at :math:`\theta + 2\pi m` for every integer
+:math:`m`, and a joint that turns :math:`\pm 360` degrees (a UR's) can be sent either. The
+solvers of :mod:`dqlab.ik` return angles wrapped to :math:`(-\pi, \pi]`; what a robot at
+:math:`q_{ref}` should be sent is, among all valid rows and all their :math:`2\pi`-equivalents
+*within the joint limits*, the joint vector nearest :math:`q_{ref}`:
+
+.. math::
+
+    q^\ast = \operatorname*{arg\,min}_{\text{valid rows } \theta,\ m \in \mathbb Z^n,\
+             lo \le \theta + 2\pi m \le hi} \lVert \theta + 2\pi m - q_{ref} \rVert .
+
+The joints are independent, so each joint takes its own nearest equivalent. The one nearest
+:math:`q_{ref,i}` is :math:`u_i = q_{ref,i} + \operatorname{wrap}(\theta_i - q_{ref,i})`;
+when it lies below :math:`lo_i`, the nearest within the limits is the smallest equivalent
+above :math:`lo_i` (the distance grows with every further turn), when above :math:`hi_i` the
+largest below :math:`hi_i`; when that one is not within the limits either, no equivalent is
+and the row cannot be sent. The row with the smallest distance wins.
+:func:`closest_solution` does this for one target or a batch, joint by joint on arrays;
+:func:`equivalent_solutions` lists every equivalent within the limits (for teaching and for
+tests).
+"""
+
+import math
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._checks import as_float_array, real_array
+from .._kernels import wrapped_angle
+
+__all__ = ["closest_solution", "equivalent_solutions"]
+
+_TWO_PI = 2.0 * math.pi
+_MAX_EQUIVALENT_JOINTS = 12
+
+
+def _joint_limits(limits, n):
+    """``(lo, hi)`` of shape (n,) each (infinite for an unlimited joint), or ``None``."""
+    if limits is None:
+        return None
+    lim = real_array(limits, "limits")
+    if lim.shape not in ((2,), (n, 2)):
+        raise ValueError(f"limits must have shape (2,) or ({n}, 2), got {lim.shape}")
+    lo = np.broadcast_to(lim[..., 0], (n,))
+    hi = np.broadcast_to(lim[..., 1], (n,))
+    if not np.all(lo <= hi):          # NaN fails this too
+        raise ValueError(f"limits must be rows (lo, hi) with lo <= hi, got {lim.tolist()}")
+    return lo, hi
+
+
+def _nearest_equivalent(theta, ref, lo, hi):
+    r"""The :math:`2\pi`-equivalent of ``theta`` nearest ``ref`` within ``[lo, hi]`` and
+    whether one exists (arrays of one shape; ``lo``, ``hi`` broadcast)."""
+    u = ref + wrapped_angle(theta - ref)
+    below, above = u < lo, u > hi
+    if below.any():
+        u = np.where(below, u + _TWO_PI * np.ceil((lo - u) / _TWO_PI), u)
+    if above.any():
+        u = np.where(above, u - _TWO_PI * np.ceil((u - hi) / _TWO_PI), u)
+    if below.any() or above.any():
+        return u, (u >= lo) & (u <= hi)
+    return u, None
+
+
+def closest_solution(result, q_ref: ArrayLike, limits: ArrayLike | None = None, *,
+                     wrapped: bool = False) -> NDArray[np.float64]:
+    r"""The valid solution nearest ``q_ref``, as the :math:`2\pi`-equivalent nearest it within
+    the joint limits.
+
+    Among every valid row of ``result`` and every :math:`2\pi`-equivalent of it within
+    ``limits``, the joint vector with the smallest Euclidean distance to ``q_ref`` (see the
+    module docstring): the vector a robot standing at ``q_ref`` should be sent, so that no
+    joint turns by more than half a turn when a shorter way exists within its limits.
+
+    Parameters
+    ----------
+    result : IKResult
+        Solutions ``(..., k, n)`` and their validity ``(..., k)``, from any solver of
+        :mod:`dqlab.ik`.
+    q_ref : array_like, shape (n,) or (..., n)
+        The configuration to be near (radians), for all targets or one per target.
+    limits : array_like, shape (2,) or (n, 2), optional
+        Lowest and highest value of each joint (for example ``robot.limits``; ``inf`` for a
+        joint without limit). Default: no limits.
+    wrapped : bool
+        Return the chosen row as the solver gives it (angles in :math:`(-\pi, \pi]`), not its
+        equivalent nearest ``q_ref`` (what :meth:`dqlab.ik.result.IKResult.best` returns;
+        only without ``limits``).
+
+    Returns
+    -------
+    ndarray, shape (..., n)
+
+    Raises
+    ------
+    ValueError
+        If some target has no valid solution, or no valid solution has an equivalent within
+        the limits (the message says which target), or ``q_ref`` or ``limits`` are not
+        numbers of the right shape.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dqlab.models import ur3
+    >>> from dqlab.ik import ur
+    >>> robot = ur3()
+    >>> q = np.array([3.0, -1.0, 1.0, -2.0, 1.0, 6.0])      # joint 6 beyond pi
+    >>> closest_solution(ur(robot, robot.fk(q)), q).round(6)
+    array([ 3., -1.,  1., -2.,  1.,  6.])
+
+    With joint 3 limited to :math:`[-\pi, 0]` the nearest solution has the elbow on the
+    other side (a different row), not the row nearest ``q`` moved into the limits:
+
+    >>> limits = robot.limits.copy(); limits[2] = [-np.pi, 0.0]
+    >>> closest_solution(ur(robot, robot.fk(q)), q, limits)[2] < 0
+    np.True_
+    """
+    solutions = np.asarray(result.solutions)
+    valid = np.asarray(result.valid)
+    k, n = solutions.shape[-2:]
+    q_ref = as_float_array(q_ref, "q_ref", (n,))
+    bounds = _joint_limits(limits, n)
+    if wrapped and bounds is not None:
+        raise ValueError("wrapped=True returns a row as the solver gives it, which ignores "
+                         "limits; give one or the other")
+    if not np.all(np.any(valid, axis=-1)):
+        raise ValueError("some targets have no valid solution; check result.reason")
+    batch = np.broadcast_shapes(valid.shape[:-1], q_ref.shape[:-1])
+    rows = np.broadcast_to(solutions, batch + (k, n)).reshape(-1, k, n)
+    index = _nearest_rows(rows, np.broadcast_to(valid, batch + (k,)).reshape(-1, k),
+                          np.broadcast_to(q_ref, batch + (n,)).reshape(-1, n), bounds)
+    if np.any(index < 0):
+        where = np.unravel_index(int(np.argmin(index)), batch) if batch else ()
+        target = f"target {tuple(int(i) for i in where)}" if batch else "the target"
+        lo, hi = bounds
+        raise ValueError(f"{target} has no valid solution within the joint limits "
+                         f"{np.stack([lo, hi], axis=-1).tolist()}")
+    columns, targets = rows.transpose(2, 1, 0), np.arange(len(rows))   # the solvers' layout
+    chosen = np.stack([columns[j][index, targets] for j in range(n)], axis=-1)
+    chosen = chosen.reshape(batch + (n,))
+    if wrapped:
+        return chosen
+    ref = np.broadcast_to(q_ref, chosen.shape)
+    if bounds is None:
+        return ref + wrapped_angle(chosen - ref)
+    return _nearest_equivalent(chosen, ref, *bounds)[0]
+
+
+_CHUNK = 4096      # targets per block: a block's (k, 4096) temporaries stay in the cache
+
+
+def _nearest_rows(rows, valid, q_ref, bounds):
+    r"""For each target (rows ``(N, k, n)``, valid ``(N, k)``, q_ref ``(N, n)``) the index of
+    the row whose nearest equivalent within ``bounds`` is nearest ``q_ref``, or -1.
+
+    The arrays are read joint by joint as ``(k, N)`` blocks, the layout in which the
+    solvers of :mod:`dqlab.ik` store a batch, and in chunks of :data:`_CHUNK` targets,
+    with the temporaries written over (the operations of :func:`_nearest_equivalent`, the
+    wrap written out as :math:`d - 2\pi\operatorname{rint}(d / 2\pi)`).
+    """
+    N, k, n = rows.shape
+    columns = rows.transpose(2, 1, 0)                         # (n, k, N), joint-major
+    refs = np.ascontiguousarray(q_ref.T)                      # (n, N)
+    ok = np.ascontiguousarray(valid.T)                        # (k, N)
+    index = np.empty(N, dtype=np.intp)
+    for a in range(0, N, _CHUNK):
+        b = min(a + _CHUNK, N)
+        m = b - a
+        dist = np.zeros((k, m))
+        d, w = np.empty((k, m)), np.empty((k, m))
+        reach = ok[:, a:b].copy()
+        for j in range(n):
+            ref = refs[j, a:b]
+            np.subtract(columns[j, :, a:b], ref, out=d)
+            np.multiply(d, 1.0 / _TWO_PI, out=w)
+            np.rint(w, out=w)
+            w *= _TWO_PI
+            d -= w                                            # wrap(theta - ref)
+            if bounds is not None:
+                lo, hi = bounds[0][j], bounds[1][j]
+                d += ref                                      # u, the nearest equivalent
+                below, above = d < lo, d > hi
+                if below.any() or above.any():
+                    u, inside = _nearest_equivalent(d, ref, lo, hi)
+                    reach &= inside
+                    np.copyto(d, u)
+                d -= ref
+            np.multiply(d, d, out=w)
+            dist += w
+        dist[~reach] = np.inf
+        best = dist.argmin(axis=0)
+        index[a:b] = np.where(np.isfinite(dist[best, np.arange(m)]), best, -1)
+    return index
+
+
+def equivalent_solutions(q: ArrayLike, limits: ArrayLike = (-2 * np.pi, 2 * np.pi)
+                         ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    r"""All :math:`2\pi`-equivalents of joint vectors within the joint limits.
+
+    A UR joint turns :math:`\pm 360` degrees, so each angle in :math:`(-\pi, \pi]` has one
+    more equivalent, :math:`q_i - 2\pi\operatorname{sgn} q_i`, and a joint vector up to
+    :math:`2^6 = 64`.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., n)
+        Joint vectors (radians).
+    limits : array_like, shape (2,) or (n, 2)
+        Lowest and highest joint value, for all joints or per joint (for example
+        ``robot.limits``). Each joint may have at most two equivalents within the limits
+        (a span of at most :math:`4\pi`).
+
+    Returns
+    -------
+    candidates : ndarray, shape (..., 2**n, n)
+        Candidate ``m`` shifts joint ``i`` by :math:`\pm 2\pi` when bit ``i`` of ``m`` is
+        set (towards zero); candidate 0 is ``q`` itself.
+    within : ndarray of bool, shape (..., 2**n)
+        Which candidates are within the limits.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> cands, ok = equivalent_solutions([0.5, -3.0, 0.0, 1.0, 2.0, -1.0])
+    >>> cands.shape, int(ok.sum())
+    ((64, 6), 64)
+    >>> cands[1].round(4)
+    array([-5.7832, -3.    ,  0.    ,  1.    ,  2.    , -1.    ])
+    """
+    q = as_float_array(q, "q")
+    if q.ndim == 0:
+        raise ValueError("q must have shape (..., n), a joint vector or a batch of them")
+    n = q.shape[-1]
+    if n > _MAX_EQUIVALENT_JOINTS:
+        raise ValueError(f"equivalent_solutions lists 2**n candidates: at most "
+                         f"{_MAX_EQUIVALENT_JOINTS} joints, got {n}")
+    limits = as_float_array(limits, "limits")
+    if limits.shape not in ((2,), (n, 2)):
+        raise ValueError(f"limits must have shape (2,) or ({n}, 2), got {limits.shape}")
+    lo = np.broadcast_to(limits[..., 0], (n,))
+    hi = np.broadcast_to(limits[..., 1], (n,))
+    if np.any(hi - lo > 4 * np.pi + 1e-12):
+        raise ValueError("equivalent_solutions handles joint ranges of at most 4 pi")
+    bits = (np.arange(2 ** n)[:, None] >> np.arange(n)) & 1          # (2**n, n)
+    shift = np.where(q >= 0, -2 * np.pi, 2 * np.pi)[..., None, :]
+    cands = q[..., None, :] + bits * shift
+    within = np.all((cands >= lo) & (cands <= hi), axis=-1)
+    return cands, within

@@ -1,0 +1,346 @@
+"""Every public callable of ``dqlab.ur`` and the MuJoCo back end, every argument, every kind of
+bad value (those of ``tests/test_bad_input_sweep.py``: NaN, inf, None, text, complex numbers,
+the wrong shape, a ragged list, an empty batch, huge and tiny magnitudes).
+
+Each call must either raise ``ValueError`` or ``TypeError`` whose message names the argument
+(by its name, or by how the command calls it: a ``movej``'s ``q`` is its "target"), or return
+a correct result: finite (a text, a state, a file written) for huge and tiny magnitudes, of
+size 0 for an empty batch, anything for ``inf`` given as a tolerance (``inf`` switches a
+check off). Anything else fails. The counts are printed at the end.
+"""
+
+import re
+from collections import Counter
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from test_bad_input_sweep import BAD_KINDS, _bad_value
+
+import dqlab
+from dqlab import ur
+from dqlab.models import ur3
+from dqlab.ur import rtde, script
+
+UR3 = ur3()
+Q0 = np.array([0.4, -1.3, 1.1, -1.2, -1.4, 0.6])           # a regular configuration
+Q1 = Q0 + [0.1, -0.05, 0.05, 0.0, 0.1, -0.1]
+POSE = ur.pose_from_transform(UR3.fk(Q0))
+GOAL = POSE + [0.02, -0.01, -0.02, 0.0, 0.0, 0.0]
+R3 = np.array([0.1, -0.2, 0.3])
+QUAT = ur.quaternion_from_rotation_vector(R3)
+ROT = ur.matrix_from_rotation_vector(R3)
+T = UR3.fk(Q0)
+DQ = UR3.fk_dq(Q0)
+T_TRAJ = np.arange(51) * 0.01
+Q_TRAJ = Q0 + np.outer(0.5 * (1 - np.cos(np.pi * T_TRAJ / T_TRAJ[-1])), [0.1, 0.05, 0, 0, 0, 0])
+
+
+def traj(t=T_TRAJ, q=Q_TRAJ):
+    return SimpleNamespace(t=t, q=q)
+
+
+class Client:
+    """A connected URClient on a kinematic arm at Q0 (fresh for each call)."""
+
+    def __getattr__(self, name):
+        client = ur.URClient(ur.KinematicBackend(q0=Q0, clock=ur.StepClock(0.01)),
+                             poll_interval=0)
+        client.connect()
+        return getattr(client, name)
+
+
+def arm():
+    a = ur.KinematicBackend(q0=Q0, clock=ur.StepClock(0.01))
+    a.connect()
+    return a
+
+
+_MUJOCO = []
+
+
+def mujoco():
+    """One MuJoCo back end for the sweep, restarted at Q0 for each call."""
+    if not _MUJOCO:
+        sim = pytest.importorskip("dqlab.sim", reason="MuJoCo (extra 'sim') is not installed")
+        _MUJOCO.append(sim.MujocoBackend(q_home=Q0))
+    _MUJOCO[0].connect(timeout=1.0)
+    return _MUJOCO[0]
+
+
+def good_file(tmp):
+    path = tmp / "good.csv"
+    if not path.exists():
+        ur.write_poses(path, [POSE, GOAL])
+    return path
+
+
+TARGET = ("target",)
+TOL = dict(inf_ok=True)
+DEFAULT_NONE = dict(none_ok=True)            # None is the argument's default: "not given"
+#: (name, call(value, tmp_path), good value, names the message may use, options)
+CASES = [
+    # poses
+    ("check_pose.p", lambda v, tmp: ur.check_pose(v), POSE, ("p", "pose"), {}),
+    ("dual_quaternion_from_pose.p", lambda v, tmp: ur.dual_quaternion_from_pose(v), POSE,
+     ("p",), {}),
+    ("transform_from_pose.p", lambda v, tmp: ur.transform_from_pose(v), POSE, ("p", "r"), {}),
+    ("quaternion_from_rotation_vector.r", lambda v, tmp: ur.quaternion_from_rotation_vector(v),
+     R3, ("r",), {}),
+    ("matrix_from_rotation_vector.r", lambda v, tmp: ur.matrix_from_rotation_vector(v), R3,
+     ("r",), {}),
+    ("rpy_from_rotation_vector.r", lambda v, tmp: ur.rpy_from_rotation_vector(v), R3, ("r",),
+     {}),
+    ("rpy_from_rotation_vector.singular_tol",
+     lambda v, tmp: ur.rpy_from_rotation_vector(R3, singular_tol=v), 1e-12, ("singular_tol",),
+     TOL),
+    ("rotation_vector_from_rpy.rpy", lambda v, tmp: ur.rotation_vector_from_rpy(v), R3,
+     ("rpy",), {}),
+    ("rotation_vector_from_rpy.half_turn_tol",
+     lambda v, tmp: ur.rotation_vector_from_rpy(R3, half_turn_tol=v), 1e-12,
+     ("half_turn_tol",), TOL),
+    ("rotation_vector_from_quaternion.q", lambda v, tmp: ur.rotation_vector_from_quaternion(v),
+     QUAT, ("q",), {}),
+    ("rotation_vector_from_quaternion.tol",
+     lambda v, tmp: ur.rotation_vector_from_quaternion(QUAT, tol=v), 1e-9,
+     ("tol", "tolerance"), TOL),
+    ("rotation_vector_from_quaternion.half_turn_tol",
+     lambda v, tmp: ur.rotation_vector_from_quaternion(QUAT, half_turn_tol=v), 1e-12,
+     ("half_turn_tol",), TOL),
+    ("rotation_vector_from_matrix.R", lambda v, tmp: ur.rotation_vector_from_matrix(v), ROT,
+     ("R",), {}),
+    ("rotation_vector_from_matrix.tol",
+     lambda v, tmp: ur.rotation_vector_from_matrix(ROT, tol=v), 1e-9, ("tol", "tolerance"), TOL),
+    ("pose_from_transform.T", lambda v, tmp: ur.pose_from_transform(v), T, ("T",), {}),
+    ("pose_from_transform.tol", lambda v, tmp: ur.pose_from_transform(T, tol=v), 1e-9,
+     ("tol", "tolerance"), TOL),
+    ("pose_from_dual_quaternion.Q", lambda v, tmp: ur.pose_from_dual_quaternion(v), DQ,
+     ("Q",), {}),
+    ("pose_from_dual_quaternion.tol", lambda v, tmp: ur.pose_from_dual_quaternion(DQ, tol=v),
+     1e-9, ("tol", "tolerance", "Q"), TOL),           # too tight a tol: Q is not unit within
+    # pose files
+    ("write_poses.values", lambda v, tmp: ur.write_poses(tmp / "w.csv", v),
+     np.stack([POSE, GOAL]), ("values", "pose"), {}),
+    ("write_poses.max_reach", lambda v, tmp: ur.write_poses(tmp / "w.csv", [POSE], max_reach=v),
+     2.0, ("max_reach",), TOL),
+    ("write_poses.unit_tol", lambda v, tmp: ur.write_poses(tmp / "w.csv", [DQ], unit_tol=v,
+                                                           kind="dual_quaternion"),
+     1e-9, ("unit_tol",), TOL),
+    ("append_pose.value", lambda v, tmp: ur.append_pose(tmp / "a.csv", v), POSE,
+     ("value", "pose"), {}),
+    ("append_pose.max_reach", lambda v, tmp: ur.append_pose(tmp / "a.csv", POSE, max_reach=v),
+     2.0, ("max_reach",), TOL),
+    ("read_poses.max_reach", lambda v, tmp: ur.read_poses(good_file(tmp), max_reach=v), 2.0,
+     ("max_reach",), TOL),
+    ("read_poses.unit_tol", lambda v, tmp: ur.read_poses(good_file(tmp), unit_tol=v), 1e-9,
+     ("unit_tol",), TOL),
+    # URScript
+    ("movej.q", lambda v, tmp: ur.movej(v), Q1, TARGET, {}),
+    ("movej.a", lambda v, tmp: ur.movej(Q1, a=v), 1.4, ("a",), {}),
+    ("movej.v", lambda v, tmp: ur.movej(Q1, v=v), 1.05, ("v",), {}),
+    ("movej.t", lambda v, tmp: ur.movej(Q1, t=v, q_from=Q0), 2.0, ("t",), {}),
+    ("movej.r", lambda v, tmp: ur.movej(Q1, r=v), 0.01, ("r",), {}),
+    ("movej.q_from", lambda v, tmp: ur.movej(Q1, q_from=v), Q0, ("q_from",), DEFAULT_NONE),
+    ("movel.pose", lambda v, tmp: ur.movel(v), GOAL, TARGET, {}),
+    ("movel.a", lambda v, tmp: ur.movel(GOAL, a=v, q_from=Q0), 1.2, ("a",), {}),
+    ("movel.v", lambda v, tmp: ur.movel(GOAL, v=v), 0.25, ("v",), {}),
+    ("movel.t", lambda v, tmp: ur.movel(GOAL, t=v, q_from=Q0), 1.0, ("t",), {}),
+    ("movel.r", lambda v, tmp: ur.movel(GOAL, r=v), 0.01, ("r",), {}),
+    ("movel.q_from", lambda v, tmp: ur.movel(GOAL, q_from=v), Q0, ("q_from",) + TARGET,
+     DEFAULT_NONE),
+    ("servoj.q", lambda v, tmp: ur.servoj(v), Q1, TARGET, {}),
+    ("servoj.t", lambda v, tmp: ur.servoj(Q1, t=v, q_from=Q0), 0.5, ("t",), {}),
+    ("servoj.lookahead_time", lambda v, tmp: ur.servoj(Q1, lookahead_time=v), 0.1,
+     ("lookahead_time",), {}),
+    ("servoj.gain", lambda v, tmp: ur.servoj(Q1, gain=v), 300.0, ("gain",), {}),
+    ("servoj.q_from", lambda v, tmp: ur.servoj(Q1, t=0.5, q_from=v), Q0, ("q_from",),
+     DEFAULT_NONE),
+    ("stopj.a", lambda v, tmp: ur.stopj(v), 2.0, ("a",), {}),
+    ("program_from_trajectory.t", lambda v, tmp: ur.program_from_trajectory(traj(t=v)), T_TRAJ,
+     ("t", "times"), {}),
+    ("program_from_trajectory.q", lambda v, tmp: ur.program_from_trajectory(traj(q=v)), Q_TRAJ,
+     ("q",) + TARGET, {}),
+    ("program_from_trajectory.a",
+     lambda v, tmp: ur.program_from_trajectory(traj(), a=v, q_from=Q0), 1.4, ("a",), {}),
+    ("program_from_trajectory.v", lambda v, tmp: ur.program_from_trajectory(traj(), v=v), 1.05,
+     ("v",), {}),
+    ("program_from_trajectory.lookahead_time",
+     lambda v, tmp: ur.program_from_trajectory(traj(), lookahead_time=v), 0.1,
+     ("lookahead_time",), {}),
+    ("program_from_trajectory.gain", lambda v, tmp: ur.program_from_trajectory(traj(), gain=v),
+     300.0, ("gain",), {}),
+    ("program_from_trajectory.q_from",
+     lambda v, tmp: ur.program_from_trajectory(traj(), q_from=v), Q0, ("q_from",),
+     DEFAULT_NONE),
+    ("check_joint_targets.times",
+     lambda v, tmp: script.check_joint_targets(Q_TRAJ, times=v, command="x"), T_TRAJ,
+     ("times", "t"), DEFAULT_NONE),
+    *[(f"SafetyLimits.{key}", lambda v, tmp, key=key: ur.SafetyLimits(**{key: v}), value,
+       (key,), {})
+      for key, value in [("joint_limits", script.UR3_JOINT_LIMITS[:5].tolist() + [[-7, 7]]),
+                         ("max_joint_speed", script.UR3_MAX_JOINT_SPEED),
+                         ("max_joint_acceleration", 10.0), ("max_joint_step", np.pi),
+                         ("max_tcp_speed", 1.0), ("max_tcp_acceleration", 5.0)]],
+    # the client, on the kinematic arm
+    ("URClient.tol", lambda v, tmp: ur.URClient(arm(), tol=v), 1e-4, ("tol",), TOL),
+    ("URClient.poll_interval", lambda v, tmp: ur.URClient(arm(), poll_interval=v), 0.002,
+     ("poll_interval",), {}),
+    ("URClient.connect_timeout", lambda v, tmp: ur.URClient(arm(), connect_timeout=v), 5.0,
+     ("connect_timeout",), {}),
+    ("URClient.movej.q", lambda v, tmp: Client().movej(v, wait=False), Q1, TARGET, {}),
+    ("URClient.movej.a", lambda v, tmp: Client().movej(Q1, a=v, wait=False), 1.4, ("a",), {}),
+    ("URClient.movej.v", lambda v, tmp: Client().movej(Q1, v=v, wait=False), 1.05, ("v",), {}),
+    ("URClient.movej.t", lambda v, tmp: Client().movej(Q1, t=v, wait=False), 1.0, ("t",), {}),
+    ("URClient.movej.r", lambda v, tmp: Client().movej(Q1, r=v, wait=False), 0.0, ("r",), {}),
+    ("URClient.movej.timeout", lambda v, tmp: Client().movej(Q1, timeout=v), 5.0,
+     ("timeout",), dict(inf_ok=True, none_ok=True)),
+    ("URClient.movel.pose", lambda v, tmp: Client().movel(v, wait=False), GOAL, TARGET, {}),
+    ("URClient.movel.a", lambda v, tmp: Client().movel(GOAL, a=v, wait=False), 1.2, ("a",),
+     {}),
+    ("URClient.movel.v", lambda v, tmp: Client().movel(GOAL, v=v, wait=False), 0.25, ("v",),
+     {}),
+    ("URClient.movel.t", lambda v, tmp: Client().movel(GOAL, t=v, wait=False), 1.0, ("t",), {}),
+    ("URClient.servoj_stream.t", lambda v, tmp: Client().servoj_stream(traj(t=v), timeout=2),
+     T_TRAJ, ("t", "times"), {}),
+    ("URClient.servoj_stream.q", lambda v, tmp: Client().servoj_stream(traj(q=v), timeout=2),
+     Q_TRAJ, ("q",) + TARGET, {}),
+    ("URClient.servoj_stream.start_tol",
+     lambda v, tmp: Client().servoj_stream(traj(), start_tol=v), 1e-3, ("start_tol",), TOL),
+    ("URClient.servoj_stream.gain", lambda v, tmp: Client().servoj_stream(traj(), gain=v),
+     300.0, ("gain",), {}),
+    ("URClient.stop.a", lambda v, tmp: Client().stop(v), 2.0, ("a",), {}),
+    ("URClient.closest_joints.pose", lambda v, tmp: Client().closest_joints(v), GOAL,
+     ("pose", "T"), {}),
+    # the kinematic arm and its clock
+    ("KinematicBackend.q0", lambda v, tmp: ur.KinematicBackend(q0=v), Q0, ("q0",),
+     DEFAULT_NONE),
+    ("KinematicBackend.speedup", lambda v, tmp: ur.KinematicBackend(speedup=v), 1.0,
+     ("speedup",), {}),
+    ("StepClock.dt", lambda v, tmp: ur.StepClock(v), 0.01, ("dt",), {}),
+    ("KinematicBackend.movej.q", lambda v, tmp: arm().movej(v), Q1, TARGET, {}),
+    ("KinematicBackend.movej.t", lambda v, tmp: arm().movej(Q1, t=v), 1.0, ("t",), {}),
+    ("KinematicBackend.movel.pose", lambda v, tmp: arm().movel(v), GOAL, TARGET, {}),
+    ("KinematicBackend.servoj.q", lambda v, tmp: arm().servoj(v, t=0.5), Q1, TARGET, {}),
+    ("KinematicBackend.servoj.t", lambda v, tmp: arm().servoj(Q1, t=v), 0.5, ("t",), {}),
+    ("KinematicBackend.stop.a", lambda v, tmp: arm().stop(v), 2.0, ("a",), {}),
+    # network back ends and the stand-in (constructed, not connected)
+    ("SecondaryInterfaceBackend.host",
+     lambda v, tmp: ur.SecondaryInterfaceBackend(v), "127.0.0.1", ("host",), {}),
+    ("SecondaryInterfaceBackend.port",
+     lambda v, tmp: ur.SecondaryInterfaceBackend("127.0.0.1", v), 30002, ("port",), {}),
+    ("SecondaryInterfaceBackend.frequency",
+     lambda v, tmp: ur.SecondaryInterfaceBackend("127.0.0.1", frequency=v), 125.0,
+     ("frequency",), {}),
+    ("RTDEReader.port", lambda v, tmp: rtde.RTDEReader("127.0.0.1", v), 30004, ("port",), {}),
+    ("ControllerStandIn.q0", lambda v, tmp: ur.ControllerStandIn(q0=v), Q0, ("q0",),
+     DEFAULT_NONE),
+    ("ControllerStandIn.speedup", lambda v, tmp: ur.ControllerStandIn(speedup=v), 5.0,
+     ("speedup",), {}),
+    ("ControllerStandIn.rtde_port", lambda v, tmp: ur.ControllerStandIn(rtde_port=v), 0,
+     ("rtde_port",), {}),
+    ("ControllerStandIn.controller_version",
+     lambda v, tmp: ur.ControllerStandIn(controller_version=v), (5, 11, 0, 0),
+     ("controller_version",), {}),
+    ("ControllerStandIn.start_timeout", lambda v, tmp: ur.ControllerStandIn(start_timeout=v),
+     30.0, ("start_timeout",), {}),
+    # the MuJoCo back end
+    ("MujocoBackend.movej.q", lambda v, tmp: mujoco().movej(v), Q1, ("q",), {}),
+    ("MujocoBackend.movej.a", lambda v, tmp: mujoco().movej(Q1, a=v), 1.4, ("a",), {}),
+    ("MujocoBackend.movej.v", lambda v, tmp: mujoco().movej(Q1, v=v), 1.05, ("v",), {}),
+    ("MujocoBackend.movej.t", lambda v, tmp: mujoco().movej(Q1, t=v), 1.0, ("t", "q"), {}),
+    ("MujocoBackend.movej.r", lambda v, tmp: mujoco().movej(Q1, r=v), 0.0, ("r",), {}),
+    ("MujocoBackend.movel.pose", lambda v, tmp: mujoco().movel(v), GOAL, ("pose",), {}),
+    ("MujocoBackend.movel.a", lambda v, tmp: mujoco().movel(GOAL, a=v), 1.2, ("a", "pose"),
+     {}),
+    ("MujocoBackend.movel.v", lambda v, tmp: mujoco().movel(GOAL, v=v), 0.25, ("v", "pose"),
+     {}),
+    ("MujocoBackend.servoj.q", lambda v, tmp: mujoco().servoj(v, t=0.5), Q1, ("q",), {}),
+    ("MujocoBackend.servoj.t", lambda v, tmp: mujoco().servoj(Q1, t=v), 0.5, ("t", "q"), {}),
+    ("MujocoBackend.servoj.gain", lambda v, tmp: mujoco().servoj(Q1, t=0.5, gain=v), 300.0,
+     ("gain",), {}),
+    ("MujocoBackend.stop.a", lambda v, tmp: mujoco().stop(v), 2.0, ("a", "q"), {}),
+    ("MujocoBackend.advance.duration", lambda v, tmp: mujoco().advance(v), 0.01,
+     ("duration",), {}),
+    ("MujocoBackend.q_home",
+     lambda v, tmp: __import__("dqlab.sim").sim.MujocoBackend(q_home=v), Q0, ("q_home",), {}),
+    ("MujocoBackend.period",
+     lambda v, tmp: __import__("dqlab.sim").sim.MujocoBackend(period=v), 0.008, ("period",),
+     {}),
+]
+
+OUTCOMES = Counter()
+
+
+def _bad(value, kind):
+    if isinstance(value, str):                       # a host name
+        return {"nan": float("nan"), "inf": float("inf"), "none": None, "text": 12345,
+                "complex": 1j, "wrong_shape": ["127.0.0.1"], "ragged": [[1.0], []],
+                "empty": "", "huge": "1" * 10_000, "tiny": "x"}[kind]
+    return _bad_value(value, kind)
+
+
+def _finite(result):
+    """Is a returned value a correct, finite result (and is it empty)?"""
+    if result is None or isinstance(result, (str, ur.URClient, ur.KinematicBackend,
+                                             ur.StepClock, ur.SafetyLimits,
+                                             ur.SecondaryInterfaceBackend, rtde.RTDEReader,
+                                             ur.ControllerStandIn)):
+        return True, False
+    if isinstance(result, ur.URState):
+        return all(np.all(np.isfinite(x)) for x in (result.q, result.qd, result.tcp_pose)), \
+            False
+    if isinstance(result, ur.PoseFile):
+        return bool(np.all(np.isfinite(result.values))), result.values.size == 0
+    if type(result).__name__ == "MujocoBackend":
+        return True, False
+    if isinstance(result, list):                    # servoj_stream's log
+        return all(_finite(r)[0] for r in result), False
+    a = np.asarray(result, dtype=float)
+    return bool(np.all(np.isfinite(a))), a.size == 0
+
+
+@pytest.mark.parametrize("case, kind", [pytest.param(c, k, id=f"{c[0]}-{k}")
+                                        for c in CASES for k in BAD_KINDS])
+def test_bad_argument_is_refused_by_name_or_gives_a_correct_result(case, kind, tmp_path):
+    name, call, good, names, options = case
+    value = _bad(good, kind)
+    try:
+        result = call(value, tmp_path)
+    except (ValueError, TypeError) as exc:
+        message = str(exc)
+        named = any(re.search(rf"(?<![\w.]){re.escape(n)}(?!\w)", message) for n in names)
+        OUTCOMES["clear error" if named else "other"] += 1
+        assert named, f"{name} {kind}: the error does not name {names}: {message}"
+        return
+    except TimeoutError as exc:          # a tiny timeout honoured, or a huge stream stopped
+        correct = kind in ("tiny", "huge")
+        OUTCOMES["correct result" if correct else "other"] += 1
+        assert correct, f"{name} {kind}: {exc}"
+        return
+    finite, empty = _finite(result)
+    correct = ((kind == "empty" and empty) or (kind in ("huge", "tiny") and finite)
+               or (kind == "inf" and options.get("inf_ok") and finite)
+               or (kind == "none" and options.get("none_ok")))
+    OUTCOMES["correct result" if correct else "other"] += 1
+    assert correct, f"{kind} {name!r} was accepted: {result!r}"
+
+
+def test_zz_summary_of_the_sweep(capsys):
+    """The counts of the sweep above (run in the same session): no case may be "other"."""
+    if not OUTCOMES:
+        pytest.skip("the sweep did not run in this session")
+    total = sum(OUTCOMES.values())
+    with capsys.disabled():
+        print(f"\nbad-input sweep of dqlab.ur and MujocoBackend: {total} cases, "
+              f"{OUTCOMES['clear error']} clear errors, {OUTCOMES['correct result']} correct "
+              f"results, {OUTCOMES['other']} other")
+    assert OUTCOMES["other"] == 0
+
+
+def test_the_sweep_covers_every_public_name_of_dqlab_ur():
+    swept = {c[0].split(".")[0] for c in CASES}
+    data = {"HOME", "ROBOT_MODE_RUNNING", "Backend", "URState", "PoseFile", "PoseFileError",
+            "UnsafeTargetError", "ControllerError"}
+    untested = {"RTDEBackend"}                       # needs ur_rtde (tests/test_ur_standin.py)
+    assert set(ur.__all__) - data - untested <= swept, set(ur.__all__) - data - swept
+    assert dqlab.ur.RTDEBackend
