@@ -375,14 +375,18 @@ class Motion:
         """Joint speeds at the start (zero except for ``servoj`` and ``stopj``)."""
         if self.law is None:
             return np.zeros_like(self.q_start)
-        return self.path(0.0)[1] * float(self.law.coefficients[0, 1])
+        h = float(self.law.breaks[1] - self.law.breaks[0])
+        return self.path(0.0)[1] * float(self.law.coefficients[0, 1] / h)   # u = t / h
 
     @property
     def qd_end(self):
         """Joint speeds just before the end (zero except for ``servoj``)."""
         if self.law is None or self.command != "servoj":
             return np.zeros_like(self.q_start)
-        return self.path(self.path.length)[1] * float(self.law.coefficients[-1, 1])
+        c = self.law.coefficients[-1]                       # in the local time u, at u = 1
+        h = float(self.law.breaks[-1] - self.law.breaks[-2])
+        speed = (c[1] + 2.0 * c[2] + 3.0 * c[3] + 4.0 * c[4] + 5.0 * c[5]) / h
+        return self.path(self.path.length)[1] * float(speed)
 
     def at(self, t):
         r"""``(q, qd, qdd)`` at the times ``t`` since the start (shape (...) -> (..., n)).
@@ -446,14 +450,15 @@ class Motion:
         if not isinstance(self.path, SplinePath):
             return None
         law = self.law
-        if np.any(law.coefficients[:, 3:] != 0.0):
+        c = law.coefficients                    # in the local time u = (t - t_k) / h_k
+        if np.any(c[:, 3:] != 0.0):
             return None
-        c = law.coefficients
+        h = np.diff(law.breaks)
         s_knots = np.append(c[:, 0], law.distance)          # sigma at the segments' ends
-        v_last = c[-1, 1] + 2.0 * c[-1, 2] * (law.breaks[-1] - law.breaks[-2])
-        speed2_knots = np.append(c[:, 1], v_last) ** 2
+        v_last = (c[-1, 1] + 2.0 * c[-1, 2]) / h[-1]
+        speed2_knots = np.append(c[:, 1] / h, v_last) ** 2
         sigma = self.path.sigma
-        a_seg = np.abs(2.0 * c[:, 2])
+        a_seg = np.abs(2.0 * c[:, 2]) / h ** 2
         lo, hi = sigma[:-1], sigma[1:]
         speed2 = np.maximum(np.interp(lo, s_knots, speed2_knots),
                             np.interp(hi, s_knots, speed2_knots))
@@ -483,30 +488,32 @@ class Motion:
 def _law_values(law, t):
     r""":math:`(\sigma, \dot\sigma, \ddot\sigma)` of a
     :class:`~dqlab.trajectory.time_laws.TimeLaw` at the times ``t`` in :math:`[0, T]`, in one
-    pass (Horner's rule on the piece of each time): the values of ``law(t)``, several times
-    faster for one instant (the kinematic arm reads one per state; tested equal to
-    ``law(t)``)."""
+    pass (Horner's rule in the local time :math:`u` of each time's segment, the derivatives
+    divided by :math:`h_k` and :math:`h_k^2`): the values of ``law(t)``, several times faster
+    for one instant (the kinematic arm reads one per state; tested equal to ``law(t)``)."""
     c = law.coefficients
     k = np.clip(np.searchsorted(law.breaks, t, side="right") - 1, 0, len(c) - 1)
-    tau = t - law.breaks[k]
+    h = law.breaks[k + 1] - law.breaks[k]
+    u = (t - law.breaks[k]) / h
     c0, c1, c2, c3, c4, c5 = (c[k, j] for j in range(6))
-    sigma = c0 + tau * (c1 + tau * (c2 + tau * (c3 + tau * (c4 + tau * c5))))
-    sd = c1 + tau * (2.0 * c2 + tau * (3.0 * c3 + tau * (4.0 * c4 + tau * 5.0 * c5)))
-    sdd = 2.0 * c2 + tau * (6.0 * c3 + tau * (12.0 * c4 + tau * 20.0 * c5))
+    sigma = c0 + u * (c1 + u * (c2 + u * (c3 + u * (c4 + u * c5))))
+    sd = (c1 + u * (2.0 * c2 + u * (3.0 * c3 + u * (4.0 * c4 + u * 5.0 * c5)))) / h
+    sdd = (2.0 * c2 + u * (6.0 * c3 + u * (12.0 * c4 + u * 20.0 * c5))) / h / h
     return sigma, sd, sdd
 
 
 def _law_peaks(law):
     r"""``(law.peak_speed, law.peak_acceleration)``; for a piecewise-quadratic law (all the
     laws planned here) directly from its coefficients -- :math:`|\dot\sigma|` is largest at
-    a segment's end, :math:`|\ddot\sigma| = 2|c_2|` -- rather than from polynomial roots
-    (tested equal)."""
-    c = law.coefficients
+    a segment's end, :math:`|\ddot\sigma| = 2|c_2| / h^2` -- rather than from polynomial
+    roots (tested equal)."""
+    c = law.coefficients                        # in the local time u = (t - t_k) / h_k
     if np.any(c[:, 3:] != 0.0):
         return law.peak_speed, law.peak_acceleration
     h = np.diff(law.breaks)
-    speed = max(float(np.max(np.abs(c[:, 1]))), float(np.max(np.abs(c[:, 1] + 2 * c[:, 2] * h))))
-    return speed, float(np.max(np.abs(2.0 * c[:, 2])))
+    speed = max(float(np.max(np.abs(c[:, 1]) / h)),
+                float(np.max(np.abs(c[:, 1] + 2 * c[:, 2]) / h)))
+    return speed, float(np.max(np.abs(2.0 * c[:, 2]) / h / h))
 
 
 def _joints(q, name):
@@ -575,7 +582,8 @@ def plan_servoj(q_from, q, t=SERVOJ_T):
     if not math.isfinite(speed):
         raise ValueError(f"t = {t!r} s is too short to move by {path.length:.6g} (an "
                          "infinite speed)")
-    law = TimeLaw(np.array([0.0, t]), np.array([[0.0, speed, 0, 0, 0, 0]]), "constant speed")
+    law = TimeLaw(np.array([0.0, t]), np.array([[0.0, path.length, 0, 0, 0, 0]]),
+                  "constant speed")        # coefficients in the local time u = tau / t
     return Motion("servoj", path, law, t)
 
 
@@ -599,7 +607,8 @@ def plan_stop(q, qd, a=STOPJ_A):
         raise ValueError(f"a = {a!r}: braking from {speed:.6g} would take {T:.3g} s, longer "
                          f"than {MAX_DURATION:g} s")
     distance = 0.5 * speed * T
-    law = TimeLaw(np.array([0.0, T]), np.array([[0.0, speed, -0.5 * a, 0, 0, 0]]), "stop")
+    law = TimeLaw(np.array([0.0, T]), np.array([[0.0, speed * T, -0.5 * a * T * T, 0, 0, 0]]),
+                  "stop")                  # coefficients in the local time u = tau / T
     return Motion("stopj", LinePath(q, q + qd / speed * distance), law, T)
 
 
