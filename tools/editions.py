@@ -282,6 +282,41 @@ def split_notebook(nb):
     return student, list(exercises.values())
 
 
+def parts(book=BOOK):
+    """``{caption: [chapter paths]}`` of the numbered chapters, by part of ``_toc.yml``."""
+    book = Path(book)
+    toc = (book.parent / "_toc.yml").read_text(encoding="utf-8")
+    numbered = {p.name for p in chapters(book)}
+    out, caption = {}, None
+    for line in toc.splitlines():
+        match = re.match(r"^\s*-\s*caption:\s*(.+?)\s*$", line)
+        if match:
+            caption = match[1]
+            continue
+        match = re.match(r"^\s*-\s*file:\s*(\S+)\s*$", line)
+        if match and caption:
+            path = book.parent / (match[1] if match[1].endswith(".ipynb")
+                                  else match[1] + ".ipynb")
+            if path.name in numbered:
+                out.setdefault(caption, []).append(path)
+    return out
+
+
+def check_table(book=BOOK):
+    """A Markdown table: per chapter, its exercises and how many check themselves."""
+    counts = check_counts(book)
+    lines = ["| chapter | exercises | with an automatic check |", "|---|---|---|"]
+    for caption, paths in parts(book).items():
+        n = sum(len(counts[p.name]) for p in paths)
+        k = sum(1 for p in paths for v in counts[p.name].values() if v)
+        lines.append(f"| **{caption}** | **{n}** | **{k}** |")
+        for path in paths:
+            per = counts[path.name]
+            checked = [label for label, v in per.items() if v]
+            lines.append(f"| {{doc}}`{path.stem}` | {len(per)} | {len(checked)} |")
+    return "\n".join(lines)
+
+
 def check_counts(book=BOOK):
     """Per chapter: ``{label: number of automatic checks}`` of every exercise.
 
