@@ -861,6 +861,27 @@ function dqlabFail(msg) {{
   }}
   dqlab.status = "ok";
 }})();
+// The viewer's control panel (dat.gui) leaves its checkboxes and its image-format menu
+// without an accessible name: name each after its row or its folder, now and whenever
+// the panel grows (animations add rows).
+(function () {{
+  function text(el) {{ return el ? el.textContent.trim() : ""; }}
+  function nameControls() {{
+    document.querySelectorAll(".dg input, .dg select").forEach(function (el) {{
+      if (el.getAttribute("aria-label")) return;
+      var row = el.closest("li");
+      var name = text(row && row.querySelector(".property-name"));
+      if (!name && el.closest(".meshcat-visibility-checkbox")) {{
+        var folder = el.closest("ul");
+        name = "show " + (text(folder && folder.querySelector(":scope > li.title")) || "object");
+      }}
+      if (!name && el.tagName === "SELECT") name = "image format";
+      el.setAttribute("aria-label", name || el.type || "control");
+    }});
+  }}
+  nameControls();
+  new MutationObserver(nameControls).observe(document.body, {{childList: true, subtree: true}});
+}})();
 </script></body></html>
 """
 
