@@ -167,7 +167,7 @@ def motor_angles(positions, *, where="point"):
     result = ik.desk_arm(uarm_swift_pro(), p)
     angles = np.full((len(p), 3), np.nan)
     for k in range(len(p)):
-        name = "(" + ", ".join(f"{v:.4g}" for v in p[k] * 1000) + ") mm"
+        name = "(" + ", ".join(f"{round(v, 6) + 0.0:.4g}" for v in p[k] * 1000) + ") mm"
         if not result.valid[k, 0]:
             reason = str(result.reason[k]).removeprefix("unreachable: ")
             raise ValueError(f"{where} {k}: {name} is out of the uArm Swift Pro's reach: "
