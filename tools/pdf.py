@@ -203,14 +203,16 @@ def _root_level_page(html_dir):
     return "dqlab-single.html"
 
 
-def print_pdf(html_dir=SINGLE, pdf=PDF, *, browser=None, settle_ms=1500, layout=None):
+def print_pdf(html_dir=SINGLE, pdf=PDF, *, browser=None, settle_ms=1500, layout=None,
+              timeout_ms=600_000):
     """Print ``html_dir/index.html`` to ``pdf``; return ``(pages, math_status)``.
 
     ``browser`` is a running playwright Chromium (the browser test passes its own); without
     it one is launched and closed here. ``layout``, a dictionary, receives what the print
     layout did: ``scaled`` (equations and tables scaled to fit), ``clipped`` (boxes that
     would still be cut, see :data:`CLIPPED`) and ``title_page`` (its text). The PDF is not
-    written when something would be clipped: ``ValueError`` lists it.
+    written when something would be clipped: ``ValueError`` lists it. ``timeout_ms`` bounds
+    each wait for the page (the whole book loads for minutes on a busy machine).
     """
     html_dir, pdf = Path(html_dir), Path(pdf)
     if not (html_dir / "index.html").exists():
@@ -235,13 +237,13 @@ def print_pdf(html_dir=SINGLE, pdf=PDF, *, browser=None, settle_ms=1500, layout=
         try:
             name = _root_level_page(html_dir)
             page.goto(f"http://127.0.0.1:{server.server_address[1]}/{name}",
-                      wait_until="load", timeout=120_000)
-            page.wait_for_function(_MATHJAX_DONE, timeout=120_000)
+                      wait_until="load", timeout=timeout_ms)
+            page.wait_for_function(_MATHJAX_DONE, timeout=timeout_ms)
             # let the 3D views replay their scenes before the page is printed
             page.wait_for_function(
                 """() => Array.from(document.querySelectorAll('iframe.dqlab-scene')).every(
                      f => f.contentWindow && f.contentWindow.dqlab &&
-                          f.contentWindow.dqlab.status !== 'loading')""", timeout=120_000)
+                          f.contentWindow.dqlab.status !== 'loading')""", timeout=timeout_ms)
             page.wait_for_timeout(settle_ms)
             math = page.evaluate(MATH_STATUS)
             scaled, clipped = prepare_for_print(page)
