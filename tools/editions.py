@@ -8,9 +8,12 @@ writes, from ``book/NN-*.ipynb``,
 * ``OUT/student/NN-*.ipynb``: the chapters without their solutions. Every solution dropdown
   (``{solution}`` blocks and everything between ``{solution-start}`` and
   ``{solution-end}``, text and code) is removed. A solution's code cell is replaced by an
-  empty cell for the student's answer and, when the solution ended in an automatic check
-  (``check_function(...)``), by that check, which waits until the functions the exercise
-  asks for are defined. The notebooks run top to bottom as they are.
+  empty cell for the student's answer and by the exercise's automatic checks, which wait
+  until the student has defined what they test. A check is either a ``check_function(...)``
+  call in the solution cell (it compares the student's function with a reference on random
+  inputs) or a whole code cell of the solution tagged ``student-check``: assertions on the
+  student's own values and functions, which never see the removed solution. The notebooks
+  run top to bottom as they are.
 * ``OUT/answer-key/NN-*.md``: for every exercise, its statement and its full solution (text
   and code), for the instructor.
 
@@ -31,9 +34,17 @@ DEFAULT_OUT = ROOT / "_build" / "editions"
 _DIRECTIVE = re.compile(r"^(?P<fence>`{3,}|:{3,})\{(?P<name>[a-z-]+)\}\s*(?P<arg>.*)$")
 
 
+#: The tag of a solution's code cell that is the exercise's automatic check.
+CHECK_TAG = "student-check"
+
+
 def chapters(book=BOOK):
-    """The numbered chapters, ``book/NN-*.ipynb``, in order."""
-    return sorted(p for p in Path(book).glob("[0-9][0-9]-*.ipynb"))
+    """The numbered chapters, ``book/NN-*.ipynb``, in the order of ``_toc.yml``."""
+    book = Path(book)
+    toc = (book.parent / "_toc.yml").read_text(encoding="utf-8")
+    files = re.findall(r"^\s*-\s*file:\s*(\S+)\s*$", toc, flags=re.M)
+    found = [book.parent / (f if f.endswith(".ipynb") else f + ".ipynb") for f in files]
+    return [p for p in found if p.exists() and re.match(r"\d\d-", p.name)]
 
 
 def _source(cell):
@@ -186,10 +197,55 @@ def auto_check(code, label, asked):
     return "\n".join(lines)
 
 
+def _assigned(tree):
+    """Names a piece of code binds: assignments, loops, imports, function and class names."""
+    names = set()
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            names.add(node.name)
+        elif isinstance(node, ast.Name) and isinstance(node.ctx, (ast.Store, ast.Del)):
+            names.add(node.id)
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            names.update((a.asname or a.name).split(".")[0] for a in node.names)
+        elif isinstance(node, ast.arg):
+            names.add(node.arg)
+    return names
+
+
+def _loaded(tree):
+    return {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)
+            and isinstance(n.ctx, ast.Load)}
+
+
+def is_check_cell(cell):
+    """Whether a code cell is a solution's automatic check (tagged ``student-check``)."""
+    return cell["cell_type"] == "code" and CHECK_TAG in cell.get("metadata", {}).get("tags", [])
+
+
+def student_check(code, label, answers):
+    """The student's version of a ``student-check`` cell.
+
+    ``answers`` are the names the exercise's removed solution cells bound; the check waits
+    for those it reads and never binds itself (the student's answer: a check cell reads the
+    student's names and binds only its own helpers) and otherwise runs as written.
+    """
+    tree = ast.parse(code)
+    waiting = sorted((_loaded(tree) & answers) - _assigned(tree))
+    lines = [f"# Automatic check of exercise {label}: run it once you have defined "
+             + ", ".join(f"`{n}`" for n in waiting) + " above."]
+    condition = " and ".join(f'"{n}" in globals()' for n in waiting) or "True"
+    lines.append(f"if {condition}:")
+    lines += ["    " + x if x.strip() else x for x in code.rstrip().split("\n")]
+    lines.append("else:")
+    lines.append(f'    print("exercise {label}: define ' + ", ".join(waiting)
+                 + ' above, then run this cell again")')
+    return "\n".join(lines)
+
+
 def split_notebook(nb):
     """(student notebook, exercises) from a chapter notebook (a dict)."""
     student = copy.deepcopy(nb)
-    cells, exercises, state = [], {}, {"inside": None}
+    cells, exercises, state, answers = [], {}, {"inside": None}, {}
     for cell in nb["cells"]:
         if cell["cell_type"] == "markdown":
             text = _split_markdown(_source(cell), state, exercises)
@@ -206,9 +262,17 @@ def split_notebook(nb):
         exercise = exercises.get(label)
         if exercise is not None:
             exercise.solution.append(("code", code))
+        if is_check_cell(cell):
+            cells.append(_code_cell(student_check(code, label, answers.get(label, set()))))
+            continue
+        try:
+            answers.setdefault(label, set()).update(_assigned(ast.parse(code)))
+        except SyntaxError:
+            pass
         asked = set(re.findall(r"`([A-Za-z_][A-Za-z0-9_]*)\(", exercise.statement)) if (
             exercise) else set()
-        cells.append(_code_cell(f"# Exercise {label}: your answer here\n"))
+        if not (cells and _source(cells[-1]) == f"# Exercise {label}: your answer here\n"):
+            cells.append(_code_cell(f"# Exercise {label}: your answer here\n"))
         check = auto_check(code, label, asked)
         if check:
             cells.append(_code_cell(check))
@@ -216,6 +280,69 @@ def split_notebook(nb):
         cell["id"] = f"student-{k:03d}"
     student["cells"] = cells
     return student, list(exercises.values())
+
+
+def parts(book=BOOK):
+    """``{caption: [chapter paths]}`` of the numbered chapters, by part of ``_toc.yml``."""
+    book = Path(book)
+    toc = (book.parent / "_toc.yml").read_text(encoding="utf-8")
+    numbered = {p.name for p in chapters(book)}
+    out, caption = {}, None
+    for line in toc.splitlines():
+        match = re.match(r"^\s*-\s*caption:\s*(.+?)\s*$", line)
+        if match:
+            caption = match[1]
+            continue
+        match = re.match(r"^\s*-\s*file:\s*(\S+)\s*$", line)
+        if match and caption:
+            path = book.parent / (match[1] if match[1].endswith(".ipynb")
+                                  else match[1] + ".ipynb")
+            if path.name in numbered:
+                out.setdefault(caption, []).append(path)
+    return out
+
+
+def check_table(book=BOOK):
+    """A Markdown table: per chapter, its exercises and how many check themselves."""
+    counts = check_counts(book)
+    lines = ["| chapter | exercises | with an automatic check |", "|---|---|---|"]
+    for caption, paths in parts(book).items():
+        n = sum(len(counts[p.name]) for p in paths)
+        k = sum(1 for p in paths for v in counts[p.name].values() if v)
+        lines.append(f"| **{caption}** | **{n}** | **{k}** |")
+        for path in paths:
+            per = counts[path.name]
+            checked = [label for label, v in per.items() if v]
+            lines.append(f"| {{doc}}`{path.stem}` | {len(per)} | {len(checked)} |")
+    return "\n".join(lines)
+
+
+def check_counts(book=BOOK):
+    """Per chapter: ``{label: number of automatic checks}`` of every exercise.
+
+    An exercise's checks are its ``check_function`` calls and its ``student-check`` cells.
+    """
+    counts = {}
+    for path in chapters(book):
+        nb = json.loads(path.read_text(encoding="utf-8"))
+        student, exercises = split_notebook(nb)
+        per = {e.label: 0 for e in exercises}
+        for cell in student["cells"]:
+            match = re.match(r"# Automatic check of exercise (\S+?):", _source(cell))
+            if match and match[1] in per:
+                per[match[1]] += 1
+        counts[path.name] = per
+    return counts
+
+
+def computed_exercises(book=BOOK):
+    """Per chapter: the labels of the exercises whose solution computes something (code)."""
+    out = {}
+    for path in chapters(book):
+        _, exercises = split_notebook(json.loads(path.read_text(encoding="utf-8")))
+        out[path.name] = [e.label for e in exercises
+                          if any(kind == "code" and text.strip() for kind, text in e.solution)]
+    return out
 
 
 def answer_key(title, exercises):

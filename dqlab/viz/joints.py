@@ -324,9 +324,9 @@ class JointSliders:
             "scale": self.scale,
         }
 
-    def document(self, *, bundle="auto"):
+    def document(self, *, bundle="auto", title="3D view with joint sliders"):
         """The view's HTML document: the scene and the joint control panel."""
-        doc = self.scene.document(bundle=bundle)
+        doc = self.scene.document(bundle=bundle, title=title)
         rows = "".join(
             f'<label>q{i + 1} <input class="dqlab-joint" type="range" data-joint="{i}" '
             f'min="{lo!r}" max="{hi!r}" step="any" value="{v!r}"> '
@@ -337,20 +337,23 @@ class JointSliders:
         head, tail = doc.rsplit("</body>", 1)
         return head + panel + "</body>" + tail
 
-    def html(self, *, height=460, bundle="auto", title="3D view with joint sliders"):
+    def html(self, *, height=460, bundle="auto", title="3D view with joint sliders",
+             description=None):
         """An ``<iframe>`` of the view, like :meth:`dqlab.viz.scene.Scene.html`."""
-        doc = self.document(bundle=bundle)
-        escaped = doc.replace("&", "&amp;").replace('"', "&quot;")
-        count = len(self.scene.commands())
-        return (f'<iframe class="dqlab-scene dqlab-joint-sliders" data-dqlab-scene="{count}" '
-                f'title="{title}" style="width: 100%; height: {int(height)}px; '
-                f'border: 1px solid #d0d7de; border-radius: 4px;" srcdoc="{escaped}"></iframe>')
+        from .scene import view_iframe
 
-    def show(self, *, height=460, bundle="auto"):
+        return view_iframe(self.document(bundle=bundle, title=title),
+                           commands=len(self.scene.commands()),
+                           height=height, title=title, description=description,
+                           classes="dqlab-scene dqlab-joint-sliders")
+
+    def show(self, *, height=460, bundle="auto", title="3D view with joint sliders",
+             description=None):
         """Display the view in a notebook (it survives into the built book)."""
         from .scene import SceneView
 
-        return SceneView(self.html(height=height, bundle=bundle))
+        return SceneView(self.html(height=height, bundle=bundle, title=title,
+                                   description=description))
 
     def _repr_html_(self):
         return self.html()

@@ -20,11 +20,13 @@ body B in the world W), points are ``(..., 3)`` arrays.
 
 import atexit
 import base64
+import hashlib
 import json
 import os
 import subprocess
 import sys
 import warnings
+from html import escape as html_escape
 from pathlib import Path
 
 import numpy as np
@@ -39,7 +41,7 @@ with warnings.catch_warnings():
     import meshcat.geometry as g
 
 __all__ = ["Scene", "SceneView", "LiveView", "LiveWindow", "live_server", "stop_live_server",
-           "viewer_script_path"]
+           "viewer_script_path", "view_iframe"]
 
 #: Environment variable naming the book's source directory while the book is built; set by
 #: :mod:`dqlab.viz.sphinxext`. When present, views load the shared viewer script.
@@ -602,7 +604,7 @@ class Scene:
         """The recorded meshcat commands (dictionaries), in the order they are replayed."""
         return self._recorder.ordered()
 
-    def html(self, *, height=420, bundle="auto", title="3D view"):
+    def html(self, *, height=420, bundle="auto", title="3D view", description=None):
         """HTML of a self-contained interactive view: an iframe that replays the scene.
 
         Parameters
@@ -617,21 +619,22 @@ class Scene:
             book is being built (:mod:`dqlab.viz.sphinxext` says so) and ``"inline"``
             otherwise.
         title : str
-            Accessible title of the iframe.
+            Accessible name of the view (the iframe's ``title`` and its document's title):
+            what it shows, in a few words.
+        description : str, optional
+            A one-sentence text alternative of what the view shows, for readers who cannot
+            see it; kept in the page for screen readers (:func:`view_iframe`).
 
         Returns
         -------
         str
-            An ``<iframe srcdoc=...>`` element.
+            An ``<iframe srcdoc=...>`` element, followed by its description if any.
         """
-        doc = self.document(bundle=bundle)
-        n = len(self._recorder.commands)
-        escaped = doc.replace("&", "&amp;").replace('"', "&quot;")
-        return (f'<iframe class="dqlab-scene" data-dqlab-scene="{n}" title="{title}" '
-                f'style="width: 100%; height: {int(height)}px; border: 1px solid #d0d7de; '
-                f'border-radius: 4px;" srcdoc="{escaped}"></iframe>')
+        doc = self.document(bundle=bundle, title=title)
+        return view_iframe(doc, commands=len(self._recorder.commands), height=height,
+                           title=title, description=description)
 
-    def document(self, *, bundle="auto"):
+    def document(self, *, bundle="auto", title="3D view"):
         """The HTML document of the view (what the iframe shows); see :meth:`html`."""
         mode = _bundle_mode(bundle)
         if mode == "shared":
@@ -645,9 +648,10 @@ class Scene:
         blobs = ",".join(f'"{base64.b64encode(b).decode("ascii")}"'
                          for b in self._recorder.packed())
         view = json.dumps(self._view)
-        return _DOCUMENT.format(script=script, commands=blobs, view=view)
+        return _DOCUMENT.format(script=script, commands=blobs, view=view,
+                                title=html_escape(str(title)))
 
-    def show(self, *, height=420, bundle="auto"):
+    def show(self, *, height=420, bundle="auto", title="3D view", description=None):
         """Display the scene in the notebook as a self-contained interactive view.
 
         The view is a snapshot: later changes to the scene do not reach it (call ``show``
@@ -659,13 +663,17 @@ class Scene:
             Height in CSS pixels.
         bundle : {"auto", "shared", "inline", "none"}
             See :meth:`html`.
+        title, description : str
+            The view's accessible name and its one-sentence text alternative; see
+            :meth:`html`.
 
         Returns
         -------
         SceneView
             Shown by Jupyter when it ends a cell.
         """
-        return SceneView(self.html(height=height, bundle=bundle))
+        return SceneView(self.html(height=height, bundle=bundle, title=title,
+                                   description=description))
 
     def _repr_html_(self):
         return self.html()
@@ -760,8 +768,54 @@ def _shared_script_url():
     return SHARED_SCRIPT if rel == "." else f"{rel}/{SHARED_SCRIPT}"
 
 
+def view_iframe(document, *, commands, height, title, description=None, classes="dqlab-scene"):
+    """The ``<iframe>`` that shows a view's document, with its accessible name and description.
+
+    The iframe's ``title`` names the view; a description becomes a paragraph right after it,
+    hidden from the eye (the page's prose describes the view for sighted readers) but read
+    by screen readers, and tied to the iframe by ``aria-describedby``.
+
+    Parameters
+    ----------
+    document : str
+        The view's HTML document (put in ``srcdoc``).
+    commands : int
+        Number of recorded commands, for the browser check (``data-dqlab-scene``).
+    height : int
+        Height in CSS pixels.
+    title : str
+    description : str, optional
+    classes : str
+        CSS classes of the iframe.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> print(view_iframe("<p>x</p>", commands=1, height=100, title="A <b> arm",
+    ...                   description="An arm."))  # doctest: +ELLIPSIS
+    <iframe class="dqlab-scene" ... title="A &lt;b&gt; arm" aria-describedby="dqlab-view-..." ...
+    """
+    escaped = document.replace("&", "&amp;").replace('"', "&quot;")
+    title = html_escape(str(title))
+    described, after = "", ""
+    if description:
+        key = hashlib.sha1((document + str(description)).encode("utf-8")).hexdigest()[:12]
+        described = f' aria-describedby="dqlab-view-{key}"'
+        after = (f'<p id="dqlab-view-{key}" class="dqlab-scene-description" '
+                 f'style="position: absolute; width: 1px; height: 1px; overflow: hidden; '
+                 f'clip: rect(0 0 0 0); white-space: nowrap; margin: 0;">'
+                 f'{html_escape(str(description))}</p>')
+    return (f'<iframe class="{classes}" data-dqlab-scene="{int(commands)}" title="{title}"'
+            f'{described} style="width: 100%; height: {int(height)}px; '
+            f'border: 1px solid #d0d7de; border-radius: 4px;" srcdoc="{escaped}"></iframe>'
+            + after)
+
+
 _DOCUMENT = """<!DOCTYPE html>
-<html><head><meta charset="utf-8"><title>3D view</title>
+<html lang="en"><head><meta charset="utf-8"><title>{title}</title>
 <style>html, body {{ margin: 0; height: 100%; overflow: hidden; background: #fff; }}
 #pane {{ width: 100%; height: 100%; }}
 #dqlab-msg {{ font: 14px sans-serif; color: #a40000; padding: 1em; }}</style></head>
@@ -806,6 +860,27 @@ function dqlabFail(msg) {{
     throw err;
   }}
   dqlab.status = "ok";
+}})();
+// The viewer's control panel (dat.gui) leaves its checkboxes and its image-format menu
+// without an accessible name: name each after its row or its folder, now and whenever
+// the panel grows (animations add rows).
+(function () {{
+  function text(el) {{ return el ? el.textContent.trim() : ""; }}
+  function nameControls() {{
+    document.querySelectorAll(".dg input, .dg select").forEach(function (el) {{
+      if (el.getAttribute("aria-label")) return;
+      var row = el.closest("li");
+      var name = text(row && row.querySelector(".property-name"));
+      if (!name && el.closest(".meshcat-visibility-checkbox")) {{
+        var folder = el.closest("ul");
+        name = "show " + (text(folder && folder.querySelector(":scope > li.title")) || "object");
+      }}
+      if (!name && el.tagName === "SELECT") name = "image format";
+      el.setAttribute("aria-label", name || el.type || "control");
+    }});
+  }}
+  nameControls();
+  new MutationObserver(nameControls).observe(document.body, {{childList: true, subtree: true}});
 }})();
 </script></body></html>
 """
