@@ -173,7 +173,7 @@ def test_a_pasted_solution_passes_its_automatic_check(out, monkeypatch):
 
 #: Exercises with a computed answer that have no automatic check yet (chapters maintained
 #: separately); the test below fails when one gets a check, so that it leaves this list.
-AWAITING_CHECKS = {"ch8-ex3", "ch8-ex4", "ch14-ex2", "ch14-ex3"}
+AWAITING_CHECKS = {"ch8-ex3", "ch8-ex4"}
 
 
 def test_every_computed_exercise_of_parts_one_to_three_checks_itself(capsys):
