@@ -6,7 +6,7 @@ function               convention  source
 :func:`ur3`            DH          Universal Robots' published DH parameters (thesis, table 4.2)
 :func:`ur5`            DH          Universal Robots' published DH parameters
 :func:`ur10`           DH          Universal Robots' published DH parameters
-:func:`ur3e` ...        DH          Universal Robots' published DH parameters: :func:`ur3e`,
+:func:`ur3e`, ...      DH          Universal Robots' published DH parameters: :func:`ur3e`,
                                    :func:`ur5e` (:func:`ur7e`), :func:`ur10e` (:func:`ur12e`),
                                    :func:`ur16e`, :func:`ur15`, :func:`ur18`, :func:`ur8_long`,
                                    :func:`ur20`, :func:`ur30` (:data:`UR_MODELS` by name)

@@ -15,7 +15,7 @@ controller's protocols for the client code of :mod:`dqlab.ur.client` to run unch
   :meth:`ControllerStandIn.log`) and nothing moves. On connection it sends what a controller
   sends: the version message (:mod:`dqlab.ur.secondary`, where its messages are encoded)
   and a robot state with the arm's kinematics info (:mod:`dqlab.ur.calibration`); the
-  client reads and discards them, :func:`dqlab.ur.calibration` reads the second.
+  client reads and discards them; :mod:`dqlab.ur.calibration` reads the second.
 - **RTDE output** (port 30004 on a robot; see :mod:`dqlab.ur.rtde`): protocol version
   negotiation (versions 1 and 2), the controller version (reported as 5.11.0.0 by default),
   output recipe set-up, start and pause, and data packages at the requested frequency (at
