@@ -875,7 +875,16 @@ def live_server():
     -------
     LiveWindow
         The connection; its ``web_url`` is the page to open.
+
+    Raises
+    ------
+    dqlab.viz._browser.LiveServerUnavailable
+        In a browser kernel (Pyodide), which cannot start the server's process.
     """
+    if sys.platform == "emscripten":
+        from ._browser import LiveServerUnavailable
+
+        raise LiveServerUnavailable()
     window = _live["window"]
     if window is not None and window.server_proc.poll() is None:
         return window
