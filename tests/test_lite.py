@@ -224,15 +224,16 @@ def test_the_build_fails_in_one_line(tmp_path):
 
 _BROWSER_KERNEL = r"""
 import sys
+import matplotlib.pyplot, numpy as np   # (imported first: sysconfig knows no emscripten here)
 sys.platform = "emscripten"            # what Pyodide reports
-sys.modules["zmq"] = None              # neither pyzmq nor tornado can be imported there
-sys.modules["tornado"] = None
-import numpy as np
+sys.modules["zmq"] = None              # no pyzmq there, and the kernel's bare tornado
+sys.modules["tornado"] = type(sys)("tornado")
 from dqlab import models, viz
 from dqlab.viz._browser import LiveServerUnavailable
 scene = viz.Scene()
 scene.add_robot(models.ur3(), np.zeros(6))
 html = scene.show().html
+assert viz.IN_BROWSER
 assert 'class="dqlab-scene"' in html and "MeshCat" in html
 assert "zmq" not in sys.modules or sys.modules["zmq"] is None
 try:
@@ -283,6 +284,17 @@ def test_site_serves_pyodide_from_itself_and_records_sources():
     assert size_mb < MAX_SITE_MB
     served = {p.name for p in (site_dir / "files").glob("*.ipynb")}
     assert served == {p.name for p, _ in NOTEBOOKS}
+
+
+def test_the_book_says_where_the_files_come_from():
+    page = (ROOT / "book" / "running-in-the-browser.md").read_text(encoding="utf-8")
+    package, version, _ = lite.WHEELS_PACKAGE
+    assert f"Pyodide {lite.PYODIDE_VERSION}" in page
+    assert f"`pyodide@{lite.PYODIDE_VERSION}`" in page
+    assert f"`{package}=={version}`" in page
+    for name in lite.PURE_WHEELS:
+        assert name in page
+    assert "book/running-in-the-browser" in (ROOT / "_toc.yml").read_text(encoding="utf-8")
 
 
 def test_every_chapter_page_links_to_its_browser_copy():

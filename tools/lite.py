@@ -309,21 +309,24 @@ def stage_pyodide(static, cache, log):
 
 
 def toc_notebooks(root=ROOT):
-    """The book's notebooks in ``_toc.yml`` order, with their chapter numbers (or None)."""
-    notebooks = []
-    number = 0
-    numbered = False
-    for line in (root / "_toc.yml").read_text(encoding="utf-8").splitlines():
-        stripped = line.split("#", 1)[0].strip()
-        if stripped.startswith("- caption:"):
-            numbered = False
-        elif stripped.startswith("numbered:"):
-            numbered = stripped.split(":", 1)[1].strip().lower() == "true"
-        elif stripped.startswith("- file:"):
-            path = root / (stripped.split(":", 1)[1].strip() + ".ipynb")
-            if path.exists():
-                number += numbered
-                notebooks.append((path, number if numbered else None))
+    """The book's notebooks in ``_toc.yml`` order, with their chapter numbers (or None).
+
+    Chapters of the parts marked ``numbered: true`` are numbered 1, 2, ... across the book,
+    as Jupyter Book numbers them; other notebooks (appendices) get None.
+    """
+    import yaml
+
+    toc = yaml.safe_load((root / "_toc.yml").read_text(encoding="utf-8"))
+    notebooks, number = [], 0
+    entries = [(toc["root"], False)] + [
+        (chapter["file"], bool(part.get("numbered")))
+        for part in toc.get("parts", []) for chapter in part.get("chapters", [])]
+    for name, numbered in entries:
+        path = root / (name + ".ipynb")
+        if numbered:
+            number += 1
+        if path.exists():
+            notebooks.append((path, number if numbered else None))
     return notebooks
 
 

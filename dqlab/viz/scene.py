@@ -878,8 +878,9 @@ def live_server():
 
     Raises
     ------
-    dqlab.viz._browser.LiveServerUnavailable
-        In a browser kernel (Pyodide), which cannot start the server's process.
+    RuntimeError
+        In a browser kernel (Pyodide), which cannot start the server's process
+        (``LiveServerUnavailable``, saying so).
     """
     if sys.platform == "emscripten":
         from ._browser import LiveServerUnavailable

@@ -32,12 +32,21 @@ def _unavailable(*args, **kwargs):
     raise LiveServerUnavailable()
 
 
+def _importable(name):
+    """Whether ``name`` can be imported (False for a stand-in without a spec: Pyodide's
+    kernel puts a bare ``tornado`` module in ``sys.modules`` for other packages' sake)."""
+    try:
+        return importlib.util.find_spec(name) is not None
+    except (ImportError, ValueError):
+        return False
+
+
 def _stand_ins():
     """Stand-ins for ``zmq`` and ``meshcat.servers.zmqserver``, for those that cannot import.
 
     With pyzmq and tornado installed (a computer) the result is empty: meshcat imports as is.
     """
-    absent = {name for name in ("zmq", "tornado") if importlib.util.find_spec(name) is None}
+    absent = {name for name in ("zmq", "tornado.web") if not _importable(name)}
     if not absent:
         return {}
     zmq = types.ModuleType("zmq", "Stand-in for pyzmq while meshcat is imported in a browser.")
