@@ -549,10 +549,13 @@ def native_note(cells):
             f"to see {'them' if len(cells) > 1 else 'it'}.*")
 
 
-def browser_notebook(nb, index, name):
-    """The in-browser copy of one notebook (a dict; the input is not changed)."""
+def browser_notebook(nb, index, name, number=None):
+    """The in-browser copy of one notebook (a dict; the input is not changed).
+
+    ``number`` is the chapter's number in the book, put before its title as the book does.
+    """
     nb = copy.deepcopy(nb)
-    cells, run, in_solution = [], [], False
+    cells, run, in_solution, titled = [], [], False, number is None
 
     def flush():
         if run:
@@ -576,6 +579,9 @@ def browser_notebook(nb, index, name):
             converted = convert_markdown(text, index, name)
             if not converted.strip():
                 continue
+            if not titled:
+                converted, titled = re.subn(r"^# (?!\d)", f"# {number}. ", converted,
+                                            count=1, flags=re.M)
             cell["source"] = converted
         elif cell["cell_type"] == "code":
             if "skip-execution" in tags:
@@ -599,9 +605,9 @@ def stage_contents(dest, notebooks, log):
     dest.mkdir(parents=True, exist_ok=True)
     index = BookIndex(notebooks)
     names = []
-    for path, _number in notebooks:
+    for path, number in notebooks:
         nb = json.loads(path.read_text(encoding="utf-8"))
-        lite = browser_notebook(nb, index, path.name)
+        lite = browser_notebook(nb, index, path.name, number)
         (dest / path.name).write_text(json.dumps(lite, indent=1, ensure_ascii=False) + "\n",
                                       encoding="utf-8")
         names.append(path.name)
@@ -616,7 +622,11 @@ def stage_contents(dest, notebooks, log):
 
 
 def build(out=DEFAULT_OUT, cache=None, log=print):
-    """Build the in-browser site into ``out``; return the sources record (a dict)."""
+    """Build the in-browser site into ``out``; return the sources record (a dict).
+
+    The record, also written to ``out/SOURCES.json``, lists every file taken from elsewhere
+    (path in the site, sha256, where it comes from) and the notebooks.
+    """
     start = time.time()
     out = Path(out).resolve()
     cache = Path(cache) if cache else cache_dir()
@@ -625,10 +635,16 @@ def build(out=DEFAULT_OUT, cache=None, log=print):
     shutil.rmtree(stage, ignore_errors=True)
     stage.mkdir(parents=True)
     try:
-        sources, pypi = stage_pyodide(stage / "static" / "pyodide", cache, log)
+        served, pypi = stage_pyodide(stage / "static" / "pyodide", cache, log)
+        sources = [{**record, "file": "static/pyodide/" + record["file"]} for record in served]
         (stage / "pypi").mkdir()
         for wheel in pypi:
             shutil.copy2(wheel, stage / "pypi" / wheel.name)
+            version = PURE_WHEELS[wheel.name.split("-")[0]][0]
+            sources.append({"file": f"pypi/{wheel.name}",
+                            "sha256": sha256_of(wheel.read_bytes()),
+                            "source": f"PyPI {wheel.name.split('-')[0]}=={version}, pinned "
+                                      f"sha256 (installed by the kernel at start)"})
         extension = Path(sys.prefix) / KERNEL_EXTENSION
         if not (extension / "package.json").exists():
             raise LiteBuildError(f"the Pyodide kernel's extension is not installed "
@@ -656,7 +672,7 @@ def build(out=DEFAULT_OUT, cache=None, log=print):
         leftover.unlink()
     record = {"pyodide": PYODIDE_VERSION, "notebooks": names,
               "files": sorted(sources, key=lambda s: s["file"])}
-    (out / "static" / "pyodide" / "SOURCES.json").write_text(json.dumps(record, indent=1))
+    (out / "SOURCES.json").write_text(json.dumps(record, indent=1))
     size = sum(p.stat().st_size for p in out.rglob("*") if p.is_file())
     log(f"in-browser site: {out} ({size / 1e6:.1f} MB, built in {time.time() - start:.0f} s)")
     return record
