@@ -368,6 +368,13 @@ _FINISHED = f"""() => {{ const cells = ({_CELLS})();
       || cells.some(c => c.stderr.some(t => /Traceback|Error/.test(t))); }}"""
 
 
+def _dismiss_dialogs(page):
+    """Accept any dialog JupyterLab opens on a fresh profile (e.g. a kernel choice)."""
+    page.wait_for_timeout(1000)
+    for button in page.query_selector_all(".jp-Dialog .jp-Dialog-button.jp-mod-accept"):
+        button.click()
+
+
 def _show_hidden_code(page):
     """Expand the collapsed code cells (plotting code, solutions) from the View menu: their
     prompts then show whether they ran."""
@@ -445,7 +452,8 @@ def test_chapter_runs_in_the_browser(path, site, offline_browser):  # noqa: F811
         href = page.locator("a", has_text="Run in your browser").first.get_attribute("href")
         start = time.time()
         page.goto(urllib.parse.urljoin(chapter_page, href), wait_until="load", timeout=120_000)
-        page.wait_for_selector(".jp-Notebook .jp-CodeCell", timeout=60_000)
+        page.wait_for_selector(".jp-Notebook .jp-CodeCell", timeout=120_000)
+        _dismiss_dialogs(page)
         _show_hidden_code(page)
         _run_all(page)
         page.wait_for_function(
@@ -474,6 +482,9 @@ def test_chapter_runs_in_the_browser(path, site, offline_browser):  # noqa: F811
               f"{run_all:.1f} s; {len(cells)} code cells, {images} figures, {scenes} 3D views; "
               f"{len(elsewhere)} requests elsewhere" + "".join(f"\n  {w}" for w in warnings)
               + "".join(f"\n  not found (HTTP): {m}" for m in missing))
+    except Exception:
+        page.screenshot(path=str(ARTIFACTS / f"lite-{path.stem}-failed.png"))
+        raise
     finally:
         context.close()
     original = json.loads(path.read_text(encoding="utf-8"))
