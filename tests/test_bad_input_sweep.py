@@ -15,10 +15,13 @@ import numpy as np
 import pytest
 
 import dqlab
-from dqlab import ik, jacobian
+from dqlab import dynamics, ik, jacobian
+from dqlab.identify import dh_parameters, robot_from_dh_parameters
 from dqlab.models import desk_arm, scara_rsm5, ur3
+from dqlab.ur.calibration import robot_from_joint_origins
 
 UR3 = ur3()
+CALIBRATED = robot_from_dh_parameters(UR3, dh_parameters(UR3) + 1e-3)   # a calibrated UR3
 Q6 = np.array([0.3, -1.2, 1.1, -0.4, 0.9, 0.2])
 Q = np.array([0.5, 0.5, 0.5, 0.5])
 V = np.array([1.0, 2.0, 3.0])
@@ -73,6 +76,23 @@ OTHER_CALLS = {
     "ik.pose_errors": (ik.pose_errors, (T, T)),
     "jacobian.manipulability": (jacobian.manipulability, (UR3.jacobian(Q6),)),
     "jacobian.singular_values": (jacobian.singular_values, (UR3.jacobian(Q6),)),
+    "dynamics.inverse_dynamics": (lambda q, qd, qdd: dynamics.inverse_dynamics(UR3, q, qd, qdd),
+                                  (Q6, Q6 / 2, Q6 / 3)),
+    "dynamics.mass_matrix": (lambda q: dynamics.mass_matrix(UR3, q), (Q6,)),
+    "dynamics.gravity_torques": (lambda q: dynamics.gravity_torques(UR3, q), (Q6,)),
+    "dynamics.coriolis_torques": (lambda q, qd: dynamics.coriolis_torques(UR3, q, qd),
+                                  (Q6, Q6 / 2)),
+    "dynamics.forward_dynamics": (lambda q, qd, tau: dynamics.forward_dynamics(UR3, q, qd, tau),
+                                  (Q6, Q6 / 2, Q6)),
+    "dynamics.kinetic_energy": (lambda q, qd: dynamics.kinetic_energy(UR3, q, qd), (Q6, Q6)),
+    "dynamics.potential_energy": (lambda q: dynamics.potential_energy(UR3, q), (Q6,)),
+    "dynamics.NewtonEuler": (lambda q, qd, qdd: dynamics.NewtonEuler(UR3)(q, qd, qdd),
+                             (Q6, Q6 / 2, Q6 / 3)),
+    "dynamics.gravity": (lambda gravity: dynamics.gravity_torques(UR3, Q6, gravity=gravity),
+                         ([0.0, 0.0, -9.81],)),
+    "ik.ur(calibrated)": (lambda target: ik.ur(CALIBRATED, target), (CALIBRATED.fk(Q6),)),
+    "ur.calibration.robot_from_joint_origins": (robot_from_joint_origins,
+                                                (np.tile(np.eye(4), (6, 1, 1)),)),
 }
 
 

@@ -87,8 +87,11 @@ def test_ur3_masses_match_the_data_sheet():
     np.testing.assert_allclose(links, UR3_LINK_MASSES)
     base = model.body("base").id
     assert model.body_subtreemass[base] == pytest.approx(11.0, abs=1e-6)
-    # inertias are positive (computed by MuJoCo from the drawn shapes)
-    assert (model.body_inertia[1:] > 0).all()
+    # the links' inertias are the robot's (positive); the empty payload body weighs nothing
+    for i, link in enumerate(robot.links, start=1):
+        np.testing.assert_allclose(np.sort(model.body(f"link{i}").inertia),
+                                   np.linalg.eigvalsh(link.inertia.tensor), rtol=1e-9)
+    assert model.body("payload").mass[0] == 0.0
 
 
 def test_payload_is_a_mass_at_the_tcp():

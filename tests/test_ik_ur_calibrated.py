@@ -1,0 +1,287 @@
+"""dqlab.ik.ur on a calibrated UR (dqlab.ik.ur_calibrated): the sweep over random poses of
+UR5e whose DH parameters are off by up to 2 mm and 2 mrad, the same contract as the closed
+form, and how close to a singularity the generating configuration is still found."""
+
+import numpy as np
+import pytest
+
+from dqlab.identify import dh_parameters, robot_from_dh_parameters
+from dqlab.ik import IKResult, ur
+from dqlab.ik.ur_calibrated import REASON_NOT_CONVERGED, calibrated_ur, nominal_ur
+from dqlab.models import UR_SHAPE, ur3, ur5e, ur10e
+from dqlab.robot import Link, Robot
+from dqlab.rotations import rot_x, rot_z
+from dqlab.ur.calibration import robot_from_joint_origins
+
+FLAGS = {"wrist_singular", "shoulder_singular", "elbow_singular", "unreachable",
+         "not_converged"}
+
+
+def calibrated(seed, model=ur5e, size=2e-3):
+    """The model with each theta, a, d, alpha off by up to ``size`` (m and rad)."""
+    nominal = model()
+    offsets = np.random.default_rng(seed).uniform(-size, size, 4 * nominal.n)
+    return robot_from_dh_parameters(nominal, dh_parameters(nominal) + offsets)
+
+
+def physically_calibrated(seed, size=2e-3):
+    """A UR5e whose links are moved by up to 2 mm and 2 mrad, in standard DH as a
+    controller writes it (far common normals of the nearly parallel axes)."""
+    rng = np.random.default_rng(seed)
+    S = []
+    previous = None
+    for link in ur5e().links:
+        T = np.eye(4)
+        if previous is not None:
+            T[:3, :3], T[0, 3] = rot_x(previous.alpha), previous.a
+        M = np.eye(4)
+        M[2, 3] = link.d
+        P = np.eye(4)
+        if previous is not None:
+            P[:3, :3] = rot_x(rng.uniform(-size, size)) @ rot_z(rng.uniform(-size, size))
+            P[:3, 3] = rng.uniform(-size, size, 3)
+        S.append(T @ M @ P)
+        previous = link
+    return robot_from_joint_origins(np.array(S), name="UR5e (calibrated)")
+
+
+def errors(robot, result, T):
+    """Independent position and rotation errors of the valid rows (forward kinematics and
+    the rotation angle from the trace and the skew part of R^T R*)."""
+    X = robot.fk(result.solutions[result.valid])
+    Tb = np.broadcast_to(np.asarray(T)[..., None, :, :],
+                         result.solutions.shape[:-1] + (4, 4))[result.valid]
+    dp = np.linalg.norm(X[:, :3, 3] - Tb[:, :3, 3], axis=-1)
+    E = np.swapaxes(X[:, :3, :3], -1, -2) @ Tb[:, :3, :3]
+    v = np.stack([E[:, 2, 1] - E[:, 1, 2], E[:, 0, 2] - E[:, 2, 0], E[:, 1, 0] - E[:, 0, 1]], -1)
+    return dp, np.arctan2(np.linalg.norm(v, axis=-1), np.trace(E, axis1=1, axis2=2) - 1.0)
+
+
+def distance_to(result, q):
+    """Joint-wise distance (mod 2 pi) from q to the nearest valid row, per pose."""
+    d = np.abs(np.angle(np.exp(1j * (result.solutions - np.asarray(q)[..., None, :]))))
+    return np.where(result.valid, d.max(axis=-1), np.inf).min(axis=-1)
+
+
+def check_contract(result, batch):
+    assert isinstance(result, IKResult)
+    assert result.solutions.shape == batch + (8, 6) and result.valid.shape == batch + (8,)
+    assert set(result.flags) == FLAGS
+    assert all(f.shape == batch for f in result.flags.values())
+    assert np.isfinite(result.solutions).all()
+    assert (result.solutions[~result.valid] == 0).all()
+    assert (np.abs(result.solutions) <= np.pi).all()
+    assert (result.reason[result.count > 0] == "").all()
+
+
+# --------------------------------------------------------------------------------------
+# The sweep of the goals
+
+
+def sweep(robots, poses, seed):
+    found = total = 0
+    worst = 0.0
+    for k, robot in enumerate(robots):
+        q = np.random.default_rng(seed + k).uniform(-np.pi, np.pi, (poses, 6))
+        T = robot.fk(q)
+        result = ur(robot, T)
+        check_contract(result, (poses,))
+        dp, da = errors(robot, result, T)
+        worst = max(worst, dp.max(), da.max())
+        found += int((distance_to(result, q) < 1e-6).sum())
+        total += poses
+    return found / total, worst
+
+
+def test_calibrated_ur5e_sweep():
+    """Four UR5e off by up to 2 mm / 2 mrad in every DH parameter, 500 random poses each:
+    every valid row reproduces its pose to 1e-10 m and 1e-10 rad, and the generating
+    configuration is among the rows of at least 99.9 % of the poses."""
+    found, worst = sweep([calibrated(300 + k) for k in range(4)], 500, 40)
+    assert worst <= 1e-10, worst
+    assert found >= 0.999, found
+
+
+def test_arm_written_as_a_controller_writes_it_sweep():
+    """The same goals for arms with far common normals (d2, d3, d4 of metres), the form of
+    a controller's kinematics-info package."""
+    robots = [physically_calibrated(400 + k) for k in range(3)]
+    assert max(abs(robot.links[1].d) for robot in robots) > 0.5
+    found, worst = sweep(robots, 500, 50)
+    assert worst <= 1e-10, worst
+    assert found >= 0.999, found
+
+
+@pytest.mark.slow
+def test_calibrated_ur5e_sweep_10k_poses():
+    found, worst = sweep([calibrated(500 + k) for k in range(10)], 1000, 60)
+    assert worst <= 1e-10 and found >= 0.999, (found, worst)
+    found, worst = sweep([physically_calibrated(600 + k) for k in range(10)], 1000, 70)
+    assert worst <= 1e-10 and found >= 0.999, (found, worst)
+
+
+# --------------------------------------------------------------------------------------
+# Near singularities: measured
+
+
+def singular_poses(robot, kind, distance, n, seed):
+    """Configurations whose exact-arm measure of ``kind`` is about ``distance``: |sin q5|,
+    |sin q3| or the shoulder margin (through q4) over d4."""
+    rng = np.random.default_rng(seed)
+    q = rng.uniform(-np.pi, np.pi, (n, 6))
+    sign = rng.choice([-1.0, 1.0], n)
+    at = rng.choice([0.0, np.pi], n)
+    if kind == "wrist":
+        q[:, 4] = at + sign * distance
+    elif kind == "elbow":
+        q[:, 2] = at + sign * distance
+    else:
+        exact = nominal_ur(robot)
+        a2, a3, d4, d5 = (exact.links[1].a, exact.links[2].a, exact.links[3].d,
+                          exact.links[4].d)
+        v = -(a2 * np.cos(q[:, 1]) + a3 * np.cos(q[:, 1] + q[:, 2])) / d5
+        keep = np.abs(v) <= 0.99
+        q = q[keep]
+        q[:, 3] = np.arcsin(v[keep]) + sign[keep] * distance * d4 / d5 - q[:, 1] - q[:, 2]
+    return q
+
+
+@pytest.mark.parametrize("kind", ["wrist", "elbow", "shoulder"])
+def test_found_near_singularities(kind):
+    """The generating configuration is found on every pose 1e-1 from a singularity and on
+    most 1e-2 from it; valid rows always reproduce the pose (measured for the report by
+    benchmarks' sweep over more distances)."""
+    robot = calibrated(700)
+    for distance, wanted in ((1e-1, 1.0), (1e-2, 0.98)):
+        q = singular_poses(robot, kind, distance, 150, 80)
+        T = robot.fk(q)
+        result = ur(robot, T)
+        dp, da = errors(robot, result, T)
+        assert max(dp.max(), da.max()) <= 1e-10
+        found = np.mean(distance_to(result, q) < 1e-6)
+        assert found >= wanted, (kind, distance, found)
+
+
+# --------------------------------------------------------------------------------------
+# The contract
+
+
+def test_an_exact_ur_gives_the_closed_forms_solutions():
+    """Called on an exact UR (which dqlab.ik.ur solves in closed form), the Newton route
+    finds the same valid rows and solutions."""
+    robot = ur5e()
+    q = np.random.default_rng(81).uniform(-np.pi, np.pi, (300, 6))
+    T = robot.fk(q)
+    closed, newton = ur(robot, T), calibrated_ur(robot, T, ur)
+    np.testing.assert_array_equal(newton.valid, closed.valid)
+    gap = np.abs(np.angle(np.exp(1j * (newton.solutions - closed.solutions))))
+    assert gap[closed.valid].max() < 1e-8
+    for name in ("wrist_singular", "shoulder_singular", "elbow_singular", "unreachable"):
+        np.testing.assert_array_equal(newton.flags[name], closed.flags[name])
+
+
+def test_nominal_ur_of_an_exact_ur_is_itself():
+    robot = ur10e()
+    exact = nominal_ur(robot)
+    UR_SHAPE.check(exact)
+    for a, b in zip(exact.links, robot.links, strict=True):
+        assert abs(a.a - b.a) < 1e-12 and abs(a.d - b.d) < 1e-12
+        assert abs(a.theta_offset - b.theta_offset) < 1e-12
+
+
+def test_single_pose_equals_batch():
+    """One pose (the kernel on whole matrices) and a batch (the kernel on entries) give the
+    same rows."""
+    robot = calibrated(82)
+    q = np.random.default_rng(83).uniform(-np.pi, np.pi, (80, 6))
+    T = robot.fk(q)
+    batch = ur(robot, T)
+    for i in range(0, 80, 7):
+        single = ur(robot, T[i])
+        np.testing.assert_array_equal(single.valid, batch.valid[i])
+        assert np.abs(single.solutions - batch.solutions[i]).max() < 1e-9
+
+
+def test_shapes_dual_quaternions_base_and_tool():
+    robot = calibrated(84, model=ur3)
+    base, tool = np.eye(4), np.eye(4)
+    base[:3, :3], base[:3, 3] = rot_z(0.4), (0.3, -0.1, 0.8)
+    tool[:3, :3], tool[:3, 3] = rot_x(0.2), (0.0, 0.01, 0.15)
+    robot.base, robot.tool = base, tool
+    q = np.random.default_rng(85).uniform(-np.pi, np.pi, (2, 3, 6))
+    T = robot.fk(q)
+    result = ur(robot, T)
+    check_contract(result, (2, 3))
+    assert max(e.max() for e in errors(robot, result, T)) <= 1e-10
+    assert (distance_to(result, q) < 1e-6).all()
+    from dqlab.dualquat import dual_quaternion_from_transform
+    again = ur(robot, dual_quaternion_from_transform(T))
+    np.testing.assert_array_equal(again.valid, result.valid)
+    # a tool given to the call replaces the robot's
+    other = np.eye(4)
+    other[2, 3] = 0.25
+    robot.tool = np.eye(4)
+    X = robot.fk(q) @ other
+    result = ur(robot, X, tool=other)
+    assert (distance_to(result, q) < 1e-6).all()
+
+
+def test_kernels_equal_forward_kinematics_and_jacobian():
+    """The speed machinery of ur_calibrated against Robot.fk_with_jacobian."""
+    from dqlab.ik import ur_calibrated as module
+
+    robot = physically_calibrated(86)
+    tool = np.eye(4)
+    tool[:3, :3], tool[:3, 3] = rot_x(0.3), (0.02, -0.01, 0.12)
+    robot.tool = tool
+    links = tuple((np.cos(lk.alpha), np.sin(lk.alpha), lk.a, lk.d, lk.theta_offset)
+                  for lk in robot.links)
+    q = np.random.default_rng(87).uniform(-np.pi, np.pi, (70, 6))
+    X, J = robot.fk_with_jacobian(q)
+    steps = []
+    for kernel in (module._MatrixChain(links, tool), module._EntryChain(links, tool)):
+        F = kernel.frames(q)
+        assert np.abs(kernel.transforms(F) - X).max() < 1e-12
+        assert np.abs(kernel.jacobian(F) - J).max() < 1e-12
+        e = kernel.residual(F, kernel.targets(robot.fk(q + 1e-4)))
+        steps.append(kernel.newton_step(F, e))
+        np.testing.assert_allclose(kernel.singularity_measures(F), module._MatrixChain(
+            links, tool).singularity_measures(module._MatrixChain(links, tool).frames(q)),
+            atol=1e-12)
+    np.testing.assert_allclose(steps[0], steps[1], atol=1e-12)
+    assert np.median(np.abs(steps[0] - 1e-4)) < 1e-7            # one step goes most of it
+
+
+def test_unreachable_pose_has_the_closed_forms_reason():
+    robot = calibrated(88)
+    far = np.eye(4)
+    far[:3, 3] = (2.0, 0.0, 0.5)
+    result = ur(robot, far)
+    assert result.count == 0 and result.flags["unreachable"]
+    assert result.reason.item().startswith("elbow")
+
+
+def test_reason_when_no_branch_converges(monkeypatch):
+    from dqlab.ik import ur_calibrated as module
+
+    robot = calibrated(89)
+    q = np.array([0.3, -1.2, 1.1, -0.4, 0.9, 0.2])
+    monkeypatch.setattr(module, "_GIVE_UP_AFTER", 0)   # no step may fail to halve...
+    monkeypatch.setattr(module, "_STOP", 0.0)           # ...and none is ever good enough
+    result = calibrated_ur(robot, robot.fk(q), ur, max_iter=1)
+    assert result.count == 0 and result.reason.item() == REASON_NOT_CONVERGED
+    assert result.flags["not_converged"]
+
+
+def test_not_a_calibrated_ur_is_refused():
+    with pytest.raises(ValueError, match="nor is it a calibrated UR"):
+        ur(Robot([Link(0.1, 0.0, 0.0)] * 6), np.eye(4))
+    p = dh_parameters(ur5e())
+    p[1::4] += 0.1                                       # every d 10 cm longer
+    p[2::4] += 0.1                                       # and every a
+    with pytest.raises(ValueError, match="the nearest exact UR is"):
+        ur(robot_from_dh_parameters(ur5e(), p), np.eye(4))
+    p = dh_parameters(ur5e())
+    p[3] += 0.2                                          # alpha1
+    with pytest.raises(ValueError, match="link 1 of a calibrated UR twists"):
+        ur(robot_from_dh_parameters(ur5e(), p), np.eye(4))
