@@ -109,6 +109,8 @@ def test_equations_are_numbered_as_in_the_book():
     index = lite.BookIndex(NOTEBOOKS)
     assert index.equations["eq-ch3-hamilton-rule"] == "3.1"
     assert index.citations["thesis2019"] == "Doctor 2019"
+    nameless = [key for key, text in index.citations.items() if not text[:1].isalpha()]
+    assert not nameless, f"citations without an author or editor: {nameless}"
 
 
 def test_solutions_spanning_cells_are_collapsed():

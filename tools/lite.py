@@ -394,11 +394,12 @@ def _citations(bib_path):
         key = re.match(r"\w+\s*\{\s*([^,\s]+)\s*,", entry)
         if not key:
             continue
-        author = re.search(r"(?m)^\s*author\s*=\s*\{(.*?)\}\s*,?\s*$", entry)
+        author = (re.search(r"(?ms)^\s*author\s*=\s*\{(.*?)\}\s*,?\s*$", entry)
+                  or re.search(r"(?ms)^\s*editor\s*=\s*\{(.*?)\}\s*,?\s*$", entry))
         year = re.search(r"(?m)^\s*year\s*=\s*\{?([^},\n]*)\}?", entry)
         names = []
         if author:
-            for person in re.split(r"\s+and\s+", author[1]):
+            for person in re.split(r"\s+and\s+", " ".join(author[1].split())):
                 person = person.strip().strip("{}")
                 last = person.split(",")[0] if "," in person else person.split()[-1]
                 names.append(last.replace("{", "").replace("}", "").strip())
