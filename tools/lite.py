@@ -539,10 +539,18 @@ NATIVE_NEEDS = {"mujoco": "MuJoCo", "ruckig": "Ruckig", "pybullet": "PyBullet",
                 "ControllerStandIn": "a controller stand-in process"}
 
 
-def native_note(cells):
-    """The one-line note that replaces a run of ``native-only`` cells."""
+def _needs(cells):
     text = "\n".join(_source(c) for c in cells)
-    needs = [label for key, label in NATIVE_NEEDS.items() if key in text]
+    return [label for key, label in NATIVE_NEEDS.items() if key in text]
+
+
+def native_note(cells, fallback=()):
+    """The one-line note that replaces a run of ``native-only`` cells.
+
+    The note names what the cells need (:data:`NATIVE_NEEDS`); cells that only build on
+    earlier skipped ones name what the notebook's first skipped cells need (``fallback``).
+    """
+    needs = _needs(cells) or list(fallback)
     what = " and ".join(needs) if needs else "a package with no WebAssembly build"
     many = "cells" if len(cells) > 1 else "cell"
     return (f"*Skipped in the browser: {len(cells)} {many} here need{'s' * (len(cells) == 1)} "
@@ -558,9 +566,13 @@ def browser_notebook(nb, index, name, number=None):
     nb = copy.deepcopy(nb)
     cells, run, in_solution, titled = [], [], False, number is None
 
+    native = [c for c in nb["cells"] if "native-only" in c.get("metadata", {}).get("tags", [])]
+    fallback = next((_needs([c]) for c in native if _needs([c])), [])[:1]
+
     def flush():
         if run:
-            cells.append(_markdown_cell(native_note(run), {"tags": ["native-only-note"]}))
+            cells.append(_markdown_cell(native_note(run, fallback),
+                                        {"tags": ["native-only-note"]}))
             run.clear()
 
     for cell in nb["cells"]:

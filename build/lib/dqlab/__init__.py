@@ -120,6 +120,7 @@ __all__ = [
 _SUBMODULES = {
     "complex", "rotations", "quaternion", "transforms", "dualquat", "robot", "models",
     "jacobian", "ik", "trajectory", "identify", "pick_place", "viz", "ur", "sim",
+    "inertia", "dynamics",
 }
 
 

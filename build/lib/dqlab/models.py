@@ -6,6 +6,10 @@ function               convention  source
 :func:`ur3`            DH          Universal Robots' published DH parameters (thesis, table 4.2)
 :func:`ur5`            DH          Universal Robots' published DH parameters
 :func:`ur10`           DH          Universal Robots' published DH parameters
+:func:`ur3e` ...        DH          Universal Robots' published DH parameters: :func:`ur3e`,
+                                   :func:`ur5e` (:func:`ur7e`), :func:`ur10e` (:func:`ur12e`),
+                                   :func:`ur16e`, :func:`ur15`, :func:`ur18`, :func:`ur8_long`,
+                                   :func:`ur20`, :func:`ur30` (:data:`UR_MODELS` by name)
 :func:`ur3_mdh`        MDH         the UR3 project report (modified DH with "q_fig" offsets)
 :func:`desk_arm`       DH          the 3-DOF desktop arm of the lab report (identified lengths)
 :func:`scara_rsm5`     MDH         the Samsung RSM-5 SCARA of the course notes, annex A
@@ -22,13 +26,17 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .inertia import LinkInertia
 from .robot import PRISMATIC, Link, Robot
 
 __all__ = [
     "ur3", "ur5", "ur10", "ur3_mdh", "desk_arm", "scara_rsm5", "six_r",
+    "ur3e", "ur5e", "ur7e", "ur10e", "ur12e", "ur16e", "ur15", "ur18", "ur8_long", "ur20",
+    "ur30", "UR_CURRENT_DH", "UR_MAX_JOINT_SPEED_DEG", "UR_PUBLISHED_MASSES", "UR_MODELS",
     "UR_DH", "UR_ALPHA", "UR3_MDH", "DESK_ARM", "SCARA_RSM5",
     "desk_arm_joints_from_lab", "desk_arm_lab_from_joints",
     "ChainShape", "UR_SHAPE", "DESK_ARM_SHAPE", "SCARA_SHAPE",
+    "UR_DYNAMICS", "UR3_MDH_JOINT_MAP", "ur_link_inertias", "rod_link_inertias",
 ]
 
 PI = math.pi
@@ -64,11 +72,187 @@ SCARA_RSM5 = {"l1": 0.350, "l2": 0.260, "z_low": 0.180, "stroke": 0.150,
               "q4_range": math.radians(360.0)}
 
 
+#: Universal Robots' inertial parameters of the six moving links, in the standard-DH link
+#: frames: ``mass`` in kg and ``com`` (centre of mass) in m, as the maker publishes them
+#: ("DH parameters for calculations of kinematics and dynamics", the ``ur_dh`` reference);
+#: ``tensor``, the inertia tensor about the centre of mass in the axes of the link frame,
+#: ``(ixx, iyy, izz, ixy, ixz, iyz)`` in kg m^2, from the physical parameters of Universal
+#: Robots' ROS 2 description (``ur_ros2_description``): for the UR10 the values it extracted
+#: from URSim, for the UR3 and the UR5 its approximation by solid cylinders (radius 0.075 m,
+#: less for the last wrist link) along each link or its joint axis (the ROS file states them
+#: in its own link frames; they are rotated into the DH frames here, which only permutes the
+#: diagonal). Add a model with
+#: :func:`ur_link_inertias`.
+UR_DYNAMICS = {
+    "UR3": {"mass": (2.0, 3.42, 1.26, 0.8, 0.8, 0.35),
+            "com": ((0.0, -0.02, 0.0), (0.13, 0.0, 0.1157), (0.05, 0.0, 0.0238),
+                    (0.0, 0.0, 0.01), (0.0, 0.0, 0.01), (0.0, 0.0, -0.02)),
+            "tensor": ((0.008093166666666665, 0.005625, 0.008093166666666665, 0, 0, 0),
+                       (0.00961875, 0.021728491912499998, 0.021728491912499998, 0, 0, 0),
+                       (0.00354375, 0.0065468090625, 0.0065468090625, 0, 0, 0),
+                       (0.0016106414999999998, 0.00225, 0.0016106414999999998, 0, 0, 0),
+                       (0.0015721739999999998, 0.00225, 0.0015721739999999998, 0, 0, 0),
+                       (0.00013626666666666665, 0.00013626666666666665, 0.0001792,
+                        0, 0, 0))},
+    "UR5": {"mass": (3.7, 8.393, 2.33, 1.219, 1.219, 0.1879),
+            "com": ((0.0, -0.02561, 0.00193), (0.2125, 0.0, 0.11336), (0.15, 0.0, 0.0265),
+                    (0.0, -0.0018, 0.01634), (0.0, 0.0018, 0.01634), (0.0, 0.0, -0.001159)),
+            "tensor": ((0.014972358333333331, 0.01040625, 0.014972358333333331, 0, 0, 0),
+                       (0.0151074, 0.13388583541666665, 0.13388583541666665, 0, 0, 0),
+                       (0.004095, 0.031216803515624995, 0.031216803515624995, 0, 0, 0),
+                       (0.002013889583333333, 0.0021942, 0.002013889583333333, 0, 0, 0),
+                       (0.0018310395833333333, 0.0021942, 0.0018310395833333333, 0, 0, 0),
+                       (8.062475833333332e-05, 8.062475833333332e-05, 0.0001321171875,
+                        0, 0, 0))},
+    "UR10": {"mass": (7.1, 12.7, 4.27, 2.0, 2.0, 0.365),
+             "com": ((0.021, 0.0, 0.027), (0.38, 0.0, 0.158), (0.24, 0.0, 0.068),
+                     (0.0, 0.007, 0.018), (0.0, 0.007, 0.018), (0.0, 0.0, -0.026)),
+             "tensor": ((0.03408, 0.03529, 0.02156, 0.00002, -0.00425, 0.00008),
+                        (0.02814, 0.77068, 0.76943, 0.00005, -0.01561, 0.00002),
+                        (0.01014, 0.30928, 0.30646, 0.00008, 0.00916, 0.0),
+                        (0.00296, 0.00222, 0.00258, -0.00001, 0.0, -0.00024),
+                        (0.00296, 0.00222, 0.00258, -0.00001, 0.0, -0.00024),
+                        (0.00040, 0.00041, 0.00034, 0.0, 0.0, 0.0))},
+}
+
+
+def ur_link_inertias(masses: ArrayLike, centres_of_mass: ArrayLike,
+                     tensors: ArrayLike | None = None, *, a: ArrayLike | None = None,
+                     radius: float = 0.075) -> tuple[LinkInertia, ...]:
+    r"""The six link inertias of a UR arm from the maker's table of masses and centres of mass.
+
+    Universal Robots publish, for each arm, the mass and the centre of mass of the six moving
+    links in the standard-DH link frames (the frames of :func:`ur3`); for some arms they (or
+    their simulator, URSim) also give the inertia tensors about the centres of mass, in the
+    same frames. This helper turns such a table into :class:`~dqlab.inertia.LinkInertia`
+    objects for ``Link(..., inertia=...)``.
+
+    Parameters
+    ----------
+    masses : array_like, shape (6,)
+        kg.
+    centres_of_mass : array_like, shape (6, 3)
+        m, link :math:`i`'s in DH frame :math:`i`.
+    tensors : array_like, shape (6, 6) or (6, 3, 3), optional
+        Inertia tensors about the centres of mass in the axes of the DH frames, rows
+        ``(ixx, iyy, izz, ixy, ixz, iyz)`` or 3x3 matrices, kg m^2. When they are not given,
+        a stated approximation after the cylinders of Universal Robots' ROS description:
+        every link a solid cylinder of radius ``radius`` centred on its centre of mass, the
+        upper arm and the forearm (links 2 and 3) along the link (the DH :math:`x` axis) with
+        the lengths
+        :math:`\lvert a_2\rvert, \lvert a_3\rvert` (``a`` must then be given), the four joint
+        housings (links 1, 4, 5 and 6) along their own joint's axis with the length
+        :math:`2r`.
+    a : array_like, shape (6,), optional
+        The DH link lengths, needed only without ``tensors``.
+    radius : float, optional
+        The cylinders' radius in m, only without ``tensors``.
+
+    Returns
+    -------
+    tuple of LinkInertia
+
+    Examples
+    --------
+    >>> p = UR_DYNAMICS["UR3"]
+    >>> inertias = ur_link_inertias(p["mass"], p["com"], p["tensor"])
+    >>> round(sum(I.mass for I in inertias), 6)      # kg, the six moving links of the UR3
+    8.63
+    >>> approx = ur_link_inertias(p["mass"], p["com"], a=UR_DH["UR3"]["a"])
+    >>> approx[1].tensor.diagonal().round(6)     # the upper arm: the table's first row
+    array([0.009619, 0.021728, 0.021728])
+    """
+    masses = np.asarray(masses, dtype=float)
+    coms = np.asarray(centres_of_mass, dtype=float)
+    if masses.shape != (6,) or coms.shape != (6, 3):
+        raise ValueError(f"masses must have shape (6,) and centres_of_mass (6, 3), got "
+                         f"{masses.shape} and {coms.shape}")
+    if tensors is None:
+        if a is None:
+            raise ValueError("without tensors, give the DH lengths a for the cylinders")
+        a = np.asarray(a, dtype=float)
+        # the axis of each cylinder in its DH frame: along x for the upper arm and the
+        # forearm; along the joint's own axis for the housings (z_{i-1} seen from frame i:
+        # y for links 1, 4 and 5, whose twist alpha is +-pi/2, z for link 6)
+        axes = np.array([[0, 1, 0], [1, 0, 0], [1, 0, 0], [0, 1, 0], [0, 1, 0], [0, 0, 1.0]])
+        lengths = [2 * radius, abs(a[1]), abs(a[2]), 2 * radius, 2 * radius, 2 * radius]
+        return tuple(LinkInertia.rod(m, c - 0.5 * h * u, c + 0.5 * h * u, radius)
+                     for m, c, u, h in zip(masses, coms, axes, lengths, strict=True))
+    tensors = np.asarray(tensors, dtype=float)
+    return tuple(LinkInertia(m, c, t) for m, c, t in zip(masses, coms, tensors, strict=True))
+
+
 def _ur(name, label):
     p = UR_DH[name]
-    links = [Link(a=a, alpha=alpha, d=d, limits=(-2 * PI, 2 * PI))
-             for a, alpha, d in zip(p["a"], UR_ALPHA, p["d"], strict=True)]
+    dynamics = UR_DYNAMICS.get(name)
+    inertias = ([None] * 6 if dynamics is None else
+                ur_link_inertias(dynamics["mass"], dynamics["com"], dynamics.get("tensor"),
+                                 a=p["a"]))
+    links = [Link(a=a, alpha=alpha, d=d, limits=(-2 * PI, 2 * PI), inertia=inertia)
+             for a, alpha, d, inertia in zip(p["a"], UR_ALPHA, p["d"], inertias, strict=True)]
     return Robot(links, convention="dh", name=label)
+
+
+def rod_link_inertias(robot: Robot, *, base_mass: float = 0.5, mass_per_metre: float = 4.0,
+                      radius: float = 0.03) -> tuple[LinkInertia, ...]:
+    r"""Plausible inertias for a chain whose maker gives none: every link a uniform rod.
+
+    The constant path of link :math:`i` runs from its own joint's axis to the next joint's
+    frame: in standard DH from :math:`(-a_i, 0, 0)` (the foot of the common normal on joint
+    :math:`i`'s axis) through the origin of frame :math:`i` to :math:`(0, 0, d_{i+1})`; in
+    modified DH from the origin of frame :math:`i` (on joint :math:`i`'s axis) through
+    :math:`(a_i, 0, 0)` to the next frame's origin :math:`(a_i, -r_{i+1}\sin\alpha_i,
+    r_{i+1}\cos\alpha_i)` (the constant :math:`d` of a prismatic joint stands for its
+    offset). The link is a solid cylinder of radius ``radius`` along the straight line
+    between the two ends (along its joint axis, of length :math:`2r`, if they coincide), of
+    mass ``base_mass + mass_per_metre * path length``: 0.5 kg plus 4 kg per metre by default.
+    This is a stated approximation, not a measurement.
+
+    Parameters
+    ----------
+    robot : Robot
+    base_mass, mass_per_metre, radius : float, optional
+
+    Returns
+    -------
+    tuple of LinkInertia
+        One per link, in the link frames of the robot's convention.
+
+    Examples
+    --------
+    >>> [round(I.mass, 3) for I in rod_link_inertias(desk_arm())]
+    [0.768, 1.076, 1.148]
+    """
+    links = robot.links
+    inertias = []
+    for i, lk in enumerate(links):
+        nxt = links[i + 1] if i + 1 < len(links) else None
+        if robot.convention == "dh":
+            start, corner = np.array([-lk.a, 0.0, 0.0]), np.zeros(3)
+            end = np.array([0.0, 0.0, nxt.d if nxt is not None else 0.0])
+            axis = np.array([0.0, math.sin(lk.alpha), math.cos(lk.alpha)])
+        else:
+            start, axis = np.zeros(3), np.array([0.0, 0.0, 1.0])
+            if nxt is None:
+                corner = end = np.zeros(3)
+            else:
+                corner = np.array([nxt.a, 0.0, 0.0])
+                end = corner + nxt.d * np.array([0.0, -math.sin(nxt.alpha),
+                                                 math.cos(nxt.alpha)])
+        path = float(np.linalg.norm(corner - start) + np.linalg.norm(end - corner))
+        if np.linalg.norm(end - start) < 1e-9:
+            start, end = start - radius * axis, start + radius * axis
+        inertias.append(LinkInertia.rod(base_mass + mass_per_metre * path, start, end,
+                                        radius))
+    return tuple(inertias)
+
+
+def _with_inertias(robot, inertias):
+    """The robot with every link carrying its inertia (a new Robot, nothing else changed)."""
+    links = [lk.with_inertia(inertia) for lk, inertia in zip(robot.links, inertias,
+                                                               strict=True)]
+    return Robot(links, convention=robot.convention, base=robot.base, tool=robot.tool,
+                 name=robot.name)
 
 
 def ur3() -> Robot:
@@ -139,6 +323,259 @@ def ur10() -> Robot:
     return _ur("UR10", "UR10")
 
 
+# --------------------------------------------------------------------------------------
+# The current UR models: e-series, UR15, UR18, UR8 Long, UR20, UR30
+
+#: The published standard DH lengths of the current UR models, added to :data:`UR_DH` (same
+#: form, metres; the twists are :data:`UR_ALPHA`). Source: Universal Robots, "DH parameters
+#: for calculations of kinematics and dynamics" (universal-robots.com/articles/ur/
+#: application-installation/dh-parameters-for-calculations-of-kinematics-and-dynamics/), as
+#: also tabulated by ``ur_analytic_ik``. The e-series, UR20 and UR30 values are those the
+#: controller simulator reports in its kinematics-info message: they reproduce the
+#: ``calib_...`` hashes of UR's ROS description files (checked in the tests). UR renamed the
+#: UR5e "UR7e" and the UR10e "UR12e" in 2025: the same arms, with the same parameters.
+UR_CURRENT_DH = {
+    "UR3e": {"d": (0.15185, 0.0, 0.0, 0.13105, 0.08535, 0.0921),
+             "a": (0.0, -0.24355, -0.2132, 0.0, 0.0, 0.0)},
+    "UR5e": {"d": (0.1625, 0.0, 0.0, 0.1333, 0.0997, 0.0996),
+             "a": (0.0, -0.425, -0.3922, 0.0, 0.0, 0.0)},
+    "UR10e": {"d": (0.1807, 0.0, 0.0, 0.17415, 0.11985, 0.11655),
+              "a": (0.0, -0.6127, -0.57155, 0.0, 0.0, 0.0)},
+    "UR16e": {"d": (0.1807, 0.0, 0.0, 0.17415, 0.11985, 0.11655),
+              "a": (0.0, -0.4784, -0.36, 0.0, 0.0, 0.0)},
+    "UR15": {"d": (0.2186, 0.0, 0.0, 0.1824, 0.1361, 0.1434),
+             "a": (0.0, -0.6475, -0.5164, 0.0, 0.0, 0.0)},
+    "UR18": {"d": (0.2186, 0.0, 0.0, 0.1824, 0.1361, 0.1434),
+             "a": (0.0, -0.475, -0.3389, 0.0, 0.0, 0.0)},
+    "UR8 Long": {"d": (0.2186, 0.0, 0.0, 0.1824, 0.1361, 0.1434),
+                 "a": (0.0, -0.8989, -0.7149, 0.0, 0.0, 0.0)},
+    "UR20": {"d": (0.2363, 0.0, 0.0, 0.201, 0.1593, 0.1543),
+             "a": (0.0, -0.862, -0.7287, 0.0, 0.0, 0.0)},
+    "UR30": {"d": (0.2363, 0.0, 0.0, 0.201, 0.1593, 0.1543),
+             "a": (0.0, -0.637, -0.5037, 0.0, 0.0, 0.0)},
+}
+UR_CURRENT_DH["UR7e"] = UR_CURRENT_DH["UR5e"]
+UR_CURRENT_DH["UR12e"] = UR_CURRENT_DH["UR10e"]
+UR_DH.update(UR_CURRENT_DH)
+
+#: Published maximum joint speeds of current UR models in degrees per second, joints 1 to 6
+#: (the joint-limit files of Universal Robots' ROS description, from the user manuals), to
+#: be carried by the links once they hold speed limits.
+UR_MAX_JOINT_SPEED_DEG = {
+    "UR3e": (180.0, 180.0, 180.0, 360.0, 360.0, 360.0),
+    "UR5e": (180.0,) * 6,
+    "UR10e": (120.0, 120.0, 180.0, 180.0, 180.0, 180.0),
+    "UR12e": (120.0, 120.0, 180.0, 180.0, 180.0, 180.0),
+    "UR16e": (120.0, 120.0, 180.0, 180.0, 180.0, 180.0),
+    "UR18": (180.0, 180.0, 240.0, 300.0, 300.0, 300.0),
+    "UR20": (120.0, 120.0, 150.0, 210.0, 210.0, 210.0),
+    "UR30": (120.0, 120.0, 150.0, 210.0, 210.0, 210.0),
+}
+
+#: Published link masses (kg) and centres of mass (m, in the DH frame of the link), links 1
+#: to 6, from the same page of Universal Robots as :data:`UR_CURRENT_DH` (which also gives
+#: the UR20's inertia matrices), to be carried by the links once they hold inertias.
+UR_PUBLISHED_MASSES = {
+    "UR3e": ((1.98, (0.0, -0.02, 0.0)), (3.4445, (0.13, 0.0, 0.1157)),
+             (1.437, (0.05, 0.0, 0.0238)), (0.871, (0.0, 0.0, 0.01)),
+             (0.805, (0.0, 0.0, 0.01)), (0.261, (0.0, 0.0, -0.02))),
+    "UR5e": ((3.761, (0.0, -0.02561, 0.00193)), (8.058, (0.2125, 0.0, 0.11336)),
+             (2.846, (0.15, 0.0, 0.0265)), (1.37, (0.0, -0.0018, 0.01634)),
+             (1.3, (0.0, 0.0018, 0.01634)), (0.365, (0.0, 0.0, -0.001159))),
+    "UR20": ((16.343, (0.0, -0.0610, 0.0062)), (29.632, (0.5226, 0.0, 0.2098)),
+             (7.879, (0.3234, 0.0, 0.0604)), (3.054, (0.0, -0.0026, 0.0393)),
+             (3.126, (0.0, 0.0024, 0.0379)), (0.846, (0.0, -0.0003, -0.0318))),
+}
+
+
+def ur3e() -> Robot:
+    r"""The Universal Robots UR3e with the maker's standard DH parameters.
+
+    :math:`d_1 = 0.15185`, :math:`a_2 = -0.24355`, :math:`a_3 = -0.2132`,
+    :math:`d_4 = 0.13105`, :math:`d_5 = 0.08535`, :math:`d_6 = 0.0921` m, the twists of
+    :data:`UR_ALPHA`, and the conventions of :func:`ur3` (those of ``ur_analytic_ik``): no
+    tool, base at the foot of joint 1, limits :math:`\pm 2\pi`. Source:
+    :data:`UR_CURRENT_DH`.
+
+    Returns
+    -------
+    Robot
+
+    Examples
+    --------
+    At :math:`q = 0` the flange is at :math:`(a_2 + a_3,\ -d_4 - d_6,\ d_1 - d_5)`:
+
+    >>> ur3e().fk([0, 0, 0, 0, 0, 0])[:3, 3].round(5)
+    array([-0.45675, -0.22315,  0.0665 ])
+    """
+    return _ur("UR3e", "UR3e")
+
+
+def ur5e() -> Robot:
+    """The Universal Robots UR5e (since 2025 also sold as the UR7e), with the maker's
+    standard DH parameters (see :func:`ur3e` and :data:`UR_CURRENT_DH`).
+
+    Returns
+    -------
+    Robot
+
+    Examples
+    --------
+    >>> ur5e().fk([0, 0, 0, 0, 0, 0])[:3, 3].round(5)
+    array([-0.8172, -0.2329,  0.0628])
+    """
+    return _ur("UR5e", "UR5e")
+
+
+def ur7e() -> Robot:
+    """The Universal Robots UR7e: the UR5e under its 2025 name (see :func:`ur5e`).
+
+    Returns
+    -------
+    Robot
+
+    Examples
+    --------
+    >>> ur7e().name, bool((ur7e().fk([0.1] * 6) == ur5e().fk([0.1] * 6)).all())
+    ('UR7e', True)
+    """
+    return _ur("UR7e", "UR7e")
+
+
+def ur10e() -> Robot:
+    """The Universal Robots UR10e (since 2025 also sold as the UR12e), with the maker's
+    standard DH parameters (see :func:`ur3e` and :data:`UR_CURRENT_DH`).
+
+    Returns
+    -------
+    Robot
+
+    Examples
+    --------
+    >>> ur10e().fk([0, 0, 0, 0, 0, 0])[:3, 3].round(5)
+    array([-1.18425, -0.2907 ,  0.06085])
+    """
+    return _ur("UR10e", "UR10e")
+
+
+def ur12e() -> Robot:
+    """The Universal Robots UR12e: the UR10e under its 2025 name (see :func:`ur10e`).
+
+    Returns
+    -------
+    Robot
+
+    Examples
+    --------
+    >>> ur12e().name, bool((ur12e().fk([0.1] * 6) == ur10e().fk([0.1] * 6)).all())
+    ('UR12e', True)
+    """
+    return _ur("UR12e", "UR12e")
+
+
+def ur16e() -> Robot:
+    """The Universal Robots UR16e with the maker's standard DH parameters (see
+    :func:`ur3e` and :data:`UR_CURRENT_DH`).
+
+    Returns
+    -------
+    Robot
+
+    Examples
+    --------
+    >>> ur16e().fk([0, 0, 0, 0, 0, 0])[:3, 3].round(5)
+    array([-0.8384 , -0.2907 ,  0.06085])
+    """
+    return _ur("UR16e", "UR16e")
+
+
+def ur15() -> Robot:
+    """The Universal Robots UR15 with the maker's standard DH parameters (see
+    :func:`ur3e` and :data:`UR_CURRENT_DH`).
+
+    Returns
+    -------
+    Robot
+
+    Examples
+    --------
+    >>> ur15().fk([0, 0, 0, 0, 0, 0])[:3, 3].round(5)
+    array([-1.1639, -0.3258,  0.0825])
+    """
+    return _ur("UR15", "UR15")
+
+
+def ur18() -> Robot:
+    """The Universal Robots UR18 with the maker's standard DH parameters (see
+    :func:`ur3e` and :data:`UR_CURRENT_DH`).
+
+    Returns
+    -------
+    Robot
+
+    Examples
+    --------
+    >>> ur18().fk([0, 0, 0, 0, 0, 0])[:3, 3].round(5)
+    array([-0.8139, -0.3258,  0.0825])
+    """
+    return _ur("UR18", "UR18")
+
+
+def ur8_long() -> Robot:
+    """The Universal Robots UR8 Long with the maker's standard DH parameters (see
+    :func:`ur3e` and :data:`UR_CURRENT_DH`).
+
+    Returns
+    -------
+    Robot
+
+    Examples
+    --------
+    >>> ur8_long().fk([0, 0, 0, 0, 0, 0])[:3, 3].round(5)
+    array([-1.6138, -0.3258,  0.0825])
+    """
+    return _ur("UR8 Long", "UR8 Long")
+
+
+def ur20() -> Robot:
+    """The Universal Robots UR20 with the maker's standard DH parameters (see
+    :func:`ur3e` and :data:`UR_CURRENT_DH`).
+
+    Returns
+    -------
+    Robot
+
+    Examples
+    --------
+    >>> ur20().fk([0, 0, 0, 0, 0, 0])[:3, 3].round(5)
+    array([-1.5907, -0.3553,  0.077 ])
+    """
+    return _ur("UR20", "UR20")
+
+
+def ur30() -> Robot:
+    """The Universal Robots UR30 with the maker's standard DH parameters (see
+    :func:`ur3e` and :data:`UR_CURRENT_DH`).
+
+    Returns
+    -------
+    Robot
+
+    Examples
+    --------
+    >>> ur30().fk([0, 0, 0, 0, 0, 0])[:3, 3].round(5)
+    array([-1.1407, -0.3553,  0.077 ])
+    """
+    return _ur("UR30", "UR30")
+
+
+#: The function of :mod:`dqlab.models` that builds each UR model, by the model's name (as
+#: the controller and :data:`UR_DH` spell it).
+UR_MODELS = {"UR3": ur3, "UR5": ur5, "UR10": ur10, "UR3e": ur3e, "UR5e": ur5e, "UR7e": ur7e,
+             "UR10e": ur10e, "UR12e": ur12e, "UR16e": ur16e, "UR15": ur15, "UR18": ur18,
+             "UR8 Long": ur8_long, "UR20": ur20, "UR30": ur30}
+
+
 def ur3_mdh() -> Robot:
     r"""The UR3 in the modified DH convention of the UR3 project report.
 
@@ -187,7 +624,37 @@ def ur3_mdh() -> Robot:
     q_fig = (PI / 2, 0.0, 0.0, PI / 2, 0.0, -PI / 2)
     links = [Link(a=ai, alpha=al, d=ri, theta_offset=off, limits=(-2 * PI, 2 * PI))
              for al, ai, ri, off in zip(alpha, a, r, q_fig, strict=True)]
-    return Robot(links, convention="mdh", name="UR3 (report, modified DH)")
+    report = Robot(links, convention="mdh", name="UR3 (report, modified DH)")
+    return _with_inertias(report, _ur3_mdh_inertias(report))
+
+
+#: The map from the UR3 report's joint angles to UR's (chapter 6):
+#: :math:`q_{UR} = S\,q_{report} + o`, with UR's base frame a quarter turn,
+#: :math:`R_z(\pi/2)`, from the report's.
+UR3_MDH_JOINT_MAP = ((1.0, -1.0, -1.0, -1.0, 1.0, 1.0), (0.0, 0.0, 0.0, -PI / 2, PI, -PI / 2))
+
+
+def _ur3_mdh_inertias(report):
+    r"""UR's link inertias (:data:`UR_DYNAMICS`) carried into the report's link frames.
+
+    Link :math:`i` is the same body in both models, so its report frame sits at a constant
+    pose in its DH frame, :math:`X_i = X^{UR}_{0i}(S q + o)^{-1} R_z(\pi/2)\, X^{rep}_{0i}(q)`,
+    read at :math:`q = 0`. The rotation is a signed permutation (rounded to it); the
+    translation carries the few millimetres by which the report's lengths differ from UR's.
+    """
+    ur = ur3()
+    S, o = (np.array(v) for v in UR3_MDH_JOINT_MAP)
+    q = np.zeros(6)
+    F_ur = ur.fk(S * q + o, all_frames=True)
+    F_rep = report.fk(q, all_frames=True)
+    turn = np.eye(4)
+    turn[:2, :2] = [[0.0, -1.0], [1.0, 0.0]]
+    inertias = []
+    for i, link in enumerate(ur.links, start=1):
+        X_ur_rep = np.linalg.inv(F_ur[i]) @ turn @ F_rep[i]
+        X_ur_rep[:3, :3] = np.round(X_ur_rep[:3, :3])
+        inertias.append(link.inertia.moved(np.linalg.inv(X_ur_rep)))
+    return inertias
 
 
 def desk_arm() -> Robot:
@@ -251,7 +718,8 @@ def desk_arm() -> Robot:
     links = [Link(a=p["l3"], alpha=PI / 2, d=p["l0_minus_l4"], limits=lim),
              Link(a=p["l1"], alpha=0.0, d=0.0, limits=lim),
              Link(a=p["l2"], alpha=0.0, d=0.0, limits=lim)]
-    return Robot(links, convention="dh", name="desktop arm (lab report)")
+    arm = Robot(links, convention="dh", name="desktop arm (lab report)")
+    return _with_inertias(arm, rod_link_inertias(arm))
 
 
 def desk_arm_joints_from_lab(q_lab: ArrayLike) -> NDArray[np.float64]:
@@ -336,7 +804,8 @@ def scara_rsm5() -> Robot:
              Link(a=p["l2"], alpha=0.0, d=p["z_low"], joint=PRISMATIC,
                   limits=(0.0, p["stroke"])),
              Link(a=0.0, alpha=0.0, d=0.0, limits=(-h4, h4))]
-    return Robot(links, convention="mdh", name="Samsung RSM-5 SCARA")
+    scara = Robot(links, convention="mdh", name="Samsung RSM-5 SCARA")
+    return _with_inertias(scara, rod_link_inertias(scara))
 
 
 def six_r(a2: float = 0.4, r4: float = 0.35, r7: float = 0.1) -> Robot:
@@ -377,7 +846,8 @@ def six_r(a2: float = 0.4, r4: float = 0.35, r7: float = 0.1) -> Robot:
              for al, ai, ri in zip(alpha, a, r, strict=True)]
     tool = np.eye(4)
     tool[2, 3] = r7
-    return Robot(links, convention="mdh", tool=tool, name="6R with spherical wrist")
+    arm = Robot(links, convention="mdh", tool=tool, name="6R with spherical wrist")
+    return _with_inertias(arm, rod_link_inertias(arm))
 
 
 # --------------------------------------------------------------------------------------

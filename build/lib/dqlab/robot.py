@@ -37,6 +37,7 @@ with the base :math:`X_{W0}` and the tool :math:`X_{nT}` (both identity by defau
 Units are metres and radians.
 """
 
+import copy
 import math
 
 import numpy as np
@@ -48,6 +49,7 @@ from ._kernels import (
     screw_entries,
 )
 from .dualquat import dual_quaternion_from_transform
+from .inertia import LinkInertia
 
 __all__ = ["Link", "Robot", "REVOLUTE", "PRISMATIC"]
 
@@ -91,6 +93,10 @@ class Link:
         Lowest and highest joint value (radians or metres). Default: no limit.
     name : str, optional
         A label printed in :meth:`Robot.dh_table`.
+    inertia : LinkInertia, optional
+        The link's mass, centre of mass and inertia tensor in the link's own frame (see
+        :mod:`dqlab.inertia`), for :mod:`dqlab.dynamics` and the simulators. None (the
+        default): the link has no inertial parameters.
 
     Raises
     ------
@@ -112,7 +118,8 @@ class Link:
     1
     """
 
-    def __init__(self, a, alpha, d, theta_offset=0.0, joint=REVOLUTE, limits=None, name=""):
+    def __init__(self, a, alpha, d, theta_offset=0.0, joint=REVOLUTE, limits=None, name="",
+                 inertia=None):
         values = {"a": a, "alpha": alpha, "d": d, "theta_offset": theta_offset}
         for key, value in values.items():
             try:
@@ -144,6 +151,27 @@ class Link:
         set_(self, "joint", joint)
         set_(self, "limits", (lo, hi))
         set_(self, "name", str(name))
+        if inertia is not None and not isinstance(inertia, LinkInertia):
+            raise ValueError("Link inertia must be a dqlab.inertia.LinkInertia or None, got "
+                             f"{type(inertia).__name__}")
+        set_(self, "inertia", inertia)
+
+    def with_inertia(self, inertia):
+        """A copy of this link (every other parameter kept) with other inertial parameters.
+
+        Examples
+        --------
+        >>> from dqlab.inertia import LinkInertia
+        >>> link = Link(a=0.3, alpha=0.0, d=0.0)
+        >>> link.with_inertia(LinkInertia.sphere(1.0, [-0.15, 0, 0])).inertia.mass
+        1.0
+        """
+        if inertia is not None and not isinstance(inertia, LinkInertia):
+            raise ValueError("inertia must be a dqlab.inertia.LinkInertia or None, got "
+                             f"{type(inertia).__name__}")
+        new = copy.copy(self)
+        object.__setattr__(new, "inertia", inertia)
+        return new
 
     def __setattr__(self, key, value):
         raise AttributeError("Link is immutable (a Robot precomputes its constant parts); "

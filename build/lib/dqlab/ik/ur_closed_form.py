@@ -133,6 +133,7 @@ from ..transforms import transform_inverse
 from . import ur_steps as steps
 from .result import IKResult, finish
 from .targets import RIGID_TOL, parse_targets, pose_errors
+from .ur_calibrated import calibrated_ur, nominal_ur
 
 __all__ = ["ur", "ur_parameters", "equivalent_solutions", "closest_solution",
            "distinct_solutions", "SOLUTION_ORDER"]
@@ -473,7 +474,9 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     ----------
     robot : dqlab.robot.Robot
         A UR-family arm in standard DH (for example :func:`dqlab.models.ur3`); its base
-        transform and tool are taken into account, and joint offsets are honoured.
+        transform and tool are taken into account, and joint offsets are honoured. A
+        calibrated UR (parameters millimetres off the exact shape) is solved by
+        :func:`dqlab.ik.ur_calibrated.calibrated_ur`, with the same result.
     target : array_like, shape (..., 4, 4) or (..., 8)
         Target pose(s) of the TCP in the world frame, as rigid transforms or unit dual
         quaternions ``(q_r, q_d)`` (told apart by the trailing shape; see
@@ -600,7 +603,15 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     pose_tol = check_tolerance(pose_tol, "pose_tol")
     if residuals not in ("fk", "equations"):
         raise ValueError(f"residuals must be 'fk' or 'equations', got {residuals!r}")
-    prm = _parameters(robot)
+    try:
+        prm = _parameters(robot)
+    except ValueError as exc:                   # not the exact UR shape: a calibrated UR?
+        try:
+            nominal_ur(robot)
+        except ValueError as why:
+            raise ValueError(f"{exc}; nor is it a calibrated UR: {why}") from None
+        return calibrated_ur(robot, target, ur, tol=tol, tool=tool, q_ref=q_ref,
+                             singular_tol=singular_tol, pose_tol=pose_tol, residuals=residuals)
     if (tool is None and residuals == "equations" and type(target) is np.ndarray
             and target.dtype is _FLOAT64 and pose_tol <= RIGID_TOL):
         result = _solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref)

@@ -25,10 +25,12 @@ from .mjcf import (
     default_masses,
     link_placements,
     mjcf_from_robot,
+    robot_inertias,
 )
 from .simulation import (
     ArmSimulation,
     ComputedTorque,
+    DynamicsModel,
     JointPD,
     TrackingResult,
     check_trajectory,
@@ -38,8 +40,8 @@ from .simulation import (
 from .urdf import urdf_from_robot
 
 __all__ = [
-    "mjcf_from_robot", "urdf_from_robot", "link_placements", "default_masses",
+    "mjcf_from_robot", "urdf_from_robot", "link_placements", "default_masses", "robot_inertias",
     "UR3_LINK_MASSES", "UR3_PAYLOAD", "UR3_BASE_MASS",
-    "ArmSimulation", "JointPD", "ComputedTorque", "TrackingResult", "track",
+    "ArmSimulation", "JointPD", "ComputedTorque", "DynamicsModel", "TrackingResult", "track",
     "check_trajectory", "require_mujoco", "MujocoBackend", "UR3_HOME",
 ]

@@ -26,11 +26,16 @@ flange site sits in the last body at :math:`R_n X_{nT}` (the tool, when the robo
 Then the site's pose is :math:`X_{WT}(q)` of :meth:`~dqlab.robot.Robot.fk` exactly, up to
 rounding: the tests check 1,000 random configurations of three robots to 1e-9.
 
-The bodies are drawn and weighed as a joint housing (a short cylinder about the joint axis)
-and capsules along the path to the next joint; MuJoCo computes their inertias from those
-shapes and the masses given here. Collisions are off (the simulation is about tracking, not
-contact). This module only writes text: MuJoCo is needed to load the model, not to generate
-it.
+The bodies are drawn as a joint housing (a short cylinder about the joint axis) and capsules
+along the path to the next joint. They are weighed by the robot's own inertial parameters
+(``Link.inertia``, :class:`~dqlab.inertia.LinkInertia`, the one source of them that
+:mod:`dqlab.dynamics` reads too): link :math:`i`'s centre of mass :math:`\mathbf c` and
+inertia tensor :math:`I_c`, given in its DH frame :math:`i = B_i R_i`, are written into body
+:math:`i` as an ``<inertial>`` element at :math:`R_i \mathbf c` with the tensor
+:math:`R\, I_c R^\top` (:math:`R` the rotation of :math:`R_i`). A link without inertial
+parameters gets :func:`dqlab.models.rod_link_inertias`' plausible ones. Collisions are off
+(the simulation is about tracking, not contact). This module only writes text: MuJoCo is
+needed to load the model, not to generate it.
 """
 
 import math
@@ -38,17 +43,19 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from ..models import UR_DYNAMICS, rod_link_inertias
 from ..quaternion import quaternion_from_matrix
 from ..robot import Robot
 from ._checks import number, per_joint
 
-__all__ = ["mjcf_from_robot", "link_placements", "default_masses", "UR3_LINK_MASSES",
-           "UR3_PAYLOAD", "UR3_BASE_MASS"]
+__all__ = ["mjcf_from_robot", "link_placements", "default_masses", "robot_inertias",
+           "UR3_LINK_MASSES", "UR3_PAYLOAD", "UR3_BASE_MASS"]
 
 #: Masses of the UR3's six moving links in kg, from Universal Robots' table of dynamic
-#: parameters (the ``ur_dh`` reference). Their sum, 8.63 kg, plus the base housing and the
-#: cable make the data sheet's 11 kg.
-UR3_LINK_MASSES = (2.0, 3.42, 1.26, 0.8, 0.8, 0.35)
+#: parameters (the ``ur_dh`` reference; :data:`dqlab.models.UR_DYNAMICS`, which
+#: :func:`dqlab.models.ur3` gives its links). Their sum, 8.63 kg, plus the base housing and
+#: the cable make the data sheet's 11 kg.
+UR3_LINK_MASSES = tuple(UR_DYNAMICS["UR3"]["mass"])
 #: The UR3's rated payload in kg (thesis, annex A: the maker's data sheet).
 UR3_PAYLOAD = 3.0
 #: Mass of the fixed base housing in kg: the data sheet's 11 kg minus the moving links (it
@@ -166,22 +173,47 @@ def _link_paths(placements, X_BnT, corners):
     return paths
 
 
-def default_masses(robot):
-    """Link masses in kg when none are given: :data:`UR3_LINK_MASSES` for a six-joint robot
-    whose name starts with "UR3", otherwise 0.5 kg per link plus 4 kg per metre of the
-    link's drawn path (from its joint to the next).
+def robot_inertias(robot):
+    """The robot's link inertias (``Link.inertia``); a link without them gets the plausible
+    ones of :func:`dqlab.models.rod_link_inertias` (0.5 kg plus 4 kg per metre of its path,
+    a uniform rod).
+
+    Returns
+    -------
+    tuple of LinkInertia
+        In the links' DH frames.
 
     Examples
     --------
-    >>> from dqlab.models import desk_arm
+    >>> from dqlab.models import ur3
+    >>> robot_inertias(ur3())[1].mass
+    3.42
+    """
+    if not isinstance(robot, Robot):
+        raise TypeError(f"robot must be a dqlab Robot, got {type(robot).__name__}")
+    guessed = None
+    inertias = []
+    for i, link in enumerate(robot.links):
+        if link.inertia is None:
+            guessed = rod_link_inertias(robot) if guessed is None else guessed
+            inertias.append(guessed[i])
+        else:
+            inertias.append(link.inertia)
+    return tuple(inertias)
+
+
+def default_masses(robot):
+    """Link masses in kg when none are given: those of :func:`robot_inertias`.
+
+    Examples
+    --------
+    >>> from dqlab.models import desk_arm, ur3
     >>> default_masses(desk_arm()).round(3)
     array([0.768, 1.076, 1.148])
+    >>> default_masses(ur3())
+    array([2.  , 3.42, 1.26, 0.8 , 0.8 , 0.35])
     """
-    if _is_ur3(robot):
-        return np.array(UR3_LINK_MASSES)
-    placements, X_BnT, corners = link_placements(robot)
-    return np.array([0.5 + 4.0 * sum(float(np.linalg.norm(b - a)) for a, b in path)
-                     for path in _link_paths(placements, X_BnT, corners)])
+    return np.array([inertia.mass for inertia in robot_inertias(robot)])
 
 
 def mjcf_from_robot(robot, *, masses=None, payload=0.0, radius=None, damping=0.1,
@@ -203,7 +235,9 @@ def mjcf_from_robot(robot, *, masses=None, payload=0.0, radius=None, damping=0.1
     robot : Robot
         Standard or modified DH, with its base and tool.
     masses : array_like, shape (n,), optional
-        Link masses in kg. Default: :func:`default_masses` (UR's values for the UR3).
+        Link masses in kg, to override the robot's: each link's inertia
+        (:func:`robot_inertias`) is scaled to the given mass, its centre of mass kept.
+        Default: the robot's own (UR's values for the UR3).
     payload : float, optional
         Mass in kg of a sphere at the TCP (0 by default; the UR3 is rated for 3 kg).
     radius : float, optional
@@ -261,8 +295,12 @@ def mjcf_from_robot(robot, *, masses=None, payload=0.0, radius=None, damping=0.1
     if radius is None:
         radius = min(max(0.05 * total_length, 0.01), 0.05)
     radius = number(radius, "radius")
-    masses = default_masses(robot) if masses is None else masses
-    masses = per_joint(masses, n, "masses", positive=True)
+    inertias = robot_inertias(robot)
+    if masses is not None:
+        masses = per_joint(masses, n, "masses", positive=True)
+        inertias = [inertia.scaled(m / inertia.mass) if inertia.mass > 0
+                    else type(inertia).sphere(m, inertia.com)
+                    for inertia, m in zip(inertias, masses, strict=True)]
     damping = per_joint(damping, n, "damping", positive=False)
     armature = per_joint(armature, n, "armature", positive=False)
     payload = number(payload, "payload", strict=False)
@@ -304,16 +342,17 @@ def mjcf_from_robot(robot, *, masses=None, payload=0.0, radius=None, damping=0.1
             limit = f' range="{xml_number(lo)} {xml_number(hi)}"'
         lines.append(f'{inner}<joint name="joint{i + 1}" type="{kind}" axis="0 0 1"{limit} '
                      f'damping="{xml_number(damping[i])}" armature="{xml_number(armature[i])}"/>')
-        lines += _housing_and_path(inner, f"link{i + 1}", masses[i], radius, paths[i],
+        lines.append(inner + _inertial(inertias[i], corners[i + 1]))
+        lines += _housing_and_path(inner, f"link{i + 1}", None, radius, paths[i],
                                    _LINK_COLOR)
         depth = inner
     lines.append(f'{depth}<site name="flange" {_pos_quat(X_BnT)} size="{xml_number(radius / 4)}"/>')
     r_payload = radius * 0.8
     lines.append(f'{depth}<body name="payload" {_pos_quat(X_BnT)}>')
-    # The payload is a solid sphere of radius r_payload; a tiny mass when there is none
-    # (MuJoCo wants a positive mass in every body), set exactly by ArmSimulation.payload.
+    # The payload is a solid sphere of radius r_payload, of mass 0 when there is none (a body
+    # without a joint of its own may weigh nothing), set by ArmSimulation.payload.
     lines.append(f'{depth}  <geom name="payload" type="sphere" size="{xml_number(r_payload)}" '
-                 f'mass="{xml_number(max(payload, 1e-9))}" rgba="{_PAYLOAD_COLOR}"/>')
+                 f'mass="{xml_number(payload)}" rgba="{_PAYLOAD_COLOR}"/>')
     lines.append(f"{depth}</body>")
     for i in range(n, 0, -1):
         lines.append(indent + "  " * i + "</body>")
@@ -325,18 +364,37 @@ def mjcf_from_robot(robot, *, masses=None, payload=0.0, radius=None, damping=0.1
     return "\n".join(lines)
 
 
+def _inertial(inertia, X_BF):
+    r"""The ``<inertial>`` element of a body whose link frame F sits at ``X_BF`` in it: the
+    centre of mass :math:`X_{BF}\,\mathbf c` and the tensor :math:`R I_c R^\top`, written
+    as MuJoCo's ``fullinertia`` (ixx iyy izz ixy ixz iyz)."""
+    R = X_BF[:3, :3]
+    com = R @ inertia.com + X_BF[:3, 3]
+    I = R @ inertia.tensor @ R.T
+    full = (I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2])
+    return (f'<inertial pos="{xml_vector(com)}" mass="{xml_number(inertia.mass)}" '
+            f'fullinertia="{xml_vector(full)}"/>')
+
+
 def _housing_and_path(indent, name, mass, radius, path, color):
-    """Geoms of one body: a joint housing about z and capsules along the path, sharing
-    ``mass`` (housing 30 %, capsules 70 % in proportion to their lengths)."""
+    """Geoms of one body: a joint housing about z and capsules along the path. With a
+    ``mass``, they share it (housing 30 %, capsules 70 % in proportion to their lengths)
+    and MuJoCo computes the body's inertia from them; without (None), they are drawn only
+    (the body has its ``<inertial>``)."""
     lengths = [float(np.linalg.norm(b - a)) for a, b in path]
     total = sum(lengths)
-    housing_mass = mass if total == 0 else 0.3 * mass
+
+    def weight(share):
+        return "" if mass is None else f'mass="{xml_number(share)}" '
+
+    housing_mass = None if mass is None else (mass if total == 0 else 0.3 * mass)
     out = [f'{indent}<geom name="{name}_housing" type="cylinder" '
            f'size="{xml_number(radius * 1.1)} {xml_number(radius)}" '
-           f'mass="{xml_number(housing_mass)}" '
+           f'{weight(housing_mass)}'
            f'rgba="{_HOUSING_COLOR}"/>']
     for k, ((a, b), length) in enumerate(zip(path, lengths, strict=True)):
+        share = None if mass is None else 0.7 * mass * length / total
         out.append(f'{indent}<geom name="{name}_segment{k + 1}" type="capsule" '
                    f'fromto="{xml_vector(a)} {xml_vector(b)}" size="{xml_number(radius)}" '
-                   f'mass="{xml_number(0.7 * mass * length / total)}" rgba="{color}"/>')
+                   f'{weight(share)}rgba="{color}"/>')
     return out

@@ -32,10 +32,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import dynamics
 from ._checks import number, vector
 from .mjcf import mjcf_from_robot
 
-__all__ = ["ArmSimulation", "JointPD", "ComputedTorque", "TrackingResult", "track",
+__all__ = ["ArmSimulation", "JointPD", "ComputedTorque", "DynamicsModel", "TrackingResult",
+           "track",
            "check_trajectory", "sample_reference", "require_mujoco"]
 
 
@@ -195,7 +197,7 @@ class ArmSimulation:
 
     @payload.setter
     def payload(self, mass):
-        mass = max(number(mass, "payload", strict=False), 1e-9)
+        mass = number(mass, "payload", strict=False)
         self.model.body_mass[self._payload_body] = mass
         self.model.body_inertia[self._payload_body] = 0.4 * mass * self._payload_radius ** 2
         # recompute the model's derived constants on the scratch data (mj_setConst moves the
@@ -257,6 +259,15 @@ class ArmSimulation:
         return M
 
 
+def _gains(controller, n):
+    """The controller's ``kp`` and ``kd`` as checked arrays of shape (n,), checked once per
+    number of joints and kept with the (immutable) controller."""
+    cache = controller.__dict__.setdefault("_gain_vectors", {})
+    if n not in cache:
+        cache[n] = (vector(controller.kp, n, "kp"), vector(controller.kd, n, "kd"))
+    return cache[n]
+
+
 @dataclass(frozen=True)
 class JointPD:
     r"""Joint PD control, :math:`\tau = K_p (q_d - q) + K_d (\dot q_d - \dot q)`,
@@ -293,8 +304,7 @@ class JointPD:
 
     def torque(self, sim, q_d, qd_d, qdd_d):
         """Motor torques for the reference ``(q_d, qd_d, qdd_d)``, shape (n,)."""
-        kp = vector(self.kp, sim.n, "kp")
-        kd = vector(self.kd, sim.n, "kd")
+        kp, kd = _gains(self, sim.n)
         q = sim.data.qpos
         tau = kp * (q_d - q) + kd * (qd_d - sim.data.qvel)
         if self.gravity_compensation:
@@ -316,9 +326,12 @@ class ComputedTorque:
         1/s^2. Default :math:`20^2`.
     kd : float or array_like, shape (n,)
         1/s. Default :math:`2 \cdot 20`.
-    model : ArmSimulation, optional
-        The controller's own model of the arm (for instance without the payload the arm
-        really carries). Default: the simulated arm itself (an exact model).
+    model : DynamicsModel or ArmSimulation, optional
+        The controller's own model of the arm: a :class:`DynamicsModel` (dqlab's
+        Newton--Euler on the robot's inertial parameters, which may be wrong, as a real
+        controller's are), or another simulation (for instance without the payload the arm
+        really carries). Default: the simulated arm itself, an exact model that no real
+        controller has.
 
     Examples
     --------
@@ -334,11 +347,86 @@ class ComputedTorque:
 
     def torque(self, sim, q_d, qd_d, qdd_d):
         """Motor torques for the reference ``(q_d, qd_d, qdd_d)``, shape (n,)."""
-        kp = vector(self.kp, sim.n, "kp")
-        kd = vector(self.kd, sim.n, "kd")
+        kp, kd = _gains(self, sim.n)
         q, qd = sim.data.qpos, sim.data.qvel
         qdd_cmd = qdd_d + kd * (qd_d - qd) + kp * (q_d - q)
         return (self.model or sim).inverse_dynamics(q, qd, qdd_cmd)
+
+
+@dataclass(frozen=True)
+class DynamicsModel:
+    r"""A controller's model of the arm by :mod:`dqlab.dynamics`, not by the simulator.
+
+    .. math::
+
+       \tau = M(q)\,\ddot q + c(q, \dot q) + g(q) + \operatorname{diag}(a)\,\ddot q
+       + D\,\dot q
+
+    with :math:`M, c, g` from :func:`dqlab.dynamics.inverse_dynamics` on ``robot``'s link
+    inertias, the motors' armature :math:`a` (reflected rotor inertia) and the joints'
+    viscous damping :math:`D`. Give it a robot whose inertias are wrong (a payload it does
+    not know, scaled masses) to study a controller whose model is not the plant.
+
+    Parameters
+    ----------
+    robot : Robot
+        Every link must carry inertial parameters (``Link.inertia``).
+    armature, damping : float or array_like, shape (n,), optional
+        kg m^2 and N m s/rad (0 by default).
+    gravity : float, optional
+        m/s^2 along the world's -z.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dqlab.models import ur3
+    >>> sim = ArmSimulation(ur3())
+    >>> model = DynamicsModel.of_simulation(sim)
+    >>> q = np.array([0.3, -1.1, 1.4, -1.6, -1.5, 0.2])
+    >>> bool(np.allclose(model.gravity_torque(q), sim.gravity_torque(q), atol=1e-12))
+    True
+    """
+
+    robot: object
+    armature: object = 0.0
+    damping: object = 0.0
+    gravity: float = 9.81
+    name = "dqlab dynamics"
+    _prepared: object = field(init=False, repr=False, compare=False, default=None)
+
+    def __post_init__(self):
+        n = self.robot.n
+        g = (0.0, 0.0, -number(self.gravity, "gravity", strict=False))
+        prepared = (dynamics.NewtonEuler(self.robot, gravity=g),
+                    vector(self.armature, n, "armature"), vector(self.damping, n, "damping"))
+        object.__setattr__(self, "_prepared", prepared)
+
+    @classmethod
+    def of_simulation(cls, sim, robot=None):
+        """The model with the motors (armature, damping) and gravity of the simulation
+        ``sim`` and the rigid bodies of ``robot`` (default: the simulated robot itself, an
+        exact rigid-body model)."""
+        return cls(sim.robot if robot is None else robot,
+                   armature=sim.model.dof_armature.copy(), damping=sim.model.dof_damping.copy(),
+                   gravity=-float(sim.model.opt.gravity[2]))
+
+    @property
+    def n(self):
+        return self.robot.n
+
+    def inverse_dynamics(self, q, qd, qdd):
+        """Joint torques for the accelerations ``qdd`` at ``(q, qd)``, shape (n,)."""
+        newton_euler, armature, damping = self._prepared
+        return newton_euler(q, qd, qdd) + armature * np.asarray(qdd) + damping * np.asarray(qd)
+
+    def gravity_torque(self, q):
+        """:math:`g(q)`, shape (n,)."""
+        zero = np.zeros(self.n)
+        return self._prepared[0](q, zero, zero)
+
+    def mass_matrix(self, q):
+        r""":math:`M(q) + \operatorname{diag}(a)`, shape (n, n)."""
+        return dynamics.mass_matrix(self.robot, q) + np.diag(self._prepared[1])
 
 
 @dataclass(frozen=True)

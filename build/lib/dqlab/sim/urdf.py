@@ -6,7 +6,7 @@ joint ``joint{i}`` has its parent link ``link{i-1}`` (``base`` for the first) an
 (roll, pitch, yaw about fixed axes, :math:`R = R_z(\text{yaw})\,R_y(\text{pitch})\,
 R_x(\text{roll})`, Craig's convention of :func:`dqlab.rotations.rpy_from_matrix`), and its
 axis along the child's z. A root link ``world`` holds the base at :math:`X_{W0}` and a link
-``flange`` sits at the TCP. URDF carries only the kinematics and lumped inertias here (no
+``flange`` sits at the TCP. URDF carries the kinematics and the robot's link inertias here (no
 shapes): enough for forward kinematics and dynamics in a simulator that reads URDF, such as
 PyBullet.
 """
@@ -17,7 +17,7 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from ..rotations import rpy_from_matrix
-from .mjcf import default_masses, link_placements, xml_number, xml_vector
+from .mjcf import default_masses, link_placements, robot_inertias, xml_number, xml_vector
 
 __all__ = ["urdf_from_robot"]
 
@@ -34,8 +34,10 @@ def urdf_from_robot(robot, *, masses=None, name=None):
     robot : Robot
         Standard or modified DH, with its base and tool.
     masses : array_like, shape (n,), optional
-        Link masses in kg (default as in :func:`~dqlab.sim.mjcf.mjcf_from_robot`); each link's
-        inertia is lumped at its origin as that of a 5 cm solid sphere.
+        Link masses in kg, to override the robot's (as in
+        :func:`~dqlab.sim.mjcf.mjcf_from_robot`: each link's inertia scaled to its mass).
+        Each link's ``<inertial>`` is the robot's (:func:`~dqlab.sim.mjcf.robot_inertias`),
+        moved from its DH frame into the URDF link frame.
     name : str, optional
         The robot's name in the file (default: the robot's).
 
@@ -50,10 +52,12 @@ def urdf_from_robot(robot, *, masses=None, name=None):
     >>> urdf.count('<joint name="joint'), 'type="prismatic"' in urdf
     (4, True)
     """
-    placements, X_BnT, _ = link_placements(robot)
+    placements, X_BnT, corners = link_placements(robot)
     masses = default_masses(robot) if masses is None else np.asarray(masses, dtype=float)
     if masses.shape != (robot.n,) or not np.isfinite(masses).all() or (masses <= 0).any():
         raise ValueError(f"masses must be {robot.n} positive finite numbers, got {masses!r}")
+    inertias = [inertia.scaled(m / inertia.mass) if inertia.mass > 0 else inertia
+                for inertia, m in zip(robot_inertias(robot), masses, strict=True)]
     label = quoteattr(name if name is not None else (robot.name or "robot"))
     lines = ['<?xml version="1.0"?>', f"<robot name={label}>", '  <link name="world"/>',
              '  <link name="base"/>',
@@ -62,12 +66,14 @@ def urdf_from_robot(robot, *, masses=None, name=None):
              '    <parent link="world"/>', '    <child link="base"/>', "  </joint>"]
     parent = "base"
     for i, (link, X) in enumerate(zip(robot.links, placements, strict=True), start=1):
-        m = float(masses[i - 1])
-        inertia = 0.4 * m * 0.05**2
+        body = inertias[i - 1].moved(corners[i])        # from DH frame i to the link frame
+        I = body.tensor
         lines += [f'  <link name="link{i}">', "    <inertial>",
-                  f'      <mass value="{xml_number(m)}"/>',
-                  f'      <inertia ixx="{xml_number(inertia)}" ixy="0" ixz="0" '
-                  f'iyy="{xml_number(inertia)}" iyz="0" izz="{xml_number(inertia)}"/>',
+                  f'      <origin xyz="{xml_vector(body.com)}" rpy="0 0 0"/>',
+                  f'      <mass value="{xml_number(body.mass)}"/>',
+                  f'      <inertia ixx="{xml_number(I[0, 0])}" ixy="{xml_number(I[0, 1])}" '
+                  f'ixz="{xml_number(I[0, 2])}" iyy="{xml_number(I[1, 1])}" '
+                  f'iyz="{xml_number(I[1, 2])}" izz="{xml_number(I[2, 2])}"/>',
                   "    </inertial>", "  </link>"]
         lo, hi = link.limits
         bounded = math.isfinite(lo) and math.isfinite(hi)

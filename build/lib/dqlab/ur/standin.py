@@ -11,9 +11,9 @@ controller's protocols for the client code of :mod:`dqlab.ur.client` to run unch
   :class:`~dqlab.ur.client.KinematicBackend` arm (a new program replaces the running one, as
   on a controller). A program with anything else in it, or with a target the arm's safety
   checks refuse, is refused as a whole (a message in :meth:`ControllerStandIn.log`) and
-  nothing moves. It
-  sends nothing back (a real controller sends binary state messages, which clients
-  discard).
+  nothing moves. To each client it sends one binary message, a robot state with the arm's
+  kinematics info (see :mod:`dqlab.ur.calibration`), as a controller does when a client
+  connects, and nothing else.
 - **RTDE output** (port 30004 on a robot; see :mod:`dqlab.ur.rtde`): protocol version
   negotiation (versions 1 and 2), the controller version (reported as 5.11.0.0 by default),
   output recipe set-up, start and pause, and data packages at the requested frequency (at
@@ -44,6 +44,7 @@ import time
 import numpy as np
 
 from . import rtde
+from .calibration import kinematics_info_from_robot, message_from_kinematics_info
 from .client import HOME, KinematicBackend, SecondaryInterfaceBackend
 
 __all__ = ["ControllerStandIn", "SERVED_VARIABLES", "ZERO_VARIABLES", "parse_urscript"]
@@ -387,6 +388,7 @@ def _serve(config_json):
     config = json.loads(config_json)
     robot = getattr(models, config["model"])()
     arm = KinematicBackend(robot, config["q0"], speedup=config["speedup"])
+    kinematics_message = message_from_kinematics_info(kinematics_info_from_robot(robot))
     arm.connect()
     version = tuple(config["controller_version"])
     sel = selectors.DefaultSelector()
@@ -450,6 +452,7 @@ def _serve(config_json):
                     conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
                     if kind == "secondary":
                         texts[conn] = ""
+                        conn.sendall(kinematics_message)    # what a controller sends first
                     else:
                         streams[conn] = _RTDEConnection(conn)
                     sel.register(conn, selectors.EVENT_READ, ("client", kind))
