@@ -140,6 +140,41 @@ def test_native_only_cells_become_one_line_notes():
             assert _text(note).startswith("*Skipped in the browser:")
 
 
+def _names(code):
+    """(names a cell defines, names it reads) by its syntax tree."""
+    import ast
+
+    tree = ast.parse(re.sub(r"^(\s*)[%!].*$", r"\1pass", code, flags=re.M))  # IPython magics
+    nodes = list(ast.walk(tree))
+    stored = {n.id for n in nodes if isinstance(n, ast.Name) and not isinstance(n.ctx, ast.Load)}
+    stored |= {n.name for n in nodes if isinstance(n, (ast.FunctionDef, ast.ClassDef))}
+    stored |= {(a.asname or a.name).split(".")[0] for n in nodes
+               if isinstance(n, (ast.Import, ast.ImportFrom)) for a in n.names}
+    stored |= {a.arg for n in nodes if isinstance(n, ast.arguments)
+               for a in [*n.posonlyargs, *n.args, *n.kwonlyargs, n.vararg, n.kwarg] if a}
+    read = {n.id for n in nodes if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)}
+    return stored, read
+
+
+@pytest.mark.parametrize("path", [p for p, _ in NOTEBOOKS], ids=lambda p: p.stem)
+def test_cells_run_in_the_browser_need_no_skipped_cell(path):
+    """A cell the browser runs reads no name that only a skipped cell (``native-only`` or
+    ``skip-execution``) defines: tag it ``native-only`` too, or it fails there."""
+    defined, skipped, problems = set(), set(), []
+    for k, cell in enumerate(json.loads(path.read_text(encoding="utf-8"))["cells"]):
+        if cell["cell_type"] != "code":
+            continue
+        stored, read = _names(_text(cell))
+        if {"native-only", "skip-execution"} & set(cell["metadata"].get("tags", [])):
+            skipped |= stored - defined
+            continue
+        missing = (read & skipped) - defined - stored
+        if missing:
+            problems.append(f"cell {k} reads {sorted(missing)}")
+        defined |= stored
+    assert not problems, f"{path.name}: " + "; ".join(problems)
+
+
 def test_simulation_and_ruckig_cells_are_native_only():
     notes = {}
     for path, _ in NOTEBOOKS:
