@@ -1,15 +1,19 @@
 #!/usr/bin/env python3
 """The project's task runner. Needs nothing but Python >= 3.10.
 
-    python3 tasks.py book    build the HTML book into _build/html
-    python3 tasks.py test    the strict book build, then one pytest session: unit tests,
-                             doctests, every notebook (nbval) and the browser check of the
-                             built pages
+    python3 tasks.py book    build the HTML book into _build/html, with the in-browser
+                             chapters (JupyterLite) in _build/html/lite
+    python3 tasks.py test    the strict book build and the in-browser site, then one pytest
+                             session: unit tests, doctests, every notebook (nbval), the
+                             browser check of the built pages and chapters run in the
+                             in-browser site
     python3 tasks.py fast    the inner loop: unit tests and doctests, no book, no slow
                              sweeps (about a minute)
-    python3 tasks.py lint    ruff over the package, tests and scripts, then the chapters
+    python3 tasks.py lint    ruff over the package, tests and scripts, then the chapters, then
+                             actionlint over the GitHub workflows
     python3 tasks.py lab     open the chapters in JupyterLab
-    python3 tasks.py serve   serve the built book on http://127.0.0.1:8000
+    python3 tasks.py serve   serve the built book (and its in-browser chapters) on
+                             http://127.0.0.1:8000
     python3 tasks.py clean   remove the build directory
     python3 tasks.py student write solution-free student notebooks and an answer key
     python3 tasks.py pdf     print the whole book to a PDF (after 'book')
@@ -75,10 +79,17 @@ def build_book(strict):
     run(BIN / "jupyter-book", "build", ".", *flags)
 
 
+def build_lite():
+    """The in-browser chapters: a JupyterLite site in _build/html/lite (tools/lite.py)."""
+    run(PYTHON, ROOT / "tools" / "lite.py", BUILD / "html" / "lite")
+
+
 def task_book():
     ensure_environment()
     start = time.time()
     build_book(strict=False)
+    say("building the in-browser chapters (JupyterLite, Pyodide) into _build/html/lite")
+    build_lite()
     index = BUILD / "html" / "index.html"
     say(f"book built in {time.time() - start:.0f} s: open {index}\n"
         "    (or run 'python3 tasks.py serve' and visit http://127.0.0.1:8000)")
@@ -89,7 +100,9 @@ def task_test():
     start = time.time()
     say("building the book with warnings as errors (executes every chapter)")
     build_book(strict=True)
-    say("unit tests, doctests, notebooks (nbval) and the browser check of the built book")
+    say("building the in-browser chapters; every downloaded file is checked")
+    build_lite()
+    say("unit tests, doctests, notebooks (nbval) and the browser checks of the built book")
     run(PYTHON, "-m", "pytest")     # what plain `pytest` runs: see [tool.pytest] in pyproject
     say(f"all checks passed in {time.time() - start:.0f} s")
 
@@ -103,6 +116,8 @@ def task_lint():
     ensure_environment()
     run(BIN / "ruff", "check", ".")
     run(BIN / "ruff", "check", *sorted((ROOT / "book").glob("*.ipynb")))
+    workflows = sorted((ROOT / ".github" / "workflows").glob("*.yml"))
+    run(BIN / "actionlint", *workflows)
 
 
 def task_lab():
@@ -114,7 +129,11 @@ def task_serve():
     html = BUILD / "html"
     if not (html / "index.html").exists():
         sys.exit("no built book yet: run 'python3 tasks.py book' first")
-    say("serving the book on http://127.0.0.1:8000 (Ctrl-C to stop)")
+    if not (html / "lite" / "index.html").exists():
+        print("(no in-browser chapters in _build/html/lite: 'python3 tasks.py book' builds "
+              "them)")
+    say("serving the book on http://127.0.0.1:8000 (Ctrl-C to stop); a chapter's "
+        "'Run in your browser' button opens it in the in-browser site")
     run(sys.executable, "-m", "http.server", "8000", "--bind", "127.0.0.1", "--directory", html)
 
 

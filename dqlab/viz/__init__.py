@@ -22,12 +22,21 @@ True
 """
 
 import importlib.util
+import sys
 
-_missing = [name for name in ("matplotlib", "meshcat", "umsgpack", "tornado", "zmq")
-            if importlib.util.find_spec(name) is None]
+#: True in a browser kernel (Pyodide, e.g. JupyterLite): no processes, no sockets, no zmq.
+#: The static views and the figures work there; the live server (tornado, pyzmq) does not.
+IN_BROWSER = sys.platform == "emscripten"
+
+_needed = ("matplotlib", "meshcat", "umsgpack") + (() if IN_BROWSER else ("tornado", "zmq"))
+_missing = [name for name in _needed if importlib.util.find_spec(name) is None]
 if _missing:
     raise ImportError("dqlab.viz needs the viz extra: pip install 'dqlab[viz]' "
                       f"(missing: {', '.join(_missing)})")
+if IN_BROWSER:
+    from ._browser import import_meshcat
+
+    import_meshcat()  # meshcat's drawing modules without its server (no pyzmq, no tornado)
 
 from .pick_place import animate_pick_place  # noqa: E402, F401
 from .plots import (  # noqa: E402

@@ -950,7 +950,17 @@ def live_server():
     -------
     LiveWindow
         The connection; its ``web_url`` is the page to open.
+
+    Raises
+    ------
+    RuntimeError
+        In a browser kernel (Pyodide), which cannot start the server's process
+        (``LiveServerUnavailable``, saying so).
     """
+    if sys.platform == "emscripten":
+        from ._browser import LiveServerUnavailable
+
+        raise LiveServerUnavailable()
     window = _live["window"]
     if window is not None and window.server_proc.poll() is None:
         return window

@@ -1,0 +1,329 @@
+"""Input validation shared by every module: shapes, finiteness, clear ``ValueError`` s."""
+
+import math
+
+import numpy as np
+
+from ._kernels import orthonormality
+
+_FLOAT64 = np.dtype(np.float64)
+
+
+def real_array(x, name):
+    """``x`` as a float array: ``TypeError`` naming ``name`` for complex numbers or text,
+    ``ValueError`` for anything else that is not an array of numbers (ragged, None...).
+
+    >>> real_array([1, 2], "v")
+    array([1., 2.])
+    >>> real_array([1j], "v")
+    Traceback (most recent call last):
+    ...
+    TypeError: v must hold real numbers, got complex numbers (dtype complex128)
+    """
+    if x is None:
+        raise TypeError(f"{name} must be an array of numbers, got None")
+    try:
+        a = np.asarray(x)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise ValueError(f"{name} must be an array of numbers: {exc}") from None
+    kind = a.dtype.kind
+    if kind == "f":
+        return a if a.dtype == _FLOAT64 else a.astype(float)
+    if kind == "c":
+        raise TypeError(f"{name} must hold real numbers, got complex numbers (dtype {a.dtype})")
+    if kind in "USV":
+        raise TypeError(f"{name} must hold numbers, got {a.dtype.name} data")
+    if kind == "O" and any(v is None for v in a.flat):
+        raise TypeError(f"{name} must be an array of numbers, got None in it")
+    try:
+        return a.astype(float)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise ValueError(f"{name} must be an array of numbers: {exc}") from None
+
+
+def batch_shape(shape, name="shape"):
+    """A batch shape as a tuple of non-negative ints (an int or a sequence of ints).
+
+    >>> batch_shape(3), batch_shape((2, 0))
+    ((3,), (2, 0))
+    """
+    if isinstance(shape, tuple) and not shape:
+        return ()
+    dims = np.atleast_1d(np.asarray(shape, dtype=object))
+    out = []
+    for d in dims:
+        if isinstance(d, (bool, np.bool_)) or not isinstance(d, (int, np.integer)) or d < 0:
+            raise ValueError(f"{name} must be a non-negative int or a tuple of them, "
+                             f"got {shape!r}")
+        out.append(int(d))
+    return tuple(out)
+
+
+def check_tolerance(value, name):
+    """``value`` as a float, or ``ValueError`` naming ``name`` unless it is a number >= 0
+    (``inf`` switches a check off; NaN and negative numbers are refused).
+
+    >>> check_tolerance(1e-9, "tol")
+    1e-09
+    >>> check_tolerance(float("nan"), "tol")
+    Traceback (most recent call last):
+    ...
+    ValueError: tol must be a number >= 0, got nan
+    """
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number >= 0, got {value!r}") from None
+    if not v >= 0.0:
+        raise ValueError(f"{name} must be a number >= 0, got {value!r}")
+    return v
+
+
+def as_float_array(x, name, trailing=None):
+    """Return ``x`` as a float array whose trailing shape is ``trailing``.
+
+    Raises ``ValueError`` naming ``name`` when the trailing shape is wrong or when ``x``
+    holds NaN or infinity.
+
+    >>> as_float_array([1, 0, 0, 0], "q", (4,))
+    array([1., 0., 0., 0.])
+    """
+    a = real_array(x, name)
+    if trailing is not None:
+        trailing = tuple(trailing)
+        if a.ndim < len(trailing) or a.shape[a.ndim - len(trailing):] != trailing:
+            want = "(..., " + ", ".join(map(str, trailing)) + ")"
+            raise ValueError(f"{name} must have shape {want}, got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} contains NaN or infinity")
+    return a
+
+
+# --- Fast paths shared by the math core -------------------------------------------------
+#
+# A single value (a 1-D array) is computed with Python floats, which is several times faster
+# than numpy on four numbers; a batch is computed column by column with numpy. The formulas
+# are written once, on "components", and run unchanged on floats or on arrays.
+
+
+def float_array(x, name, trailing):
+    """Like :func:`as_float_array`, but a float64 ndarray of the right shape is returned as is.
+
+    ``trailing`` must be a tuple. Finiteness of such an array is *not* checked here: callers
+    check their result (see :func:`finite_or_raise`) or call :func:`check_finite` on batches.
+
+    >>> float_array([0, 1, 0], "v", (3,))
+    array([0., 1., 0.])
+    """
+    if (type(x) is np.ndarray and x.dtype is _FLOAT64 and x.shape[-len(trailing):] == trailing
+            and x.ndim >= len(trailing)):
+        return x
+    return as_float_array(x, name, trailing)
+
+
+
+def check_finite(a, name):
+    """Raise ``ValueError`` naming ``name`` when the array ``a`` holds NaN or infinity.
+
+    >>> check_finite(np.zeros(3), "v")
+    """
+    if not np.isfinite(a).all():
+        raise ValueError(f"{name} contains NaN or infinity")
+
+
+def components(a):
+    """Split the last axis of ``a``: Python floats for a 1-D array, column views otherwise.
+
+    >>> components(np.array([1.0, 2.0]))
+    [1.0, 2.0]
+    """
+    if a.ndim == 1:
+        return a.tolist()
+    # one copy to a component-major layout makes every later operation contiguous
+    return list(np.ascontiguousarray(_last_axis_first(a)))
+
+
+def component_rows(a):
+    """The components of ``a`` (its last axis) as the rows of a new C-ordered array: a copy,
+    always, which the caller may overwrite.
+
+    >>> component_rows(np.arange(6.0).reshape(3, 2))
+    array([[0., 2., 4.],
+           [1., 3., 5.]])
+    """
+    return _last_axis_first(a).copy()
+
+
+def _last_axis_first(a):
+    """A view of ``a`` with its last axis first (``np.moveaxis(a, -1, 0)``, cheaper)."""
+    return a.transpose((a.ndim - 1,) + tuple(range(a.ndim - 1)))
+
+
+def stack_components(parts):
+    """Inverse of :func:`components`: a new float array with ``parts`` on the last axis.
+
+    >>> stack_components([1.0, 2.0])
+    array([1., 2.])
+    """
+    if type(parts[0]) is float and type(parts[-1]) is float:
+        return np.array(parts)
+    return np.stack(np.broadcast_arrays(*parts), axis=-1).astype(float, copy=False)
+
+
+def finite_or_raise(out, *named):
+    """Return ``out`` if it is finite; otherwise find the bad input and raise ``ValueError``.
+
+    ``named`` are ``(array, name, trailing)`` triples of the inputs, checked in order with
+    :func:`as_float_array` so that the message names the argument at fault.
+
+    >>> finite_or_raise(np.ones(2), (np.ones(2), "a", (2,)))
+    array([1., 1.])
+    """
+    if np.isfinite(out).all():
+        return out
+    for x, name, trailing in named:
+        as_float_array(x, name, trailing)
+    raise ValueError("the result is not finite: the inputs are too large (overflow)")
+
+
+def pack(parts, *named):
+    """Stack ``parts`` (see :func:`stack_components`) and make sure the result is finite.
+
+    For Python floats (a single value) the test is one subtraction; a batch goes through
+    :func:`finite_or_raise`. ``named`` are the inputs as in :func:`finite_or_raise`.
+
+    >>> pack([1.0, 2.0], (np.ones(2), "a", (2,)))
+    array([1., 2.])
+    """
+    if type(parts[0]) is float and type(parts[-1]) is float:
+        s = sum(parts)
+        if s - s == 0.0:
+            return np.array(parts)
+        return finite_or_raise(np.array(parts), *named)
+    return finite_or_raise(stack_components(parts), *named)
+
+
+CHUNK = 8192
+
+
+def batched(kernel, inputs, out_trailing, chunk=CHUNK):
+    """Apply ``kernel`` to a batch in chunks of ``chunk`` elements and assemble the result.
+
+    ``inputs`` are ``(array, k)`` pairs, ``k`` being the number of trailing (per-element)
+    axes of that array; the leading axes broadcast. ``kernel`` receives the chunks (each
+    with one leading axis) and returns an array of trailing shape ``out_trailing``.
+    Chunks that fit in the processor cache make the many small element-wise operations of
+    a component formula about twice as fast as one pass over a large batch.
+
+    >>> batched(lambda a, b: a + b, [(np.ones((3, 2)), 1), (np.ones(2), 1)], (2,))
+    array([[2., 2.],
+           [2., 2.],
+           [2., 2.]])
+    """
+    shape = np.broadcast_shapes(*(a.shape[:a.ndim - k] for a, k in inputs))
+    n = 1
+    for s in shape:
+        n *= s
+    flat = [np.broadcast_to(a, shape + a.shape[a.ndim - k:]).reshape((n,) + a.shape[a.ndim - k:])
+            for a, k in inputs]
+    if n <= chunk:
+        out = kernel(*flat)
+    else:
+        out = np.empty((n,) + tuple(out_trailing))
+        for start in range(0, n, chunk):
+            out[start:start + chunk] = kernel(*(f[start:start + chunk] for f in flat))
+    return out.reshape(shape + tuple(out_trailing))
+
+
+# --- Checks on components (see dqlab._kernels) ------------------------------------------
+
+
+def unit_quaternion_or_raise(parts, name, tol, subject=None):
+    """Raise unless the quaternion given by its components has norm 1 within ``tol``.
+
+    ``parts`` are four floats or four arrays; ``name`` is the argument, ``subject`` what the
+    message says is not unit (default ``name``, e.g. "the real part of Q").
+
+    >>> unit_quaternion_or_raise((0.0, 0.0, 0.0, 1.0), "q", 1e-9)
+    >>> unit_quaternion_or_raise((0.0, 0.0, 0.0, 0.0), "Q", 1e-9, "the real part of Q")
+    Traceback (most recent call last):
+    ...
+    ValueError: the real part of Q is the zero quaternion, which is not a rotation
+    """
+    w, x, y, z = parts
+    n2 = w * w + x * x + y * y + z * z
+    if isinstance(n2, np.ndarray):
+        if not np.isfinite(n2).all():
+            raise ValueError(f"{name} contains NaN or infinity")
+        bad = ~(np.abs(np.sqrt(n2) - 1.0) <= tol)
+        if bad.any():
+            _raise_not_unit(subject or name, np.sqrt(n2)[bad].flat[0], tol)
+        return
+    if abs(n2 - 1.0) <= tol:  # implies | |q| - 1 | <= tol / 2 (and catches NaN/inf below)
+        return
+    if not n2 - n2 == 0.0:
+        raise ValueError(f"{name} contains NaN or infinity")
+    if not abs(math.sqrt(n2) - 1.0) <= tol:
+        _raise_not_unit(subject or name, math.sqrt(n2), tol)
+
+
+def _raise_not_unit(subject, n, tol):
+    check_tolerance(tol, "tol")
+    if n == 0.0:
+        raise ValueError(f"{subject} is the zero quaternion, which is not a rotation")
+    raise ValueError(
+        f"{subject} must be a unit quaternion (norm 1 within {tol:g}), got norm {n:.12g}; "
+        "normalise it with quaternion_normalize first")
+
+
+def rigid_rows(T, tol):
+    """The top three rows of one (4, 4) float array as lists of Python floats when it is a
+    rigid transform within ``tol`` (finite, orthonormal rotation block with determinant
+    +1, last row ``(0, 0, 0, 1)``); None otherwise, for the caller's full check to say why.
+
+    >>> rigid_rows(np.eye(4), 1e-9)[0]
+    [1.0, 0.0, 0.0, 0.0]
+    >>> rigid_rows(np.diag([1.0, 1.0, -1.0, 1.0]), 1e-9) is None
+    True
+    """
+    a, b, c, d = T.tolist()
+    err, det = orthonormality(a, b, c)  # NaN or inf in R fail this test too
+    t = a[3] + b[3] + c[3]
+    if err <= tol and det > 0.0 and t - t == 0.0 and d == [0.0, 0.0, 0.0, 1.0]:
+        return a, b, c
+    return None
+
+
+def unit_dual_quaternion_or_raise(parts, name, tol):
+    """Raise unless :math:`|q_r| = 1` and :math:`\\langle q_r, q_d\\rangle = 0` within ``tol``.
+
+    >>> unit_dual_quaternion_or_raise((1.0, 0, 0, 0, 0, 0.5, 0, 0), "Q", 1e-9)
+    """
+    rw, rx, ry, rz, dw, dx, dy, dz = parts
+    unit_quaternion_or_raise((rw, rx, ry, rz), name, tol, f"the real part of {name}")
+    dot = rw * dw + rx * dx + ry * dy + rz * dz
+    bad = np.max(np.abs(dot), initial=0.0) if isinstance(dot, np.ndarray) else abs(dot)
+    if not bad - bad == 0.0:
+        raise ValueError(f"{name} contains NaN or infinity")
+    if not bad <= tol:
+        check_tolerance(tol, "tol")
+        raise ValueError(
+            f"{name} must be a unit dual quaternion: <q_r, q_d> = {bad:.3g} should be 0 "
+            f"(tolerance {tol:g}); normalise it with dual_quaternion_normalize first")
+
+
+def rotation_or_raise(name, err, det, tol):
+    """Raise unless ``err`` (largest entry of :math:`|R^T R - I|`, see
+    :func:`dqlab._kernels.orthonormality`) is within ``tol`` and ``det`` is positive.
+
+    >>> rotation_or_raise("R", 0.0, -1.0, 1e-9)
+    Traceback (most recent call last):
+    ...
+    ValueError: R is a reflection (determinant -1), not a rotation
+    """
+    check_tolerance(tol, "tol")
+    if not err <= tol:
+        raise ValueError(
+            f"{name} is not orthonormal: |R^T R - I| reaches {err:.3g} (tolerance {tol:g})")
+    if not det > 0.0:
+        raise ValueError(f"{name} is a reflection (determinant -1), not a rotation")

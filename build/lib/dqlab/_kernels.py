@@ -1,0 +1,289 @@
+r"""Unchecked component formulas shared by every layer of dqlab.
+
+Each function here is one formula written on *components*: its arguments are the entries of
+quaternions, dual quaternions, vectors or matrices, either Python floats (one value, the
+fast path) or numpy arrays of one common shape (a batch, column by column). Nothing is
+checked: the public functions of :mod:`dqlab.quaternion`, :mod:`dqlab.rotations`,
+:mod:`dqlab.dualquat` and :mod:`dqlab.robot` validate their arguments once (with
+:mod:`dqlab._checks`) and then call these.
+
+Conventions: quaternions ``(w, x, y, z)`` with the Hamilton product, dual quaternions
+``(q_r, q_d)`` as eight numbers, matrices row by row.
+
+>>> quaternion_mul(0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0)     # i j = k
+(0.0, 0.0, 0.0, 1.0)
+"""
+
+import math
+
+import numpy as np
+
+# --------------------------------------------------------------------------------------
+# Angles
+
+_TWO_PI = 2.0 * math.pi
+
+
+def wrapped_angle(theta):
+    r"""``theta`` wrapped to :math:`(-\pi, \pi]`: :math:`\theta - 2\pi k` with
+    :math:`k = \operatorname{rint}(\theta / 2\pi)` (exact when :math:`|\theta| < \pi`),
+    then -pi and the roundings of :math:`\theta / 2\pi` moved inside.
+
+    >>> wrapped_angle(-math.pi), wrapped_angle(7.0)
+    (3.141592653589793, 0.7168146928204138)
+    """
+    if type(theta) is float:
+        if -math.pi < theta <= math.pi:
+            return theta
+        w = theta - _TWO_PI * round(theta * (1.0 / _TWO_PI))    # round: half to even, as rint
+        if not abs(w) < math.pi:
+            w = w - _TWO_PI if w > math.pi else (w + _TWO_PI if w <= -math.pi else w)
+        return w
+    w = theta - _TWO_PI * np.rint(theta * (1.0 / _TWO_PI))
+    if w.size and not np.abs(w).max() < np.pi:   # -pi, or a rounding of theta / (2 pi)
+        w = np.where(w > np.pi, w - _TWO_PI, np.where(w <= -np.pi, w + _TWO_PI, w))
+    return w
+
+
+# --------------------------------------------------------------------------------------
+# Quaternions
+
+
+def quaternion_mul(aw, ax, ay, az, bw, bx, by, bz):
+    r"""Hamilton product :math:`a b`, component by component.
+
+    >>> quaternion_mul(0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0)   # j i = -k
+    (0.0, 0.0, 0.0, -1.0)
+    """
+    return (aw * bw - ax * bx - ay * by - az * bz,
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw)
+
+
+def quaternion_rotate(w, x, y, z, vx, vy, vz):
+    r"""The vector :math:`q\,v\,q^*` for a unit quaternion :math:`q = (w, \mathbf u)`.
+
+    With :math:`\mathbf t = 2\,\mathbf u \times \mathbf v`:
+    :math:`\mathbf v' = \mathbf v + w\,\mathbf t + \mathbf u \times \mathbf t`.
+
+    >>> quaternion_rotate(0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0)     # half turn about z
+    (-1.0, 0.0, 0.0)
+    """
+    tx = 2.0 * (y * vz - z * vy)
+    ty = 2.0 * (z * vx - x * vz)
+    tz = 2.0 * (x * vy - y * vx)
+    return (vx + w * tx + (y * tz - z * ty),
+            vy + w * ty + (z * tx - x * tz),
+            vz + w * tz + (x * ty - y * tx))
+
+
+def matrix_entries_from_quaternion(w, x, y, z):
+    """The nine entries (row by row) of the rotation matrix of a unit quaternion.
+
+    >>> matrix_entries_from_quaternion(1.0, 0.0, 0.0, 0.0)
+    (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+    """
+    xx, yy, zz = x * x, y * y, z * z
+    xy, xz, yz = x * y, x * z, y * z
+    wx, wy, wz = w * x, w * y, w * z
+    return (1.0 - 2.0 * (yy + zz), 2.0 * (xy - wz), 2.0 * (xz + wy),
+            2.0 * (xy + wz), 1.0 - 2.0 * (xx + zz), 2.0 * (yz - wx),
+            2.0 * (xz - wy), 2.0 * (yz + wx), 1.0 - 2.0 * (xx + yy))
+
+
+# Positions of the rows of K = 4 q q^T in the tuple returned by shepperd_terms.
+_K_ROWS = ((0, 4, 5, 6), (4, 1, 7, 8), (5, 7, 2, 9), (6, 8, 9, 3))
+
+
+def shepperd_terms(r00, r01, r02, r10, r11, r12, r20, r21, r22):
+    """The ten distinct entries of :math:`K = 4 q q^T` written with the entries of R.
+
+    The diagonal :math:`4w^2, 4x^2, 4y^2, 4z^2`, then :math:`4wx, 4wy, 4wz, 4xy, 4xz, 4yz`
+    (active convention).
+
+    >>> shepperd_terms(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)[:4]
+    (4.0, 0.0, 0.0, 0.0)
+    """
+    tr = r00 + r11 + r22
+    return (1.0 + tr, 1.0 + r00 - r11 - r22, 1.0 - r00 + r11 - r22, 1.0 - r00 - r11 + r22,
+            r21 - r12, r02 - r20, r10 - r01, r01 + r10, r02 + r20, r12 + r21)
+
+
+def quaternion_from_matrix_entries(r00, r01, r02, r10, r11, r12, r20, r21, r22):
+    """Unit quaternion (``w >= 0``) of a rotation matrix given by its nine entries.
+
+    Row k of :math:`K` divided by :math:`2\\sqrt{K_{kk}}` is q, for any k; Shepperd's method
+    takes the row of the largest diagonal entry (it divides by the largest component of q).
+
+    >>> quaternion_from_matrix_entries(-1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0)
+    (0.0, 0.0, 0.0, 1.0)
+    """
+    K = shepperd_terms(r00, r01, r02, r10, r11, r12, r20, r21, r22)
+    if not isinstance(r00, np.ndarray):
+        k = 0
+        for j in (1, 2, 3):
+            if K[j] > K[k]:
+                k = j
+        i, j, m, n = _K_ROWS[k]
+        w, x, y, z = K[i], K[j], K[m], K[n]
+        s = 0.5 / math.sqrt(K[k])
+        if w < 0.0:
+            s = -s  # canonical sign: w >= 0
+        return (w * s, x * s, y * s, z * s)
+    best, row = K[0], [K[i] for i in _K_ROWS[0]]
+    for k in (1, 2, 3):
+        larger = K[k] > best
+        best = np.where(larger, K[k], best)
+        row = [np.where(larger, K[i], r) for i, r in zip(_K_ROWS[k], row, strict=True)]
+    s = 0.5 / np.sqrt(best)
+    s = np.where(row[0] < 0.0, -s, s)
+    return tuple(c * s for c in row)
+
+
+def rotation_vector_from_matrix_entries(r00, r01, r02, r10, r11, r12, r20, r21, r22):
+    r"""The rotation vector :math:`\theta\,\mathbf u` (axis times angle, :math:`\theta
+    \in [0, \pi]`) of a rotation matrix given by its nine entries: its quaternion
+    :math:`(w, \mathbf v)` (Shepperd, :math:`w \ge 0`), then
+    :math:`2 \operatorname{atan2}(\lVert\mathbf v\rVert, w)\,\mathbf v / \lVert\mathbf v
+    \rVert`, and 0 for the identity.
+
+    >>> [round(c, 12) for c in rotation_vector_from_matrix_entries(
+    ...     0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)]               # quarter turn about z
+    [0.0, 0.0, 1.570796326795]
+    """
+    w, x, y, z = quaternion_from_matrix_entries(r00, r01, r02, r10, r11, r12, r20, r21, r22)
+    if type(w) is float:
+        norm_v = math.sqrt(x * x + y * y + z * z)
+        scale = 2.0 * math.atan2(norm_v, w) / norm_v if norm_v > 0.0 else 2.0
+    else:
+        norm_v = np.sqrt(x * x + y * y + z * z)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            scale = np.where(norm_v > 0.0, 2.0 * np.arctan2(norm_v, w) / norm_v, 2.0)
+    return x * scale, y * scale, z * scale
+
+
+def pose_error_entries(a, b):
+    r"""Position and rotation errors between two poses given by their 16 entries, row by row
+    (see :func:`dqlab.ik.targets.pose_errors`): :math:`\lVert p - p^\ast \rVert` and the
+    angle :math:`\operatorname{atan2}(\lVert (M - M^\top)^\vee\rVert, \operatorname{tr}M - 1)`
+    of :math:`M = R R^{\ast\top}`.
+
+    >>> pose_error_entries([1.0, 0, 0, 0.3, 0, 1.0, 0, 0, 0, 0, 1.0, 0, 0, 0, 0, 1.0],
+    ...                    [1.0, 0, 0, 0.0, 0, 1.0, 0, 0, 0, 0, 1.0, 0, 0, 0, 0, 1.0])
+    (0.3, 0.0)
+    """
+    dx, dy, dz = a[3] - b[3], a[7] - b[7], a[11] - b[11]
+
+    def dot(i, j):            # M_ij = R_i . R*_j: row i of R dotted with row j of R*
+        return a[4 * i] * b[4 * j] + a[4 * i + 1] * b[4 * j + 1] + a[4 * i + 2] * b[4 * j + 2]
+
+    vx = dot(1, 2) - dot(2, 1)
+    vy = dot(2, 0) - dot(0, 2)
+    vz = dot(0, 1) - dot(1, 0)
+    trace = dot(0, 0) + dot(1, 1) + dot(2, 2)
+    if type(dx) is float:
+        return (math.sqrt(dx * dx + dy * dy + dz * dz),
+                math.atan2(math.sqrt(vx * vx + vy * vy + vz * vz), trace - 1.0))
+    return (np.sqrt(dx * dx + dy * dy + dz * dz),
+            np.arctan2(np.sqrt(vx * vx + vy * vy + vz * vz), trace - 1.0))
+
+
+# --------------------------------------------------------------------------------------
+# Rotation matrices
+
+
+def orthonormality(a, b, c):
+    """Largest entry of :math:`|R^T R - I|` and :math:`\\det R`, R given by its rows.
+
+    The entries are floats (one matrix) or arrays (a batch: the largest error over the batch
+    and the smallest determinant are returned).
+
+    >>> orthonormality((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, -1.0))
+    (0.0, -1.0)
+    """
+    a0, a1, a2 = a[0], a[1], a[2]
+    b0, b1, b2 = b[0], b[1], b[2]
+    c0, c1, c2 = c[0], c[1], c[2]
+    errs = (abs(a0 * a0 + b0 * b0 + c0 * c0 - 1.0),
+            abs(a1 * a1 + b1 * b1 + c1 * c1 - 1.0),
+            abs(a2 * a2 + b2 * b2 + c2 * c2 - 1.0),
+            abs(a0 * a1 + b0 * b1 + c0 * c1),
+            abs(a0 * a2 + b0 * b2 + c0 * c2),
+            abs(a1 * a2 + b1 * b2 + c1 * c2))
+    det = a0 * (b1 * c2 - b2 * c1) - a1 * (b0 * c2 - b2 * c0) + a2 * (b0 * c1 - b1 * c0)
+    if isinstance(det, np.ndarray):
+        return (float(max(e.max(initial=0.0) for e in errs)),
+                float(det.min(initial=1.0)))
+    return max(errs), det
+
+
+# --------------------------------------------------------------------------------------
+# Dual quaternions
+
+
+def dual_quaternion_mul(a, b):
+    r""":math:`(a_r + \varepsilon a_d)(b_r + \varepsilon b_d) = a_r b_r + \varepsilon (a_r b_d
+    + a_d b_r)` on the eight components of ``a`` and ``b``.
+
+    >>> dual_quaternion_mul((1.0, 0, 0, 0, 0, 0.5, 0, 0), (1.0, 0, 0, 0, 0, 0, 1.0, 0))
+    (1.0, 0.0, 0.0, 0.0, 0.0, 0.5, 1.0, 0.0)
+    """
+    arw, arx, ary, arz, adw, adx, ady, adz = a
+    brw, brx, bry, brz, bdw, bdx, bdy, bdz = b
+    rw, rx, ry, rz = quaternion_mul(arw, arx, ary, arz, brw, brx, bry, brz)
+    d1w, d1x, d1y, d1z = quaternion_mul(arw, arx, ary, arz, bdw, bdx, bdy, bdz)
+    d2w, d2x, d2y, d2z = quaternion_mul(adw, adx, ady, adz, brw, brx, bry, brz)
+    return rw, rx, ry, rz, d1w + d2w, d1x + d2x, d1y + d2y, d1z + d2z
+
+
+def screw_entries(lx, ly, lz, mx, my, mz, c, s, h):
+    r"""The unit dual quaternion of the screw about the line :math:`(\mathbf l, \mathbf m)`.
+
+    ``c, s`` are the cosine and sine of half the angle, ``h`` half the displacement along
+    the axis (see :func:`dqlab.dualquat.dual_quaternion_from_screw`).
+
+    >>> screw_entries(0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.5)
+    (1.0, 0.0, 0.0, 0.0, -0.0, 0.0, 0.0, 0.5)
+    """
+    hc = h * c
+    return (c, s * lx, s * ly, s * lz,
+            -h * s, s * mx + hc * lx, s * my + hc * ly, s * mz + hc * lz)
+
+
+def translation_from_dual_quaternion_entries(rw, rx, ry, rz, dw, dx, dy, dz):
+    r"""The translation :math:`\mathbf t` of a unit dual quaternion, :math:`(0, \mathbf t) =
+    2\, q_d\, q_r^*`, as three components.
+
+    >>> translation_from_dual_quaternion_entries(1.0, 0, 0, 0, 0, 0.5, 1.0, 1.5)
+    (1.0, 2.0, 3.0)
+    """
+    _, tx, ty, tz = quaternion_mul(dw, dx, dy, dz, rw, -rx, -ry, -rz)
+    return 2.0 * tx, 2.0 * ty, 2.0 * tz
+
+
+# --------------------------------------------------------------------------------------
+# Norms
+
+
+def norm_last_axis(a):
+    r"""Euclidean norm over the last axis of an array, without overflow or underflow.
+
+    :math:`\sqrt{\sum a_i^2}` directly where the sum of squares is a normal number (the
+    result is then exactly that of the plain formula), and as
+    :math:`m \sqrt{\sum (a_i / m)^2}` with :math:`m = \max |a_i|` elsewhere (entries near
+    1e±154 and beyond, whose squares overflow or underflow).
+
+    >>> norm_last_axis(np.array([3e200, 4e200])), norm_last_axis(np.array([3e-200, 4e-200]))
+    (array(5.e+200), array(5.e-200))
+    """
+    with np.errstate(over="ignore", under="ignore"):
+        n2 = np.sum(a * a, axis=-1)
+    n = np.array(np.sqrt(n2))
+    risky = ~((n2 > 1e-290) & (n2 < 1e290))
+    if risky.any():
+        sub = a[risky]
+        m = np.max(np.abs(sub), axis=-1)
+        safe = np.where(m > 0.0, m, 1.0)
+        n[risky] = m * np.sqrt(np.sum((sub / safe[..., None]) ** 2, axis=-1))
+    return n

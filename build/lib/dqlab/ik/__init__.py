@@ -1,0 +1,56 @@
+"""Inverse kinematics: closed-form solvers and a numerical solver, one contract for all.
+
+Every solver is called ``solver(robot, target, *, tol, ...)`` and returns an
+:class:`~dqlab.ik.result.IKResult` (the numerical solver also takes its start ``q0``):
+
+- ``dqlab.ik.ur`` (:func:`dqlab.ik.ur_closed_form.ur`) -- every closed-form solution of
+  a UR-family arm, by dual quaternions; its steps are :mod:`dqlab.ik.ur_steps`;
+- ``dqlab.ik.desk_arm`` (:func:`dqlab.ik.desk_arm_closed_form.desk_arm`) -- the 3-DOF
+  desktop arm in closed form (the robot itself is :func:`dqlab.models.desk_arm`);
+- ``dqlab.ik.scara`` (:func:`dqlab.ik.scara_closed_form.scara`) -- the SCARA RSM-5 in
+  closed form;
+- ``dqlab.ik.numerical`` (:func:`dqlab.ik.damped_least_squares.numerical`) -- damped least
+  squares, position-only or full pose, for any chain.
+
+What they share lives in a few small modules: :mod:`dqlab.ik.targets` parses and checks
+the targets once (:func:`~dqlab.ik.targets.parse_targets`) and measures the errors of a pose
+(:func:`~dqlab.ik.targets.pose_errors`); :mod:`dqlab.ik.result` holds the result type and
+how a solver finishes it (:func:`~dqlab.ik.result.finish`,
+:func:`~dqlab.ik.result.target_reasons`); :mod:`dqlab.ik.two_link` solves the planar
+two-link arm. A closed-form solver checks the robot against its
+:class:`dqlab.models.ChainShape`. A new closed-form solver is one new module built from
+these pieces.
+
+Helpers for the UR solutions: ``SOLUTION_ORDER`` (the meaning of the eight rows),
+``ur_parameters``, ``distinct_solutions``, ``equivalent_solutions`` (the 2 pi-equivalents
+within the joint limits) and ``closest_solution``.
+"""
+
+import sys
+
+from . import damped_least_squares, ur_closed_form
+from .damped_least_squares import numerical
+from .desk_arm_closed_form import desk_arm
+from .result import IKResult
+from .scara_closed_form import scara
+from .targets import pose_errors
+from .ur_closed_form import (
+    SOLUTION_ORDER,
+    closest_solution,
+    distinct_solutions,
+    equivalent_solutions,
+    ur,
+    ur_parameters,
+)
+
+__all__ = [
+    "IKResult", "SOLUTION_ORDER", "closest_solution", "desk_arm", "distinct_solutions",
+    "equivalent_solutions", "numerical", "pose_errors", "scara", "ur", "ur_parameters",
+]
+
+# The module paths of earlier versions, kept for code that imports from them:
+# ``from dqlab.ik.ur import ur_parameters`` and ``from dqlab.ik.numerical import pose_errors``
+# load the modules named after what they hold. The attributes ``dqlab.ik.ur`` and
+# ``dqlab.ik.numerical`` are the solver functions.
+sys.modules[__name__ + ".ur"] = ur_closed_form
+sys.modules[__name__ + ".numerical"] = damped_least_squares

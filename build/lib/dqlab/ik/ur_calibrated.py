@@ -1,0 +1,801 @@
+r"""Inverse kinematics of a calibrated UR: the closed form of the nearest exact UR, then Newton.
+
+Every UR leaves the factory with its own kinematic calibration: its :math:`\theta_i, a_i,
+d_i, \alpha_i` differ from the published ones by millimetres and milliradians (read them with
+:mod:`dqlab.ur.calibration`). The calibrated chain no longer has the exact UR shape the closed
+form of :func:`dqlab.ik.ur_closed_form.ur` needs (axes 2, 3, 4 exactly parallel, the others
+exactly perpendicular), so ``dqlab.ik.ur`` hands such a robot to :func:`calibrated_ur`, which
+keeps its contract (every branch, flags, reasons, batches) in three steps:
+
+1. **The nearest exact UR** (:func:`nominal_ur`). Its lengths are read off the calibrated joint
+   axes at :math:`q = 0` in the *arm plane*, the plane through joint 2 perpendicular to its
+   axis: joints 3 and 4 cross it at :math:`P_3, P_4`, and with :math:`P_2` on joint 2,
+
+   .. math::
+
+      a_2 = -\lVert P_3 - P_2\rVert,\quad a_3 = -\lVert P_4 - P_3\rVert,\quad
+      d_4 = (o_4 - P_4)\cdot z_1,
+
+   the joint offsets :math:`\theta^0_2, \theta^0_3, \theta^0_4` being the angles between the
+   successive directions :math:`x_1, (P_3 - P_2)/a_2, (P_4 - P_3)/a_3, x_4` about
+   :math:`z_1`. Joints 1, 5 and 6 keep their calibrated :math:`d_i, \theta^0_i` (their axes
+   meet their neighbours at right angles, where the DH parameters are well conditioned). This
+   reads the same arm whatever the calibrated parameters look like: a controller expresses
+   nearly parallel axes with common normals hundreds of metres away (:math:`d_2 = 305.9` m,
+   :math:`d_3 = -305.7` m), which the arm plane does not see.
+2. **The closed form** of that exact UR gives every branch of every target, with the tolerance
+   widened to twice the distance between the two arms (so that a target at the edge of the
+   calibrated arm's reach, which the exact arm misses by a little, still gets its branches).
+3. **Newton steps on the calibrated chain**, from each branch:
+
+   .. math::
+
+      q \leftarrow q + \bigl(J^\mathsf{T} J + \lambda I\bigr)^{-1} J^\mathsf{T} e(q),\qquad
+      e = \begin{pmatrix} p^\ast - p \\ \tfrac12 (R^\ast R^\mathsf{T}
+          - R R^{\ast\mathsf{T}})^\vee \end{pmatrix},
+
+   with :math:`J` the geometric Jacobian at the TCP and :math:`\lambda = 10^{-12}\,
+   \operatorname{tr}(J^\mathsf{T}J)/6` (a guard at exact singularities, negligible
+   elsewhere); steps longer than half a radian are shortened. A branch stops when its error
+   is below :math:`10^{-12}` (or stops improving); it is valid when forward kinematics of the
+   calibrated chain reproduces the target to ``tol``. A branch that started from a solution
+   of the exact arm but does not get there is kept as an invalid row with its errors and
+   flagged ``"not_converged"``, never dropped silently.
+
+Near a singularity of the calibrated arm the Newton steps converge slowly (the Jacobian is
+nearly singular) and may end on a neighbouring branch; the tests measure how close to the
+wrist, elbow and shoulder singularities every generating configuration is still found.
+"""
+
+import math
+import weakref
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..dualquat import dual_quaternion_from_transform
+from ..models import UR_ALPHA, UR_SHAPE
+from ..robot import Link, Robot
+from ..rotations import wrap_angle
+from ..transforms import transform_inverse
+from .result import IKResult, finish
+from .targets import parse_targets, pose_errors
+
+__all__ = ["calibrated_ur", "nominal_ur", "REASON_NOT_CONVERGED", "MAX_DISCREPANCY"]
+
+#: Why a pose without a valid row has none although the exact arm had branches for it.
+REASON_NOT_CONVERGED = ("calibrated chain: no branch of the nearest exact UR's solution "
+                        "converged to the pose within tol")
+
+#: The largest distance (metres, and radians for the rotation) between a calibrated arm and
+#: its nearest exact UR that :func:`nominal_ur` accepts: calibrations differ by millimetres;
+#: a robot farther off is not a calibrated UR.
+MAX_DISCREPANCY = 0.05
+
+_STOP = 0.1            # a Newton branch stops when its errors are below _STOP tol
+_DAMPING = 1e-12       # lambda = _DAMPING tr(J^T J) / 6
+_MAX_STEP = 0.5        # longest Newton step, rad (a longer one is shortened)
+_GIVE_UP_AFTER = 8     # steps after which a branch must keep halving its error
+_BLOCK = 2048          # branches per block of the Newton steps
+_RESTART_ITER = 10     # Newton steps of a restart at most
+_FEW_ROWS = 64         # up to this many branches, the kernel working on whole matrices
+_SAMPLES = np.random.default_rng(20260531).uniform(-np.pi, np.pi, (64, 6))
+
+
+@dataclass(frozen=True)
+class _Nominal:
+    """What a calibrated robot's solves need, computed once per robot: the nearest exact UR
+    (bare), the largest position and rotation differences between the two arms on sample
+    configurations, and the calibrated chain's constants for the Newton kernels."""
+
+    robot: Robot
+    position_gap: float
+    rotation_gap: float
+    links: tuple          # per link (cos alpha, sin alpha, a, d, theta offset)
+
+
+_NOMINAL = weakref.WeakKeyDictionary()        # calibrated robot -> _Nominal (links immutable)
+
+
+def nominal_ur(robot: Robot) -> Robot:
+    r"""The exact UR nearest a calibrated one: the arm whose closed form starts the Newton steps.
+
+    Read off the calibrated joint axes at :math:`q = 0` (see the module's step 1): the
+    lengths :math:`d_1, a_2, a_3, d_4, d_5, d_6` and the joint offsets of an arm with the
+    exact UR twists :math:`\alpha = (\pi/2, 0, 0, \pi/2, -\pi/2, 0)` and
+    :math:`a_1 = a_4 = a_5 = a_6 = d_2 = d_3 = 0`. For an exact UR it is the same arm.
+
+    Parameters
+    ----------
+    robot : dqlab.robot.Robot
+        A calibrated UR: six revolute joints in standard DH whose parameters may differ from
+        a UR's by millimetres and milliradians (or be written with far common normals, as a
+        controller writes them). Its base and tool are not part of the answer.
+
+    Returns
+    -------
+    Robot
+        UR-shaped (:data:`dqlab.models.UR_SHAPE`), no base and no tool, the calibrated
+        robot's joint limits.
+
+    Raises
+    ------
+    ValueError
+        If the robot is not six revolute joints in standard DH, or if the nearest exact UR
+        is farther than :data:`MAX_DISCREPANCY` from it (0.05 m or 0.05 rad on sample
+        configurations): then it is not a calibrated UR.
+
+    Examples
+    --------
+    A UR5e whose upper arm is 1 mm longer than published, and whose shoulder turns 1 mrad
+    about the upper arm's direction:
+
+    >>> from dqlab.models import ur5e
+    >>> from dqlab.identify import dh_parameters, dh_parameter_names, robot_from_dh_parameters
+    >>> p = dh_parameters(ur5e())
+    >>> names = dh_parameter_names(ur5e())
+    >>> p[names.index("a2")] -= 0.001
+    >>> p[names.index("alpha2")] += 0.001
+    >>> calibrated = robot_from_dh_parameters(ur5e(), p)
+    >>> exact = nominal_ur(calibrated)
+    >>> round(exact.links[1].a, 6), exact.links[1].alpha
+    (-0.426, 0.0)
+    """
+    return _nominal(robot).robot
+
+
+def _nominal(robot):
+    """The :class:`_Nominal` of a calibrated robot, computed once."""
+    try:
+        return _NOMINAL[robot]
+    except (KeyError, TypeError):
+        pass
+    links = getattr(robot, "links", None)
+    if (links is None or robot.convention != "dh" or robot.n != 6
+            or not all(lk.is_revolute for lk in links)):
+        raise ValueError("a calibrated UR must be six revolute joints in standard DH, got "
+                         f"{robot!r}")
+    for i, (lk, alpha) in enumerate(zip(links, UR_ALPHA, strict=True), start=1):
+        if not abs(math.remainder(lk.alpha - alpha, 2 * math.pi)) <= MAX_DISCREPANCY:
+            raise ValueError(f"link {i} of a calibrated UR twists by about {alpha:.4g} rad, "
+                             f"not {lk.alpha!r}")
+    bare = Robot(links, convention="dh")
+    F = bare.fk(np.zeros(6), all_frames=True)              # frames 0..6 (and the TCP = 6)
+    x, z, o = F[:, :3, 0], F[:, :3, 2], F[:, :3, 3]
+    n = z[1]                                              # the arm plane's normal, joint 2
+    P2 = o[1]
+    P3 = o[2] + ((P2 - o[2]) @ n) / (z[2] @ n) * z[2]     # joint 3 crosses the arm plane
+    P4 = o[3] + ((P2 - o[3]) @ n) / (z[3] @ n) * z[3]     # joint 4 crosses the arm plane
+    a2 = -float(np.linalg.norm(P3 - P2))
+    a3 = -float(np.linalg.norm(P4 - P3))
+    x2, x3 = (P3 - P2) / a2, (P4 - P3) / a3
+    offsets = [links[0].theta_offset, _angle_about(x[1], x2, n), _angle_about(x2, x3, n),
+               _angle_about(x3, x[4], n), links[4].theta_offset, links[5].theta_offset]
+    d = [links[0].d, 0.0, 0.0, float((o[4] - P4) @ n), links[4].d, links[5].d]
+    a = [0.0, a2, a3, 0.0, 0.0, 0.0]
+    exact = Robot([Link(a=ai, alpha=al, d=di, theta_offset=t, limits=lk.limits)
+                   for ai, al, di, t, lk in zip(a, UR_ALPHA, d, offsets, links, strict=True)],
+                  convention="dh", name=f"{robot.name or 'calibrated UR'} (nearest exact UR)")
+    UR_SHAPE.check(exact)
+    position_gap, rotation_gap = (float(e.max()) for e in pose_errors(exact.fk(_SAMPLES),
+                                                                      bare.fk(_SAMPLES)))
+    if not (position_gap <= MAX_DISCREPANCY and rotation_gap <= MAX_DISCREPANCY):
+        raise ValueError(f"the nearest exact UR is {position_gap:.3g} m and "
+                         f"{rotation_gap:.3g} rad from this robot on sample configurations "
+                         f"(a calibrated UR differs by millimetres; at most "
+                         f"{MAX_DISCREPANCY} is accepted)")
+    constants = tuple((math.cos(lk.alpha), math.sin(lk.alpha), lk.a, lk.d, lk.theta_offset)
+                      for lk in links)
+    nominal = _Nominal(exact, position_gap, rotation_gap, constants)
+    _NOMINAL[robot] = nominal
+    return nominal
+
+
+def _angle_about(u, v, n):
+    """The angle (rad) from the direction u to the direction v about the unit axis n."""
+    return float(math.atan2(np.cross(u, v) @ n, u @ v - (u @ n) * (v @ n)))
+
+
+def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 1e-9,
+                  tool: ArrayLike | None = None, q_ref: ArrayLike | None = None,
+                  singular_tol: float = 5e-7, pose_tol: float = 1e-9,
+                  residuals: str = "equations", max_iter: int = 16) -> IKResult:
+    r"""Every inverse-kinematics solution of a calibrated UR: ``dqlab.ik.ur`` for such a robot.
+
+    ``dqlab.ik.ur`` calls this when its robot has not the exact UR shape; call that instead.
+    The steps are the module's: the closed form of :func:`nominal_ur`, then Newton steps on
+    the calibrated chain from every branch.
+
+    Parameters
+    ----------
+    robot : dqlab.robot.Robot
+        A calibrated UR (see :func:`nominal_ur`); its base and tool are taken into account.
+    target : array_like, shape (..., 4, 4) or (..., 8)
+        TCP poses in the world frame (transforms or unit dual quaternions).
+    closed_form : callable
+        The closed-form solver of an exact UR, ``dqlab.ik.ur`` itself (it passes itself, which
+        keeps the imports between the two modules one-way).
+    tol, tool, q_ref, singular_tol, pose_tol
+        As for ``dqlab.ik.ur``. ``q_ref`` reaches the closed form (the member of a wrist
+        family it starts from); ``singular_tol`` applies to the calibrated arm's own
+        singularity measures (see Returns).
+    residuals : {"equations", "fk"}
+        Accepted for ``dqlab.ik.ur``'s signature; a calibrated chain has no solved equations,
+        so the errors always come from forward kinematics.
+    max_iter : int
+        Newton steps per branch at most.
+
+    Returns
+    -------
+    IKResult
+        As ``dqlab.ik.ur``'s: ``solutions`` (..., 8, 6) in the exact arm's branch order
+        (:data:`dqlab.ik.SOLUTION_ORDER`), wrapped to :math:`(-\pi, \pi]`; ``valid``; the
+        errors of forward kinematics of the calibrated chain for every branch that was
+        polished (the exact arm's errors for a branch it could not start); ``flags``
+        ``"wrist_singular"``, ``"elbow_singular"``, ``"shoulder_singular"`` measured on the
+        calibrated arm at its valid rows (the sines of the angles between joint axes 4 and
+        6 and between the common normals of joints 2-3 and 3-4, and the distance of the
+        wrist centre from the plane of joint 1 and joint 2's direction over :math:`d_4`),
+        ``"unreachable"``, and ``"not_converged"`` (a branch started from a solution of the
+        exact arm did not converge; its row is invalid and keeps its errors); ``reason``.
+
+    Raises
+    ------
+    ValueError
+        As :func:`nominal_ur` for a robot that is not a calibrated UR, and as ``dqlab.ik.ur``
+        for a bad target, tool or tolerance.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dqlab.ik import ur
+    >>> from dqlab.models import ur5e
+    >>> from dqlab.identify import dh_parameters, robot_from_dh_parameters
+    >>> p = dh_parameters(ur5e()) + np.random.default_rng(3).uniform(-2e-3, 2e-3, 24)
+    >>> robot = robot_from_dh_parameters(ur5e(), p)          # off by up to 2 mm and 2 mrad
+    >>> q = np.array([0.3, -1.2, 1.1, -0.4, 0.9, 0.2])
+    >>> result = ur(robot, robot.fk(q))
+    >>> int(result.count), bool(result.position_error[result.valid].max() <= 1e-10)
+    (8, True)
+    >>> bool(np.any(np.abs(result.solutions - q).max(axis=-1) < 1e-9))
+    True
+    """
+    nominal = _nominal(robot)
+    if residuals not in ("fk", "equations"):
+        raise ValueError(f"residuals must be 'fk' or 'equations', got {residuals!r}")
+    targets = parse_targets(target, tol=pose_tol)
+    batch = targets.batch
+    X_W = targets.transforms.reshape((-1, 4, 4))
+    n = X_W.shape[0]
+    X_6T = robot.tool if tool is None else _checked_tool(tool, pose_tol)
+    X_0T = transform_inverse(robot.base) @ X_W          # the targets in frame 0 ...
+    X_T6 = transform_inverse(X_6T)
+    X_06 = X_0T @ X_T6                                  # ... and the flanges they mean
+    wide = max(tol, 2.0 * nominal.position_gap)
+
+    def exact_solutions(X, tol=wide):
+        return closed_form(nominal.robot, X[0] if X.shape[0] == 1 and batch == () else X,
+                           tol=tol, q_ref=q_ref, singular_tol=singular_tol)
+
+    start = exact_solutions(X_06)
+    q0 = start.solutions.reshape(n * 8, 6).copy()
+    errors = start.position_error.reshape(n * 8)
+    found = start.valid.reshape(n * 8)                 # the branches the exact arm found
+    exact = found & (errors <= tol)                     # ... of them, its exact solutions
+    near = ~found & (errors <= 10.0 * wide)             # those it misses by a little more
+    started = found.copy()
+    if near.any():                                      # (as near a wrist singularity)
+        poses = np.flatnonzero(near.reshape(n, 8).any(axis=1))
+        again = exact_solutions(X_06[poses], tol=10.0 * wide)
+        rows = (8 * poses[:, None] + np.arange(8)).reshape(-1)
+        use = near[rows] & again.valid.reshape(-1)
+        q0[rows[use]] = again.solutions.reshape(-1, 6)[use]
+        started[rows[use]] = True
+    chain = (nominal.links, X_6T)
+    polished = _Polished.empty(n)
+    rows = np.flatnonzero(started)
+    polished.record(rows, *_newton(*chain, q0[rows], X_0T[rows // 8], tol, max_iter))
+    extra = np.flatnonzero(started & ~found)            # a branch the exact arm misses: keep
+    polished.converged[extra] &= polished.are_new(extra, polished.q[extra],   # it if new
+                                                  polished.unique() & found)
+    _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, tol, max_iter)
+    done = np.flatnonzero(polished.done)
+    pe = start.position_error.reshape(n * 8).copy()
+    re = start.rotation_error.reshape(n * 8).copy()
+    pe[done], re[done] = pose_errors(polished.X[done], X_0T[done // 8])
+    valid = polished.converged & (pe <= tol) & (re <= tol)
+    flags = _flags(polished, valid, singular_tol, nominal.robot.links[3].d)
+    flags["not_converged"] = (exact & ~valid).reshape(n, 8).any(axis=1)
+    reason = np.full(n, "", dtype=object)
+    none = ~valid.reshape(n, 8).any(axis=1)
+    started = start.valid.reshape(n, 8).any(axis=1)
+    reason[none & started] = REASON_NOT_CONVERGED
+    reason[none & ~started] = start.reason.reshape(n)[none & ~started]
+    return finish(wrap_angle(polished.q).reshape(batch + (8, 6)), valid.reshape(batch + (8,)),
+                  pe.reshape(batch + (8,)), re.reshape(batch + (8,)),
+                  {name: f.reshape(batch) for name, f in flags.items()},
+                  reason.reshape(batch))
+
+
+@dataclass
+class _Polished:
+    """The branches of n poses after Newton, row ``8 i + k`` for branch k of pose i: joint
+    vectors ``q`` (8 n, 6), which rows were polished (``done``) and converged, the TCP pose
+    ``X`` (8 n, 4, 4) in frame 0 and the singularity measures (3, 8 n) at ``q``."""
+
+    q: np.ndarray
+    done: np.ndarray
+    converged: np.ndarray
+    X: np.ndarray
+    measures: np.ndarray
+
+    @classmethod
+    def empty(cls, n):
+        return cls(np.zeros((8 * n, 6)), np.zeros(8 * n, dtype=bool),
+                   np.zeros(8 * n, dtype=bool), np.zeros((8 * n, 4, 4)), np.zeros((3, 8 * n)))
+
+    def record(self, rows, q, converged, X, measures):
+        self.q[rows], self.converged[rows], self.X[rows] = q, converged, X
+        self.measures[:, rows] = measures
+        self.done[rows] = True
+
+    def unique(self):
+        """Converged rows that do not repeat a converged row of lower number of their pose
+        (joint-wise within 1e-6 rad, modulo 2 pi)."""
+        Q = np.where(self.converged[:, None], self.q, np.nan).reshape(-1, 8, 6)
+        with np.errstate(invalid="ignore"):
+            same = np.abs(wrap_angle(Q[:, :, None] - Q[:, None])).max(axis=-1) < 1e-6
+        repeats = (same & np.tri(8, k=-1, dtype=bool)).any(axis=-1).reshape(-1)
+        return self.converged & ~repeats
+
+    def are_new(self, rows, q, unique):
+        """Whether each joint vector ``q[j]`` differs from every unique row of the pose of
+        ``rows[j]``."""
+        Q = np.where(unique[:, None], self.q, np.nan).reshape(-1, 8, 6)[rows // 8]
+        with np.errstate(invalid="ignore"):
+            same = np.abs(wrap_angle(Q - q[:, None])).max(axis=-1) < 1e-6
+        return ~same.any(axis=-1)
+
+    def is_new(self, row, q, unique):
+        """Whether the joint vector ``q`` (6,) differs from every unique row of the pose of
+        ``row``."""
+        pose = slice(row - row % 8, row - row % 8 + 8)
+        others = self.q[pose][unique[pose]]
+        return not (np.abs(wrap_angle(others - q)).max(axis=-1) < 1e-6).any()
+
+
+def _checked_tool(tool, pose_tol):
+    """The tool transform asked for, checked as ``dqlab.ik.ur`` checks it."""
+    dual_quaternion_from_transform(tool, tol=pose_tol, name="tool")
+    tool = np.asarray(tool, dtype=float)
+    if tool.shape != (4, 4):
+        raise ValueError(f"tool must have shape (4, 4), got {tool.shape}")
+    return tool
+
+
+def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, tol, max_iter):
+    r"""Restart the branches missing from a pose: converged onto another branch's solution
+    (near a singularity the exact arm's start may lie on the wrong side of the calibrated
+    arm's), or not converged. Restarts, in turn:
+
+    1. the exact arm's solutions of the pose corrected by the two arms' difference at a
+       solution :math:`q^\ast` the pose already has,
+       :math:`X' = X\, X_{cal}(q^\ast)^{-1} X_{exact}(q^\ast)`, which the exact arm reaches
+       in :math:`q^\ast` exactly and, nearby, in the other branches;
+    2. a sibling's solution flipped by the exact arm's elbow or wrist flip (:func:`_flip`);
+       and, for a branch the exact arm ``found`` that repeats another or did not converge
+       from a start near a singularity (from a regular start it has no solution nearby),
+       its own start ``q0`` and the solutions of the other shoulder's branches, when near a
+       singularity, moved along the calibrated arm's most singular direction there (by
+       0.05, 0.2 and 0.6 rad either way): the two solutions a singularity separates lie on
+       either side.
+
+    The first restart that converges to a solution the pose does not have yet replaces the
+    branch; ``polished`` is updated in place."""
+    unique = polished.unique()
+    missing = polished.done & ~unique
+    if not missing.any():
+        return
+    poses = np.flatnonzero(missing.reshape(-1, 8).any(axis=1)
+                           & unique.reshape(-1, 8).any(axis=1))
+    if poses.size:
+        first = 8 * poses + np.argmax(unique.reshape(-1, 8)[poses], axis=1)
+        X_cal6 = polished.X[first] @ X_T6               # the calibrated flange at q*
+        X_exact6 = nominal.robot.fk(polished.q[first])
+        corrected = exact_solutions(X_0T[poses] @ X_T6 @ transform_inverse(X_cal6)
+                                    @ X_exact6)
+        rows = (8 * poses[:, None] + np.arange(8)).reshape(-1)
+        use = missing[rows] & corrected.valid.reshape(-1)
+        _restart(chain, polished, unique, rows[use], corrected.solutions.reshape(-1, 6)[use],
+                 X_0T, tol, max_iter)
+    wanted = np.flatnonzero(polished.done & ~unique)
+    if not wanted.size:
+        return
+    owners, starts = [], []
+    for bits in (2, 1, 3):                              # elbow, wrist, both
+        sibling = wanted ^ bits
+        ok = unique[sibling]
+        owners.append(wanted[ok])
+        starts.append(_flip(nominal.robot, polished.q[sibling[ok]], bits))
+    kernel = _MatrixChain(*chain)
+    wanted = wanted[found[wanted]]
+    failed = wanted[~polished.converged[wanted]]        # restart those only near a
+    if failed.size:                                     # singularity (else: no solution)
+        sigma = np.linalg.svd(kernel.jacobian(kernel.frames(q0[failed])), compute_uv=False)
+        wanted = np.union1d(wanted[polished.converged[wanted]],
+                            failed[sigma[:, -1] < 1e-2 * sigma[:, 0]])
+    bases = [(wanted, q0[wanted])]                      # the branch's own start
+    for bits in (4, 5, 6, 7):                           # the other shoulder's solutions
+        sibling = wanted ^ bits
+        ok = unique[sibling]
+        bases.append((wanted[ok], polished.q[sibling[ok]]))
+    for rows, q in bases:
+        if rows.size:
+            _, sigma, V = np.linalg.svd(kernel.jacobian(kernel.frames(q)))
+            near = sigma[:, -1] < 1e-2 * sigma[:, 0]     # only near a singularity
+            for t in (0.05, -0.05, 0.2, -0.2, 0.6, -0.6):
+                owners.append(rows[near])
+                starts.append(q[near] + t * V[near, -1])
+    _restart(chain, polished, unique, np.concatenate(owners), np.concatenate(starts), X_0T,
+             tol, max_iter)
+
+
+def _restart(chain, polished, unique, owners, starts, X_0T, tol, max_iter):
+    """Newton from ``starts`` (m, 6) for the rows ``owners`` (m,); the first start of a row
+    that converges to a solution its pose does not have replaces the row."""
+    if not owners.size:
+        return
+    q, converged, X, measures = _newton(*chain, starts, X_0T[owners // 8], tol,
+                                        min(max_iter, _RESTART_ITER))
+    new = converged & polished.are_new(owners, q, unique)
+    fixed = np.zeros(unique.size, dtype=bool)
+    for j in np.flatnonzero(new):                       # in the order of the starts
+        row = owners[j]
+        if fixed[row] or not polished.is_new(row, q[j], unique):   # taken meanwhile
+            continue
+        polished.record(row, q[j], True, X[j], measures[:, j])
+        unique[row] = fixed[row] = True
+
+
+def _flip(exact, q, bits):
+    r"""The exact arm's other elbow (``bits & 2``) and wrist (``bits & 1``) solutions of the
+    joint vectors ``q`` (m, 6) for the same pose: with :math:`\theta = q + \theta^0`, the
+    wrist flip :math:`(\theta_4 + \pi, -\theta_5, \theta_6 + \pi)` and the elbow flip
+    :math:`(\theta_2 + 2\beta, -\theta_3, \theta_4 + 2\theta_3 - 2\beta)`,
+    :math:`\beta = \operatorname{atan2}(a_3 \sin\theta_3, a_2 + a_3 \cos\theta_3)`."""
+    offsets = np.array([lk.theta_offset for lk in exact.links])
+    a2, a3 = exact.links[1].a, exact.links[2].a
+    t = q + offsets
+    if bits & 2:
+        beta = np.arctan2(a3 * np.sin(t[:, 2]), a2 + a3 * np.cos(t[:, 2]))
+        t[:, 1], t[:, 2], t[:, 3] = (t[:, 1] + 2.0 * beta, -t[:, 2],
+                                     t[:, 3] + 2.0 * t[:, 2] - 2.0 * beta)
+    if bits & 1:
+        t[:, 3], t[:, 4], t[:, 5] = t[:, 3] + np.pi, -t[:, 4], t[:, 5] + np.pi
+    return t - offsets
+
+
+def _newton(links, tool, q, X_target, tol, max_iter):
+    """Newton steps from the joint vectors ``q`` (m, 6) towards the poses ``X_target``
+    (m, 4, 4) of frame 0, until each row's position and rotation errors (Euclidean) are
+    below ``_STOP tol``, or it stops making progress (after ``_GIVE_UP_AFTER`` steps, less
+    than halving its error in two steps), or ``max_iter`` steps. Returns the joint vectors,
+    whether each converged, the TCP poses (m, 4, 4) and the singularity measures (3, m) at
+    them. Many rows go through in blocks (temporaries that stay in the cache)."""
+    if q.shape[0] > _BLOCK:
+        parts = [_newton(links, tool, q[i:i + _BLOCK], X_target[i:i + _BLOCK], tol, max_iter)
+                 for i in range(0, q.shape[0], _BLOCK)]
+        return (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
+                np.concatenate([p[2] for p in parts]), np.concatenate([p[3] for p in parts],
+                                                                      axis=1))
+    m = q.shape[0]
+    chain = _chain(links, tool, m)
+    q = q.copy()
+    frames = chain.frames(q)
+    targets = chain.targets(X_target)
+    size = np.full(m, np.inf)                  # |e| at the current q of each row
+    before = np.full((2, m), np.inf)           # ... and at the two previous iterates
+    stop = _STOP * tol
+    active = np.arange(m)
+    for iteration in range(max_iter + 1):
+        whole = active.size == m
+        part = frames if whole else chain.take(frames, active)
+        e = chain.residual(part, targets if whole else chain.take(targets, active))
+        ee = e * e
+        before[:, active] = before[1, active], size[active]
+        size[active] = np.sqrt(np.maximum(ee[:, :3].sum(axis=1), ee[:, 3:].sum(axis=1)))
+        keep = size[active] > stop             # NaN stops too
+        if iteration >= _GIVE_UP_AFTER:        # no longer making progress: give up
+            keep &= size[active] < 0.5 * before[0, active]
+        if iteration == max_iter or not keep.any():
+            break
+        if not keep.all():
+            active, part, e = active[keep], chain.take(part, np.flatnonzero(keep)), e[keep]
+        step = chain.newton_step(part, e)
+        longest = np.abs(step).max(axis=1, keepdims=True)
+        step *= np.minimum(1.0, _MAX_STEP / np.maximum(longest, 1e-300))
+        q[active] += step
+        chain.put(frames, active, q[active])
+    converged = size <= stop
+    lost = ~np.isfinite(q).all(axis=1)         # a step that overflowed: back to zero
+    if lost.any():
+        q[lost] = np.where(np.isfinite(q[lost]), q[lost], 0.0)
+        chain.put(frames, np.flatnonzero(lost), q[lost])
+    return q, converged, chain.transforms(frames), chain.singularity_measures(frames)
+
+
+def _flags(polished, valid, singular_tol, d4):
+    """The singularity and reach flags (n,) of the calibrated arm, over the valid rows."""
+    wrist, elbow, shoulder = polished.measures
+    flags = {}
+    for name, measure in (("wrist_singular", wrist), ("shoulder_singular", shoulder / d4),
+                          ("elbow_singular", elbow)):
+        flags[name] = (valid & (measure < singular_tol)).reshape(-1, 8).any(axis=1)
+    flags["unreachable"] = ~valid.reshape(-1, 8).any(axis=1)
+    return flags
+
+
+def _chain(links, tool, m):
+    """The Newton kernel for m branches: whole matrices for a few (one pose), entries for
+    many (a batch)."""
+    return (_MatrixChain if m <= _FEW_ROWS else _EntryChain)(links, tool)
+
+
+class _MatrixChain:
+    r"""Forward kinematics, residual and Newton step of a calibrated arm on whole matrices:
+    frames (m, 7, 4, 4) (frame 0, frames 1..5 and the TCP, in the chain's frame 0), a few
+    numpy calls per step whatever m. The kernel of one pose's branches; tested equal to
+    :meth:`dqlab.robot.Robot.fk_with_jacobian`.
+
+    Link i is :math:`A_i = \cos\theta_i K_i^c + \sin\theta_i K_i^s + K_i^1` (standard DH,
+    the tool folded into :math:`A_6`), and the frames are the prefix products
+    :math:`A_1 \cdots A_i`, computed in three rounds of products."""
+
+    def __init__(self, links, tool):
+        K = np.zeros((6, 3, 4, 4))
+        for i, (ca, sa, a, d, _) in enumerate(links):
+            K[i, 0] = [[1, 0, 0, a], [0, ca, -sa, 0], [0, 0, 0, 0], [0, 0, 0, 0]]
+            K[i, 1] = [[0, -ca, sa, 0], [1, 0, 0, a], [0, 0, 0, 0], [0, 0, 0, 0]]
+            K[i, 2] = [[0, 0, 0, 0], [0, 0, 0, 0], [0, sa, ca, d], [0, 0, 0, 1]]
+        K[5] = K[5] @ tool
+        self.K = K.reshape(6, 3, 16)
+        self.offsets = np.array([lk[4] for lk in links])
+
+    def frames(self, q):
+        m = q.shape[0]
+        cs = np.empty((m, 6, 1, 3))
+        cs[..., 2] = 1.0
+        theta = q + self.offsets
+        np.cos(theta, out=cs[:, :, 0, 0])
+        np.sin(theta, out=cs[:, :, 0, 1])
+        F = np.empty((m, 7, 4, 4))
+        F[:, 0] = np.eye(4)
+        P = F[:, 1:]
+        P[...] = (cs @ self.K).reshape(m, 6, 4, 4)      # the links A_1 .. A_6 (tool)
+        P[:, 1:] = P[:, :-1] @ P[:, 1:]                  # prefix products in three rounds
+        P[:, 2:] = P[:, :-2] @ P[:, 2:]
+        P[:, 4:] = P[:, :-4] @ P[:, 4:]
+        return F
+
+    @staticmethod
+    def take(F, rows):
+        return F[rows]
+
+    def put(self, F, rows, q):
+        F[rows] = self.frames(q)
+
+    @staticmethod
+    def targets(X):
+        return X
+
+    @staticmethod
+    def transforms(F):
+        """The TCP poses (m, 4, 4) in frame 0."""
+        return F[:, 6]
+
+    @staticmethod
+    def residual(F, X_target):
+        """e (m, 6): the position error and the rotation vector (small angles) from the TCP
+        to the target, in frame 0."""
+        E = X_target[:, :3, :3] @ np.swapaxes(F[:, 6, :3, :3], -1, -2)
+        e = np.empty((F.shape[0], 6))
+        e[:, :3] = X_target[:, :3, 3] - F[:, 6, :3, 3]
+        e[:, 3:] = 0.5 * (E.reshape(-1, 9)[:, [7, 2, 3]] - E.reshape(-1, 9)[:, [5, 6, 1]])
+        return e
+
+    @staticmethod
+    def jacobian(F):
+        """J (m, 6, 6) at the TCP, in frame 0, linear rows first."""
+        z, r = F[:, :6, :3, 2], F[:, 6, None, :3, 3] - F[:, :6, :3, 3]
+        J = np.empty((F.shape[0], 6, 6))
+        J[:, 0] = z[..., 1] * r[..., 2] - z[..., 2] * r[..., 1]
+        J[:, 1] = z[..., 2] * r[..., 0] - z[..., 0] * r[..., 2]
+        J[:, 2] = z[..., 0] * r[..., 1] - z[..., 1] * r[..., 0]
+        J[:, 3:] = np.swapaxes(z, -1, -2)
+        return J
+
+    def newton_step(self, F, e):
+        """The damped Newton step (J^T J + lambda I)^-1 J^T e of every row (m, 6)."""
+        J = self.jacobian(F)
+        JT = np.swapaxes(J, -1, -2)
+        H = JT @ J
+        H[:, _DIAGONAL, _DIAGONAL] += (_DAMPING / 6.0) * np.trace(H, axis1=1, axis2=2)[:, None]
+        return np.linalg.solve(H, JT @ e[..., None])[..., 0]
+
+    @staticmethod
+    def singularity_measures(F):
+        """(3, m): |sin| of the angle between joint axes 4 and 6, |sin| of the elbow angle
+        (between the common normals x_2 and x_3) and the wrist centre's distance from the
+        plane of joint 1 and joint 2's direction."""
+        return _measures(F[:, 1, :3, 2], F[:, 3, :3, 2], F[:, 5, :3, 2], F[:, 2, :3, 0],
+                         F[:, 3, :3, 0], F[:, 5, :3, 3])
+
+
+def _measures(z1, z3, z5, x2, x3, o5):
+    """The three singularity measures (3, m) from the vectors (m, 3) they need: |z3 x z5|,
+    |x2 x x3| and |(o5 . (z0 x z1))| / |z0 x z1| with z0 = (0, 0, 1)."""
+    a, b = np.stack([z3, x2]), np.stack([z5, x3])                  # (2, m, 3)
+    cross = a[..., [1, 2, 0]] * b[..., [2, 0, 1]] - a[..., [2, 0, 1]] * b[..., [1, 2, 0]]
+    sines = np.sqrt((cross * cross).sum(axis=-1))                   # (2, m)
+    shoulder = (np.abs(z1[:, 0] * o5[:, 1] - z1[:, 1] * o5[:, 0])
+                / np.hypot(z1[:, 0], z1[:, 1]))
+    return np.concatenate([sines, shoulder[None]])
+
+
+_DIAGONAL = np.arange(6)
+
+
+class _EntryChain:
+    """The same as :class:`_MatrixChain` on entries: one array per entry of the frames with
+    the m branches along it, arithmetic written out (a fixed number of numpy calls per
+    entry, none per branch): the kernel of a batch. Frames are an array (48, m) holding
+    z_1..z_5, o_1..o_5 (frames 1..5), x_2, x_3, the TCP position and its rotation matrix row
+    by row; targets an array (12, m), rotation row by row then position."""
+
+    def __init__(self, links, tool):
+        self.links = links
+        self.tool = tool.tolist()
+        self.no_tool = bool(np.array_equal(tool, np.eye(4)))
+
+    def frames(self, q):
+        qT = np.ascontiguousarray(q.T)
+        (ca, sa, a, d, t0) = self.links[0]
+        theta = qT[0] + t0
+        c, s = np.cos(theta), np.sin(theta)
+        x, y, z = (c, s, 0.0), (-ca * s, ca * c, sa), (sa * s, -sa * c, ca)
+        o = (a * c, a * s, d)
+        zs, os_, xs = [z], [o], [x]
+        for ca, sa, a, d, t0 in self.links[1:]:
+            theta = qT[len(zs)] + t0
+            c, s = np.cos(theta), np.sin(theta)
+            xn = tuple(c * xk + s * yk for xk, yk in zip(x, y, strict=True))
+            yp = tuple(c * yk - s * xk for xk, yk in zip(x, y, strict=True))
+            o = tuple(ok + d * zk + a * xk for ok, zk, xk in zip(o, z, xn, strict=True))
+            y = tuple(ca * yk + sa * zk for yk, zk in zip(yp, z, strict=True))
+            z = tuple(ca * zk - sa * yk for yk, zk in zip(yp, z, strict=True))
+            x = xn
+            zs.append(z)
+            os_.append(o)
+            xs.append(x)
+        (t00, t01, t02, tx), (t10, t11, t12, ty), (t20, t21, t22, tz), _ = self.tool
+        if self.no_tool:
+            p, R = list(o), [(x[k], y[k], z[k]) for k in range(3)]            # R by rows
+        else:
+            p = [o[k] + tx * x[k] + ty * y[k] + tz * z[k] for k in range(3)]
+            R = [(x[k] * t00 + y[k] * t10 + z[k] * t20, x[k] * t01 + y[k] * t11 + z[k] * t21,
+                  x[k] * t02 + y[k] * t12 + z[k] * t22) for k in range(3)]
+        entries = [v for vec in (*zs[:5], *os_[:5], xs[1], xs[2]) for v in vec]
+        entries += p + [v for row in R for v in row]
+        out = np.empty((48, q.shape[0]))
+        for k, v in enumerate(entries):
+            out[k] = v
+        return out
+
+    @staticmethod
+    def take(F, rows):
+        return F[:, rows]
+
+    def put(self, F, rows, q):
+        F[:, rows] = self.frames(q)
+
+    @staticmethod
+    def targets(X):
+        return np.concatenate([X[:, :3, :3].reshape(-1, 9).T, X[:, :3, 3].T])
+
+    @staticmethod
+    def transforms(F):
+        m = F.shape[1]
+        X = np.zeros((m, 4, 4))
+        X[:, :3, :3] = F[39:48].T.reshape(m, 3, 3)
+        X[:, :3, 3] = F[36:39].T
+        X[:, 3, 3] = 1.0
+        return X
+
+    @staticmethod
+    def residual(F, target):
+        R, Rt = F[39:48], target[:9]
+        e = np.empty((6, F.shape[1]))
+        np.subtract(target[9:12], F[36:39], out=e[:3])
+        for k, (i, j) in enumerate(((2, 1), (0, 2), (1, 0))):     # (E_ij - E_ji) / 2
+            ti, tj, ri, rj = Rt[3 * i:3 * i + 3], Rt[3 * j:3 * j + 3], R[3 * i:3 * i + 3], \
+                R[3 * j:3 * j + 3]
+            e[3 + k] = 0.5 * ((ti[0] * rj[0] + ti[1] * rj[1] + ti[2] * rj[2])
+                              - (tj[0] * ri[0] + tj[1] * ri[1] + tj[2] * ri[2]))
+        return e.T
+
+    @staticmethod
+    def _columns(F):
+        """The six columns of J, each six entries (arrays, or floats for the constants)."""
+        px, py, pz = F[36], F[37], F[38]
+        columns = [(-py, px, 0.0, 0.0, 0.0, 1.0)]          # joint 1: z_0 = (0, 0, 1), o_0 = 0
+        for i in range(5):
+            zx, zy, zz = F[3 * i], F[3 * i + 1], F[3 * i + 2]
+            rx, ry, rz = px - F[15 + 3 * i], py - F[16 + 3 * i], pz - F[17 + 3 * i]
+            columns.append((zy * rz - zz * ry, zz * rx - zx * rz, zx * ry - zy * rx,
+                            zx, zy, zz))
+        return columns
+
+    def jacobian(self, F):
+        m = F.shape[1]
+        J = np.empty((m, 6, 6))
+        for j, column in enumerate(self._columns(F)):
+            for i, v in enumerate(column):
+                J[:, i, j] = v
+        return J
+
+    def newton_step(self, F, e):
+        """The damped Newton step of :meth:`_MatrixChain.newton_step`, by the normal
+        equations solved with Cholesky on entries."""
+        J = self._columns(F)
+        e = e.T
+        H = [[_dot(J[i], J[j]) for j in range(i + 1)] for i in range(6)]
+        g = [_dot(J[i], e) for i in range(6)]
+        lam = (_DAMPING / 6.0) * sum(H[i][i] for i in range(6))
+        for i in range(6):
+            H[i][i] = H[i][i] + lam
+        return np.array(_cholesky_solve(H, g)).T
+
+    @staticmethod
+    def singularity_measures(F):
+        return _measures(F[0:3].T, F[6:9].T, F[12:15].T, F[30:33].T, F[33:36].T, F[27:30].T)
+
+
+def _dot(u, v):
+    """The dot product of two 6-vectors of entries (arrays or floats), zero entries skipped."""
+    total = 0.0
+    for a, b in zip(u, v, strict=True):
+        if not (type(a) is float and a == 0.0) and not (type(b) is float and b == 0.0):
+            total = total + a * b
+    return total
+
+
+def _cholesky_solve(H, g):
+    """Solve H x = g for a symmetric positive definite H given by its lower triangle
+    ``H[i][j], j <= i`` (entries), by Cholesky: H = L L^T."""
+    n = len(g)
+    L = [[None] * n for _ in range(n)]
+    for j in range(n):
+        s = H[j][j]
+        for k in range(j):
+            s = s - L[j][k] * L[j][k]
+        L[j][j] = np.sqrt(s)
+        inv = 1.0 / L[j][j]
+        for i in range(j + 1, n):
+            s = H[i][j]
+            for k in range(j):
+                s = s - L[i][k] * L[j][k]
+            L[i][j] = s * inv
+    y = []
+    for i in range(n):
+        s = g[i]
+        for k in range(i):
+            s = s - L[i][k] * y[k]
+        y.append(s / L[i][i])
+    x = [None] * n
+    for i in range(n - 1, -1, -1):
+        s = y[i]
+        for k in range(i + 1, n):
+            s = s - L[k][i] * x[k]
+        x[i] = s / L[i][i]
+    return x

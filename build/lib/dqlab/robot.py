@@ -1,0 +1,1119 @@
+r"""Serial kinematic chains: links in standard or modified Denavit--Hartenberg form.
+
+A :class:`Robot` is a list of :class:`Link` objects plus a base and a tool transform. It
+computes the forward kinematics (MGD in the French course notes) as homogeneous matrices
+(:meth:`Robot.fk`) and as unit dual quaternions, in the two ways of the thesis: a product of
+per-link dual quaternions (:meth:`Robot.fk_dq`) and a product of base-frame screw motions
+about the joint axes of the zero pose (:meth:`Robot.fk_dq_screw`).
+
+Conventions
+-----------
+Both Denavit--Hartenberg conventions are first-class. For link :math:`i`:
+
+- standard DH (``convention="dh"``, as Universal Robots publish their arms)
+
+  .. math::
+
+     X_{i-1,i} = R_z(\theta_i)\, T_z(d_i)\, T_x(a_i)\, R_x(\alpha_i)
+
+- modified DH (``convention="mdh"``, Khalil--Kleinfinger, the French course notes), where the
+  link stores :math:`a_{i-1}` in ``a``, :math:`\alpha_{i-1}` in ``alpha`` and :math:`r_i` in
+  ``d``:
+
+  .. math::
+
+     X_{i-1,i} = R_x(\alpha_{i-1})\, T_x(a_{i-1})\, R_z(\theta_i)\, T_z(r_i)
+
+The joint variable :math:`q_i` enters as :math:`\theta_i = q_i + \theta^0_i` for a revolute
+joint (``theta_offset`` holds :math:`\theta^0_i`, the "q_fig" row of a published table) and
+as :math:`d_i = q_i + d^0_i` for a prismatic joint (``d`` holds :math:`d^0_i`, and
+``theta_offset`` is then the constant :math:`\theta_i`). The whole chain is
+
+.. math::
+
+   X_{WT}(q) = X_{W0}\, X_{01}(q_1) \cdots X_{n-1,n}(q_n)\, X_{nT}
+
+with the base :math:`X_{W0}` and the tool :math:`X_{nT}` (both identity by default).
+Units are metres and radians.
+"""
+
+import copy
+import math
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ._checks import as_float_array, batched, real_array
+from ._kernels import (
+    dual_quaternion_mul,
+    screw_entries,
+)
+from .dualquat import dual_quaternion_from_transform
+from .inertia import LinkInertia
+
+__all__ = ["Link", "Robot", "REVOLUTE", "PRISMATIC"]
+
+REVOLUTE = "revolute"
+PRISMATIC = "prismatic"
+
+
+def _rot_x_h(alpha):
+    """4x4 rotation about x (plain numpy; used for the constant parts of a link)."""
+    c, s = math.cos(alpha), math.sin(alpha)
+    return np.array([[1.0, 0, 0, 0], [0, c, -s, 0], [0, s, c, 0], [0, 0, 0, 1.0]])
+
+
+def _trans_x_h(a):
+    T = np.eye(4)
+    T[0, 3] = a
+    return T
+
+
+class Link:
+    r"""One link of a serial chain: its Denavit--Hartenberg parameters and its joint.
+
+    Parameters
+    ----------
+    a : float
+        Link length in metres: :math:`a_i` (standard DH) or :math:`a_{i-1}` (modified DH).
+    alpha : float
+        Link twist in radians: :math:`\alpha_i` (standard DH) or :math:`\alpha_{i-1}`
+        (modified DH).
+    d : float
+        Link offset in metres along the joint axis: :math:`d_i` (standard DH) or :math:`r_i`
+        (modified DH). For a prismatic joint this is the constant added to the joint
+        variable.
+    theta_offset : float, optional
+        For a revolute joint, the constant added to the joint variable,
+        :math:`\theta_i = q_i + \theta^0_i` (the "q_fig" row of a table). For a prismatic
+        joint, the constant joint angle :math:`\theta_i`.
+    joint : {"revolute", "prismatic"}, optional
+        Joint type, :math:`\sigma_i = 0` or :math:`1` in the course notes.
+    limits : (float, float), optional
+        Lowest and highest joint value (radians or metres). Default: no limit.
+    name : str, optional
+        A label printed in :meth:`Robot.dh_table`.
+    inertia : LinkInertia, optional
+        The link's mass, centre of mass and inertia tensor in the link's own frame (see
+        :mod:`dqlab.inertia`), for :mod:`dqlab.dynamics` and the simulators. None (the
+        default): the link has no inertial parameters.
+
+    Raises
+    ------
+    ValueError
+        If a parameter is not a finite number, the joint type is unknown or the limits are
+        not ordered.
+
+    Notes
+    -----
+    A link is immutable: a :class:`Robot` precomputes the constant parts of its chain.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> link = Link(a=0.0, alpha=np.pi / 2, d=0.1519)
+    >>> link.joint, link.sigma
+    ('revolute', 0)
+    >>> Link(a=0.0, alpha=0.0, d=0.0, joint="prismatic", limits=(0.0, 0.15)).sigma
+    1
+    """
+
+    def __init__(self, a, alpha, d, theta_offset=0.0, joint=REVOLUTE, limits=None, name="",
+                 inertia=None):
+        values = {"a": a, "alpha": alpha, "d": d, "theta_offset": theta_offset}
+        for key, value in values.items():
+            try:
+                value = float(value)
+            except (TypeError, ValueError):
+                raise ValueError(f"Link {key} must be a number, got {value!r}") from None
+            if not math.isfinite(value):
+                raise ValueError(f"Link {key} must be finite, got {value!r}")
+            values[key] = value
+        if joint in (0, "R", "r"):
+            joint = REVOLUTE
+        elif joint in (1, "P", "p"):
+            joint = PRISMATIC
+        if joint not in (REVOLUTE, PRISMATIC):
+            raise ValueError(f"Link joint must be 'revolute' or 'prismatic', got {joint!r}")
+        if limits is None:
+            limits = (-math.inf, math.inf)
+        try:
+            lo, hi = (float(v) for v in limits)
+        except (TypeError, ValueError):
+            raise ValueError(f"Link limits must be a pair (lo, hi), got {limits!r}") from None
+        if math.isnan(lo) or math.isnan(hi) or not lo <= hi:
+            raise ValueError(f"Link limits must satisfy lo <= hi, got {limits!r}")
+        set_ = object.__setattr__       # a Link is immutable once built
+        set_(self, "a", values["a"])
+        set_(self, "alpha", values["alpha"])
+        set_(self, "d", values["d"])
+        set_(self, "theta_offset", values["theta_offset"])
+        set_(self, "joint", joint)
+        set_(self, "limits", (lo, hi))
+        set_(self, "name", str(name))
+        if inertia is not None and not isinstance(inertia, LinkInertia):
+            raise ValueError("Link inertia must be a dqlab.inertia.LinkInertia or None, got "
+                             f"{type(inertia).__name__}")
+        set_(self, "inertia", inertia)
+
+    def with_inertia(self, inertia):
+        """A copy of this link (every other parameter kept) with other inertial parameters.
+
+        Examples
+        --------
+        >>> from dqlab.inertia import LinkInertia
+        >>> link = Link(a=0.3, alpha=0.0, d=0.0)
+        >>> link.with_inertia(LinkInertia.sphere(1.0, [-0.15, 0, 0])).inertia.mass
+        1.0
+        """
+        if inertia is not None and not isinstance(inertia, LinkInertia):
+            raise ValueError("inertia must be a dqlab.inertia.LinkInertia or None, got "
+                             f"{type(inertia).__name__}")
+        new = copy.copy(self)
+        object.__setattr__(new, "inertia", inertia)
+        return new
+
+    def __setattr__(self, key, value):
+        raise AttributeError("Link is immutable (a Robot precomputes its constant parts); "
+                             "build a new Link and Robot instead")
+
+    @property
+    def sigma(self):
+        """Joint type as in the course notes: 0 revolute, 1 prismatic."""
+        return int(self.joint == PRISMATIC)
+
+    @property
+    def is_revolute(self):
+        return self.joint == REVOLUTE
+
+    def __repr__(self):
+        return (f"Link(a={self.a!r}, alpha={self.alpha!r}, d={self.d!r}, "
+                f"theta_offset={self.theta_offset!r}, joint={self.joint!r}, "
+                f"limits={self.limits!r})")
+
+
+def _link_constants(links, convention):
+    """The constant factors L_i, R_i (n, 4, 4) of the links X_{i-1,i} = L_i J_i R_i, with
+    the joint motion J = Rz(theta) Tz(d) between them: L = I, R = Tx(a) Rx(alpha) in
+    standard DH; L = Rx(alpha) Tx(a), R = I in modified DH."""
+    L = np.empty((len(links), 4, 4))
+    R = np.empty((len(links), 4, 4))
+    for i, lk in enumerate(links):
+        if convention == "dh":
+            L[i] = np.eye(4)
+            R[i] = _trans_x_h(lk.a) @ _rot_x_h(lk.alpha)
+        else:
+            L[i] = _rot_x_h(lk.alpha) @ _trans_x_h(lk.a)
+            R[i] = np.eye(4)
+    return L, R
+
+
+def _check_transform_like(T, name):
+    if T is None:
+        return np.eye(4)
+    T = as_float_array(T, name, (4, 4))
+    if T.shape != (4, 4):
+        raise ValueError(f"{name} must be one 4x4 transform, got shape {T.shape}")
+    R = T[:3, :3]
+    if (not np.allclose(T[3], [0, 0, 0, 1], atol=1e-9)
+            or not np.allclose(R.T @ R, np.eye(3), atol=1e-9)
+            or np.linalg.det(R) < 0):
+        raise ValueError(f"{name} must be a rigid transform (rotation block and last row "
+                         "[0, 0, 0, 1])")
+    return T.copy()
+
+
+def _transform_attribute(name, doc):
+    """A rigid transform of the chain (base or tool): read as a copy; assigning checks it
+    and recomputes the chain's constant parts."""
+    private = "_" + name
+
+    def get(self):
+        return getattr(self, private).copy()
+
+    def set_(self, value):
+        setattr(self, private, _check_transform_like(value, name))
+        self._prepare()
+
+    return property(get, set_, doc=doc)
+
+
+class Robot:
+    r"""A serial kinematic chain with forward kinematics and Jacobian.
+
+    Parameters
+    ----------
+    links : sequence of Link
+        The links from the base to the flange.
+    convention : {"dh", "mdh"}, optional
+        Standard (``"dh"``) or modified (``"mdh"``, Khalil--Kleinfinger) Denavit--Hartenberg.
+    base : array_like, shape (4, 4), optional
+        :math:`X_{W0}`, the pose of the chain's frame 0 in the world frame W. Identity by
+        default.
+    tool : array_like, shape (4, 4), optional
+        :math:`X_{nT}`, the pose of the tool centre point (TCP) in the flange frame n.
+        Identity by default.
+    name : str, optional
+        Printed in :meth:`dh_table` and ``repr``.
+
+    Attributes
+    ----------
+    n : int
+        Number of joints.
+    links : tuple of Link
+    convention : str
+    base, tool : ndarray, shape (4, 4)
+    name : str
+
+    Examples
+    --------
+    A planar two-link arm in standard DH (lengths 1 and 0.5):
+
+    >>> import numpy as np
+    >>> arm = Robot([Link(1.0, 0.0, 0.0), Link(0.5, 0.0, 0.0)], name="planar 2R")
+    >>> arm.n
+    2
+    >>> X_WT = arm.fk([0.0, np.pi / 2])
+    >>> X_WT[:3, 3].round(12)
+    array([1. , 0.5, 0. ])
+    >>> arm.fk([[0.0, 0.0], [np.pi / 2, 0.0]])[:, :3, 3].round(12)
+    array([[1.5, 0. , 0. ],
+           [0. , 1.5, 0. ]])
+    """
+
+    def __init__(self, links, convention="dh", base=None, tool=None, name=""):
+        links = tuple(links)
+        if not links:
+            raise ValueError("Robot needs at least one link")
+        for i, link in enumerate(links):
+            if not isinstance(link, Link):
+                raise ValueError(f"links[{i}] must be a Link, got {type(link).__name__}")
+        if convention not in ("dh", "mdh"):
+            raise ValueError(f"convention must be 'dh' or 'mdh', got {convention!r}")
+        self._links = links
+        self._convention = convention
+        self.name = str(name)
+        self._base = _check_transform_like(base, "base")
+        self._tool = _check_transform_like(tool, "tool")
+        self._prepare()
+
+    # -- read-only description -------------------------------------------------------------
+    @property
+    def links(self):
+        return self._links
+
+    @property
+    def convention(self):
+        return self._convention
+
+    @property
+    def n(self):
+        return len(self._links)
+
+    base = _transform_attribute(
+        "base", ":math:`X_{W0}`, shape (4, 4) (a copy; assign a new transform to change it).")
+    tool = _transform_attribute(
+        "tool", ":math:`X_{nT}`, shape (4, 4) (a copy; assign a new transform to change it).")
+
+    @property
+    def joint_types(self):
+        """Tuple of ``"revolute"`` / ``"prismatic"``, one per joint."""
+        return tuple(link.joint for link in self._links)
+
+    @property
+    def bare(self):
+        """True when the robot has neither a base transform nor a tool: its world frame is
+        frame 0 and its TCP is the flange (the frames of a published DH table)."""
+        return self._bare
+
+    @property
+    def limits(self):
+        """Joint limits as an array of shape (n, 2): lowest, highest."""
+        return np.array([link.limits for link in self._links], dtype=float)
+
+    # -- constant parts, precomputed once ------------------------------------------------
+    def _prepare(self):
+        """Compute everything derived from the links, the base and the tool.
+
+        The one cache rule of a robot: this runs when the robot is built and whenever its
+        base or tool is assigned (links are immutable), and nothing else is cached.
+        """
+        n = self.n
+        self._revolute = np.array([lk.is_revolute for lk in self._links])
+        self._lo = np.array([lk.limits[0] for lk in self._links])
+        self._hi = np.array([lk.limits[1] for lk in self._links])
+        self._prismatic_idx = np.flatnonzero(~self._revolute)
+        # the shape of a joint vector that the float path takes: none with prismatic joints
+        # (their limits are checked by check_joints)
+        self._float_path_shape = (n,) if self._prismatic_idx.size == 0 else None
+        self._bare = bool(np.array_equal(self._base, np.eye(4))
+                          and np.array_equal(self._tool, np.eye(4)))
+        # (theta_i offset, d_i offset, revolute?) as Python values for the products
+        self._joint_constants = [(lk.theta_offset, lk.d, lk.is_revolute) for lk in self._links]
+        self._L, self._R = _link_constants(self._links, self._convention)
+        # The constant factors of neighbouring links multiplied once:
+        # X_WT = K_0 J_1 K_1 J_2 ... J_n K_n, K_0 = X_W0 L_1, K_i = R_i L_{i+1}, K_n = R_n X_nT
+        K = np.concatenate([self._base[None] @ self._L[:1], self._R[:-1] @ self._L[1:],
+                            self._R[-1:] @ self._tool[None]])
+        self._K = K
+        self._K0_columns = [tuple(K[0, :3, j].tolist()) for j in range(4)]
+        self._base_columns = [tuple(self._base[:3, j].tolist()) for j in range(4)]
+        # the top three rows of each K_i, for a constant factor that is not a screw about x
+        self._K_rows = [tuple(map(tuple, K[i, :3].tolist())) for i in range(n + 1)]
+        self._K_dual_quaternions = dual_quaternion_from_transform(K).tolist()
+        # which K_i are screws about x (every one between two DH links is: Tx(a) Rx(alpha)):
+        # (cos alpha, sin alpha, a) for the matrices, (cos alpha/2, sin alpha/2, a/2) for the
+        # dual quaternions; None for another K_i, () for the identity
+        screws = [_x_screw_constants(K[i], self._K_dual_quaternions[i]) for i in range(n + 1)]
+        self._K_matrix_screws = [None if c is None else () if c[:3] == (1.0, 0.0, 0.0)
+                                 else c[:3] for c in screws]
+        self._K_dq_screws = [None if c is None else () if c[:3] == (1.0, 0.0, 0.0)
+                             else c[3:] for c in screws]
+        # per link, what the products read: the joint's constants and the factor after it
+        self._matrix_steps = list(zip(self._joint_constants, self._K_matrix_screws[1:],
+                                      self._K_rows[1:], strict=True))
+        self._dq_steps = list(zip(self._joint_constants, self._K_dq_screws[1:],
+                                  self._K_dual_quaternions[1:], strict=True))
+        # the zero pose: joint axes in the world frame and the TCP (fk_dq_screw's constants)
+        zero = [0.0] * n
+        X0, before, _ = self._product(zero, record=True)
+        self._zero_pose = (np.array([X[3] for X in before]),
+                           np.array([X[2] for X in before]),
+                           _matrix_from_columns(X0))
+        points, axes, X_WT0 = self._zero_pose
+        lines = np.concatenate([axes, np.cross(points, axes)], axis=-1)
+        self._screw_constants = (lines.tolist(), dual_quaternion_from_transform(X_WT0).tolist())
+
+    # -- joint vectors -----------------------------------------------------------------------
+    def check_joints(self, q: ArrayLike, *, limits: str = "prismatic", name: str = "q"
+                     ) -> NDArray[np.float64]:
+        """Validate joint vectors and return them as a float array.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Joint values: radians for revolute joints, metres for prismatic joints.
+        limits : {"prismatic", "all", "none"}, optional
+            Which joint limits to enforce. The default enforces only the prismatic ones (a
+            prismatic joint beyond its travel has no physical meaning, while a revolute angle
+            outside its software limits still describes a pose).
+
+        Returns
+        -------
+        ndarray, shape (..., n)
+
+        Raises
+        ------
+        ValueError
+            On a wrong last dimension, NaN or infinity, or a value beyond the enforced
+            limits (the message names the joint and the limit).
+
+        Examples
+        --------
+        >>> from dqlab.models import scara_rsm5
+        >>> scara = scara_rsm5()
+        >>> scara.check_joints([0.1, 0.2, 0.05, 0.0])
+        array([0.1 , 0.2 , 0.05, 0.  ])
+        >>> scara.check_joints([0.1, 0.2, 0.5, 0.0])
+        Traceback (most recent call last):
+        ...
+        ValueError: joint 3 (prismatic) = 0.5 is beyond its limits [0, 0.15]
+        """
+        q = real_array(q, name)
+        if q.ndim == 0 or q.shape[-1] != self.n:
+            raise ValueError(
+                f"{name} must have shape (..., {self.n}) for this {self.n}-joint robot, "
+                f"got shape {q.shape}")
+        if not np.isfinite(q).all():
+            raise ValueError(f"{name} contains NaN or infinity")
+        if limits == "none":
+            return q
+        if limits == "prismatic":
+            idx = self._prismatic_idx
+            if idx.size == 0:
+                return q
+        elif limits == "all":
+            idx = np.arange(self.n)
+        else:
+            raise ValueError(f"limits must be 'prismatic', 'all' or 'none', got {limits!r}")
+        sub = q[..., idx]
+        bad = (sub < self._lo[idx]) | (sub > self._hi[idx])
+        if bad.any():
+            where = np.argwhere(bad)[0]
+            j = idx[where[-1]]
+            value = sub[tuple(where)]
+            lk = self._links[j]
+            raise ValueError(
+                f"joint {j + 1} ({lk.joint}) = {value:.6g} is beyond its limits "
+                f"[{lk.limits[0]:.6g}, {lk.limits[1]:.6g}]")
+        return q
+
+    def _joint_floats(self, q):
+        """One joint vector as a list of Python floats, checked as :meth:`check_joints`
+        checks it, for the float path of a single call; None when ``q`` is anything but a
+        float64 array of shape (n,) of a robot without prismatic joints, or when the check
+        fails (:meth:`check_joints` then says why)."""
+        if not (type(q) is np.ndarray and q.shape == self._float_path_shape
+                and q.dtype is _FLOAT64):
+            return None
+        floats = q.tolist()
+        total = sum(floats)            # NaN or inf in q make it NaN or inf
+        return floats if total - total == 0.0 else None
+
+    def _link_parameters(self, q):
+        """Joint angles theta and offsets d of every link, shape (..., n) each."""
+        theta = np.array([c[0] for c in self._joint_constants]) + q * self._revolute
+        d = np.array([c[1] for c in self._joint_constants]) + q * ~self._revolute
+        return theta, d
+
+    def _joint_motions(self, q):
+        """J_i = Rz(theta_i) Tz(d_i) for every link, shape (..., n, 4, 4)."""
+        theta, d = self._link_parameters(q)
+        c, s = np.cos(theta), np.sin(theta)
+        J = np.zeros(q.shape + (4, 4))
+        J[..., 0, 0] = c
+        J[..., 0, 1] = -s
+        J[..., 1, 0] = s
+        J[..., 1, 1] = c
+        J[..., 2, 2] = 1.0
+        J[..., 2, 3] = d
+        J[..., 3, 3] = 1.0
+        return J
+
+    def link_transforms(self, q: ArrayLike) -> NDArray[np.float64]:
+        r"""The link transforms :math:`X_{i-1,i}(q_i)`, without base and tool.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+
+        Returns
+        -------
+        ndarray, shape (..., n, 4, 4)
+            Entry ``i`` is the pose of frame ``i + 1`` in frame ``i``.
+
+        Examples
+        --------
+        >>> from dqlab.models import ur3_mdh
+        >>> X_01 = ur3_mdh().link_transforms([0.1, 0, 0, 0, 0, 0])[0]
+        >>> X_01.round(8)
+        array([[-0.09983342, -0.99500417,  0.        ,  0.        ],
+               [ 0.99500417, -0.09983342,  0.        ,  0.        ],
+               [ 0.        ,  0.        ,  1.        ,  0.152     ],
+               [ 0.        ,  0.        ,  0.        ,  1.        ]])
+        """
+        q = self.check_joints(q)
+        return self._L @ self._joint_motions(q) @ self._R
+
+    # -- forward kinematics, matrices ---------------------------------------------------
+    def fk(self, q: ArrayLike, all_frames: bool = False) -> NDArray[np.float64]:
+        r"""Forward kinematics as homogeneous transforms.
+
+        .. math::
+
+           X_{WT}(q) = X_{W0} \prod_{i=1}^{n} X_{i-1,i}(q_i)\; X_{nT}
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Joint vectors (radians, metres for prismatic joints).
+        all_frames : bool, optional
+            If True, also return the intermediate frames.
+
+        Returns
+        -------
+        ndarray, shape (..., 4, 4) or (..., n + 1, 4, 4)
+            :math:`X_{WT}`, the pose of the tool (the flange when there is no tool) in the
+            world frame. With ``all_frames``, the poses of frames 0 (the base), 1, ...,
+            n in W, where the last one is the TCP (frame n composed with the tool).
+
+        Raises
+        ------
+        ValueError
+            See :meth:`check_joints`.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from dqlab.models import ur3
+        >>> X_WF = ur3().fk(np.zeros(6))
+        >>> X_WF.round(5)
+        array([[ 1.     ,  0.     ,  0.     , -0.4569 ],
+               [ 0.     ,  0.     , -1.     , -0.19425],
+               [ 0.     ,  1.     ,  0.     ,  0.06655],
+               [ 0.     ,  0.     ,  0.     ,  1.     ]])
+        >>> ur3().fk(np.zeros((5, 6)), all_frames=True).shape
+        (5, 7, 4, 4)
+        """
+        if not all_frames:
+            floats = self._joint_floats(q)
+            if floats is not None:
+                return np.array(self._pose_entries(floats)).reshape(4, 4)
+        q = self.check_joints(q)
+        if not all_frames:
+            return _on_components(self._pose_entries, q, (4, 4))
+        last = self.n + 1
+        frames = _on_components(self._frame_entries, q, (last, 4, 4))
+        # frames hold K_0 J_1 ... J_i (after joint i); frame i is that times R_i
+        frames[..., 1:last - 1, :, :] = frames[..., 1:last - 1, :, :] @ self._R[:-1]
+        return frames
+
+    def _product(self, q, record=False):
+        r"""The chain's one product, :math:`X_{WT} = K_0 J_1 K_1 \cdots J_n K_n`.
+
+        The top three rows of the running product are kept as four columns
+        :math:`(u, v, w, p)`, entry by entry: the joint motion ``X @ Rz(theta) Tz(d)``
+        turns :math:`u, v` and moves :math:`p` along :math:`w`; the constant factor between
+        two DH links, ``@ Tx(a) Rx(alpha)``, turns :math:`v, w` and moves :math:`p` along
+        :math:`u`; any other constant factor (a base or a tool) adds multiples of columns.
+        ``q`` holds the joint values: Python floats (one joint vector; an entry is a float)
+        or arrays of shape (N,) (a batch; an entry is an array of shape (N,) or a constant
+        float), one formula for both.
+
+        Returns the four columns of :math:`X_{WT}`; with ``record``, also the running
+        products before and after each joint motion (lists of n column sets): before joint
+        i it is the frame whose z axis is joint i's axis.
+        """
+        cos, sin = (math.cos, math.sin) if type(q[0]) is float else (np.cos, np.sin)
+        (ux, uy, uz), (vx, vy, vz), (wx, wy, wz), (px, py, pz) = self._K0_columns
+        before, after = [], []
+        for q_i, ((theta0, d0, revolute), screw, K) in zip(q, self._matrix_steps, strict=True):
+            if record:
+                before.append(((ux, uy, uz), (vx, vy, vz), (wx, wy, wz), (px, py, pz)))
+            if revolute:
+                c, s = cos(q_i + theta0), sin(q_i + theta0)
+                d = d0
+            else:
+                c, s = cos(theta0), sin(theta0)
+                d = q_i + d0
+            # @ Rz(theta) Tz(d)
+            ux, uy, uz, vx, vy, vz = (c * ux + s * vx, c * uy + s * vy, c * uz + s * vz,
+                                      c * vx - s * ux, c * vy - s * uy, c * vz - s * uz)
+            if not revolute or d != 0.0:
+                px, py, pz = px + d * wx, py + d * wy, pz + d * wz
+            if record:
+                after.append(((ux, uy, uz), (vx, vy, vz), (wx, wy, wz), (px, py, pz)))
+            if screw:                                   # @ Tx(a) Rx(alpha)
+                ca, sa, a = screw
+                if sa != 0.0 or ca != 1.0:
+                    vx, vy, vz, wx, wy, wz = (ca * vx + sa * wx, ca * vy + sa * wy,
+                                              ca * vz + sa * wz, ca * wx - sa * vx,
+                                              ca * wy - sa * vy, ca * wz - sa * vz)
+                if a != 0.0:
+                    px, py, pz = px + a * ux, py + a * uy, pz + a * uz
+            elif screw is None:                         # @ K, any rigid transform
+                (k00, k01, k02, k03), (k10, k11, k12, k13), (k20, k21, k22, k23) = K
+                ux, uy, uz, vx, vy, vz, wx, wy, wz, px, py, pz = (
+                    k00 * ux + k10 * vx + k20 * wx, k00 * uy + k10 * vy + k20 * wy,
+                    k00 * uz + k10 * vz + k20 * wz,
+                    k01 * ux + k11 * vx + k21 * wx, k01 * uy + k11 * vy + k21 * wy,
+                    k01 * uz + k11 * vz + k21 * wz,
+                    k02 * ux + k12 * vx + k22 * wx, k02 * uy + k12 * vy + k22 * wy,
+                    k02 * uz + k12 * vz + k22 * wz,
+                    k03 * ux + k13 * vx + k23 * wx + px, k03 * uy + k13 * vy + k23 * wy + py,
+                    k03 * uz + k13 * vz + k23 * wz + pz)
+        X = ((ux, uy, uz), (vx, vy, vz), (wx, wy, wz), (px, py, pz))
+        return (X, before, after) if record else X
+
+    def _pose_entries(self, q):
+        return _entries(self._product(q))
+
+    def _frame_entries(self, q):
+        X, _, after = self._product(q, record=True)
+        return (_entries(self._base_columns) + sum((_entries(Y) for Y in after[:-1]), ())
+                + _entries(X))
+
+    def _axes_entries(self, q):
+        X, before, _ = self._product(q, record=True)
+        return sum((tuple(B[3]) + tuple(B[2]) for B in before), ()) + tuple(X[3])
+
+    def joint_axes(self, q: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        r"""Points on the joint axes and their unit directions, in the world frame.
+
+        The joint :math:`i` moves along or about the z axis of the frame
+        :math:`X_{W0} X_{01} \cdots X_{i-2,i-1} L_i` (frame :math:`i-1` in standard DH,
+        frame :math:`i` in modified DH).
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+
+        Returns
+        -------
+        points : ndarray, shape (..., n, 3)
+        axes : ndarray, shape (..., n, 3)
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from dqlab.models import ur3
+        >>> points, axes = ur3().joint_axes(np.zeros(6))
+        >>> axes[:3].round(12)
+        array([[ 0.,  0.,  1.],
+               [ 0., -1.,  0.],
+               [ 0., -1.,  0.]])
+        """
+        points, axes, _ = self._axes_and_tcp_position(self.check_joints(q))
+        return points, axes
+
+    def _axes_and_tcp_position(self, q):
+        """Joint axis points and directions (..., n, 3) and the TCP position (..., 3) of
+        checked joint vectors."""
+        n = self.n
+        flat = _on_components(self._axes_entries, q, (2 * n + 1, 3))
+        return flat[..., 0:2 * n:2, :], flat[..., 1:2 * n:2, :], flat[..., 2 * n, :]
+
+    # -- forward kinematics, dual quaternions --------------------------------------------
+    def fk_dq(self, q: ArrayLike) -> NDArray[np.float64]:
+        r"""Forward kinematics as a unit dual quaternion, link by link.
+
+        Each link is written as a product of three dual quaternions, the constant parts and
+        the joint's screw about its own z axis (a turn by :math:`\theta_i` and a shift by
+        :math:`d_i`, which commute),
+
+        .. math::
+
+           \hat Q_{i-1,i} = \hat L_i\; \hat J_i(q_i)\; \hat R_i, \qquad
+           \hat J_i = r_i + \varepsilon\,\tfrac12\, d_i k\, r_i, \quad
+           r_i = \cos\tfrac{\theta_i}{2} + \sin\tfrac{\theta_i}{2}\,k,
+
+        that is :math:`\hat J_i = \bigl(\cos\tfrac{\theta_i}{2}, 0, 0,
+        \sin\tfrac{\theta_i}{2}\bigr) + \varepsilon\,\tfrac12\bigl(-d_i
+        \sin\tfrac{\theta_i}{2}, 0, 0, d_i \cos\tfrac{\theta_i}{2}\bigr)`, and multiplied
+        from the base to the tool,
+        :math:`\hat Q_{WT} = \hat Q_{W0} \hat Q_{01} \cdots \hat Q_{n-1,n} \hat Q_{nT}`
+        (thesis section 4.2, first construction). The constant factors of neighbouring
+        links are multiplied once in advance, :math:`\hat K_0 = \hat Q_{W0} \hat L_1`,
+        :math:`\hat K_i = \hat R_i \hat L_{i+1}`, :math:`\hat K_n = \hat R_n \hat Q_{nT}`, so
+        that
+
+        .. math::
+
+           \hat Q_{WT} = \hat K_0\, \hat J_1 \hat K_1\, \hat J_2 \hat K_2 \cdots
+           \hat J_n \hat K_n .
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+
+        Returns
+        -------
+        ndarray, shape (..., 8)
+            :math:`(q_r, q_d)` of the pose :math:`X_{WT}`. Its sign is that of the product
+            (``-Q`` is the same pose).
+
+        Raises
+        ------
+        ValueError
+            See :meth:`check_joints`.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from dqlab import dualquat
+        >>> from dqlab.models import ur3
+        >>> robot = ur3()
+        >>> q = [0.1, -0.5, 0.8, -0.2, 0.5, 0.1]
+        >>> Q = robot.fk_dq(q)
+        >>> np.allclose(dualquat.transform_from_dual_quaternion(Q), robot.fk(q))
+        True
+        """
+        floats = self._joint_floats(q)
+        if floats is not None:
+            return np.array(self._fk_dq_parts(floats))
+        return _on_components(self._fk_dq_parts, self.check_joints(q), (8,))
+
+    def _fk_dq_parts(self, q):
+        r"""The product :math:`\hat K_0 \hat J_1 \hat K_1 \cdots \hat J_n \hat K_n` on the
+        eight components :math:`(r, d)` of the running product :math:`\hat Q = r +
+        \varepsilon d`.
+
+        Both factors of a link are screws, about z (the joint) and about x (the constant
+        factor between two DH links), and multiplying by a screw skips the zeros of the
+        general product. With :math:`(c, s)` the cosine and sine of half the angle and
+        :math:`h` half the displacement, the screw about the unit axis :math:`u = k` or
+        :math:`i` is :math:`\hat S = \rho + \varepsilon\, h u \rho`, :math:`\rho = c + s u`;
+        since :math:`u` and :math:`\rho` commute,
+
+        .. math::
+
+            \hat Q \hat S = r \rho + \varepsilon\,\bigl(d \rho + h\, (r \rho)\, u\bigr),
+
+        where, for :math:`p = (w, x, y, z)`, :math:`p\,(c + s k) = (c w - s z, c x + s y,
+        c y - s x, c z + s w)`, :math:`p k = (-z, y, -x, w)`, :math:`p\,(c + s i) = (c w - s x,
+        c x + s w, c y + s z, c z - s y)` and :math:`p i = (-x, w, z, -y)`.
+
+        ``q`` holds the joint values one per joint: Python floats (one joint vector) or
+        arrays of shape (N,) (a batch), one formula for both. The factors are validated unit
+        dual quaternions, so nothing is checked here.
+        """
+        cos, sin = (math.cos, math.sin) if type(q[0]) is float else (np.cos, np.sin)
+        rw, rx, ry, rz, dw, dx, dy, dz = self._K_dual_quaternions[0]
+        for q_i, ((theta0, d0, revolute), screw, K) in zip(q, self._dq_steps, strict=True):
+            if revolute:
+                half, h = 0.5 * (q_i + theta0), 0.5 * d0
+            else:
+                half, h = 0.5 * theta0, 0.5 * (q_i + d0)
+            c, s = cos(half), sin(half)                 # the joint, a screw about z
+            rw, rx, ry, rz, dw, dx, dy, dz = (
+                c * rw - s * rz, c * rx + s * ry, c * ry - s * rx, c * rz + s * rw,
+                c * dw - s * dz, c * dx + s * dy, c * dy - s * dx, c * dz + s * dw)
+            if not revolute or h != 0.0:
+                dw, dx, dy, dz = dw - h * rz, dx + h * ry, dy - h * rx, dz + h * rw
+            if screw:                                   # the constant, a screw about x
+                c, s, h = screw
+                if s != 0.0 or c != 1.0:
+                    rw, rx, ry, rz, dw, dx, dy, dz = (
+                        c * rw - s * rx, c * rx + s * rw, c * ry + s * rz, c * rz - s * ry,
+                        c * dw - s * dx, c * dx + s * dw, c * dy + s * dz, c * dz - s * dy)
+                if h != 0.0:
+                    dw, dx, dy, dz = dw - h * rx, dx + h * rw, dy + h * rz, dz - h * ry
+            elif screw is None:                         # any other rigid transform
+                rw, rx, ry, rz, dw, dx, dy, dz = dual_quaternion_mul(
+                    (rw, rx, ry, rz, dw, dx, dy, dz), K)
+        return rw, rx, ry, rz, dw, dx, dy, dz
+
+    def zero_pose_screws(self
+                         ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        r"""The joint axes at :math:`q = 0` in the world frame and the zero-pose TCP.
+
+        Returns
+        -------
+        points : ndarray, shape (n, 3)
+            A point on each joint axis.
+        axes : ndarray, shape (n, 3)
+            Unit direction of each joint axis.
+        X_WT0 : ndarray, shape (4, 4)
+            The pose of the tool at :math:`q = 0`.
+
+        Examples
+        --------
+        >>> from dqlab.models import ur3
+        >>> points, axes, X_WT0 = ur3().zero_pose_screws()
+        >>> points[1].round(4), axes[1].round(4)
+        (array([0.    , 0.    , 0.1519]), array([ 0., -1.,  0.]))
+        """
+        points, axes, X_WT0 = self._zero_pose
+        return points.copy(), axes.copy(), X_WT0.copy()
+
+    def fk_dq_screw(self, q: ArrayLike) -> NDArray[np.float64]:
+        r"""Forward kinematics as a product of base-frame screw motions (thesis, second way).
+
+        Joint :math:`i` turns the rest of the arm about its axis at the zero pose, the line
+        through :math:`p_i` with unit direction :math:`\omega_i` in the world frame. As a dual
+        quaternion that motion is the rotation :math:`r_i = \cos\frac{q_i}{2} +
+        \sin\frac{q_i}{2}\,\omega_i` followed by the translation :math:`p_i - r_i p_i r_i^*`
+        (a translation :math:`q_i \omega_i` for a prismatic joint). In closed form, with the
+        moment :math:`\mathbf m_i = p_i \times \omega_i` of the axis (see
+        :func:`dqlab.dualquat.dual_quaternion_from_screw`),
+
+        .. math::
+
+           \hat S_i = \Bigl(\cos\tfrac{q_i}{2},\; \sin\tfrac{q_i}{2}\,\omega_i\Bigr)
+           + \varepsilon\,\Bigl(0,\; \sin\tfrac{q_i}{2}\,\mathbf m_i\Bigr)
+           \quad\text{(revolute)}, \qquad
+           \hat S_i = 1 + \varepsilon\,\Bigl(0,\; \tfrac{q_i}{2}\,\omega_i\Bigr)
+           \quad\text{(prismatic)}.
+
+        Then
+
+        .. math::
+
+           \hat Q_{WT}(q) = \hat S_1(q_1)\, \hat S_2(q_2) \cdots \hat S_n(q_n)\;
+           \hat Q_{WT}(0),
+
+        the dual-quaternion form of the product-of-exponentials formula.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+
+        Returns
+        -------
+        ndarray, shape (..., 8)
+            The same pose as :meth:`fk_dq` (possibly with the opposite sign).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from dqlab import dualquat
+        >>> from dqlab.models import ur3
+        >>> robot = ur3()
+        >>> q = [0, -np.pi / 2, 0, -np.pi / 2, 0, 0]
+        >>> Q = robot.fk_dq_screw(q)
+        >>> tcp = dualquat.dual_quaternion_apply(Q, [0.0, 0.0, 0.2])   # 0.2 m along flange z
+        >>> tcp.round(5) + 0.0
+        array([ 0.     , -0.39425,  0.69415])
+        """
+        return _on_components(self._fk_dq_screw_parts, self.check_joints(q), (8,))
+
+    def _fk_dq_screw_parts(self, q):
+        """The product S_1 S_2 ... S_n Q_WT(0) on components (``q`` as in _fk_dq_parts)."""
+        cos, sin = (math.cos, math.sin) if type(q[0]) is float else (np.cos, np.sin)
+        lines, Q = self._screw_constants
+        for i in range(self.n - 1, -1, -1):
+            if self._joint_constants[i][2]:
+                half, h = 0.5 * q[i], 0.0
+            else:
+                half, h = 0.0, 0.5 * q[i]
+            Q = dual_quaternion_mul(screw_entries(*lines[i], cos(half), sin(half), h), Q)
+        return Q
+
+    # -- differential kinematics ----------------------------------------------------------
+    def jacobian(self, q: ArrayLike) -> NDArray[np.float64]:
+        r"""Geometric Jacobian at the tool centre point, in the world frame, linear rows first.
+
+        Column :math:`i` for a revolute joint about the unit axis :math:`z_i` through
+        :math:`o_i`, and for a prismatic joint along :math:`z_i`:
+
+        .. math::
+
+           J_i = \begin{pmatrix} z_i \times (p_T - o_i) \\ z_i \end{pmatrix}
+           \quad\text{(revolute)},\qquad
+           J_i = \begin{pmatrix} z_i \\ 0 \end{pmatrix}
+           \quad\text{(prismatic)},
+
+        where :math:`p_T` is the TCP position (see :meth:`joint_axes`). Then
+        :math:`(\dot p_T, \omega) = J(q)\, \dot q` with :math:`\omega` the tool's angular
+        velocity in the world frame. For standard DH the axis of joint :math:`i` is the z
+        axis of frame :math:`i-1`; for modified DH it is the z axis of frame :math:`i`.
+        :func:`dqlab.jacobian.geometric_jacobian` is the same function.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+
+        Returns
+        -------
+        ndarray, shape (..., 6, n)
+
+        Examples
+        --------
+        The UR3 report's Jacobian (modified DH) at its joint angles, first column:
+
+        >>> import numpy as np
+        >>> from dqlab.models import ur3_mdh
+        >>> J = ur3_mdh().jacobian([0.1, -0.5, 0.8, -0.2, 0.5, 0.1])
+        >>> J[:, 0].round(8)
+        array([-0.49781088, -0.08817691,  0.        ,  0.        ,  0.        ,  1.        ])
+        """
+        n = self.n
+        floats = self._joint_floats(q)
+        if floats is not None:
+            return np.array(self._jacobian_entries(floats)).reshape(6, n)
+        return _on_components(self._jacobian_entries, self.check_joints(q), (6, n))
+
+    def fk_with_jacobian(self, q: ArrayLike
+                         ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        r""":meth:`fk` and :meth:`jacobian` at the same joint vectors, from one product.
+
+        The running product of the forward kinematics passes through every joint's frame,
+        which is all the Jacobian needs; a Newton-type solver that wants both at each
+        iterate computes the chain once.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+
+        Returns
+        -------
+        X : ndarray, shape (..., 4, 4)
+            As :meth:`fk`.
+        J : ndarray, shape (..., 6, n)
+            As :meth:`jacobian`.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from dqlab.models import ur3
+        >>> robot = ur3()
+        >>> q = np.array([0.3, -1.2, 1.1, -0.4, 0.9, 0.2])
+        >>> X, J = robot.fk_with_jacobian(q)
+        >>> bool(np.array_equal(X, robot.fk(q)) and np.array_equal(J, robot.jacobian(q)))
+        True
+        """
+        n = self.n
+        floats = self._joint_floats(q)
+        if floats is not None:
+            flat = np.array(self._pose_jacobian_entries(floats))
+        else:
+            flat = _on_components(self._pose_jacobian_entries, self.check_joints(q),
+                                  (16 + 6 * n,))
+        lead = flat.shape[:-1]
+        return flat[..., :16].reshape(lead + (4, 4)), flat[..., 16:].reshape(lead + (6, n))
+
+    def _jacobian_entries(self, q):
+        X, before, _ = self._product(q, record=True)
+        return self._jacobian_of(before, X[3])
+
+    def _pose_jacobian_entries(self, q):
+        X, before, _ = self._product(q, record=True)
+        return _entries(X) + self._jacobian_of(before, X[3])
+
+    def _jacobian_of(self, before, p):
+        """The 6 n entries of the Jacobian, row by row, from the running products before
+        each joint (whose columns 2 and 3 are the joint's axis z_i and a point o_i on it)
+        and the TCP position ``p``: the column is (z_i x (p - o_i), z_i) for a revolute
+        joint, (z_i, 0) for a prismatic one."""
+        px, py, pz = p
+        columns = []
+        for (_, _, (zx, zy, zz), (ox, oy, oz)), (_, _, revolute) in zip(
+                before, self._joint_constants, strict=True):
+            if revolute:
+                rx, ry, rz = px - ox, py - oy, pz - oz
+                columns.append((zy * rz - zz * ry, zz * rx - zx * rz, zx * ry - zy * rx,
+                                zx, zy, zz))
+            else:
+                columns.append((zx, zy, zz, 0.0, 0.0, 0.0))
+        return sum(zip(*columns, strict=True), ())         # row by row
+
+    # -- printing -------------------------------------------------------------------------
+    def dh_table(self) -> str:
+        """The parameter table as text, in the robot's own convention.
+
+        Angles are printed in degrees, lengths in metres. For modified DH the columns are
+        the course notes' :math:`\\sigma_i, \\alpha_{i-1}, a_{i-1}, \\theta_i, r_i`. The
+        title names the convention unless the robot's name already does.
+
+        Returns
+        -------
+        str
+
+        Examples
+        --------
+        >>> from dqlab.models import ur3
+        >>> print(ur3().dh_table())
+        UR3 (standard DH, 6 joints)
+          i  joint  theta_i [deg]  d_i [m]  a_i [m]   alpha_i [deg]  limits
+          1  R      q1             0.1519   0         90             [-360, 360] deg
+          2  R      q2             0        -0.24365  0              [-360, 360] deg
+          3  R      q3             0        -0.21325  0              [-360, 360] deg
+          4  R      q4             0.11235  0         90             [-360, 360] deg
+          5  R      q5             0.08535  0         -90            [-360, 360] deg
+          6  R      q6             0.0819   0         0              [-360, 360] deg
+        """
+        rows = []
+        for i, lk in enumerate(self._links, start=1):
+            if lk.is_revolute:
+                theta = _var("q", i, lk.theta_offset, degrees=True)
+                d = _num(lk.d)
+                lim = _limits(lk.limits, degrees=True)
+            else:
+                theta = _num(math.degrees(lk.theta_offset))
+                d = _var("q", i, lk.d, degrees=False)
+                lim = _limits(lk.limits, degrees=False)
+            rows.append((str(i), "R" if lk.is_revolute else "P", theta, d, _num(lk.a),
+                         _num(math.degrees(lk.alpha)), lim))
+        if self._convention == "dh":
+            convention = "standard DH"
+            header = ("i", "joint", "theta_i [deg]", "d_i [m]", "a_i [m]", "alpha_i [deg]",
+                      "limits")
+        else:
+            convention = "modified DH"
+            header = ("i", "sigma", "alpha_i-1 [deg]", "a_i-1 [m]", "theta_i [deg]",
+                      "r_i [m]", "limits")
+            rows = [(r[0], str(int(r[1] == "P")), r[5], r[4], r[2], r[3], r[6]) for r in rows]
+        name = self.name or "robot"
+        notes = [f"{self.n} joints"]
+        if convention.lower() not in name.lower():      # unless the name already says it
+            notes.insert(0, convention)
+        if name.endswith(")"):                          # no second pair of parentheses
+            title = ", ".join([name] + notes)
+        else:
+            title = f"{name} ({', '.join(notes)})"
+        widths = [max(len(header[k]), *(len(r[k]) for r in rows)) for k in range(7)]
+
+        def fmt(cells):
+            return "  " + "  ".join(c.ljust(w) for c, w in zip(cells, widths, strict=True)).rstrip()
+
+        lines = [title, fmt(header)] + [fmt(r) for r in rows]
+        extra = []
+        if not np.allclose(self._base, np.eye(4)):
+            extra.append("base X_W0 =\n" + _matrix_text(self._base))
+        if not np.allclose(self._tool, np.eye(4)):
+            extra.append("tool X_nT =\n" + _matrix_text(self._tool))
+        return "\n".join(lines + extra)
+
+    def __repr__(self):
+        return f"Robot({self.name!r}, convention={self._convention!r}, n={self.n})"
+
+
+_FEW = 8    # up to this many joint vectors, Python floats beat numpy's per-call overhead
+_FLOAT64 = np.dtype(np.float64)
+
+
+def _on_components(parts, q, trailing):
+    """Run a formula on joint values, ``parts(q_1, ..., q_n) -> entries``, for checked joint
+    vectors ``q`` of shape (..., n): with Python floats for one joint vector (or each of a
+    few), and with arrays of shape (N,) per joint for blocks of a batch. Returns shape
+    (...) + trailing."""
+    if q.ndim == 1:
+        return np.array(parts(q.tolist())).reshape(trailing)
+    if q.size <= _FEW * q.shape[-1]:
+        rows = q.reshape(-1, q.shape[-1]).tolist()
+        return np.array([parts(row) for row in rows]).reshape(q.shape[:-1] + trailing)
+
+    def kernel(block):
+        entries = parts(list(np.ascontiguousarray(block.T)))
+        out = np.empty((block.shape[0], len(entries)))
+        for k, entry in enumerate(entries):     # constants (floats) broadcast
+            out[:, k] = entry
+        return out.reshape(out.shape[:1] + trailing)
+
+    return batched(kernel, [(q, 1)], trailing)
+
+
+def _x_screw_constants(K, K_dual_quaternion):
+    r"""``(cos alpha, sin alpha, a, cos alpha/2, sin alpha/2, a/2)`` when the constant
+    factor ``K`` is a screw about x, :math:`T_x(a) R_x(\alpha)` (the factor between two
+    links in either DH convention), else None."""
+    (k00, k01, k02, a), (k10, c, k12, k13), (k20, s, k22, k23), _ = K.tolist()
+    if not (k00 == 1.0 and k01 == k02 == k10 == k20 == k13 == k23 == 0.0
+            and k22 == c and k12 == -s):
+        return None
+    cw, cx, cy, cz, *_ = K_dual_quaternion
+    if not cy == cz == 0.0:  # pragma: no cover -- Shepperd's quaternion of Rx is (c, s, 0, 0)
+        return None
+    return c, s, a, cw, cx, 0.5 * a
+
+
+def _entries(X):
+    """The 16 entries, row by row, of the 4x4 whose top rows are the columns ``X``."""
+    return (X[0][0], X[1][0], X[2][0], X[3][0],
+            X[0][1], X[1][1], X[2][1], X[3][1],
+            X[0][2], X[1][2], X[2][2], X[3][2],
+            0.0, 0.0, 0.0, 1.0)
+
+
+def _matrix_from_columns(X):
+    """A (4, 4) array from the float columns of a product."""
+    return np.array(_entries(X)).reshape(4, 4)
+
+
+def _num(x):
+    """Short number text: up to 6 significant digits, no trailing zeros."""
+    if abs(x) < 1e-12:
+        return "0"
+    return f"{x:.6g}"
+
+
+def _var(symbol, i, offset, degrees):
+    name = f"{symbol}{i}"
+    if abs(offset) < 1e-12:
+        return name
+    value = math.degrees(offset) if degrees else offset
+    sign = "+" if value > 0 else "-"
+    return f"{name} {sign} {_num(abs(value))}"
+
+
+def _limits(limits, degrees):
+    lo, hi = limits
+    if math.isinf(lo) and math.isinf(hi):
+        return "-"
+    if degrees:
+        return f"[{_num(math.degrees(lo))}, {_num(math.degrees(hi))}] deg"
+    return f"[{_num(lo)}, {_num(hi)}] m"
+
+
+def _matrix_text(T):
+    return "\n".join("  " + " ".join(f"{v:9.5f}" for v in row) for row in T)
