@@ -230,7 +230,7 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
     -------
     IKResult
         As ``dqlab.ik.ur``'s: ``solutions`` (..., 8, 6) in the exact arm's branch order
-        (:data:`dqlab.ik.SOLUTION_ORDER`), wrapped to :math:`(-\pi, \pi]`; ``valid``; the
+        (:data:`dqlab.ik.ur_closed_form.SOLUTION_ORDER`), wrapped to :math:`(-\pi, \pi]`; ``valid``; the
         errors of forward kinematics of the calibrated chain for every branch that was
         polished (the exact arm's errors for a branch it could not start); ``flags``
         ``"wrist_singular"``, ``"elbow_singular"``, ``"shoulder_singular"`` measured on the
