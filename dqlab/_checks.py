@@ -1,10 +1,9 @@
 """Input validation shared by every module: shapes, finiteness, clear ``ValueError`` s."""
 
-import math
 
 import numpy as np
 
-from ._kernels import orthonormality
+from ._kernels import functions_for, orthonormality
 
 _FLOAT64 = np.dtype(np.float64)
 
@@ -165,9 +164,7 @@ def stack_components(parts):
     >>> stack_components([1.0, 2.0])
     array([1., 2.])
     """
-    if type(parts[0]) is float and type(parts[-1]) is float:
-        return np.array(parts)
-    return np.stack(np.broadcast_arrays(*parts), axis=-1).astype(float, copy=False)
+    return functions_for(parts[0], parts[-1]).stack(parts)
 
 
 def finite_or_raise(out, *named):
@@ -195,12 +192,8 @@ def pack(parts, *named):
     >>> pack([1.0, 2.0], (np.ones(2), "a", (2,)))
     array([1., 2.])
     """
-    if type(parts[0]) is float and type(parts[-1]) is float:
-        s = sum(parts)
-        if s - s == 0.0:
-            return np.array(parts)
-        return finite_or_raise(np.array(parts), *named)
-    return finite_or_raise(stack_components(parts), *named)
+    out, finite = functions_for(parts[0], parts[-1]).stack_finite(parts)
+    return out if finite else finite_or_raise(out, *named)
 
 
 CHUNK = 8192
@@ -252,19 +245,15 @@ def unit_quaternion_or_raise(parts, name, tol, subject=None):
     """
     w, x, y, z = parts
     n2 = w * w + x * x + y * y + z * z
-    if isinstance(n2, np.ndarray):
-        if not np.isfinite(n2).all():
-            raise ValueError(f"{name} contains NaN or infinity")
-        bad = ~(np.abs(np.sqrt(n2) - 1.0) <= tol)
-        if bad.any():
-            _raise_not_unit(subject or name, np.sqrt(n2)[bad].flat[0], tol)
+    f = functions_for(n2)
+    if f.max_abs(n2 - 1.0) <= tol:  # implies | |q| - 1 | <= tol / 2 (NaN and inf fail it)
         return
-    if abs(n2 - 1.0) <= tol:  # implies | |q| - 1 | <= tol / 2 (and catches NaN/inf below)
-        return
-    if not n2 - n2 == 0.0:
+    if not f.all_finite(n2):
         raise ValueError(f"{name} contains NaN or infinity")
-    if not abs(math.sqrt(n2) - 1.0) <= tol:
-        _raise_not_unit(subject or name, math.sqrt(n2), tol)
+    norm = f.sqrt(n2)
+    off = abs(norm - 1.0)
+    if not f.largest(off, 0.0) <= tol:
+        _raise_not_unit(subject or name, f.first(norm, np.logical_not(off <= tol)), tol)
 
 
 def _raise_not_unit(subject, n, tol):
@@ -302,7 +291,7 @@ def unit_dual_quaternion_or_raise(parts, name, tol):
     rw, rx, ry, rz, dw, dx, dy, dz = parts
     unit_quaternion_or_raise((rw, rx, ry, rz), name, tol, f"the real part of {name}")
     dot = rw * dw + rx * dx + ry * dy + rz * dz
-    bad = np.max(np.abs(dot), initial=0.0) if isinstance(dot, np.ndarray) else abs(dot)
+    bad = functions_for(dot).max_abs(dot)
     if not bad - bad == 0.0:
         raise ValueError(f"{name} contains NaN or infinity")
     if not bad <= tol:

@@ -26,9 +26,6 @@ Helpers for the UR solutions: ``SOLUTION_ORDER`` (the meaning of the eight rows)
 within the joint limits) and ``closest_solution``.
 """
 
-import sys
-
-from . import damped_least_squares, ur_closed_form
 from .damped_least_squares import numerical
 from .desk_arm_closed_form import desk_arm
 from .result import IKResult
@@ -47,10 +44,3 @@ __all__ = [
     "IKResult", "SOLUTION_ORDER", "closest_solution", "desk_arm", "distinct_solutions",
     "equivalent_solutions", "numerical", "pose_errors", "scara", "ur", "ur_parameters",
 ]
-
-# The module paths of earlier versions, kept for code that imports from them:
-# ``from dqlab.ik.ur import ur_parameters`` and ``from dqlab.ik.numerical import pose_errors``
-# load the modules named after what they hold. The attributes ``dqlab.ik.ur`` and
-# ``dqlab.ik.numerical`` are the solver functions.
-sys.modules[__name__ + ".ur"] = ur_closed_form
-sys.modules[__name__ + ".numerical"] = damped_least_squares
