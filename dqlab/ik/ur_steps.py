@@ -9,12 +9,12 @@ coefficients :math:`L` and the wrist angles (:func:`relative_rotation_coefficien
 :func:`wrist_angles`), the arm-plane coordinates :math:`(u_5, v_5)` of the wrist centre and
 :math:`(u_4, v_4)` of the wrist-1 point (:func:`arm_plane_wrist`, :func:`wrist1_point`) and
 the planar two-link arm (:func:`elbow_angles`). :func:`candidate_solutions` runs them in the
-chapter's order and is what the chapter shows; :func:`dqlab.ik.ur` computes the same rows
-(tested equal, bit for bit) with the speed machinery of :mod:`dqlab.ik._ur_engine`, and adds
-the checks, the flags and the choice at a wrist singularity.
+chapter's order and is what the chapter shows. :func:`dqlab.ik.ur` computes the same rows
+with the speed machinery of the private module ``dqlab.ik._ur_engine`` (tested equal, bit
+for bit) and adds the checks, the flags and the choice at a wrist singularity.
 
-Each step is one formula for two kinds of numbers, told apart by one switch,
-:func:`dqlab._kernels.functions_for`: Python floats, computed with ``math`` (one pose, one
+Each step is one formula for two kinds of numbers, told apart by one switch
+(``dqlab._kernels.functions_for``): Python floats, computed with ``math`` (one pose, one
 branch at a time), and numpy arrays of any shape (a batch, all branches at once). Angles
 are in radians, lengths in metres; UR's standard Denavit--Hartenberg values keep their
 published signs (:math:`a_2`, :math:`a_3` are negative).
