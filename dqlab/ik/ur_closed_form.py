@@ -19,6 +19,13 @@ term. The route has four steps, each a small function of :mod:`dqlab.ik.ur_steps
    :math:`\theta_4 = \theta_{234} - \theta_2 - \theta_3`
    (:func:`~dqlab.ik.ur_steps.elbow_angles`).
 
+:func:`~dqlab.ik.ur_steps.candidate_solutions` assembles the steps into the eight rows in the
+order of the book's chapter 8, readably; :func:`ur` returns the same rows, bit for bit, from
+the private engine ``dqlab.ik._ur_engine`` (one pose on Python floats, a batch with all
+branches as arrays, in blocks), which also checks every row, sets the flags and, at a wrist
+singularity, chooses a member of the family. :func:`ur` itself only checks its arguments and
+the robot's UR shape (:func:`ur_parameters`), in one place.
+
 A candidate is valid when it reproduces the pose to ``tol`` (1e-9 m and 1e-9 rad by
 default; the thesis filters by forward kinematics with ``np.allclose(..., atol=1e-3)``). Its
 distance to the pose comes from the solved equations (only a step that had to clip leaves
@@ -255,27 +262,27 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     Notes
     -----
     Steps, with :math:`X_{06} = (q, p)` the flange pose in the base frame and
-    :math:`q_D = q\, q_0^*` its rotation relative to the zero pose
+    :math:`\mathsf r_D = q\, q_0^*` its rotation relative to the zero pose
     (:math:`q_0 = \cos\frac{\pi}{4} + \sin\frac{\pi}{4}\, i`, the flange at :math:`q = 0`):
 
     .. math::
 
         p_5 &= p - d_6 z_6, \qquad
         \theta_1 = \operatorname{atan2}(y_5 h_\pm + x_5 d_4,\ x_5 h_\pm - y_5 d_4),\\
-        L &= r_z(\theta_1)^* q_D, \qquad
+        L &= r_z(\theta_1)^* \mathsf r_D, \qquad
         \theta_5 = 2 \operatorname{atan2}\big(\sigma\sqrt{L_x^2 + L_z^2},
                                              \sqrt{L_w^2 + L_y^2}\big),\\
         \theta_{234} &= \operatorname{atan2}(-L_y, L_w) + \operatorname{atan2}(\sigma L_x,
                         -\sigma L_z), \quad
         \theta_6 = \operatorname{atan2}(-L_y, L_w) - \operatorname{atan2}(\sigma L_x,
                         -\sigma L_z),\\
-        (X, Y) &= (c_1 x_5 + s_1 y_5 - d_5 s_{234},\ z_5 - d_1 + d_5 c_{234}),\\
+        (u_4, v_4) &= (c_1 x_5 + s_1 y_5 - d_5 s_{234},\ z_5 - d_1 + d_5 c_{234}),\\
         \theta_3 &= \operatorname{atan2}\big(\pm\sqrt{((a_2 + a_3)^2 - \rho^2)
                      (\rho^2 - (a_2 - a_3)^2)},\ \rho^2 - a_2^2 - a_3^2\big), \quad
-        \theta_2 = \operatorname{atan2}(Y k_1 - X k_2, X k_1 + Y k_2),\\
+        \theta_2 = \operatorname{atan2}(v_4 k_1 - u_4 k_2, u_4 k_1 + v_4 k_2),\\
         \theta_4 &= \theta_{234} - \theta_2 - \theta_3 ,
 
-    with :math:`\rho^2 = X^2 + Y^2`, :math:`k_1 = a_2 + a_3 c_3`, :math:`k_2 = a_3 s_3`.
+    with :math:`\rho^2 = u_4^2 + v_4^2`, :math:`k_1 = a_2 + a_3 c_3`, :math:`k_2 = a_3 s_3`.
 
     Singularities: at the shoulder singularity (:math:`h = 0`) and the elbow singularity
     (:math:`\sin\theta_3 = 0`) two branches coincide and both are returned. At the wrist

@@ -9,9 +9,10 @@ coefficients :math:`L` and the wrist angles (:func:`relative_rotation_coefficien
 :func:`wrist_angles`), the arm-plane coordinates :math:`(u_5, v_5)` of the wrist centre and
 :math:`(u_4, v_4)` of the wrist-1 point (:func:`arm_plane_wrist`, :func:`wrist1_point`) and
 the planar two-link arm (:func:`elbow_angles`). :func:`candidate_solutions` runs them in the
-chapter's order and is what the chapter shows. :func:`dqlab.ik.ur` computes the same rows
-with the speed machinery of the private module ``dqlab.ik._ur_engine`` (tested equal, bit
-for bit) and adds the checks, the flags and the choice at a wrist singularity.
+chapter's order and is what the chapter shows.
+:func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>` computes the same rows with the speed
+machinery of the private module ``dqlab.ik._ur_engine`` (tested equal, bit for bit) and
+adds the checks, the flags and the choice at a wrist singularity.
 
 Each step is one formula for two kinds of numbers, told apart by one switch
 (``dqlab._kernels.functions_for``): Python floats, computed with ``math`` (one pose, one
@@ -341,8 +342,9 @@ def theta234_sine_cosine(L: tuple, sigma: ArrayLike, c5bar: Array, s5bar: Array
 
     (the two numerators have the squared sum :math:`\bar c_5^2 \bar s_5^2`). Undefined at
     the wrist singularity, :math:`\bar c_5 \bar s_5 = 0`, where only
-    :math:`\theta_{234} \pm \theta_6` is determined and :func:`dqlab.ik.ur` chooses
-    :math:`\theta_{234}` from its family (:func:`feasible_theta234`).
+    :math:`\theta_{234} \pm \theta_6` is determined and
+    :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>` chooses :math:`\theta_{234}` from its family
+    (:func:`feasible_theta234`).
 
     Examples
     --------
@@ -673,18 +675,19 @@ def candidate_solutions(X: ArrayLike, d1: float, a2: float, a3: float, d4: float
 
     Row :math:`k = 4s + 2e + w` holds :math:`(\theta_1, \dots, \theta_6)`, each in
     :math:`(-\pi, \pi]`. These are candidates: a step that has no exact solution (a target out
-    of reach) clips, and :func:`dqlab.ik.ur` keeps a row only if it reproduces the pose.
-    :func:`dqlab.ik.ur` returns these same rows, bit for bit, for every row it marks valid
-    away from a wrist singularity. At a wrist singularity (:math:`\bar c_5 \bar s_5 = 0`) only
-    :math:`\theta_{234} \pm \theta_6` is fixed and :func:`dqlab.ik.ur` chooses a member of
-    the family; this function refuses such a pose.
+    of reach) clips, and :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>` keeps a row only if it
+    reproduces the pose. It returns these same rows, bit for bit, for every row it marks
+    valid away from a wrist singularity. At a wrist singularity
+    (:math:`\bar c_5 \bar s_5 = 0`) only :math:`\theta_{234} \pm \theta_6` is fixed and
+    it chooses a member of the family; this function refuses such a pose.
 
     Parameters
     ----------
     X : array_like, shape (4, 4) or (..., 4, 4)
         Flange pose(s) :math:`X_{06}`, rigid transforms.
     d1, a2, a3, d4, d5, d6 : float
-        UR's standard DH lengths (see :func:`dqlab.ik.ur_parameters`).
+        UR's standard DH lengths (see
+        :func:`dqlab.ik.ur_parameters <dqlab.ik.ur_closed_form.ur_parameters>`).
 
     Returns
     -------
@@ -712,14 +715,14 @@ def candidate_solutions(X: ArrayLike, d1: float, a2: float, a3: float, d4: float
     X = check_transform(X, name="X")
     entries = components(X.reshape(X.shape[:-2] + (16,)))    # row by row
     p, z6 = entries[3:12:4], entries[2:11:4]                  # position, z axis
-    r_D = target_rotation(quaternion_from_matrix_entries(*entries[0:3], *entries[4:7],
-                                                         *entries[8:11]))
+    q = quaternion_from_matrix_entries(*entries[0:3], *entries[4:7], *entries[8:11])
+    r_D = target_rotation(q)                                           # r_D = q q0*
     p5 = wrist_center(p, z6, d6)                                       # eq-ik-wrist-point
     rows = [None] * 8
     for s, shoulder in enumerate((1.0, -1.0)):           # left (h+ = +h), right (h+ = -h)
         theta1, c1, s1, *_ = shoulder_angles(p5[0], p5[1], d4, shoulder)     # eq-ik-theta1
-        L = relative_rotation_coefficients(r_D, half_angle_cos_sin(c1, s1))
-        u5, v5 = arm_plane_wrist(p5, c1, s1, d1)
+        L = relative_rotation_coefficients(r_D, half_angle_cos_sin(c1, s1))  # eq-ik-theta6-system
+        u5, v5 = arm_plane_wrist(p5, c1, s1, d1)                       # the arm plane
         for w, sigma in enumerate((1.0, -1.0)):          # wrist not flipped, flipped
             theta5, half_sum, half_diff, c5bar, s5bar = wrist_angles(L, sigma)  # eq-ik-wrist
             if not functions_for(c5bar).smallest(c5bar * s5bar) > 0.0:
@@ -729,8 +732,8 @@ def candidate_solutions(X: ArrayLike, d1: float, a2: float, a3: float, d4: float
             sin234, cos234 = theta234_sine_cosine(L, sigma, c5bar, s5bar)
             u4, v4 = wrist1_point(u5, v5, sin234, cos234, d5)          # eq-ik-wrist1-point
             for e, elbow in enumerate((1.0, -1.0)):      # elbow up, down
-                theta2, theta3, *_ = elbow_angles(u4, v4, a2, a3, elbow)   # eq-ik-theta3
-                theta4 = theta234 - theta2 - theta3                      # eq-ik-theta2
+                theta2, theta3, *_ = elbow_angles(u4, v4, a2, a3, elbow)   # eq-ik-theta3-atan2
+                theta4 = theta234 - theta2 - theta3                        # and eq-ik-theta2
                 rows[4 * s + 2 * e + w] = (theta1, theta2, theta3, wrap_angle(theta4),
                                            theta5, wrap_angle(theta6))
     return np.moveaxis(np.array(rows, dtype=float), (0, 1), (-2, -1))
