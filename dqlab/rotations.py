@@ -338,7 +338,10 @@ def wrap_angle(theta: ArrayLike) -> NDArray[np.float64]:
     >>> wrap_angle(7.0)
     0.7168146928204138
     """
-    if type(theta) is not float:
+    if type(theta) is float:          # a Python float needs no check
+        if -_PI < theta <= _PI:       # already inside: nothing to do
+            return theta
+    else:
         theta = real_array(theta, "theta")
     f = functions_for(theta)
     if f.max_abs(theta) < _PI:       # already inside: nothing to do (+theta: a new array)

@@ -75,7 +75,7 @@ REASON_REACH = "elbow: the wrist-1 point is out of the forearm's reach on every 
 REASON_TOL = "no branch reproduces the pose within tol"
 
 
-def solve(robot, prm, target, *, tol, singular_tol, pose_tol, tool, q_ref, residuals):
+def solve(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals):
     """:func:`dqlab.ik.ur` after its checks of ``tol``, ``singular_tol``, ``pose_tol`` and
     ``residuals``, with ``prm`` the robot's :func:`~dqlab.ik.ur_parameters`: one pose on
     floats when it can, else the batch path."""
@@ -85,8 +85,7 @@ def solve(robot, prm, target, *, tol, singular_tol, pose_tol, tool, q_ref, resid
         result = solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref)
         if result is not None:
             return result
-    return solve_batch(robot, prm, target, tol=tol, singular_tol=singular_tol,
-                       pose_tol=pose_tol, tool=tool, q_ref=q_ref, residuals=residuals)
+    return solve_batch(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals)
 
 
 # --------------------------------------------------------------------------------------
@@ -146,14 +145,21 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref):
             return None
         L = steps.relative_rotation_coefficients(r_D, steps.half_angle_cos_sin(c1, s1))
         u5, v5 = steps.arm_plane_wrist(p5, c1, s1, d1)
+        theta5, half_sum, half_diff, c5bar, s5bar = steps.wrist_angles(L, 1.0)
+        sin5 = 2.0 * s5bar * c5bar
+        if sin5 < NEAR_WRIST:
+            return None
+        sin234, cos234 = steps.theta234_sine_cosine(L, 1.0, c5bar, s5bar)
         for w, sigma in enumerate((1.0, -1.0)):
-            theta5, half_sum, half_diff, c5bar, s5bar = steps.wrist_angles(L, sigma)
-            sin5 = 2.0 * s5bar * c5bar
-            if sin5 < NEAR_WRIST:
-                return None
+            if w == 1:
+                # the flipped wrist, sigma = -1, from the sigma = +1 values: wrist_angles'
+                # theta5 and theta234_sine_cosine's k = sigma / (c5bar s5bar) change sign
+                # exactly; the half difference is computed anew
+                theta5 = -theta5 if theta5 != math.pi else theta5      # never -pi
+                half_diff = steps.half_difference(L, sigma)
+                sin234, cos234 = -sin234, -cos234
             theta234 = half_sum + half_diff
             theta6 = wrap_angle(half_sum - half_diff)
-            sin234, cos234 = steps.theta234_sine_cosine(L, sigma, c5bar, s5bar)
             u4, v4 = steps.wrist1_point(u5, v5, sin234, cos234, d5)
             triangle = steps.elbow_triangle(u4, v4, a2, a3)
             # the residual of the rows: the clipping of the elbow, if any (h2 >= 0: no
@@ -277,7 +283,7 @@ class Block:
                       self.reason.reshape(batch))
 
 
-def solve_batch(robot, prm, target, *, tol, singular_tol, pose_tol, tool, q_ref, residuals):
+def solve_batch(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals):
     """Any poses (one or a batch) with array operations, without a Python loop over the
     poses, in blocks of :data:`CHUNK`."""
     targets = parse_targets(target, tol=pose_tol)

@@ -326,8 +326,8 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     pose_tol = check_tolerance(pose_tol, "pose_tol")
     if residuals not in ("fk", "equations"):
         raise ValueError(f"residuals must be 'fk' or 'equations', got {residuals!r}")
-    return solve(robot, _parameters(robot), target, tol=tol, singular_tol=singular_tol,
-                 pose_tol=pose_tol, tool=tool, q_ref=q_ref, residuals=residuals)
+    return solve(robot, _parameters(robot), target, tol, singular_tol, pose_tol, tool, q_ref,
+                 residuals)
 
 
 def distinct_solutions(result: IKResult, atol: float = 1e-9) -> NDArray[np.bool_]:

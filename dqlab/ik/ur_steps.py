@@ -48,7 +48,7 @@ from ..transforms import check_transform
 
 __all__ = [
     "target_rotation", "wrist_center", "shoulder_angles", "half_angle_cos_sin",
-    "relative_rotation_coefficients", "wrist_angles", "theta234_sine_cosine",
+    "relative_rotation_coefficients", "wrist_angles", "half_difference", "theta234_sine_cosine",
     "arm_plane_wrist", "wrist1_point", "elbow_triangle", "elbow_angles", "reach_gap",
     "shoulder_gap", "feasible_theta234", "candidate_solutions",
 ]
@@ -322,8 +322,23 @@ def wrist_angles(L: tuple, sigma: ArrayLike) -> tuple[Array, Array, Array, Array
     s5bar = f.sqrt(Lx * Lx + Lz * Lz)
     theta5 = f.no_minus_pi(sigma * (2.0 * f.atan2(s5bar, c5bar)))    # atan2 is odd in y
     half_sum = f.atan2(-Ly, Lw)
-    half_diff = f.atan2(sigma * Lx, -sigma * Lz)
-    return theta5, half_sum, half_diff, c5bar, s5bar
+    return theta5, half_sum, half_difference(L, sigma), c5bar, s5bar
+
+
+def half_difference(L: tuple, sigma: ArrayLike) -> Array:
+    r"""The half difference :math:`\tfrac{\theta_{234} - \theta_6}{2} =
+    \operatorname{atan2}(\sigma L_x, -\sigma L_z)` of :func:`wrist_angles`, the one wrist
+    quantity that depends on the branch :math:`\sigma` otherwise than by its sign.
+
+    Examples
+    --------
+    >>> L = (math.cos(0.3) * math.cos(0.1), math.sin(0.3) * math.sin(0.2),
+    ...      -math.cos(0.3) * math.sin(0.1), -math.sin(0.3) * math.cos(0.2))
+    >>> round(half_difference(L, 1.0), 12), round(half_difference(L, -1.0), 12)
+    (0.2, -2.94159265359)
+    """
+    _, Lx, _, Lz = L
+    return functions_for(Lx).atan2(sigma * Lx, -sigma * Lz)
 
 
 def theta234_sine_cosine(L: tuple, sigma: ArrayLike, c5bar: Array, s5bar: Array
