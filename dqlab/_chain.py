@@ -165,7 +165,7 @@ class CompiledChain:
         products before and after each joint motion (lists of n column sets): before joint
         i it is the frame whose z axis is joint i's axis.
         """
-        f = functions_for(q[0])
+        f = functions_for(type(q[0]))
         cos, sin = f.cos, f.sin
         (ux, uy, uz), (vx, vy, vz), (wx, wy, wz), (px, py, pz) = self._K0_columns
         before, after = [], []
@@ -244,7 +244,7 @@ class CompiledChain:
         arrays of shape (N,) (a batch), one formula for both. The factors are validated unit
         dual quaternions, so nothing is checked here.
         """
-        f = functions_for(q[0])
+        f = functions_for(type(q[0]))
         cos, sin = f.cos, f.sin
         rw, rx, ry, rz, dw, dx, dy, dz = self._K_dual_quaternions[0]
         for q_i, ((theta0, d0, revolute), screw, K) in zip(q, self._dq_steps, strict=True):
@@ -275,7 +275,7 @@ class CompiledChain:
 
     def _fk_dq_screw_parts(self, q):
         """The product S_1 S_2 ... S_n Q_WT(0) on components (``q`` as in _fk_dq_parts)."""
-        f = functions_for(q[0])
+        f = functions_for(type(q[0]))
         cos, sin = f.cos, f.sin
         lines, Q = self._screw_constants
         for i in range(self._n - 1, -1, -1):

@@ -164,7 +164,7 @@ def stack_components(parts):
     >>> stack_components([1.0, 2.0])
     array([1., 2.])
     """
-    return functions_for(parts[0], parts[-1]).stack(parts)
+    return functions_for((type(parts[0]), type(parts[-1]))).stack(parts)
 
 
 def finite_or_raise(out, *named):
@@ -192,7 +192,7 @@ def pack(parts, *named):
     >>> pack([1.0, 2.0], (np.ones(2), "a", (2,)))
     array([1., 2.])
     """
-    out, finite = functions_for(parts[0], parts[-1]).stack_finite(parts)
+    out, finite = functions_for((type(parts[0]), type(parts[-1]))).stack_finite(parts)
     return out if finite else finite_or_raise(out, *named)
 
 
@@ -245,14 +245,14 @@ def unit_quaternion_or_raise(parts, name, tol, subject=None):
     """
     w, x, y, z = parts
     n2 = w * w + x * x + y * y + z * z
-    f = functions_for(n2)
+    f = functions_for(type(n2))
     if f.max_abs(n2 - 1.0) <= tol:  # implies | |q| - 1 | <= tol / 2 (NaN and inf fail it)
         return
     if not f.all_finite(n2):
         raise ValueError(f"{name} contains NaN or infinity")
     norm = f.sqrt(n2)
     off = abs(norm - 1.0)
-    if not f.largest(off, 0.0) <= tol:
+    if not f.largest(off) <= tol:
         _raise_not_unit(subject or name, f.first(norm, np.logical_not(off <= tol)), tol)
 
 
@@ -291,7 +291,7 @@ def unit_dual_quaternion_or_raise(parts, name, tol):
     rw, rx, ry, rz, dw, dx, dy, dz = parts
     unit_quaternion_or_raise((rw, rx, ry, rz), name, tol, f"the real part of {name}")
     dot = rw * dw + rx * dx + ry * dy + rz * dz
-    bad = functions_for(dot).max_abs(dot)
+    bad = functions_for(type(dot)).max_abs(dot)
     if not bad - bad == 0.0:
         raise ValueError(f"{name} contains NaN or infinity")
     if not bad <= tol:

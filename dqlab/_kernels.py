@@ -47,20 +47,12 @@ def _float_half_cos_sin(c, s):
     return abs(other), (-big if s < 0.0 else big)
 
 
-def _float_extreme(x, empty=None):
-    return x
-
-
 def _float_first(x, where):
     return x
 
 
 def _float_all_finite(x):
     return x - x == 0.0               # NaN and inf give NaN
-
-
-def _float_largest_of(values, empty=None):
-    return max(values)
 
 
 def _float_row_of_largest(K, rows):
@@ -78,16 +70,16 @@ def _float_stack_finite(parts):
     return np.array(parts), total - total == 0.0
 
 
-def _array_largest(x, empty=-math.inf):
-    return float(x.max(initial=empty))
+def _array_largest(x):
+    return float(x.max(initial=-math.inf))
 
 
-def _array_smallest(x, empty=math.inf):
-    return float(x.min(initial=empty))
+def _array_smallest(x):
+    return float(x.min(initial=math.inf))
 
 
-def _array_largest_of(values, empty=-math.inf):
-    return max(float(x.max(initial=empty)) for x in values)
+def _array_largest_of(values):
+    return max(_array_largest(x) for x in values)
 
 
 def _array_max_abs(x):
@@ -159,9 +151,9 @@ class _OnFloats:
     copysign = math.copysign
     rint = round                                     # half to even, as numpy's rint
     where = staticmethod(_float_where)               # a if condition else b
-    largest = staticmethod(_float_extreme)           # the largest entry: the value itself
-    smallest = staticmethod(_float_extreme)          # (the second argument: for no entry)
-    largest_of = staticmethod(_float_largest_of)     # the largest entry of several
+    largest = float                                  # the largest entry: the value itself
+    smallest = float
+    largest_of = max                                 # the largest entry of several
     max_abs = abs                                    # the largest |entry|
     first = staticmethod(_float_first)               # the first entry where a mask is True
     all_finite = staticmethod(_float_all_finite)
@@ -199,23 +191,25 @@ class _OnArrays:
     stack_finite = staticmethod(_array_stack_finite)
 
 
-def functions_for(x, y=0.0):
-    r"""The functions a component formula uses, for the kind of number ``x`` (and ``y``) is.
+class _FunctionsByType(dict):
+    r"""The functions a component formula uses, by the type of its numbers: ``float`` (and a
+    pair of floats) to :class:`_OnFloats`, any other type to :class:`_OnArrays`.
 
     The one switch between the two paths of every formula written on components: Python
     floats (one value; ``math`` is several times faster than numpy on single numbers) get
     ``math``'s functions, anything else (arrays of one common shape, a batch) numpy's. A
-    formula reads ``f = functions_for(x)`` and then ``f.sqrt``, ``f.atan2``, ``f.where``...,
-    the same text for both kinds. ``y``, when given, must be a float too for the float
-    functions (for formulas whose parts mix constants and arrays).
+    formula reads ``f = functions_for(type(x))`` and then ``f.sqrt``, ``f.atan2``,
+    ``f.where``..., the same text for both kinds; a formula whose parts may mix constants
+    and arrays asks with the pair ``(type(first), type(last))``. (A dictionary lookup, not a
+    Python function: the float path of one pose asks it dozens of times.)
 
     The namespace holds the elementary functions (``sqrt``, ``sin``, ``cos``, ``atan2``,
     ``copysign``, ``rint``, ``where``) and a few small operations whose float and array
     forms differ:
 
-    - ``largest(x, empty)``, ``smallest(x, empty)``, ``largest_of(values, empty)`` and
-      ``max_abs(x)``: the value itself for a float; the extreme entry of an array, as a
-      float (``empty`` for an array without entries);
+    - ``largest(x)``, ``smallest(x)``, ``largest_of(values)`` and ``max_abs(x)``: the value
+      itself for a float; the extreme entry of an array, as a float (:math:`\mp\infty` for
+      an array without entries);
     - ``first(x, where)``: the first entry of ``x`` where the mask is true;
     - ``all_finite(x)``; ``clip0(x)``: :math:`\max(x, 0)`; ``no_minus_pi(theta)``:
       :math:`-\pi \to \pi`; ``cos_sin(x, y)``: the unit vector of :math:`(x, y)`,
@@ -226,10 +220,17 @@ def functions_for(x, y=0.0):
     - ``stack(parts)``: the parts on a last axis; ``stack_finite(parts)``: the stack and
       whether it is finite.
 
-    >>> functions_for(2.0).sqrt(2.0) == math.sqrt(2.0), functions_for(np.ones(2)).sqrt is np.sqrt
+    >>> functions_for(float).sqrt is math.sqrt, functions_for(np.ndarray).sqrt is np.sqrt
     (True, True)
+    >>> functions_for((float, np.ndarray)) is functions_for(np.float64) is _OnArrays
+    True
     """
-    return _OnFloats if type(x) is float and type(y) is float else _OnArrays
+
+    def __missing__(self, kind):
+        return _OnArrays
+
+
+functions_for = _FunctionsByType({float: _OnFloats, (float, float): _OnFloats}).__getitem__
 
 
 # --------------------------------------------------------------------------------------
@@ -307,7 +308,7 @@ def quaternion_from_matrix_entries(r00, r01, r02, r10, r11, r12, r20, r21, r22):
     (0.0, 0.0, 0.0, 1.0)
     """
     K = shepperd_terms(r00, r01, r02, r10, r11, r12, r20, r21, r22)
-    f = functions_for(r00)
+    f = functions_for(type(r00))
     (w, x, y, z), best = f.row_of_largest(K, _K_ROWS)   # the row of the largest diagonal
     s = 0.5 / f.sqrt(best)
     s = f.where(w < 0.0, -s, s)                 # canonical sign: w >= 0
@@ -326,7 +327,7 @@ def rotation_vector_from_matrix_entries(r00, r01, r02, r10, r11, r12, r20, r21, 
     [0.0, 0.0, 1.570796326795]
     """
     w, x, y, z = quaternion_from_matrix_entries(r00, r01, r02, r10, r11, r12, r20, r21, r22)
-    f = functions_for(w)
+    f = functions_for(type(w))
     norm_v = f.sqrt(x * x + y * y + z * z)
     turned = norm_v > 0.0
     scale = f.where(turned, 2.0 * f.atan2(norm_v, w) / f.where(turned, norm_v, 1.0), 2.0)
@@ -352,7 +353,7 @@ def pose_error_entries(a, b):
     vy = dot(2, 0) - dot(0, 2)
     vz = dot(0, 1) - dot(1, 0)
     trace = dot(0, 0) + dot(1, 1) + dot(2, 2)
-    f = functions_for(dx)
+    f = functions_for(type(dx))
     return (f.sqrt(dx * dx + dy * dy + dz * dz),
             f.atan2(f.sqrt(vx * vx + vy * vy + vz * vz), trace - 1.0))
 
@@ -380,8 +381,8 @@ def orthonormality(a, b, c):
             abs(a0 * a2 + b0 * b2 + c0 * c2),
             abs(a1 * a2 + b1 * b2 + c1 * c2))
     det = a0 * (b1 * c2 - b2 * c1) - a1 * (b0 * c2 - b2 * c0) + a2 * (b0 * c1 - b1 * c0)
-    f = functions_for(det)
-    return f.largest_of(errs, 0.0), f.smallest(det, 1.0)
+    f = functions_for(type(det))
+    return f.largest_of(errs), f.smallest(det)
 
 
 # --------------------------------------------------------------------------------------

@@ -343,9 +343,7 @@ def wrap_angle(theta: ArrayLike) -> NDArray[np.float64]:
             return theta
     else:
         theta = real_array(theta, "theta")
-    f = functions_for(theta)
-    if f.max_abs(theta) < _PI:       # already inside: nothing to do (+theta: a new array)
-        return +theta
+    f = functions_for(type(theta))
     w = theta - _TWO_PI * f.rint(theta * _ONE_TURN)
     if not f.max_abs(w) < _PI:                # -pi, or a rounding of theta / (2 pi)
         w = f.where(w > _PI, w - _TWO_PI, f.where(w <= -_PI, w + _TWO_PI, w))

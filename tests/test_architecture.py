@@ -3,11 +3,13 @@ no function that shadows a module of its package."""
 
 import ast
 import importlib
+import math
 import pkgutil
 import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import dqlab
@@ -173,7 +175,15 @@ CORE = [p for p in SOURCES if (module_name(p) + ".").split(".")[1] in
 
 
 def test_the_core_tells_floats_from_arrays_in_one_place():
-    """One switch between the float path and the array path of a formula,
-    dqlab._kernels.functions_for; wrap_angle skips its check for a Python float."""
+    """One switch between the float path and the array path of a formula: the mapping
+    dqlab._kernels.functions_for from the type of a number to its functions. No other
+    place of the core tests for a float, except wrap_angle, which skips its argument check
+    for a Python float."""
+    from dqlab._kernels import functions_for
+
     sites = {(module_name(p), name) for p in CORE for name, _ in float_switches(p)}
-    assert sites == {("dqlab._kernels", "functions_for"), ("dqlab.rotations", "wrap_angle")}
+    assert sites == {("dqlab.rotations", "wrap_angle")}
+    floats, arrays = functions_for(float), functions_for(np.ndarray)
+    assert floats.atan2 is math.atan2 and arrays.atan2 is np.arctan2
+    assert functions_for(np.float64) is arrays and functions_for((float, np.ndarray)) is arrays
+    assert functions_for((float, float)) is floats

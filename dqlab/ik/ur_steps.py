@@ -177,7 +177,7 @@ def shoulder_angles(x5: Array, y5: Array, d4: float, sign: ArrayLike
     >>> np.round(both[0].ravel(), 6)                                 # left, right
     array([0.      , 2.424928])
     """
-    f = functions_for(x5)
+    f = functions_for(type(x5))
     h2 = x5 * x5 + y5 * y5 - d4 * d4
     h = f.sqrt(f.clip0(h2))
     hpm = sign * h
@@ -218,7 +218,7 @@ def half_angle_cos_sin(c: Array, s: Array) -> tuple[Array, Array]:
     >>> bool(np.allclose(c, np.cos(theta / 2)) and np.allclose(s, np.sin(theta / 2)))
     True
     """
-    return functions_for(c).half_cos_sin(c, s)
+    return functions_for(type(c)).half_cos_sin(c, s)
 
 
 def relative_rotation_coefficients(r_D: tuple, half1: tuple) -> tuple:
@@ -317,7 +317,7 @@ def wrist_angles(L: tuple, sigma: ArrayLike) -> tuple[Array, Array, Array, Array
     [-0.6, 0.1, -2.941592653590]
     """
     Lw, Lx, Ly, Lz = L
-    f = functions_for(Lw)
+    f = functions_for(type(Lw))
     c5bar = f.sqrt(Lw * Lw + Ly * Ly)
     s5bar = f.sqrt(Lx * Lx + Lz * Lz)
     theta5 = f.no_minus_pi(sigma * (2.0 * f.atan2(s5bar, c5bar)))    # atan2 is odd in y
@@ -338,7 +338,7 @@ def half_difference(L: tuple, sigma: ArrayLike) -> Array:
     (0.2, -2.94159265359)
     """
     _, Lx, _, Lz = L
-    return functions_for(Lx).atan2(sigma * Lx, -sigma * Lz)
+    return functions_for(type(Lx)).atan2(sigma * Lx, -sigma * Lz)
 
 
 def theta234_sine_cosine(L: tuple, sigma: ArrayLike, c5bar: Array, s5bar: Array
@@ -473,7 +473,7 @@ def elbow_triangle(u4: Array, v4: Array, a2: float, a3: float
     >>> round(angle3, 6)
     1.326258
     """
-    f = functions_for(u4)
+    f = functions_for(type(u4))
     rho2 = u4 * u4 + v4 * v4
     rho = f.sqrt(rho2)
     r_out = abs(a2 + a3)
@@ -552,7 +552,7 @@ def elbow_angles(u4: Array, v4: Array, a2: float, a3: float, elbow: ArrayLike,
     >>> [round(v, 6) for v in (up[0], up[1], down[0], down[1])]
     [-1.199206, 1.326258, 0.0232, -1.326258]
     """
-    f = functions_for(u4)
+    f = functions_for(type(u4))
     cos_num, k, outer, inner, angle3 = triangle or elbow_triangle(u4, v4, a2, a3)
     m = 2.0 * abs(a2 * a3)
     # the folded elbow has theta3 = pi on both branches
@@ -575,7 +575,7 @@ def reach_gap(u4: Array, v4: Array, a2: float, a3: float) -> Array:
     >>> reach_gap(0.5, 0.0, -0.24365, -0.21325), reach_gap(0.3, 0.0, -0.24365, -0.21325)
     (0.0431, 0.0)
     """
-    f = functions_for(u4)
+    f = functions_for(type(u4))
     rho = f.sqrt(u4 * u4 + v4 * v4)
     r_out, r_in = abs(a2 + a3), abs(a2 - a3)
     return f.clip0(f.where(rho > r_out, rho - r_out, r_in - rho))
@@ -592,7 +592,7 @@ def shoulder_gap(x5: Array, y5: Array, h2: Array, d4: float) -> Array:
     >>> round(shoulder_gap(0.1, 0.0, 0.1**2 - 0.11235**2, 0.11235), 12)
     0.01235
     """
-    f = functions_for(x5)
+    f = functions_for(type(x5))
     return f.clip0(-h2) / (d4 + f.sqrt(x5 * x5 + y5 * y5))
 
 
@@ -740,7 +740,7 @@ def candidate_solutions(X: ArrayLike, d1: float, a2: float, a3: float, d4: float
         u5, v5 = arm_plane_wrist(p5, c1, s1, d1)                       # the arm plane
         for w, sigma in enumerate((1.0, -1.0)):          # wrist not flipped, flipped
             theta5, half_sum, half_diff, c5bar, s5bar = wrist_angles(L, sigma)  # eq-ik-wrist
-            if not functions_for(c5bar).smallest(c5bar * s5bar) > 0.0:
+            if not functions_for(type(c5bar)).smallest(c5bar * s5bar) > 0.0:
                 raise ValueError("X is wrist-singular (theta5 = 0 or pi): only theta234 +- "
                                  "theta6 is determined; dqlab.ik.ur chooses a member")
             theta234, theta6 = half_sum + half_diff, half_sum - half_diff
