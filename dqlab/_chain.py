@@ -100,19 +100,16 @@ class CompiledChain:
         total = sum(floats)            # NaN or inf in q make it NaN or inf
         return floats if total - total == 0.0 else None
 
-    def _run(self, parts, q, trailing):
-        """``parts`` on the joint vectors ``q`` (unchecked), shape (...) + trailing: one
-        joint vector through the float gate, anything else checked and then on
-        components."""
-        floats = self.joint_floats(q)
-        if floats is not None:
-            return np.array(parts(floats)).reshape(trailing)
-        return _on_components(parts, self._check(q), trailing)
-
     # -- what the robot asks for -----------------------------------------------------------
+    # Each product is run on one joint vector through the float gate (Python floats), and on
+    # anything else after the robot's check, on components (_on_components).
+
     def pose(self, q):
         """:math:`X_{WT}` (..., 4, 4) of joint vectors (unchecked)."""
-        return self._run(self._pose_entries, q, (4, 4))
+        floats = self.joint_floats(q)
+        if floats is not None:
+            return np.array(self._pose_entries(floats)).reshape(4, 4)
+        return _on_components(self._pose_entries, self._check(q), (4, 4))
 
     def frames(self, q):
         """The frames 0..n in W (..., n + 1, 4, 4) of checked joint vectors, the last one
@@ -132,7 +129,10 @@ class CompiledChain:
 
     def dual_quaternion(self, q):
         r""":math:`\hat Q_{WT}` (..., 8) of joint vectors (unchecked), link by link."""
-        return self._run(self._fk_dq_parts, q, (8,))
+        floats = self.joint_floats(q)
+        if floats is not None:
+            return np.array(self._fk_dq_parts(floats))
+        return _on_components(self._fk_dq_parts, self._check(q), (8,))
 
     def screw_dual_quaternion(self, q):
         r""":math:`\hat Q_{WT}` (..., 8) of checked joint vectors, by base-frame screws."""
@@ -140,11 +140,19 @@ class CompiledChain:
 
     def jacobian(self, q):
         """The geometric Jacobian (..., 6, n) of joint vectors (unchecked)."""
-        return self._run(self._jacobian_entries, q, (6, self._n))
+        floats = self.joint_floats(q)
+        if floats is not None:
+            return np.array(self._jacobian_entries(floats)).reshape(6, self._n)
+        return _on_components(self._jacobian_entries, self._check(q), (6, self._n))
 
     def pose_and_jacobian(self, q):
         """:meth:`pose` and :meth:`jacobian` (..., 4, 4), (..., 6, n) from one product."""
-        flat = self._run(self._pose_jacobian_entries, q, (16 + 6 * self._n,))
+        floats = self.joint_floats(q)
+        if floats is not None:
+            flat = np.array(self._pose_jacobian_entries(floats))
+        else:
+            flat = _on_components(self._pose_jacobian_entries, self._check(q),
+                                  (16 + 6 * self._n,))
         lead = flat.shape[:-1]
         return flat[..., :16].reshape(lead + (4, 4)), flat[..., 16:].reshape(lead + (6, self._n))
 

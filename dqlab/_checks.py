@@ -186,14 +186,17 @@ def finite_or_raise(out, *named):
 def pack(parts, *named):
     """Stack ``parts`` (see :func:`stack_components`) and make sure the result is finite.
 
-    For Python floats (a single value) the test is one subtraction; a batch goes through
-    :func:`finite_or_raise`. ``named`` are the inputs as in :func:`finite_or_raise`.
+    The test is on the sum of the parts, which NaN or infinity in any part makes NaN or
+    infinite (a sum that overflows is told apart by :func:`finite_or_raise`, which also
+    names the input at fault). ``named`` are the inputs as in :func:`finite_or_raise`.
 
     >>> pack([1.0, 2.0], (np.ones(2), "a", (2,)))
     array([1., 2.])
     """
-    out, finite = functions_for((type(parts[0]), type(parts[-1]))).stack_finite(parts)
-    return out if finite else finite_or_raise(out, *named)
+    f = functions_for((type(parts[0]), type(parts[-1])))
+    total = sum(parts)                  # NaN or inf in a part make it NaN or inf
+    out = f.stack(parts)
+    return out if f.all_finite(total) else finite_or_raise(out, *named)
 
 
 CHUNK = 8192

@@ -51,10 +51,6 @@ def _float_first(x, where):
     return x
 
 
-def _float_all_finite(x):
-    return x - x == 0.0               # NaN and inf give NaN
-
-
 def _float_row_of_largest(K, rows):
     k = 1 if K[1] > K[0] else 0
     if K[2] > K[k]:
@@ -63,11 +59,6 @@ def _float_row_of_largest(K, rows):
         k = 3
     i, j, m, n = rows[k]
     return (K[i], K[j], K[m], K[n]), K[k]
-
-
-def _float_stack_finite(parts):
-    total = sum(parts)            # NaN or inf in a part make it NaN or inf
-    return np.array(parts), total - total == 0.0
 
 
 def _array_largest(x):
@@ -135,11 +126,6 @@ def _array_stack(parts):
     return np.stack(np.broadcast_arrays(*parts), axis=-1).astype(float, copy=False)
 
 
-def _array_stack_finite(parts):
-    out = _array_stack(parts)
-    return out, bool(np.isfinite(out).all())
-
-
 class _OnFloats:
     """The functions of a component formula on Python floats (one value): ``math``'s, and
     plain Python for the rest. The class is only a namespace (nothing binds)."""
@@ -156,14 +142,13 @@ class _OnFloats:
     largest_of = max                                 # the largest entry of several
     max_abs = abs                                    # the largest |entry|
     first = staticmethod(_float_first)               # the first entry where a mask is True
-    all_finite = staticmethod(_float_all_finite)
+    all_finite = math.isfinite
     clip0 = staticmethod(_float_clip0)               # max(x, 0), never -0.0
     no_minus_pi = staticmethod(_float_no_minus_pi)   # -pi -> pi, other angles unchanged
     cos_sin = staticmethod(_float_cos_sin)           # (x, y) / |(x, y)|, (1, 0) at 0
     half_cos_sin = staticmethod(_float_half_cos_sin)  # see dqlab.ik.ur_steps.half_angle_cos_sin
     row_of_largest = staticmethod(_float_row_of_largest)   # see quaternion_from_matrix_entries
     stack = np.array                                 # parts on a last axis
-    stack_finite = staticmethod(_float_stack_finite)  # (stack, whether all are finite)
 
 
 class _OnArrays:
@@ -188,7 +173,6 @@ class _OnArrays:
     half_cos_sin = staticmethod(_array_half_cos_sin)
     row_of_largest = staticmethod(_array_row_of_largest)
     stack = staticmethod(_array_stack)
-    stack_finite = staticmethod(_array_stack_finite)
 
 
 class _FunctionsByType(dict):
@@ -217,8 +201,7 @@ class _FunctionsByType(dict):
       :func:`dqlab.ik.ur_steps.half_angle_cos_sin`;
     - ``row_of_largest(K, rows)``: Shepperd's choice, the entries ``rows[k]`` of ``K`` for
       the first ``k`` with the largest ``K[k]``, and that ``K[k]``;
-    - ``stack(parts)``: the parts on a last axis; ``stack_finite(parts)``: the stack and
-      whether it is finite.
+    - ``stack(parts)``: the parts on a last axis.
 
     >>> functions_for(float).sqrt is math.sqrt, functions_for(np.ndarray).sqrt is np.sqrt
     (True, True)
