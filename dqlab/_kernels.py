@@ -141,6 +141,7 @@ class _OnFloats:
     smallest = float
     largest_of = max                                 # the largest entry of several
     max_abs = abs                                    # the largest |entry|
+    maximum = max                                    # the larger of two, entry by entry
     first = staticmethod(_float_first)               # the first entry where a mask is True
     all_finite = math.isfinite
     clip0 = staticmethod(_float_clip0)               # max(x, 0), never -0.0
@@ -165,6 +166,7 @@ class _OnArrays:
     smallest = staticmethod(_array_smallest)
     largest_of = staticmethod(_array_largest_of)
     max_abs = staticmethod(_array_max_abs)
+    maximum = np.maximum
     first = staticmethod(_array_first)
     all_finite = staticmethod(_array_all_finite)
     clip0 = staticmethod(_array_clip0)
@@ -188,7 +190,7 @@ class _FunctionsByType(dict):
     Python function: the float path of one pose asks it dozens of times.)
 
     The namespace holds the elementary functions (``sqrt``, ``sin``, ``cos``, ``atan2``,
-    ``copysign``, ``rint``, ``where``) and a few small operations whose float and array
+    ``copysign``, ``rint``, ``where``, ``maximum``) and a few small operations whose float and array
     forms differ:
 
     - ``largest(x)``, ``smallest(x)``, ``largest_of(values)`` and ``max_abs(x)``: the value

@@ -578,7 +578,7 @@ def reach_gap(u4: Array, v4: Array, a2: float, a3: float) -> Array:
     f = functions_for(type(u4))
     rho = f.sqrt(u4 * u4 + v4 * v4)
     r_out, r_in = abs(a2 + a3), abs(a2 - a3)
-    return f.clip0(f.where(rho > r_out, rho - r_out, r_in - rho))
+    return f.maximum(f.maximum(rho - r_out, r_in - rho), 0.0)
 
 
 def shoulder_gap(x5: Array, y5: Array, h2: Array, d4: float) -> Array:
