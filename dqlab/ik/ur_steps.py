@@ -314,7 +314,7 @@ def wrist_angles(L: tuple, sigma: ArrayLike) -> tuple[Array, Array, Array, Array
     >>> [round(v, 12) for v in wrist_angles(L, 1.0)[:3]]
     [0.6, 0.1, 0.2]
     >>> [round(v, 12) for v in wrist_angles(L, -1.0)[:3]]      # the flipped wrist
-    [-0.6, 0.1, -2.941592653590]
+    [-0.6, 0.1, -2.94159265359]
     """
     Lw, Lx, Ly, Lz = L
     f = functions_for(type(Lw))
@@ -572,7 +572,7 @@ def reach_gap(u4: Array, v4: Array, a2: float, a3: float) -> Array:
 
     Examples
     --------
-    >>> reach_gap(0.5, 0.0, -0.24365, -0.21325), reach_gap(0.3, 0.0, -0.24365, -0.21325)
+    >>> round(reach_gap(0.5, 0.0, -0.24365, -0.21325), 12), reach_gap(0.3, 0.0, -0.24365, -0.21325)
     (0.0431, 0.0)
     """
     f = functions_for(type(u4))
