@@ -4,7 +4,8 @@ Every solver is called ``solver(robot, target, *, tol, ...)`` and returns an
 :class:`~dqlab.ik.result.IKResult` (the numerical solver also takes its start ``q0``):
 
 - ``dqlab.ik.ur`` (:func:`dqlab.ik.ur_closed_form.ur`) -- every closed-form solution of
-  a UR-family arm, by dual quaternions; its steps are :mod:`dqlab.ik.ur_steps`;
+  a UR-family arm, by dual quaternions; its steps, and their assembly into the eight rows
+  as chapter 8 derives them, are :mod:`dqlab.ik.ur_steps`;
 - ``dqlab.ik.desk_arm`` (:func:`dqlab.ik.desk_arm_closed_form.desk_arm`) -- the 3-DOF
   desktop arm in closed form (the robot itself is :func:`dqlab.models.desk_arm`);
 - ``dqlab.ik.scara`` (:func:`dqlab.ik.scara_closed_form.scara`) -- the SCARA RSM-5 in

@@ -8,12 +8,13 @@ operation runs over long contiguous rows; all eight branches are computed at onc
 of shape ``(2, 2, 2, n)`` over (shoulder, elbow, wrist), with the branch axes first; big
 batches are cut into blocks of :data:`CHUNK` poses whose temporaries stay in the cache; the
 results of a batch live in one allocation (:class:`Block`: the floats, then the booleans),
-written in place by the steps and handed to the caller as poses-first views;
-:math:`\sin\theta_{234}` and :math:`\cos\theta_{234}` come from the rotation coefficients
-without trigonometry; the residuals come from the steps' clipping instead of forward
-kinematics. It also handles what the readable path leaves out: a base, a tool, joint
-offsets, the choice of a member of the family at a wrist singularity, the validity of each
-row, the singularity flags and the reason of a pose without solution.
+written in place by the steps and handed to the caller as poses-first views; one pose
+takes its flipped wrist (:math:`\sigma = -1`) from the :math:`\sigma = +1` values by exact
+sign identities, computing only the half difference anew; the residuals come from the
+steps' clipping instead of forward kinematics. It also handles what the readable path
+leaves out: a base, a tool, joint offsets, the choice of a member of the family at a wrist
+singularity, the validity of each row, the singularity flags and the reason of a pose
+without solution.
 
 Tested equal to the readable path. Every row it marks valid away from a wrist singularity
 is, bit for bit, the row of :func:`dqlab.ik.ur_steps.candidate_solutions` (on floats for
