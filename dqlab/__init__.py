@@ -11,14 +11,13 @@ import importlib
 
 __version__ = "0.1.0"
 
-# The math core, re-exported at the top level (the public contract of the book and the tests).
-from .complex import planar_arm_joints, planar_arm_tip, rotate_planar  # noqa: E402
+# The math core the chapters use, re-exported at the top level (``dqlab.quaternion_product``,
+# the public contract of ../shared/DESIGN.md among them); every other function is reached
+# through its module (``dqlab.rotations.skew``, ``dqlab.complex.planar_arm_joints``).
 from .dualquat import (  # noqa: E402
     DualQuaternion,
-    check_unit_dual_quaternion,
     dual_quaternion_apply,
     dual_quaternion_apply_line,
-    dual_quaternion_apply_vector,
     dual_quaternion_combined_conjugate,
     dual_quaternion_conjugate,
     dual_quaternion_dual_conjugate,
@@ -42,7 +41,6 @@ from .dualquat import (  # noqa: E402
 from .quaternion import (  # noqa: E402
     Quaternion,
     axis_angle_from_quaternion,
-    check_unit_quaternion,
     matrix_from_quaternion,
     pyquaternion_from_quaternion,
     quaternion_conjugate,
@@ -51,7 +49,6 @@ from .quaternion import (  # noqa: E402
     quaternion_from_axis_angle,
     quaternion_from_matrix,
     quaternion_from_pyquaternion,
-    quaternion_identity,
     quaternion_inverse,
     quaternion_log,
     quaternion_norm,
@@ -62,57 +59,41 @@ from .quaternion import (  # noqa: E402
     slerp,
 )
 from .rotations import (  # noqa: E402
-    axis_angle_from_matrix,
-    check_rotation_matrix,
-    euler_zxz_from_matrix,
     matrix_from_axis_angle,
-    matrix_from_euler_zxz,
     matrix_from_rpy,
-    rodrigues,
     rot_x,
     rot_y,
     rot_z,
-    rpy_from_matrix,
-    skew,
 )
 from .transforms import (  # noqa: E402
     apply_to_vectors,
     apply_transform,
-    check_transform,
     compose,
-    rotation_translation_from_transform,
     transform_from,
-    transform_identity,
     transform_inverse,
 )
 
 __all__ = [
     # quaternion.py
-    "quaternion_product", "quaternion_conjugate", "quaternion_norm", "quaternion_inverse",
-    "quaternion_normalize", "check_unit_quaternion", "rotate_vector",
-    "quaternion_from_axis_angle", "axis_angle_from_quaternion", "quaternion_from_matrix",
-    "matrix_from_quaternion", "quaternion_exp", "quaternion_log", "quaternion_power", "slerp",
-    "quaternion_distance", "quaternion_from_pyquaternion", "pyquaternion_from_quaternion",
-    "quaternion_identity", "Quaternion",
+    "Quaternion", "axis_angle_from_quaternion", "matrix_from_quaternion",
+    "pyquaternion_from_quaternion", "quaternion_conjugate", "quaternion_distance",
+    "quaternion_exp", "quaternion_from_axis_angle", "quaternion_from_matrix",
+    "quaternion_from_pyquaternion", "quaternion_inverse", "quaternion_log", "quaternion_norm",
+    "quaternion_normalize", "quaternion_power", "quaternion_product", "rotate_vector", "slerp",
     # rotations.py
-    "rot_x", "rot_y", "rot_z", "matrix_from_euler_zxz", "euler_zxz_from_matrix",
-    "matrix_from_rpy", "rpy_from_matrix", "matrix_from_axis_angle", "axis_angle_from_matrix",
-    "rodrigues", "check_rotation_matrix", "skew",
+    "matrix_from_axis_angle", "matrix_from_rpy", "rot_x", "rot_y", "rot_z",
     # transforms.py
-    "transform_from", "transform_inverse", "compose", "apply_transform", "apply_to_vectors",
-    "check_transform", "rotation_translation_from_transform", "transform_identity",
+    "apply_to_vectors", "apply_transform", "compose", "transform_from", "transform_inverse",
     # dualquat.py
-    "dual_quaternion_product", "dual_quaternion_conjugate", "dual_quaternion_dual_conjugate",
-    "dual_quaternion_combined_conjugate", "dual_quaternion_norm", "check_unit_dual_quaternion",
-    "dual_quaternion_normalize", "dual_quaternion_inverse",
-    "dual_quaternion_from_rotation_translation", "rotation_translation_from_dual_quaternion",
-    "dual_quaternion_from_transform", "transform_from_dual_quaternion",
-    "dual_quaternion_apply", "dual_quaternion_apply_vector", "dual_quaternion_apply_line",
-    "dual_quaternion_from_pair", "pair_from_dual_quaternion", "pair_product",
-    "screw_from_dual_quaternion", "dual_quaternion_from_screw", "dual_quaternion_power",
-    "sclerp", "dual_quaternion_identity", "DualQuaternion",
-    # complex.py
-    "rotate_planar", "planar_arm_joints", "planar_arm_tip",
+    "DualQuaternion", "dual_quaternion_apply", "dual_quaternion_apply_line",
+    "dual_quaternion_combined_conjugate", "dual_quaternion_conjugate",
+    "dual_quaternion_dual_conjugate", "dual_quaternion_from_pair",
+    "dual_quaternion_from_rotation_translation", "dual_quaternion_from_screw",
+    "dual_quaternion_from_transform", "dual_quaternion_identity", "dual_quaternion_inverse",
+    "dual_quaternion_norm", "dual_quaternion_normalize", "dual_quaternion_power",
+    "dual_quaternion_product", "pair_from_dual_quaternion", "pair_product",
+    "rotation_translation_from_dual_quaternion", "sclerp", "screw_from_dual_quaternion",
+    "transform_from_dual_quaternion",
 ]
 
 # Sub-packages reached as attributes (``dqlab.models.ur3()``) are imported on first use, so

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._kernels import orthonormality
+from ._kernels import functions_for, orthonormality
 
 _FLOAT64 = np.dtype(np.float64)
 
@@ -265,9 +265,7 @@ def stack_components(parts):
     >>> stack_components([1.0, 2.0])
     array([1., 2.])
     """
-    if type(parts[0]) is float and type(parts[-1]) is float:
-        return np.array(parts)
-    return np.stack(np.broadcast_arrays(*parts), axis=-1).astype(float, copy=False)
+    return functions_for((type(parts[0]), type(parts[-1]))).stack(parts)
 
 
 def finite_or_raise(out, *named):
@@ -289,18 +287,17 @@ def finite_or_raise(out, *named):
 def pack(parts, *named):
     """Stack ``parts`` (see :func:`stack_components`) and make sure the result is finite.
 
-    For Python floats (a single value) the test is one subtraction; a batch goes through
-    :func:`finite_or_raise`. ``named`` are the inputs as in :func:`finite_or_raise`.
+    The test is on the sum of the parts, which NaN or infinity in any part makes NaN or
+    infinite (a sum that overflows is told apart by :func:`finite_or_raise`, which also
+    names the input at fault). ``named`` are the inputs as in :func:`finite_or_raise`.
 
     >>> pack([1.0, 2.0], (np.ones(2), "a", (2,)))
     array([1., 2.])
     """
-    if type(parts[0]) is float and type(parts[-1]) is float:
-        s = sum(parts)
-        if s - s == 0.0:
-            return np.array(parts)
-        return finite_or_raise(np.array(parts), *named)
-    return finite_or_raise(stack_components(parts), *named)
+    f = functions_for((type(parts[0]), type(parts[-1])))
+    total = sum(parts)                  # NaN or inf in a part make it NaN or inf
+    out = f.stack(parts)
+    return out if f.all_finite(total) else finite_or_raise(out, *named)
 
 
 CHUNK = 8192
@@ -352,19 +349,15 @@ def unit_quaternion_or_raise(parts, name, tol, subject=None):
     """
     w, x, y, z = parts
     n2 = w * w + x * x + y * y + z * z
-    if isinstance(n2, np.ndarray):
-        if not np.isfinite(n2).all():
-            raise ValueError(f"{name} contains NaN or infinity")
-        bad = ~(np.abs(np.sqrt(n2) - 1.0) <= tol)
-        if bad.any():
-            _raise_not_unit(subject or name, np.sqrt(n2)[bad].flat[0], tol)
+    f = functions_for(type(n2))
+    if f.max_abs(n2 - 1.0) <= tol:  # implies | |q| - 1 | <= tol / 2 (NaN and inf fail it)
         return
-    if abs(n2 - 1.0) <= tol:  # implies | |q| - 1 | <= tol / 2 (and catches NaN/inf below)
-        return
-    if not n2 - n2 == 0.0:
+    if not f.all_finite(n2):
         raise ValueError(f"{name} contains NaN or infinity")
-    if not abs(math.sqrt(n2) - 1.0) <= tol:
-        _raise_not_unit(subject or name, math.sqrt(n2), tol)
+    norm = f.sqrt(n2)
+    off = abs(norm - 1.0)
+    if not f.largest(off) <= tol:
+        _raise_not_unit(subject or name, f.first(norm, np.logical_not(off <= tol)), tol)
 
 
 def _raise_not_unit(subject, n, tol):
@@ -402,7 +395,7 @@ def unit_dual_quaternion_or_raise(parts, name, tol):
     rw, rx, ry, rz, dw, dx, dy, dz = parts
     unit_quaternion_or_raise((rw, rx, ry, rz), name, tol, f"the real part of {name}")
     dot = rw * dw + rx * dx + ry * dy + rz * dz
-    bad = np.max(np.abs(dot), initial=0.0) if isinstance(dot, np.ndarray) else abs(dot)
+    bad = functions_for(type(dot)).max_abs(dot)
     if not bad - bad == 0.0:
         raise ValueError(f"{name} contains NaN or infinity")
     if not bad <= tol:

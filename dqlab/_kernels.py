@@ -19,30 +19,203 @@ import math
 import numpy as np
 
 # --------------------------------------------------------------------------------------
-# Angles
-
-_TWO_PI = 2.0 * math.pi
+# Floats or arrays: the one switch
 
 
-def wrapped_angle(theta):
-    r"""``theta`` wrapped to :math:`(-\pi, \pi]`: :math:`\theta - 2\pi k` with
-    :math:`k = \operatorname{rint}(\theta / 2\pi)` (exact when :math:`|\theta| < \pi`),
-    then -pi and the roundings of :math:`\theta / 2\pi` moved inside.
+def _float_where(condition, a, b):
+    return a if condition else b
 
-    >>> wrapped_angle(-math.pi), wrapped_angle(7.0)
-    (3.141592653589793, 0.7168146928204138)
+
+def _float_clip0(x):
+    return x if x > 0.0 else 0.0
+
+
+def _float_no_minus_pi(theta):
+    return math.pi if theta == -math.pi else theta
+
+
+def _float_cos_sin(x, y):
+    r = math.sqrt(x * x + y * y)
+    return (x / r, y / r) if r > 0.0 else (1.0, 0.0)
+
+
+def _float_half_cos_sin(c, s):
+    big = math.sqrt(0.5 + 0.5 * abs(c))
+    other = 0.5 * s / big
+    if c >= 0.0:
+        return big, other
+    return abs(other), (-big if s < 0.0 else big)
+
+
+def _float_first(x, where):
+    return x
+
+
+def _float_row_of_largest(K, rows):
+    k = 1 if K[1] > K[0] else 0
+    if K[2] > K[k]:
+        k = 2
+    if K[3] > K[k]:
+        k = 3
+    i, j, m, n = rows[k]
+    return (K[i], K[j], K[m], K[n]), K[k]
+
+
+def _array_largest(x):
+    return float(x.max(initial=-math.inf))
+
+
+def _array_smallest(x):
+    return float(x.min(initial=math.inf))
+
+
+def _array_largest_of(values):
+    return max(_array_largest(x) for x in values)
+
+
+def _array_max_abs(x):
+    return float(np.abs(x).max(initial=0.0))
+
+
+def _array_first(x, where):
+    return x[where].flat[0]
+
+
+def _array_all_finite(x):
+    return bool(np.isfinite(x).all())
+
+
+def _array_row_of_largest(K, rows):
+    best, row = K[0], [K[i] for i in rows[0]]
+    for k in (1, 2, 3):
+        larger = K[k] > best
+        best = np.where(larger, K[k], best)
+        row = [np.where(larger, K[i], r) for i, r in zip(rows[k], row, strict=True)]
+    return row, best
+
+
+def _array_clip0(x):
+    return np.maximum(x, 0.0)
+
+
+def _array_no_minus_pi(theta):
+    # the smallest entry tells whether some entry is -pi (or below), in one pass
+    return np.where(theta == -np.pi, np.pi, theta) if theta.min(initial=0.0) <= -np.pi else theta
+
+
+def _array_cos_sin(x, y):
+    r = np.sqrt(x * x + y * y)
+    if r.min(initial=np.inf) > 0.0:       # no zero (the common case)
+        return x / r, y / r
+    with np.errstate(divide="ignore", invalid="ignore"):
+        c, s = x / r, y / r
+    zero = r == 0.0
+    c[zero], s[zero] = 1.0, 0.0
+    return c, s
+
+
+def _array_half_cos_sin(c, s):
+    big = np.sqrt(0.5 + 0.5 * np.abs(c))
+    other = 0.5 * s / big
+    first = c >= 0.0
+    signed_big = np.where(s < 0.0, -big, big)
+    return np.where(first, big, np.abs(other)), np.where(first, other, signed_big)
+
+
+def _array_stack(parts):
+    return np.stack(np.broadcast_arrays(*parts), axis=-1).astype(float, copy=False)
+
+
+class _OnFloats:
+    """The functions of a component formula on Python floats (one value): ``math``'s, and
+    plain Python for the rest. The class is only a namespace (nothing binds)."""
+
+    sqrt = math.sqrt
+    sin = math.sin
+    cos = math.cos
+    atan2 = math.atan2
+    copysign = math.copysign
+    rint = round                                     # half to even, as numpy's rint
+    where = staticmethod(_float_where)               # a if condition else b
+    largest = float                                  # the largest entry: the value itself
+    smallest = float
+    largest_of = max                                 # the largest entry of several
+    max_abs = abs                                    # the largest |entry|
+    maximum = max                                    # the larger of two, entry by entry
+    first = staticmethod(_float_first)               # the first entry where a mask is True
+    all_finite = math.isfinite
+    clip0 = staticmethod(_float_clip0)               # max(x, 0), never -0.0
+    no_minus_pi = staticmethod(_float_no_minus_pi)   # -pi -> pi, other angles unchanged
+    cos_sin = staticmethod(_float_cos_sin)           # (x, y) / |(x, y)|, (1, 0) at 0
+    half_cos_sin = staticmethod(_float_half_cos_sin)  # see dqlab.ik.ur_steps.half_angle_cos_sin
+    row_of_largest = staticmethod(_float_row_of_largest)   # see quaternion_from_matrix_entries
+    stack = np.array                                 # parts on a last axis
+
+
+class _OnArrays:
+    """The same functions on numpy arrays of one common shape (a batch, column by column)."""
+
+    sqrt = np.sqrt
+    sin = np.sin
+    cos = np.cos
+    atan2 = np.arctan2
+    copysign = np.copysign
+    rint = np.rint
+    where = np.where
+    largest = staticmethod(_array_largest)
+    smallest = staticmethod(_array_smallest)
+    largest_of = staticmethod(_array_largest_of)
+    max_abs = staticmethod(_array_max_abs)
+    maximum = np.maximum
+    first = staticmethod(_array_first)
+    all_finite = staticmethod(_array_all_finite)
+    clip0 = staticmethod(_array_clip0)
+    no_minus_pi = staticmethod(_array_no_minus_pi)
+    cos_sin = staticmethod(_array_cos_sin)
+    half_cos_sin = staticmethod(_array_half_cos_sin)
+    row_of_largest = staticmethod(_array_row_of_largest)
+    stack = staticmethod(_array_stack)
+
+
+class _FunctionsByType(dict):
+    r"""The functions a component formula uses, by the type of its numbers: ``float`` (and a
+    pair of floats) to :class:`_OnFloats`, any other type to :class:`_OnArrays`.
+
+    The one switch between the two paths of every formula written on components: Python
+    floats (one value; ``math`` is several times faster than numpy on single numbers) get
+    ``math``'s functions, anything else (arrays of one common shape, a batch) numpy's. A
+    formula reads ``f = functions_for(type(x))`` and then ``f.sqrt``, ``f.atan2``,
+    ``f.where``..., the same text for both kinds; a formula whose parts may mix constants
+    and arrays asks with the pair ``(type(first), type(last))``. (A dictionary lookup, not a
+    Python function: the float path of one pose asks it dozens of times.)
+
+    The namespace holds the elementary functions (``sqrt``, ``sin``, ``cos``, ``atan2``,
+    ``copysign``, ``rint``, ``where``, ``maximum``) and a few small operations whose float and array
+    forms differ:
+
+    - ``largest(x)``, ``smallest(x)``, ``largest_of(values)`` and ``max_abs(x)``: the value
+      itself for a float; the extreme entry of an array, as a float (:math:`\mp\infty` for
+      an array without entries);
+    - ``first(x, where)``: the first entry of ``x`` where the mask is true;
+    - ``all_finite(x)``; ``clip0(x)``: :math:`\max(x, 0)`; ``no_minus_pi(theta)``:
+      :math:`-\pi \to \pi`; ``cos_sin(x, y)``: the unit vector of :math:`(x, y)`,
+      :math:`(1, 0)` at 0; ``half_cos_sin(c, s)``: see
+      :func:`dqlab.ik.ur_steps.half_angle_cos_sin`;
+    - ``row_of_largest(K, rows)``: Shepperd's choice, the entries ``rows[k]`` of ``K`` for
+      the first ``k`` with the largest ``K[k]``, and that ``K[k]``;
+    - ``stack(parts)``: the parts on a last axis.
+
+    >>> functions_for(float).sqrt is math.sqrt, functions_for(np.ndarray).sqrt is np.sqrt
+    (True, True)
+    >>> functions_for((float, np.ndarray)) is functions_for(np.float64) is _OnArrays
+    True
     """
-    if type(theta) is float:
-        if -math.pi < theta <= math.pi:
-            return theta
-        w = theta - _TWO_PI * round(theta * (1.0 / _TWO_PI))    # round: half to even, as rint
-        if not abs(w) < math.pi:
-            w = w - _TWO_PI if w > math.pi else (w + _TWO_PI if w <= -math.pi else w)
-        return w
-    w = theta - _TWO_PI * np.rint(theta * (1.0 / _TWO_PI))
-    if w.size and not np.abs(w).max() < np.pi:   # -pi, or a rounding of theta / (2 pi)
-        w = np.where(w > np.pi, w - _TWO_PI, np.where(w <= -np.pi, w + _TWO_PI, w))
-    return w
+
+    def __missing__(self, kind):
+        return _OnArrays
+
+
+functions_for = _FunctionsByType({float: _OnFloats, (float, float): _OnFloats}).__getitem__
 
 
 # --------------------------------------------------------------------------------------
@@ -120,25 +293,11 @@ def quaternion_from_matrix_entries(r00, r01, r02, r10, r11, r12, r20, r21, r22):
     (0.0, 0.0, 0.0, 1.0)
     """
     K = shepperd_terms(r00, r01, r02, r10, r11, r12, r20, r21, r22)
-    if not isinstance(r00, np.ndarray):
-        k = 0
-        for j in (1, 2, 3):
-            if K[j] > K[k]:
-                k = j
-        i, j, m, n = _K_ROWS[k]
-        w, x, y, z = K[i], K[j], K[m], K[n]
-        s = 0.5 / math.sqrt(K[k])
-        if w < 0.0:
-            s = -s  # canonical sign: w >= 0
-        return (w * s, x * s, y * s, z * s)
-    best, row = K[0], [K[i] for i in _K_ROWS[0]]
-    for k in (1, 2, 3):
-        larger = K[k] > best
-        best = np.where(larger, K[k], best)
-        row = [np.where(larger, K[i], r) for i, r in zip(_K_ROWS[k], row, strict=True)]
-    s = 0.5 / np.sqrt(best)
-    s = np.where(row[0] < 0.0, -s, s)
-    return tuple(c * s for c in row)
+    f = functions_for(type(r00))
+    (w, x, y, z), best = f.row_of_largest(K, _K_ROWS)   # the row of the largest diagonal
+    s = 0.5 / f.sqrt(best)
+    s = f.where(w < 0.0, -s, s)                 # canonical sign: w >= 0
+    return w * s, x * s, y * s, z * s
 
 
 def rotation_vector_from_quaternion_entries(w, x, y, z):
@@ -151,13 +310,10 @@ def rotation_vector_from_quaternion_entries(w, x, y, z):
     ...     math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5))]                     # quarter turn about z
     [0.0, 0.0, 1.570796326795]
     """
-    if type(w) is float:
-        norm_v = math.sqrt(x * x + y * y + z * z)
-        scale = 2.0 * math.atan2(norm_v, w) / norm_v if norm_v > 0.0 else 2.0
-    else:
-        norm_v = np.sqrt(x * x + y * y + z * z)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            scale = np.where(norm_v > 0.0, 2.0 * np.arctan2(norm_v, w) / norm_v, 2.0)
+    f = functions_for(type(w))
+    norm_v = f.sqrt(x * x + y * y + z * z)
+    turned = norm_v > 0.0
+    scale = f.where(turned, 2.0 * f.atan2(norm_v, w) / f.where(turned, norm_v, 1.0), 2.0)
     return x * scale, y * scale, z * scale
 
 
@@ -193,11 +349,9 @@ def pose_error_entries(a, b):
     vy = dot(2, 0) - dot(0, 2)
     vz = dot(0, 1) - dot(1, 0)
     trace = dot(0, 0) + dot(1, 1) + dot(2, 2)
-    if type(dx) is float:
-        return (math.sqrt(dx * dx + dy * dy + dz * dz),
-                math.atan2(math.sqrt(vx * vx + vy * vy + vz * vz), trace - 1.0))
-    return (np.sqrt(dx * dx + dy * dy + dz * dz),
-            np.arctan2(np.sqrt(vx * vx + vy * vy + vz * vz), trace - 1.0))
+    f = functions_for(type(dx))
+    return (f.sqrt(dx * dx + dy * dy + dz * dz),
+            f.atan2(f.sqrt(vx * vx + vy * vy + vz * vz), trace - 1.0))
 
 
 # --------------------------------------------------------------------------------------
@@ -223,10 +377,8 @@ def orthonormality(a, b, c):
             abs(a0 * a2 + b0 * b2 + c0 * c2),
             abs(a1 * a2 + b1 * b2 + c1 * c2))
     det = a0 * (b1 * c2 - b2 * c1) - a1 * (b0 * c2 - b2 * c0) + a2 * (b0 * c1 - b1 * c0)
-    if isinstance(det, np.ndarray):
-        return (float(max(e.max(initial=0.0) for e in errs)),
-                float(det.min(initial=1.0)))
-    return max(errs), det
+    f = functions_for(type(det))
+    return f.largest_of(errs), f.smallest(det)
 
 
 # --------------------------------------------------------------------------------------

@@ -101,3 +101,13 @@ def array_of(x):
     [1.0, 0.0]
     """
     return getattr(x, "array", x)
+
+
+def float_if_single(a):
+    """A float for a single value (an array of shape ()), the array itself for a batch: what
+    a wrapper's scalar-valued methods (``norm``, ``angle``...) return.
+
+    >>> float_if_single(np.array(2.0)), float_if_single(np.array([1.0, 2.0]))
+    (2.0, array([1., 2.]))
+    """
+    return float(a) if a.ndim == 0 else a

@@ -3,8 +3,9 @@ r"""Differential kinematics: Jacobians, manipulability and singularities.
 The direct kinematic model (MCD in the French course notes) maps joint velocities to the
 velocity of the tool, :math:`\dot x = J(q)\, \dot q`. Two forms are used in the book:
 
-- the *geometric* Jacobian (:func:`geometric_jacobian`), whose rows are the linear velocity
-  of the tool centre point and the angular velocity of the tool, both in the world frame;
+- the *geometric* Jacobian (:meth:`dqlab.robot.Robot.jacobian`, a method of the robot),
+  whose rows are the linear velocity of the tool centre point and the angular velocity of
+  the tool, both in the world frame;
 - an *analytic* Jacobian, the derivative of a minimal set of coordinates; for the SCARA,
   :math:`(x, y, z, \text{yaw})` (:func:`scara_jacobian`).
 """
@@ -17,52 +18,9 @@ from .models import SCARA_SHAPE
 from .robot import Robot
 
 __all__ = [
-    "geometric_jacobian", "manipulability", "singular_values", "is_singular",
+    "manipulability", "singular_values", "is_singular",
     "xyz_yaw_jacobian", "scara_jacobian", "scara_jacobian_determinant", "scara_is_singular",
 ]
-
-
-def geometric_jacobian(robot: Robot, q: ArrayLike) -> NDArray[np.float64]:
-    r"""Geometric Jacobian at the tool centre point, in the world frame, linear rows first.
-
-    Column :math:`i` for a revolute joint about the unit axis :math:`z_i` through
-    :math:`o_i`, and for a prismatic joint along :math:`z_i`:
-
-    .. math::
-
-       J_i = \begin{pmatrix} z_i \times (p_T - o_i) \\ z_i \end{pmatrix}
-       \quad\text{(revolute)},\qquad
-       J_i = \begin{pmatrix} z_i \\ 0 \end{pmatrix}
-       \quad\text{(prismatic)},
-
-    where :math:`p_T` is the TCP position. Then
-    :math:`(\dot p_T, \omega) = J(q)\, \dot q` with :math:`\omega` the tool's angular
-    velocity in the world frame. For standard DH the axis of joint :math:`i` is the z axis of
-    frame :math:`i-1`; for modified DH it is the z axis of frame :math:`i`.
-
-    The same as :meth:`dqlab.robot.Robot.jacobian`, which computes it from the robot's joint
-    axes (:meth:`~dqlab.robot.Robot.joint_axes`).
-
-    Parameters
-    ----------
-    robot : Robot
-    q : array_like, shape (..., n)
-
-    Returns
-    -------
-    ndarray, shape (..., 6, n)
-
-    Examples
-    --------
-    The UR3 report's Jacobian (modified DH) at its joint angles, first column:
-
-    >>> import numpy as np
-    >>> from dqlab.models import ur3_mdh
-    >>> J = geometric_jacobian(ur3_mdh(), [0.1, -0.5, 0.8, -0.2, 0.5, 0.1])
-    >>> J[:, 0].round(8)
-    array([-0.49781088, -0.08817691,  0.        ,  0.        ,  0.        ,  1.        ])
-    """
-    return robot.jacobian(q)
 
 
 def singular_values(J: ArrayLike) -> NDArray[np.float64]:
@@ -464,7 +422,7 @@ def analytic_jacobian(robot, q, *, orientation="rpy", tol=1e-9):
     from .quaternion import quaternion_from_matrix
     from .rotations import rpy_from_matrix
 
-    J = geometric_jacobian(robot, q)
+    J = robot.jacobian(q)
     R = robot.fk(q)[..., :3, :3]
     if orientation == "rpy":
         rpy = rpy_from_matrix(R)

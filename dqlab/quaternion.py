@@ -34,7 +34,7 @@ from ._kernels import (
     quaternion_mul,
     quaternion_rotate,
 )
-from ._wrapper import ArrayWrapper, array_of
+from ._wrapper import ArrayWrapper, array_of, float_if_single
 
 __all__ = [
     "quaternion_product", "quaternion_conjugate", "quaternion_norm", "quaternion_inverse",
@@ -865,7 +865,7 @@ class Quaternion(ArrayWrapper):
     def norm(self):
         """See :func:`quaternion_norm` (a float for a single quaternion)."""
         n = quaternion_norm(self.array)
-        return float(n) if n.ndim == 0 else n
+        return float_if_single(n)
 
     def normalized(self):
         """See :func:`quaternion_normalize`."""
@@ -897,12 +897,12 @@ class Quaternion(ArrayWrapper):
     def angle(self):
         """Rotation angle in :math:`[0, \\pi]`."""
         a = axis_angle_from_quaternion(self.array)[1]
-        return float(a) if a.ndim == 0 else a
+        return float_if_single(a)
 
     def distance(self, other):
         """See :func:`quaternion_distance`."""
         d = quaternion_distance(self.array, array_of(other))
-        return float(d) if d.ndim == 0 else d
+        return float_if_single(d)
 
     def slerp(self, other, t):
         """See :func:`slerp`."""

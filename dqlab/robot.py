@@ -43,12 +43,8 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._checks import as_float_array, batched, real_array
-from ._kernels import (
-    dual_quaternion_mul,
-    screw_entries,
-)
-from .dualquat import dual_quaternion_from_transform
+from ._chain import CompiledChain
+from ._checks import as_float_array, real_array
 from .inertia import LinkInertia
 
 __all__ = ["Link", "Robot", "REVOLUTE", "PRISMATIC"]
@@ -349,51 +345,18 @@ class Robot:
         The one cache rule of a robot: this runs when the robot is built and whenever its
         base or tool is assigned (links are immutable), and nothing else is cached.
         """
-        n = self.n
         self._revolute = np.array([lk.is_revolute for lk in self._links])
         self._lo = np.array([lk.limits[0] for lk in self._links])
         self._hi = np.array([lk.limits[1] for lk in self._links])
         self._prismatic_idx = np.flatnonzero(~self._revolute)
-        # the shape of a joint vector that the float path takes: none with prismatic joints
-        # (their limits are checked by check_joints)
-        self._float_path_shape = (n,) if self._prismatic_idx.size == 0 else None
         self._bare = bool(np.array_equal(self._base, np.eye(4))
                           and np.array_equal(self._tool, np.eye(4)))
-        # (theta_i offset, d_i offset, revolute?) as Python values for the products
+        # (theta_i offset, d_i offset, revolute?) of every link
         self._joint_constants = [(lk.theta_offset, lk.d, lk.is_revolute) for lk in self._links]
         self._L, self._R = _link_constants(self._links, self._convention)
-        # The constant factors of neighbouring links multiplied once:
-        # X_WT = K_0 J_1 K_1 J_2 ... J_n K_n, K_0 = X_W0 L_1, K_i = R_i L_{i+1}, K_n = R_n X_nT
-        K = np.concatenate([self._base[None] @ self._L[:1], self._R[:-1] @ self._L[1:],
-                            self._R[-1:] @ self._tool[None]])
-        self._K = K
-        self._K0_columns = [tuple(K[0, :3, j].tolist()) for j in range(4)]
-        self._base_columns = [tuple(self._base[:3, j].tolist()) for j in range(4)]
-        # the top three rows of each K_i, for a constant factor that is not a screw about x
-        self._K_rows = [tuple(map(tuple, K[i, :3].tolist())) for i in range(n + 1)]
-        self._K_dual_quaternions = dual_quaternion_from_transform(K).tolist()
-        # which K_i are screws about x (every one between two DH links is: Tx(a) Rx(alpha)):
-        # (cos alpha, sin alpha, a) for the matrices, (cos alpha/2, sin alpha/2, a/2) for the
-        # dual quaternions; None for another K_i, () for the identity
-        screws = [_x_screw_constants(K[i], self._K_dual_quaternions[i]) for i in range(n + 1)]
-        self._K_matrix_screws = [None if c is None else () if c[:3] == (1.0, 0.0, 0.0)
-                                 else c[:3] for c in screws]
-        self._K_dq_screws = [None if c is None else () if c[:3] == (1.0, 0.0, 0.0)
-                             else c[3:] for c in screws]
-        # per link, what the products read: the joint's constants and the factor after it
-        self._matrix_steps = list(zip(self._joint_constants, self._K_matrix_screws[1:],
-                                      self._K_rows[1:], strict=True))
-        self._dq_steps = list(zip(self._joint_constants, self._K_dq_screws[1:],
-                                  self._K_dual_quaternions[1:], strict=True))
-        # the zero pose: joint axes in the world frame and the TCP (fk_dq_screw's constants)
-        zero = [0.0] * n
-        X0, before, _ = self._product(zero, record=True)
-        self._zero_pose = (np.array([X[3] for X in before]),
-                           np.array([X[2] for X in before]),
-                           _matrix_from_columns(X0))
-        points, axes, X_WT0 = self._zero_pose
-        lines = np.concatenate([axes, np.cross(points, axes)], axis=-1)
-        self._screw_constants = (lines.tolist(), dual_quaternion_from_transform(X_WT0).tolist())
+        # the products that fk, fk_dq, fk_dq_screw and jacobian run (speed machinery)
+        self._chain = CompiledChain(self._joint_constants, self._L, self._R, self._base,
+                                    self._tool, self.check_joints)
 
     # -- joint vectors -----------------------------------------------------------------------
     def check_joints(self, q: ArrayLike, *, limits: str = "prismatic", name: str = "q"
@@ -459,18 +422,6 @@ class Robot:
                 f"[{lk.limits[0]:.6g}, {lk.limits[1]:.6g}]")
         return q
 
-    def _joint_floats(self, q):
-        """One joint vector as a list of Python floats, checked as :meth:`check_joints`
-        checks it, for the float path of a single call; None when ``q`` is anything but a
-        float64 array of shape (n,) of a robot without prismatic joints, or when the check
-        fails (:meth:`check_joints` then says why)."""
-        if not (type(q) is np.ndarray and q.shape == self._float_path_shape
-                and q.dtype is _FLOAT64):
-            return None
-        floats = q.tolist()
-        total = sum(floats)            # NaN or inf in q make it NaN or inf
-        return floats if total - total == 0.0 else None
-
     def _link_parameters(self, q):
         """Joint angles theta and offsets d of every link, shape (..., n) each."""
         theta = np.array([c[0] for c in self._joint_constants]) + q * self._revolute
@@ -492,7 +443,15 @@ class Robot:
         return J
 
     def link_transforms(self, q: ArrayLike) -> NDArray[np.float64]:
-        r"""The link transforms :math:`X_{i-1,i}(q_i)`, without base and tool.
+        r"""The link transforms :math:`X_{i-1,i}(q_i)`, without base and tool: the readable
+        definition of the chain.
+
+        Each link is the product of its constant factors and its joint motion,
+        :math:`X_{i-1,i} = L_i\, R_z(\theta_i) T_z(d_i)\, R_i` (:math:`L_i = I`,
+        :math:`R_i = T_x(a_i) R_x(\alpha_i)` in standard DH; :math:`L_i = R_x(\alpha_{i-1})
+        T_x(a_{i-1})`, :math:`R_i = I` in modified DH), as 4x4 matrices. :meth:`fk` is
+        defined as :math:`X_{W0}\, X_{01} \cdots X_{n-1,n}\, X_{nT}` of these; it is
+        computed another way, and tested equal to this product.
 
         Parameters
         ----------
@@ -523,6 +482,12 @@ class Robot:
         .. math::
 
            X_{WT}(q) = X_{W0} \prod_{i=1}^{n} X_{i-1,i}(q_i)\; X_{nT}
+
+        The definition is this product of the :meth:`link_transforms`. It is computed by
+        the robot's compiled chain (``dqlab._chain``: the constant factors of
+        neighbouring links multiplied once, the product unrolled on the entries, one joint
+        vector on Python floats), which the tests hold to the product of
+        :meth:`link_transforms` with the base and the tool.
 
         Parameters
         ----------
@@ -556,87 +521,9 @@ class Robot:
         >>> ur3().fk(np.zeros((5, 6)), all_frames=True).shape
         (5, 7, 4, 4)
         """
-        if not all_frames:
-            floats = self._joint_floats(q)
-            if floats is not None:
-                return np.array(self._pose_entries(floats)).reshape(4, 4)
-        q = self.check_joints(q)
-        if not all_frames:
-            return _on_components(self._pose_entries, q, (4, 4))
-        last = self.n + 1
-        frames = _on_components(self._frame_entries, q, (last, 4, 4))
-        # frames hold K_0 J_1 ... J_i (after joint i); frame i is that times R_i
-        frames[..., 1:last - 1, :, :] = frames[..., 1:last - 1, :, :] @ self._R[:-1]
-        return frames
-
-    def _product(self, q, record=False):
-        r"""The chain's one product, :math:`X_{WT} = K_0 J_1 K_1 \cdots J_n K_n`.
-
-        The top three rows of the running product are kept as four columns
-        :math:`(u, v, w, p)`, entry by entry: the joint motion ``X @ Rz(theta) Tz(d)``
-        turns :math:`u, v` and moves :math:`p` along :math:`w`; the constant factor between
-        two DH links, ``@ Tx(a) Rx(alpha)``, turns :math:`v, w` and moves :math:`p` along
-        :math:`u`; any other constant factor (a base or a tool) adds multiples of columns.
-        ``q`` holds the joint values: Python floats (one joint vector; an entry is a float)
-        or arrays of shape (N,) (a batch; an entry is an array of shape (N,) or a constant
-        float), one formula for both.
-
-        Returns the four columns of :math:`X_{WT}`; with ``record``, also the running
-        products before and after each joint motion (lists of n column sets): before joint
-        i it is the frame whose z axis is joint i's axis.
-        """
-        cos, sin = (math.cos, math.sin) if type(q[0]) is float else (np.cos, np.sin)
-        (ux, uy, uz), (vx, vy, vz), (wx, wy, wz), (px, py, pz) = self._K0_columns
-        before, after = [], []
-        for q_i, ((theta0, d0, revolute), screw, K) in zip(q, self._matrix_steps, strict=True):
-            if record:
-                before.append(((ux, uy, uz), (vx, vy, vz), (wx, wy, wz), (px, py, pz)))
-            if revolute:
-                c, s = cos(q_i + theta0), sin(q_i + theta0)
-                d = d0
-            else:
-                c, s = cos(theta0), sin(theta0)
-                d = q_i + d0
-            # @ Rz(theta) Tz(d)
-            ux, uy, uz, vx, vy, vz = (c * ux + s * vx, c * uy + s * vy, c * uz + s * vz,
-                                      c * vx - s * ux, c * vy - s * uy, c * vz - s * uz)
-            if not revolute or d != 0.0:
-                px, py, pz = px + d * wx, py + d * wy, pz + d * wz
-            if record:
-                after.append(((ux, uy, uz), (vx, vy, vz), (wx, wy, wz), (px, py, pz)))
-            if screw:                                   # @ Tx(a) Rx(alpha)
-                ca, sa, a = screw
-                if sa != 0.0 or ca != 1.0:
-                    vx, vy, vz, wx, wy, wz = (ca * vx + sa * wx, ca * vy + sa * wy,
-                                              ca * vz + sa * wz, ca * wx - sa * vx,
-                                              ca * wy - sa * vy, ca * wz - sa * vz)
-                if a != 0.0:
-                    px, py, pz = px + a * ux, py + a * uy, pz + a * uz
-            elif screw is None:                         # @ K, any rigid transform
-                (k00, k01, k02, k03), (k10, k11, k12, k13), (k20, k21, k22, k23) = K
-                ux, uy, uz, vx, vy, vz, wx, wy, wz, px, py, pz = (
-                    k00 * ux + k10 * vx + k20 * wx, k00 * uy + k10 * vy + k20 * wy,
-                    k00 * uz + k10 * vz + k20 * wz,
-                    k01 * ux + k11 * vx + k21 * wx, k01 * uy + k11 * vy + k21 * wy,
-                    k01 * uz + k11 * vz + k21 * wz,
-                    k02 * ux + k12 * vx + k22 * wx, k02 * uy + k12 * vy + k22 * wy,
-                    k02 * uz + k12 * vz + k22 * wz,
-                    k03 * ux + k13 * vx + k23 * wx + px, k03 * uy + k13 * vy + k23 * wy + py,
-                    k03 * uz + k13 * vz + k23 * wz + pz)
-        X = ((ux, uy, uz), (vx, vy, vz), (wx, wy, wz), (px, py, pz))
-        return (X, before, after) if record else X
-
-    def _pose_entries(self, q):
-        return _entries(self._product(q))
-
-    def _frame_entries(self, q):
-        X, _, after = self._product(q, record=True)
-        return (_entries(self._base_columns) + sum((_entries(Y) for Y in after[:-1]), ())
-                + _entries(X))
-
-    def _axes_entries(self, q):
-        X, before, _ = self._product(q, record=True)
-        return sum((tuple(B[3]) + tuple(B[2]) for B in before), ()) + tuple(X[3])
+        if all_frames:
+            return self._chain.frames(self.check_joints(q))
+        return self._chain.pose(q)
 
     def joint_axes(self, q: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         r"""Points on the joint axes and their unit directions, in the world frame.
@@ -664,15 +551,8 @@ class Robot:
                [ 0., -1.,  0.],
                [ 0., -1.,  0.]])
         """
-        points, axes, _ = self._axes_and_tcp_position(self.check_joints(q))
+        points, axes, _ = self._chain.axes_and_tcp_position(self.check_joints(q))
         return points, axes
-
-    def _axes_and_tcp_position(self, q):
-        """Joint axis points and directions (..., n, 3) and the TCP position (..., 3) of
-        checked joint vectors."""
-        n = self.n
-        flat = _on_components(self._axes_entries, q, (2 * n + 1, 3))
-        return flat[..., 0:2 * n:2, :], flat[..., 1:2 * n:2, :], flat[..., 2 * n, :]
 
     # -- forward kinematics, dual quaternions --------------------------------------------
     def fk_dq(self, q: ArrayLike) -> NDArray[np.float64]:
@@ -729,60 +609,7 @@ class Robot:
         >>> np.allclose(dualquat.transform_from_dual_quaternion(Q), robot.fk(q))
         True
         """
-        floats = self._joint_floats(q)
-        if floats is not None:
-            return np.array(self._fk_dq_parts(floats))
-        return _on_components(self._fk_dq_parts, self.check_joints(q), (8,))
-
-    def _fk_dq_parts(self, q):
-        r"""The product :math:`\hat K_0 \hat J_1 \hat K_1 \cdots \hat J_n \hat K_n` on the
-        eight components :math:`(r, d)` of the running product :math:`\hat Q = r +
-        \varepsilon d`.
-
-        Both factors of a link are screws, about z (the joint) and about x (the constant
-        factor between two DH links), and multiplying by a screw skips the zeros of the
-        general product. With :math:`(c, s)` the cosine and sine of half the angle and
-        :math:`h` half the displacement, the screw about the unit axis :math:`u = k` or
-        :math:`i` is :math:`\hat S = \rho + \varepsilon\, h u \rho`, :math:`\rho = c + s u`;
-        since :math:`u` and :math:`\rho` commute,
-
-        .. math::
-
-            \hat Q \hat S = r \rho + \varepsilon\,\bigl(d \rho + h\, (r \rho)\, u\bigr),
-
-        where, for :math:`p = (w, x, y, z)`, :math:`p\,(c + s k) = (c w - s z, c x + s y,
-        c y - s x, c z + s w)`, :math:`p k = (-z, y, -x, w)`, :math:`p\,(c + s i) = (c w - s x,
-        c x + s w, c y + s z, c z - s y)` and :math:`p i = (-x, w, z, -y)`.
-
-        ``q`` holds the joint values one per joint: Python floats (one joint vector) or
-        arrays of shape (N,) (a batch), one formula for both. The factors are validated unit
-        dual quaternions, so nothing is checked here.
-        """
-        cos, sin = (math.cos, math.sin) if type(q[0]) is float else (np.cos, np.sin)
-        rw, rx, ry, rz, dw, dx, dy, dz = self._K_dual_quaternions[0]
-        for q_i, ((theta0, d0, revolute), screw, K) in zip(q, self._dq_steps, strict=True):
-            if revolute:
-                half, h = 0.5 * (q_i + theta0), 0.5 * d0
-            else:
-                half, h = 0.5 * theta0, 0.5 * (q_i + d0)
-            c, s = cos(half), sin(half)                 # the joint, a screw about z
-            rw, rx, ry, rz, dw, dx, dy, dz = (
-                c * rw - s * rz, c * rx + s * ry, c * ry - s * rx, c * rz + s * rw,
-                c * dw - s * dz, c * dx + s * dy, c * dy - s * dx, c * dz + s * dw)
-            if not revolute or h != 0.0:
-                dw, dx, dy, dz = dw - h * rz, dx + h * ry, dy - h * rx, dz + h * rw
-            if screw:                                   # the constant, a screw about x
-                c, s, h = screw
-                if s != 0.0 or c != 1.0:
-                    rw, rx, ry, rz, dw, dx, dy, dz = (
-                        c * rw - s * rx, c * rx + s * rw, c * ry + s * rz, c * rz - s * ry,
-                        c * dw - s * dx, c * dx + s * dw, c * dy + s * dz, c * dz - s * dy)
-                if h != 0.0:
-                    dw, dx, dy, dz = dw - h * rx, dx + h * rw, dy + h * rz, dz - h * ry
-            elif screw is None:                         # any other rigid transform
-                rw, rx, ry, rz, dw, dx, dy, dz = dual_quaternion_mul(
-                    (rw, rx, ry, rz, dw, dx, dy, dz), K)
-        return rw, rx, ry, rz, dw, dx, dy, dz
+        return self._chain.dual_quaternion(q)
 
     def zero_pose_screws(self
                          ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
@@ -804,7 +631,7 @@ class Robot:
         >>> points[1].round(4), axes[1].round(4)
         (array([0.    , 0.    , 0.1519]), array([ 0., -1.,  0.]))
         """
-        points, axes, X_WT0 = self._zero_pose
+        points, axes, X_WT0 = self._chain.zero_pose
         return points.copy(), axes.copy(), X_WT0.copy()
 
     def fk_dq_screw(self, q: ArrayLike) -> NDArray[np.float64]:
@@ -856,19 +683,7 @@ class Robot:
         >>> tcp.round(5) + 0.0
         array([ 0.     , -0.39425,  0.69415])
         """
-        return _on_components(self._fk_dq_screw_parts, self.check_joints(q), (8,))
-
-    def _fk_dq_screw_parts(self, q):
-        """The product S_1 S_2 ... S_n Q_WT(0) on components (``q`` as in _fk_dq_parts)."""
-        cos, sin = (math.cos, math.sin) if type(q[0]) is float else (np.cos, np.sin)
-        lines, Q = self._screw_constants
-        for i in range(self.n - 1, -1, -1):
-            if self._joint_constants[i][2]:
-                half, h = 0.5 * q[i], 0.0
-            else:
-                half, h = 0.0, 0.5 * q[i]
-            Q = dual_quaternion_mul(screw_entries(*lines[i], cos(half), sin(half), h), Q)
-        return Q
+        return self._chain.screw_dual_quaternion(self.check_joints(q))
 
     # -- differential kinematics ----------------------------------------------------------
     def jacobian(self, q: ArrayLike) -> NDArray[np.float64]:
@@ -888,7 +703,7 @@ class Robot:
         :math:`(\dot p_T, \omega) = J(q)\, \dot q` with :math:`\omega` the tool's angular
         velocity in the world frame. For standard DH the axis of joint :math:`i` is the z
         axis of frame :math:`i-1`; for modified DH it is the z axis of frame :math:`i`.
-        :func:`dqlab.jacobian.geometric_jacobian` is the same function.
+        This is the package's one geometric Jacobian (:mod:`dqlab.jacobian` builds on it).
 
         Parameters
         ----------
@@ -908,11 +723,7 @@ class Robot:
         >>> J[:, 0].round(8)
         array([-0.49781088, -0.08817691,  0.        ,  0.        ,  0.        ,  1.        ])
         """
-        n = self.n
-        floats = self._joint_floats(q)
-        if floats is not None:
-            return np.array(self._jacobian_entries(floats)).reshape(6, n)
-        return _on_components(self._jacobian_entries, self.check_joints(q), (6, n))
+        return self._chain.jacobian(q)
 
     def fk_with_jacobian(self, q: ArrayLike
                          ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -943,40 +754,7 @@ class Robot:
         >>> bool(np.array_equal(X, robot.fk(q)) and np.array_equal(J, robot.jacobian(q)))
         True
         """
-        n = self.n
-        floats = self._joint_floats(q)
-        if floats is not None:
-            flat = np.array(self._pose_jacobian_entries(floats))
-        else:
-            flat = _on_components(self._pose_jacobian_entries, self.check_joints(q),
-                                  (16 + 6 * n,))
-        lead = flat.shape[:-1]
-        return flat[..., :16].reshape(lead + (4, 4)), flat[..., 16:].reshape(lead + (6, n))
-
-    def _jacobian_entries(self, q):
-        X, before, _ = self._product(q, record=True)
-        return self._jacobian_of(before, X[3])
-
-    def _pose_jacobian_entries(self, q):
-        X, before, _ = self._product(q, record=True)
-        return _entries(X) + self._jacobian_of(before, X[3])
-
-    def _jacobian_of(self, before, p):
-        """The 6 n entries of the Jacobian, row by row, from the running products before
-        each joint (whose columns 2 and 3 are the joint's axis z_i and a point o_i on it)
-        and the TCP position ``p``: the column is (z_i x (p - o_i), z_i) for a revolute
-        joint, (z_i, 0) for a prismatic one."""
-        px, py, pz = p
-        columns = []
-        for (_, _, (zx, zy, zz), (ox, oy, oz)), (_, _, revolute) in zip(
-                before, self._joint_constants, strict=True):
-            if revolute:
-                rx, ry, rz = px - ox, py - oy, pz - oz
-                columns.append((zy * rz - zz * ry, zz * rx - zx * rz, zx * ry - zy * rx,
-                                zx, zy, zz))
-            else:
-                columns.append((zx, zy, zz, 0.0, 0.0, 0.0))
-        return sum(zip(*columns, strict=True), ())         # row by row
+        return self._chain.pose_and_jacobian(q)
 
     # -- printing -------------------------------------------------------------------------
     def dh_table(self) -> str:
@@ -1047,58 +825,6 @@ class Robot:
 
     def __repr__(self):
         return f"Robot({self.name!r}, convention={self._convention!r}, n={self.n})"
-
-
-_FEW = 8    # up to this many joint vectors, Python floats beat numpy's per-call overhead
-_FLOAT64 = np.dtype(np.float64)
-
-
-def _on_components(parts, q, trailing):
-    """Run a formula on joint values, ``parts(q_1, ..., q_n) -> entries``, for checked joint
-    vectors ``q`` of shape (..., n): with Python floats for one joint vector (or each of a
-    few), and with arrays of shape (N,) per joint for blocks of a batch. Returns shape
-    (...) + trailing."""
-    if q.ndim == 1:
-        return np.array(parts(q.tolist())).reshape(trailing)
-    if q.size <= _FEW * q.shape[-1]:
-        rows = q.reshape(-1, q.shape[-1]).tolist()
-        return np.array([parts(row) for row in rows]).reshape(q.shape[:-1] + trailing)
-
-    def kernel(block):
-        entries = parts(list(np.ascontiguousarray(block.T)))
-        out = np.empty((block.shape[0], len(entries)))
-        for k, entry in enumerate(entries):     # constants (floats) broadcast
-            out[:, k] = entry
-        return out.reshape(out.shape[:1] + trailing)
-
-    return batched(kernel, [(q, 1)], trailing)
-
-
-def _x_screw_constants(K, K_dual_quaternion):
-    r"""``(cos alpha, sin alpha, a, cos alpha/2, sin alpha/2, a/2)`` when the constant
-    factor ``K`` is a screw about x, :math:`T_x(a) R_x(\alpha)` (the factor between two
-    links in either DH convention), else None."""
-    (k00, k01, k02, a), (k10, c, k12, k13), (k20, s, k22, k23), _ = K.tolist()
-    if not (k00 == 1.0 and k01 == k02 == k10 == k20 == k13 == k23 == 0.0
-            and k22 == c and k12 == -s):
-        return None
-    cw, cx, cy, cz, *_ = K_dual_quaternion
-    if not cy == cz == 0.0:  # pragma: no cover -- Shepperd's quaternion of Rx is (c, s, 0, 0)
-        return None
-    return c, s, a, cw, cx, 0.5 * a
-
-
-def _entries(X):
-    """The 16 entries, row by row, of the 4x4 whose top rows are the columns ``X``."""
-    return (X[0][0], X[1][0], X[2][0], X[3][0],
-            X[0][1], X[1][1], X[2][1], X[3][1],
-            X[0][2], X[1][2], X[2][2], X[3][2],
-            0.0, 0.0, 0.0, 1.0)
-
-
-def _matrix_from_columns(X):
-    """A (4, 4) array from the float columns of a product."""
-    return np.array(_entries(X)).reshape(4, 4)
 
 
 def _num(x):

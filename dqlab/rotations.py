@@ -12,7 +12,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._checks import as_float_array, components, real_array, rotation_or_raise
-from ._kernels import norm_last_axis, orthonormality, wrapped_angle
+from ._kernels import functions_for, norm_last_axis, orthonormality
+
+_PI = np.pi
+_TWO_PI = 2.0 * np.pi
+_ONE_TURN = 1.0 / _TWO_PI
 
 __all__ = [
     "rot_x", "rot_y", "rot_z", "matrix_from_euler_zxz", "euler_zxz_from_matrix",
@@ -307,14 +311,23 @@ def euler_zxz_from_matrix(R: ArrayLike, *, tol: float = 1e-9, singular_tol: floa
 def wrap_angle(theta: ArrayLike) -> NDArray[np.float64]:
     r"""Wrap angles to the interval :math:`(-\pi, \pi]`.
 
+    .. math::
+
+        \theta - 2\pi k, \qquad k = \operatorname{rint}\Big(\frac{\theta}{2\pi}\Big)
+
+    (exact when :math:`|\theta| < \pi`), then :math:`-\pi` and the roundings of
+    :math:`\theta / 2\pi` moved inside. The one angle wrapping of the package: every
+    module calls it, on arrays or, in the single-value fast paths, on Python floats (which
+    need no check and come back as floats).
+
     Parameters
     ----------
-    theta : array_like, shape (...)
+    theta : array_like, shape (...), or float
         Angles in radians.
 
     Returns
     -------
-    ndarray, shape (...)
+    ndarray, shape (...), or float
         ``theta - 2 pi k`` with the integer ``k`` that puts the result in (-pi, pi].
 
     Examples
@@ -322,8 +335,19 @@ def wrap_angle(theta: ArrayLike) -> NDArray[np.float64]:
     >>> import numpy as np
     >>> wrap_angle([np.pi, -np.pi, 3 * np.pi / 2, 0.5])
     array([ 3.14159265,  3.14159265, -1.57079633,  0.5       ])
+    >>> wrap_angle(7.0)
+    0.7168146928204138
     """
-    return wrapped_angle(real_array(theta, "theta"))
+    if type(theta) is float:          # a Python float needs no check
+        if -_PI < theta <= _PI:       # already inside: nothing to do
+            return theta
+    else:
+        theta = real_array(theta, "theta")
+    f = functions_for(type(theta))
+    w = theta - _TWO_PI * f.rint(theta * _ONE_TURN)
+    if not f.max_abs(w) < _PI:                # -pi, or a rounding of theta / (2 pi)
+        w = f.where(w > _PI, w - _TWO_PI, f.where(w <= -_PI, w + _TWO_PI, w))
+    return w
 
 
 def matrix_from_rpy(rpy: ArrayLike) -> NDArray[np.float64]:

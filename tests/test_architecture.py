@@ -3,11 +3,13 @@ no function that shadows a module of its package."""
 
 import ast
 import importlib
+import math
 import pkgutil
 import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import dqlab
@@ -96,8 +98,8 @@ def test_the_imports_between_dqlab_modules_have_no_cycle():
         if name not in state:
             visit(name, [name])
     # the walk sees the arrows it should (a smoke test of the test itself)
-    assert "dqlab.dualquat" in graph["dqlab.robot"]
-    assert "dqlab.ik.ur_steps" in graph["dqlab.ik.ur_closed_form"]
+    assert "dqlab._chain" in graph["dqlab.robot"] and "dqlab.dualquat" in graph["dqlab._chain"]
+    assert "dqlab.ik.ur_steps" in graph["dqlab.ik._ur_engine"]
 
 
 def test_robot_and_jacobian_depend_one_way():
@@ -127,10 +129,61 @@ def test_no_attribute_shadows_a_module_of_its_package(package):
             f"{package}.{info.name} is {value!r}, not the module of that name")
 
 
-def test_earlier_ik_module_paths_still_import():
-    from dqlab.ik.numerical import pose_errors
-    from dqlab.ik.ur import ur_parameters
-
+def test_the_ik_solvers_are_functions_and_no_module_alias_is_left():
     import dqlab.ik
-    assert ur_parameters is dqlab.ik.ur_parameters and pose_errors is dqlab.ik.pose_errors
+
     assert callable(dqlab.ik.ur) and callable(dqlab.ik.numerical)
+    for old in ("dqlab.ik.ur", "dqlab.ik.numerical"):
+        assert old not in sys.modules
+        with pytest.raises(ModuleNotFoundError):
+            importlib.import_module(old)
+
+
+# The speed machinery sits behind one public front each: only that front imports it.
+ENGINES = {"dqlab._chain": {"dqlab.robot"}, "dqlab.ik._ur_engine": {"dqlab.ik.ur_closed_form"}}
+
+
+@pytest.mark.parametrize("engine", sorted(ENGINES))
+def test_each_engine_is_reached_through_its_front_only(engine):
+    users = {name for name, path in MODULES.items() if engine in set(dqlab_edges(path))}
+    assert users == ENGINES[engine]
+
+
+def float_switches(path):
+    """The places of ``path`` that tell a Python float from an array: ``type(x) is float``
+    (or ``is not``) and ``isinstance(x, np.ndarray)``, as (function, line) pairs."""
+    tree = ast.parse(path.read_text())
+    found = []
+    for function in ast.walk(tree):
+        if not isinstance(function, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            continue
+        for node in ast.walk(function):
+            if (isinstance(node, ast.Compare) and isinstance(node.ops[0], (ast.Is, ast.IsNot))
+                    and isinstance(node.comparators[0], ast.Name)
+                    and node.comparators[0].id == "float"):
+                found.append((function.name, node.lineno))
+            if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
+                    and node.func.id == "isinstance" and len(node.args) == 2
+                    and ast.unparse(node.args[1]) == "np.ndarray"):
+                found.append((function.name, node.lineno))
+    return found
+
+
+CORE = [p for p in SOURCES if (module_name(p) + ".").split(".")[1] in
+        ("complex", "rotations", "quaternion", "transforms", "dualquat", "robot", "_chain",
+         "models", "jacobian", "ik", "_kernels", "_checks", "_wrapper")]
+
+
+def test_the_core_tells_floats_from_arrays_in_one_place():
+    """One switch between the float path and the array path of a formula: the mapping
+    dqlab._kernels.functions_for from the type of a number to its functions. No other
+    place of the core tests for a float, except wrap_angle, which skips its argument check
+    for a Python float."""
+    from dqlab._kernels import functions_for
+
+    sites = {(module_name(p), name) for p in CORE for name, _ in float_switches(p)}
+    assert sites == {("dqlab.rotations", "wrap_angle")}
+    floats, arrays = functions_for(float), functions_for(np.ndarray)
+    assert floats.atan2 is math.atan2 and arrays.atan2 is np.arctan2
+    assert functions_for(np.float64) is arrays and functions_for((float, np.ndarray)) is arrays
+    assert functions_for((float, float)) is floats

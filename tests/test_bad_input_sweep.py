@@ -107,8 +107,14 @@ def _parameter_names(function, count):
     return names[:count]
 
 
+def _function(name):
+    """The public function ``name`` of the math core, from the module that holds it."""
+    modules = (dqlab.quaternion, dqlab.rotations, dqlab.transforms, dqlab.dualquat)
+    return next(getattr(m, name) for m in modules if name in m.__all__)
+
+
 def _cases():
-    calls = {name: (getattr(dqlab, name), args) for name, args in GOOD_CALLS.items()}
+    calls = {name: (_function(name), args) for name, args in GOOD_CALLS.items()}
     calls.update(OTHER_CALLS)
     for name, (function, args) in calls.items():
         names = _parameter_names(function, len(args))

@@ -13,8 +13,10 @@ import numpy as np
 import pytest
 
 from dqlab.dualquat import dual_quaternion_from_transform
-from dqlab.ik import IKResult, ur
+from dqlab.ik import IKResult, ur, ur_parameters
+from dqlab.ik import _ur_engine as engine
 from dqlab.ik import ur_closed_form as urmod
+from dqlab.ik.ur_steps import candidate_solutions
 from dqlab.models import ur3
 from dqlab.robot import Link, Robot
 from dqlab.testing import quiet_stdout
@@ -503,7 +505,7 @@ def test_batch_result_is_the_poses_first_view_of_the_rows():
     views of those rows (chunked and reshaped), equal to one pose's own result."""
     robot = ur3()
     rng = np.random.default_rng(8)
-    n = 7 * (2 * urmod._CHUNK // 7 + 1)                         # three blocks
+    n = 7 * (2 * engine.CHUNK // 7 + 1)                         # three blocks
     T = robot.fk(rng.uniform(-np.pi, np.pi, (n, 6)))
     T[5, :3, 3] *= 5.0                                            # no solution
     result = ur(robot, T.reshape(7, -1, 4, 4))
@@ -513,7 +515,7 @@ def test_batch_result_is_the_poses_first_view_of_the_rows():
     valid = result.valid.reshape(n, 8)
     assert not valid[5].any() and np.all(flat[5] == 0.0)
     assert np.all(flat[~valid] == 0.0) and (~valid).sum() > 100
-    for i in (0, 5, urmod._CHUNK, n - 1):
+    for i in (0, 5, engine.CHUNK, n - 1):
         one = ur(robot, T[i])
         np.testing.assert_array_equal(one.valid, valid[i])
         np.testing.assert_allclose(one.solutions, flat[i], rtol=0, atol=1e-12)
@@ -581,7 +583,7 @@ def test_single_pose_path_equals_the_batch_path(which):
     fast = 0
     for i, pose in enumerate(poses):
         single = ur(robot, pose, **kw)
-        fast += urmod._solve_single(robot, urmod._parameters(robot), pose, 1e-9, 5e-7, 1e-9,
+        fast += engine.solve_single(robot, ur_parameters(robot), pose, 1e-9, 5e-7, 1e-9,
                                     None) is not None
         np.testing.assert_array_equal(single.valid, batch.valid[i])
         # math's and numpy's sin and cos may differ in the last bit, which the elbow angles
@@ -771,6 +773,85 @@ def test_every_ur_analytic_ik_solution_is_ours(robot):
 # Helpers
 
 
+def readable_rows(robot, X):
+    """The rows of the readable path, ur_steps.candidate_solutions, for the robot's lengths."""
+    p = ur_parameters(robot)
+    return candidate_solutions(X, *(p[k] for k in ("d1", "a2", "a3", "d4", "d5", "d6")))
+
+
+def poses_off_the_wrist_family(robot):
+    """Regular poses, elbow- and shoulder-singular ones, theta234 = pi, wrists near (not at)
+    the singularity and unreachable targets: every kind of pose on which dqlab.ik.ur
+    computes its rows without choosing a member of a wrist family."""
+    rng = np.random.default_rng(42)
+    q = rng.uniform(-np.pi, np.pi, (700, 6))
+    q[100:150, 4] = rng.choice([1e-2, -2e-3, np.pi - 1e-2, 3e-3 - np.pi], 50)      # wrist
+    q[150:200, 2] = rng.choice([0.0, np.pi, 1e-9, 3e-7], 50)                     # elbow
+    v = -(UR3["a2"] * np.cos(q[200:250, 1]) + UR3["a3"] * np.cos(q[200:250, 1]
+                                                                  + q[200:250, 2])) / UR3["d5"]
+    q[200:250, 3] = np.arcsin(np.clip(v, -1, 1)) - q[200:250, 1] - q[200:250, 2]  # shoulder
+    q[250:300, 3] = np.pi - q[250:300, 1] - q[250:300, 2]                       # theta234
+    T = robot.fk(q)
+    T[300:310, :3, 3] *= 5.0                                       # beyond reach
+    T[310:320, :3, 3] = [0.0, 0.0, 0.3]                            # wrist centre near the axis
+    return T
+
+
+def test_engine_equals_the_readable_path(robot):
+    """Every row dqlab.ik.ur marks valid is, bit for bit, the row of the readable path
+    ur_steps.candidate_solutions: a batch (the engine's arrays over all branches at once, in
+    blocks) against the readable path on arrays, one pose (the engine's float path) against
+    it on floats, on every kind of pose off the wrist family."""
+    T = poses_off_the_wrist_family(robot)
+    batch = ur(robot, T)
+    rows = readable_rows(robot, T)
+    assert rows.shape == (len(T), 8, 6)
+    assert batch.flags["elbow_singular"].sum() > 10 and batch.flags["shoulder_singular"].sum() > 10
+    assert batch.flags["unreachable"].sum() >= 20 and batch.valid.sum() > 4500
+    np.testing.assert_array_equal(batch.solutions[batch.valid], rows[batch.valid])
+    floats = 0
+    for X, valid in zip(T, batch.valid, strict=True):
+        one = ur(robot, X)
+        floats += engine.solve_single(robot, ur_parameters(robot), X, 1e-9, 5e-7, 1e-9,
+                                      None) is not None
+        np.testing.assert_array_equal(one.valid, valid)
+        np.testing.assert_array_equal(one.solutions[valid], readable_rows(robot, X)[valid])
+    assert floats > 600                        # most poses went through the float path
+    # several blocks, the near-wrist rows included
+    big = robot.fk(np.random.default_rng(43).uniform(-np.pi, np.pi, (2 * engine.CHUNK + 5, 6)))
+    result = ur(robot, big)
+    np.testing.assert_array_equal(result.solutions[result.valid],
+                                  readable_rows(robot, big)[result.valid])
+
+
+def test_the_readable_path_refuses_a_wrist_singular_pose(robot):
+    """theta1 = 0 and theta5 = 0 exactly: the flange turned as at q = 0, the wrist centre at
+    (x5, -d4); there only theta234 + theta6 is determined, and dqlab.ik.ur chooses."""
+    X = np.eye(4)
+    X[:3, :3] = [[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]]
+    X[:3, 3] = [0.3, -UR3["d4"] - UR3["d6"], 0.2]
+    with pytest.raises(ValueError, match="wrist-singular"):
+        readable_rows(robot, X)
+    with pytest.raises(ValueError, match="wrist-singular"):
+        readable_rows(robot, np.stack([robot.fk(np.ones(6)), X]))
+    result = ur(robot, X)
+    assert result.flags["wrist_singular"] and result.count == 8
+    assert_reproduces(robot, result, X)
+    with pytest.raises(ValueError, match="X must have bottom row"):
+        readable_rows(robot, 2 * X)
+
+
+def test_a_pose_as_a_list_takes_the_path_of_the_same_array(robot):
+    """ur(robot, X) and ur(robot, X.tolist()) are the same computation: bitwise equal."""
+    T = poses_of_every_kind(robot)
+    for target in (T, dual_quaternion_from_transform(T)):
+        for X in target[::3]:
+            a, b = ur(robot, X), ur(robot, X.tolist())
+            for name in ("solutions", "valid", "position_error", "rotation_error", "reason"):
+                np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+            assert a.flags == b.flags
+
+
 def test_distinct_solutions(robot):
     result = ur(robot, robot.fk(np.array([0.3, -1.2, 1.1, -0.4, 0.9, 0.2])))
     assert urmod.distinct_solutions(result).all()
@@ -780,7 +861,7 @@ def test_distinct_solutions(robot):
 
 
 def test_wrap_angle():
-    from dqlab.ik.ur_steps import wrap_angle
+    from dqlab.rotations import wrap_angle
 
     x = np.array([-np.pi, np.pi, -3 * np.pi, 3 * np.pi, 0.0, -1e-300, 7.0])
     w = wrap_angle(x)
@@ -788,25 +869,32 @@ def test_wrap_angle():
     assert np.allclose(np.exp(1j * w), np.exp(1j * x))
 
 
-def test_wrist_flip_is_the_other_wrist_branch():
-    """wrist_flip(sigma = +1) gives sigma = -1's theta5 and half difference (to a rounding
-    of pi), on arrays and on floats, and the flipped wrist turns the same rotation."""
-    from dqlab.ik.ur_steps import wrist_angles, wrist_flip
+def test_the_flipped_wrist_is_the_other_sign_of_sigma():
+    """wrist_angles with sigma = -1 is the wrist flip of sigma = +1: theta5 negated exactly,
+    the half sum unchanged, the half difference turned by pi (to a rounding of pi), on
+    arrays and (bitwise the same) on floats; the flipped wrist turns the same rotation."""
+    from dqlab.ik.ur_steps import wrist_angles
     from dqlab.quaternion import quaternion_from_axis_angle, quaternion_product
 
     rng = np.random.default_rng(12)
     L = rng.normal(size=(4, 300))
     L /= np.linalg.norm(L, axis=0)
-    theta5, half_sum, half_diff, _, _ = wrist_angles(tuple(L), 1.0)
-    flip5, flip_diff = wrist_flip(theta5, half_diff)
-    other5, other_sum, other_diff, _, _ = wrist_angles(tuple(L), -1.0)
-    np.testing.assert_array_equal(flip5, other5)
-    np.testing.assert_array_equal(half_sum, other_sum)
-    assert np.abs(flip_diff - other_diff).max() <= 4.5e-16
+    theta5, half_sum, half_diff, c5, s5 = wrist_angles(tuple(L), 1.0)
+    flip5, flip_sum, flip_diff, flip_c5, flip_s5 = wrist_angles(tuple(L), -1.0)
+    np.testing.assert_array_equal(flip5, -theta5)
+    np.testing.assert_array_equal(flip_sum, half_sum)
+    np.testing.assert_array_equal(flip_c5, c5)
+    np.testing.assert_array_equal(flip_s5, s5)
+    assert np.abs(wrapped(flip_diff - half_diff - np.pi)).max() <= 4.5e-16
     assert np.all(np.abs(flip_diff) <= np.pi) and np.all(flip5 > -np.pi)
-    for k in range(5):                                      # floats: the same formula
-        one = wrist_flip(float(theta5[k]), float(half_diff[k]))
-        assert one == (flip5[k], flip_diff[k])
+    both = wrist_angles(tuple(c[None] for c in L), np.array([[1.0], [-1.0]]))
+    for k, sigma in enumerate((1.0, -1.0)):               # both branches at once: the same
+        one = wrist_angles(tuple(L), sigma)
+        for whole, part in zip(both, one, strict=True):
+            np.testing.assert_array_equal(np.broadcast_to(whole, (2, 300))[k], part)
+    for k in range(5):                                    # floats: the same formula
+        one = wrist_angles(tuple(float(c) for c in L[:, k]), -1.0)
+        assert one[:3] == (flip5[k], flip_sum[k], flip_diff[k])
 
     def wrist(t234, t5, t6):      # r_-y(theta234) r_-z(theta5) r_-y(theta6)
         minus_y, minus_z = np.array([0.0, -1.0, 0.0]), np.array([0.0, 0.0, -1.0])
@@ -874,7 +962,8 @@ def _thesis_quantities(robot, q):
     T = robot.fk(q)
     q0_conj = np.array([np.sqrt(0.5), -np.sqrt(0.5), 0.0, 0.0])
     qD = quaternion_product(quaternion_from_matrix(T[..., :3, :3]), q0_conj)
-    return T, relative_rotation_coefficients(np.moveaxis(qD, -1, 0), 0.5 * q[..., 0])
+    half1 = np.cos(0.5 * q[..., 0]), np.sin(0.5 * q[..., 0])
+    return T, relative_rotation_coefficients(np.moveaxis(qD, -1, 0), half1)
 
 
 def test_thesis_theta6_formula_fails_at_theta234_pi(robot):

@@ -5,7 +5,6 @@ import numpy as np
 import pytest
 
 from dqlab.jacobian import (
-    geometric_jacobian,
     is_singular,
     manipulability,
     scara_is_singular,
@@ -52,9 +51,8 @@ def random_joints(robot, rng, size):
 
 
 def test_report_jacobian_is_reproduced():
-    J = geometric_jacobian(ur3_mdh(), REPORT_Q)
+    J = ur3_mdh().jacobian(REPORT_Q)
     np.testing.assert_allclose(J, REPORT_J, atol=2e-8)
-    np.testing.assert_allclose(ur3_mdh().jacobian(REPORT_Q), J)
 
 
 @pytest.mark.parametrize("model", [ur3, ur3_mdh, desk_arm, scara_rsm5, six_r])
@@ -65,7 +63,7 @@ def test_geometric_jacobian_equals_finite_differences(model):
     q = random_joints(robot, rng, 1000)
     if model is scara_rsm5:
         q[:, 2] = rng.uniform(0.01, 0.14, 1000)
-    J = geometric_jacobian(robot, q)
+    J = robot.jacobian(q)
     assert J.shape == (1000, 6, robot.n)
     np.testing.assert_allclose(J, finite_difference_jacobian(robot, q), atol=1e-6)
 

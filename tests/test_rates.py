@@ -13,7 +13,6 @@ from dqlab.dualquat import (
 )
 from dqlab.jacobian import (
     analytic_jacobian,
-    geometric_jacobian,
     quaternion_rate_matrix,
     rpy_rate_matrix,
 )
@@ -239,7 +238,7 @@ def test_analytic_jacobians_against_finite_differences(make_robot):
         assert J_quat.shape == (7, len(q))
         assert np.allclose(J_quat[3:], (r_plus - r_minus).T / (2 * H), atol=1e-7)
         # back to the geometric Jacobian: omega = E J_rpy = 4 G^T J_quat
-        J = geometric_jacobian(robot, q)
+        J = robot.jacobian(q)
         rpy = rpy_from_matrix(robot.fk(q)[:3, :3])
         assert np.allclose(rpy_rate_matrix(rpy) @ J_rpy[3:], J[3:], atol=1e-12)
         assert np.allclose(4 * quaternion_rate_matrix(r).T @ J_quat[3:], J[3:], atol=1e-12)

@@ -179,6 +179,8 @@ def test_prismatic_joint_moves_along_its_axis():
 
 @pytest.mark.parametrize("model", MODELS)
 def test_fk_is_the_product_of_link_transforms_with_base_and_tool(model):
+    """link_transforms is the definition of the chain: fk (the compiled chain, on floats
+    for one joint vector, on arrays for a batch) is that product with the base and tool."""
     rng = np.random.default_rng(3)
     robot = model()
     robot.base = random_transform(rng)
@@ -188,6 +190,11 @@ def test_fk_is_the_product_of_link_transforms_with_base_and_tool(model):
     for A in robot.link_transforms(q):
         X = X @ A
     np.testing.assert_allclose(robot.fk(q), X @ robot.tool, atol=1e-13)
+    batch = random_joints(robot, rng, 50)
+    X = np.broadcast_to(robot.base, (50, 4, 4))
+    for i in range(robot.n):
+        X = X @ robot.link_transforms(batch)[:, i]
+    np.testing.assert_allclose(robot.fk(batch), X @ robot.tool, atol=1e-13)
     frames = robot.fk(q, all_frames=True)
     assert frames.shape == (robot.n + 1, 4, 4)
     np.testing.assert_allclose(frames[0], robot.base, atol=1e-15)

@@ -4,7 +4,8 @@ Every solver is called ``solver(robot, target, *, tol, ...)`` and returns an
 :class:`~dqlab.ik.result.IKResult` (the numerical solver also takes its start ``q0``):
 
 - ``dqlab.ik.ur`` (:func:`dqlab.ik.ur_closed_form.ur`) -- every closed-form solution of
-  a UR-family arm, by dual quaternions; its steps are :mod:`dqlab.ik.ur_steps`;
+  a UR-family arm, by dual quaternions; its steps, and their assembly into the eight rows
+  as chapter 8 derives them, are :mod:`dqlab.ik.ur_steps`;
 - ``dqlab.ik.desk_arm`` (:func:`dqlab.ik.desk_arm_closed_form.desk_arm`) -- the 3-DOF
   desktop arm in closed form (the robot itself is :func:`dqlab.models.desk_arm`);
 - ``dqlab.ik.scara`` (:func:`dqlab.ik.scara_closed_form.scara`) -- the SCARA RSM-5 in
@@ -28,9 +29,6 @@ configuration, as its :math:`2\pi`-equivalent within the joint limits) and
 ``equivalent_solutions`` (every such equivalent).
 """
 
-import sys
-
-from . import damped_least_squares, ur_closed_form
 from .damped_least_squares import numerical
 from .desk_arm_closed_form import desk_arm
 from .result import IKResult
@@ -48,10 +46,3 @@ __all__ = [
     "IKResult", "SOLUTION_ORDER", "closest_solution", "desk_arm", "distinct_solutions",
     "equivalent_solutions", "numerical", "pose_errors", "scara", "ur", "ur_parameters",
 ]
-
-# The module paths of earlier versions, kept for code that imports from them:
-# ``from dqlab.ik.ur import ur_parameters`` and ``from dqlab.ik.numerical import pose_errors``
-# load the modules named after what they hold. The attributes ``dqlab.ik.ur`` and
-# ``dqlab.ik.numerical`` are the solver functions.
-sys.modules[__name__ + ".ur"] = ur_closed_form
-sys.modules[__name__ + ".numerical"] = damped_least_squares

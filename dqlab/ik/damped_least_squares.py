@@ -59,7 +59,7 @@ def numerical(robot: Robot, target: ArrayLike, q0: ArrayLike, *, position_only: 
     r"""Inverse kinematics by damped least squares, from a warm start ``q0``.
 
     Each iteration linearises the forward kinematics at :math:`q_k` with the geometric
-    Jacobian :math:`J` (:func:`dqlab.jacobian.geometric_jacobian`) and takes the
+    Jacobian :math:`J` (:meth:`dqlab.robot.Robot.jacobian`) and takes the
     Levenberg--Marquardt step, the :math:`\Delta q` that minimises
     :math:`\lVert e_k - J \Delta q \rVert^2 + \mu_k \lVert \Delta q \rVert^2`:
 

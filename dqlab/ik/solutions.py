@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._checks import as_float_array, real_array
-from .._kernels import wrapped_angle
+from ..rotations import wrap_angle
 
 __all__ = ["closest_solution", "equivalent_solutions"]
 
@@ -53,7 +53,7 @@ def _joint_limits(limits, n):
 def _nearest_equivalent(theta, ref, lo, hi):
     r"""The :math:`2\pi`-equivalent of ``theta`` nearest ``ref`` within ``[lo, hi]`` and
     whether one exists (arrays of one shape; ``lo``, ``hi`` broadcast)."""
-    u = ref + wrapped_angle(theta - ref)
+    u = ref + wrap_angle(theta - ref)
     below, above = u < lo, u > hi
     if below.any():
         u = np.where(below, u + _TWO_PI * np.ceil((lo - u) / _TWO_PI), u)
@@ -144,7 +144,7 @@ def closest_solution(result, q_ref: ArrayLike, limits: ArrayLike | None = None, 
         return chosen
     ref = np.broadcast_to(q_ref, chosen.shape)
     if bounds is None:
-        return ref + wrapped_angle(chosen - ref)
+        return ref + wrap_angle(chosen - ref)
     return _nearest_equivalent(chosen, ref, *bounds)[0]
 
 

@@ -230,9 +230,9 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
     -------
     IKResult
         As ``dqlab.ik.ur``'s: ``solutions`` (..., 8, 6) in the exact arm's branch order
-        (:data:`dqlab.ik.ur_closed_form.SOLUTION_ORDER`), wrapped to :math:`(-\pi, \pi]`; ``valid``; the
-        errors of forward kinematics of the calibrated chain for every branch that was
-        polished (the exact arm's errors for a branch it could not start); ``flags``
+        (:data:`dqlab.ik.ur_closed_form.SOLUTION_ORDER`), wrapped to :math:`(-\pi, \pi]`;
+        ``valid``; the errors of forward kinematics of the calibrated chain for every branch
+        that was polished (the exact arm's errors for a branch it could not start); ``flags``
         ``"wrist_singular"``, ``"elbow_singular"``, ``"shoulder_singular"`` measured on the
         calibrated arm at its valid rows (the sines of the angles between joint axes 4 and
         6 and between the common normals of joints 2-3 and 3-4, and the distance of the

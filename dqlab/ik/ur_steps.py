@@ -1,26 +1,39 @@
-r"""The steps of the closed-form UR inverse kinematics, one equation per function.
+r"""The steps of the closed-form UR inverse kinematics, one equation of chapter 8 per function,
+and their assembly into the eight candidate solutions, :func:`candidate_solutions`.
 
-These are the building blocks of :func:`dqlab.ik.ur_closed_form.ur`; each function solves
-one equation of the derivation (the book's inverse-kinematics chapter, after section 4.3 of
-the thesis). Each is one formula for two kinds of numbers: numpy arrays of any shape, so
-that a whole batch of poses is solved for all branches at once without a Python loop, and
-plain Python floats with the functions of ``math``, one pose and one branch at a time
-(the fast path of a single pose, where numpy's per-call overhead would dominate). Angles
-are in radians, lengths in metres, and the UR's standard Denavit-Hartenberg values are used
-with their published signs (``a2``, ``a3`` are negative).
+Chapter 8 (:ref:`ch-inverse-kinematics`) derives the UR's inverse kinematics with dual
+quaternions, after section 4.3 of the thesis; each function here is one of its equations,
+under the chapter's names: the wrist centre :math:`p_5` and the shoulder angle
+:math:`\theta_1` (:func:`wrist_center`, :func:`shoulder_angles`), the four rotation
+coefficients :math:`L` and the wrist angles (:func:`relative_rotation_coefficients`,
+:func:`wrist_angles`), the arm-plane coordinates :math:`(u_5, v_5)` of the wrist centre and
+:math:`(u_4, v_4)` of the wrist-1 point (:func:`arm_plane_wrist`, :func:`wrist1_point`) and
+the planar two-link arm (:func:`elbow_angles`). :func:`candidate_solutions` runs them in the
+chapter's order and is what the chapter shows.
+:func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>` computes the same rows with the speed
+machinery of the private module ``dqlab.ik._ur_engine`` (tested equal, bit for bit) and
+adds the checks, the flags and the choice at a wrist singularity.
 
-Notation. The pose is written relative to the arm's *zero pose* as the product of the six
-joint screws about their zero-pose axes (the thesis's axis-angle dual quaternions
-:math:`Q_1 \dots Q_6`): joint 1 turns about :math:`+z`, joints 2, 3, 4 and 6 about
-:math:`-y`, joint 5 about :math:`-z`. The rotation part of that product is
+Each step is one formula for two kinds of numbers, told apart by one switch
+(``dqlab._kernels.functions_for``): Python floats, computed with ``math`` (one pose, one
+branch at a time), and numpy arrays of any shape (a batch, all branches at once). Angles
+are in radians, lengths in metres; UR's standard Denavit--Hartenberg values keep their
+published signs (:math:`a_2`, :math:`a_3` are negative).
+
+Notation. With all frames parallel to the base frame in the zero configuration, the joints
+are the pairs :math:`Q_i = (\mathsf r_i, \mathbf t_i)` of the chapter: joint 1 turns about
+:math:`+\mathbf k`, joints 2, 3, 4 and 6 about :math:`-\mathbf j`, joint 5 about
+:math:`-\mathbf k`. The rotation part of their product is
 
 .. math::
 
-    q_D = r_z(\theta_1)\, r_{-y}(\theta_{234})\, r_{-z}(\theta_5)\, r_{-y}(\theta_6),
+    \mathsf r_D = \mathsf r_{\mathbf k}(\theta_1)\, \mathsf r_{-\mathbf j}(\theta_{234})\,
+                  \mathsf r_{-\mathbf k}(\theta_5)\, \mathsf r_{-\mathbf j}(\theta_6),
     \qquad \theta_{234} = \theta_2 + \theta_3 + \theta_4,
 
-where :math:`r_u(\theta) = \cos\frac{\theta}{2} + \sin\frac{\theta}{2}\, u` is the unit
-quaternion of a turn by :math:`\theta` about the unit axis :math:`u`.
+where :math:`\mathsf r_{\mathbf u}(\theta) = \cos\frac{\theta}{2} + \sin\frac{\theta}{2}\,
+\mathbf u` is the unit quaternion of a turn by :math:`\theta` about the unit axis
+:math:`\mathbf u`.
 """
 
 import math
@@ -28,130 +41,96 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..rotations import wrap_angle  # noqa: F401  (the steps' angle wrapping)
+from .._checks import components
+from .._kernels import functions_for, quaternion_from_matrix_entries, quaternion_mul
+from ..rotations import wrap_angle
+from ..transforms import check_transform
 
-#: The arrays of the steps: float64 arrays of any shape.
+__all__ = [
+    "target_rotation", "wrist_center", "shoulder_angles", "half_angle_cos_sin",
+    "relative_rotation_coefficients", "wrist_angles", "half_difference", "theta234_sine_cosine",
+    "arm_plane_wrist", "wrist1_point", "elbow_triangle", "elbow_angles", "reach_gap",
+    "shoulder_gap", "feasible_theta234", "candidate_solutions",
+]
+
+#: The arrays of the steps: float64 arrays of any shape (or Python floats).
 Array = NDArray[np.float64]
 
-_PLUS_MINUS = np.array([[1.0], [-1.0]])
+_HALF_SQRT2 = math.sqrt(0.5)           # a Python float: it serves floats and arrays
 
 
-def _float_clip0(x):
-    return x if x > 0.0 else 0.0
+def target_rotation(q: tuple) -> tuple:
+    r"""The target's rotation in the frames of the pairs, :math:`\mathsf r_D = q\, q_0^*`.
 
+    UR's DH flange frame is the pairs' last frame turned by :math:`\pi/2` about :math:`x`,
+    whose quaternion is :math:`q_0 = (1 + \mathbf i)/\sqrt 2`; undoing that turn on the
+    flange rotation :math:`q` is the quaternion product
 
-def _float_no_minus_pi(theta):
-    return math.pi if theta == -math.pi else theta
+    .. math::
 
+        \mathsf r_D = q\, q_0^* = \frac{q\,(1 - \mathbf i)}{\sqrt 2},
 
-def _float_cos_sin(x, y):
-    r = math.sqrt(x * x + y * y)
-    return (x / r, y / r) if r > 0.0 else (1.0, 0.0)
-
-
-def _float_half_cos_sin(c, s):
-    big = math.sqrt(0.5 + 0.5 * abs(c))
-    other = 0.5 * s / big
-    if c >= 0.0:
-        return big, other
-    return abs(other), (-big if s < 0.0 else big)
-
-
-def _array_clip0(x):
-    return np.maximum(x, 0.0)
-
-
-def _array_no_minus_pi(theta):
-    # the smallest entry tells whether some entry is -pi (or below), in one pass
-    return np.where(theta == -np.pi, np.pi, theta) if theta.min(initial=0.0) <= -np.pi else theta
-
-
-def _array_cos_sin(x, y):
-    r = np.sqrt(x * x + y * y)
-    if r.min(initial=np.inf) > 0.0:       # no zero (the common case)
-        return x / r, y / r
-    with np.errstate(divide="ignore", invalid="ignore"):
-        c, s = x / r, y / r
-    zero = r == 0.0
-    c[zero], s[zero] = 1.0, 0.0
-    return c, s
-
-
-def _array_half_cos_sin(c, s):
-    big = np.sqrt(0.5 + 0.5 * np.abs(c))
-    other = 0.5 * s / big
-    first = c >= 0.0
-    signed_big = np.where(s < 0.0, -big, big)
-    return np.where(first, big, np.abs(other)), np.where(first, other, signed_big)
-
-
-class _FLOAT:
-    """The elementary functions of the steps for Python floats: ``math``'s. (The class
-    itself is the namespace: its attributes are read without binding.)"""
-
-    sqrt = math.sqrt
-    atan2 = math.atan2
-    sin = math.sin
-    cos = math.cos
-    copysign = math.copysign
-    clip0 = staticmethod(_float_clip0)                # max(x, 0)
-    no_minus_pi = staticmethod(_float_no_minus_pi)    # -pi -> pi, other angles unchanged
-    cos_sin = staticmethod(_float_cos_sin)    # (x, y) / |(x, y)|, (1, 0) at 0: atan2(y, x)'s
-    half_cos_sin = staticmethod(_float_half_cos_sin)  # see half_angle_cos_sin
-
-
-class _ARRAY:
-    """The same functions for numpy arrays."""
-
-    sqrt = np.sqrt
-    atan2 = np.arctan2
-    sin = np.sin
-    cos = np.cos
-    copysign = np.copysign
-    clip0 = staticmethod(_array_clip0)
-    no_minus_pi = staticmethod(_array_no_minus_pi)
-    cos_sin = staticmethod(_array_cos_sin)
-    half_cos_sin = staticmethod(_array_half_cos_sin)
-
-
-# Each step picks ``math``'s functions for a Python float (one pose, one branch at a time)
-# and numpy's for arrays (a batch, all branches at once): one formula for both.
-
-
-def wrist_center(p: ArrayLike, z6: ArrayLike, d6: float) -> Array:
-    r"""Position of the wrist-2 point, :math:`p_5 = p_6 - d_6\, z_6`.
-
-    Joint 6 only turns the flange about its own :math:`z_6` axis, so the origin of frame 5
-    lies :math:`d_6` behind the flange along :math:`z_6`. In the thesis this is the
-    translation part of :math:`Q_{FK}\, Q_6^{-1} Q_5^{-1}`-type products, equation (4.5)
-    (whose printed :math:`Q_5^{-1}` carries the translation along :math:`i` instead of
-    :math:`j`).
+    whose product with :math:`1 - \mathbf i` only adds and subtracts components (exact).
 
     Parameters
     ----------
-    p, z6 : ndarray, shape (..., 3)
-        Flange position and flange :math:`z` axis in the base frame.
+    q : sequence of four floats or arrays
+        Components :math:`(w, x, y, z)` of the flange rotation (a unit quaternion).
+
+    Returns
+    -------
+    tuple of four floats or arrays
+        :math:`\mathsf r_D`.
+
+    Examples
+    --------
+    At :math:`\theta = 0` the flange rotation is :math:`q_0` itself:
+
+    >>> [round(c, 15) for c in target_rotation((math.sqrt(0.5), math.sqrt(0.5), 0.0, 0.0))]
+    [1.0, 0.0, 0.0, 0.0]
+    """
+    w, x, y, z = quaternion_mul(*q, 1.0, -1.0, 0.0, 0.0)
+    return _HALF_SQRT2 * w, _HALF_SQRT2 * x, _HALF_SQRT2 * y, _HALF_SQRT2 * z
+
+
+def wrist_center(p: tuple, z6: tuple, d6: float) -> tuple:
+    r"""The wrist centre :math:`p_5 = p - d_6\, z_6`, chapter 8's :eq:`eq-ik-wrist-point`.
+
+    Joint 6 only turns the flange about its own :math:`z_6` axis, so the origin of frame 5
+    (where the axes of joints 5 and 6 meet) lies :math:`d_6` behind the flange along
+    :math:`z_6`. In the pairs' frames this is the translation of
+    :math:`(\mathsf r_D, p)(1, d_6\mathbf j)`, the thesis's (4.5) (whose printed
+    :math:`Q_5^{-1}` carries the translation along :math:`\mathbf i` instead of
+    :math:`\mathbf j`).
+
+    Parameters
+    ----------
+    p, z6 : sequences of three floats or arrays
+        Flange position :math:`p` and flange :math:`z` axis :math:`z_6` in the base frame,
+        component by component.
     d6 : float
         Wrist-3 offset.
 
     Returns
     -------
-    ndarray, shape (..., 3)
+    tuple of three floats or arrays
+        :math:`(x_5, y_5, z_5)`.
 
     Examples
     --------
-    >>> wrist_center(np.array([0.0, -0.19425, 0.69415]), np.array([0.0, -1.0, 0.0]), 0.0819)
-    array([ 0.     , -0.11235,  0.69415])
+    >>> [round(c, 12) for c in wrist_center((0.0, -0.19425, 0.69415), (0.0, -1.0, 0.0), 0.0819)]
+    [0.0, -0.11235, 0.69415]
     """
-    return p - d6 * z6
+    return p[0] - d6 * z6[0], p[1] - d6 * z6[1], p[2] - d6 * z6[2]
 
 
-def shoulder_angles(x5: Array, y5: Array, d4: float, sign: ArrayLike | None = None
+def shoulder_angles(x5: Array, y5: Array, d4: float, sign: ArrayLike
                     ) -> tuple[Array, Array, Array, Array, Array]:
-    r"""Both solutions of :math:`\sin\theta_1\, x_5 - \cos\theta_1\, y_5 = d_4` (thesis 4.9).
+    r"""The shoulder angle :math:`\theta_1` of :eq:`eq-ik-theta1`, from the plane equation
+    :math:`-x_5 \sin\theta_1 + y_5 \cos\theta_1 = -d_4` (thesis 4.9).
 
     With :math:`h = \sqrt{x_5^2 + y_5^2 - d_4^2}` the two roots are
-    :math:`\theta_1 = \operatorname{atan2}(y_5, x_5) + \operatorname{atan2}(d_4, \pm h)`,
+    :math:`\theta_1 = \operatorname{atan2}(-x_5, y_5) \pm \operatorname{atan2}(h, -d_4)`,
     that is :math:`e^{i\theta_1} \propto (x_5 + i y_5)(h_\pm + i d_4)`, computed as one
     well-conditioned ``atan2``:
 
@@ -160,45 +139,48 @@ def shoulder_angles(x5: Array, y5: Array, d4: float, sign: ArrayLike | None = No
         \theta_1 = \operatorname{atan2}(y_5 h_\pm + x_5 d_4,\; x_5 h_\pm - y_5 d_4),
         \qquad h_\pm = \pm h .
 
-    The sign of :math:`h_\pm` is the shoulder branch: :math:`h_\pm = \cos\theta_1 x_5 +
-    \sin\theta_1 y_5` is the wrist centre's coordinate along :math:`x_1`. A solution exists
-    only if :math:`x_5^2 + y_5^2 \ge d_4^2`; when the difference is negative it is clipped to
-    zero here (the caller judges whether the clipped answer is good enough), and when it is
-    zero the two roots coincide (shoulder singularity).
+    The sign of :math:`h_\pm` is the shoulder branch: :math:`h_\pm = u_5 = \cos\theta_1 x_5
+    + \sin\theta_1 y_5` is the wrist centre's coordinate along :math:`x_1`. A solution
+    exists only if :math:`x_5^2 + y_5^2 \ge d_4^2`; when the difference is negative it is
+    clipped to zero here (the caller judges whether the clipped answer is good enough), and
+    when it is zero the two roots coincide (shoulder singularity).
 
     Parameters
     ----------
-    x5, y5 : ndarray, shape (n,)
+    x5, y5 : float or ndarray
         Wrist-centre coordinates in the base frame.
     d4 : float
         Shoulder offset (distance of the arm plane from the base axis).
-    sign : float, optional
-        The one branch to compute, +1.0 (:math:`h_\pm = +h`) or -1.0, with float inputs;
-        by default both branches, on a new first axis.
+    sign : float or ndarray
+        The shoulder branch: +1.0 (:math:`h_\pm = +h`, "left") or -1.0 ("right"), or an
+        array of signs that broadcasts against ``x5`` (``[[1.0], [-1.0]]``: both at once,
+        on a new first axis).
 
     Returns
     -------
-    theta1, c1, s1 : ndarray, shape (2, n)
-        :math:`\theta_1`, :math:`\cos\theta_1`, :math:`\sin\theta_1`; row 0 with
-        :math:`h_\pm = +h`, row 1 with :math:`h_\pm = -h` (floats with ``sign``).
-    h : ndarray, shape (n,)
+    theta1, c1, s1 : float or ndarray
+        :math:`\theta_1`, :math:`\cos\theta_1`, :math:`\sin\theta_1` (the last two from the
+        same two numbers as the ``atan2``, without trigonometry).
+    h : float or ndarray
         :math:`h \ge 0` after clipping.
-    h2 : ndarray, shape (n,)
+    h2 : float or ndarray
         :math:`x_5^2 + y_5^2 - d_4^2` before clipping (negative: the wrist centre is inside
-        the cylinder of radius :math:`d_4` about the base axis).
+        the shoulder cylinder of radius :math:`d_4` about the base axis).
 
     Examples
     --------
-    >>> theta1, c1, s1, h, h2 = shoulder_angles(np.array([0.3]), np.array([-0.11235]), 0.11235)
-    >>> np.round(theta1.ravel(), 6), np.round(h, 12)
-    (array([0.      , 2.424928]), array([0.3]))
-    >>> round(shoulder_angles(0.3, -0.11235, 0.11235, sign=-1.0)[0], 6)     # one branch
-    2.424928
+    >>> theta1, c1, s1, h, h2 = shoulder_angles(0.3, -0.11235, 0.11235, 1.0)
+    >>> round(theta1, 12), round(h, 12)
+    (0.0, 0.3)
+    >>> both = shoulder_angles(np.array([0.3]), np.array([-0.11235]), 0.11235,
+    ...                        np.array([[1.0], [-1.0]]))
+    >>> np.round(both[0].ravel(), 6)                                 # left, right
+    array([0.      , 2.424928])
     """
-    f = _FLOAT if type(x5) is float else _ARRAY
+    f = functions_for(type(x5))
     h2 = x5 * x5 + y5 * y5 - d4 * d4
     h = f.sqrt(f.clip0(h2))
-    hpm = (_PLUS_MINUS if sign is None else sign) * h
+    hpm = sign * h
     num_c = x5 * hpm - y5 * d4
     num_s = y5 * hpm + x5 * d4
     theta1 = f.atan2(num_s + 0.0, num_c)    # + 0.0 turns -0.0 into 0.0: never -pi
@@ -221,12 +203,12 @@ def half_angle_cos_sin(c: Array, s: Array) -> tuple[Array, Array]:
 
     Parameters
     ----------
-    c, s : ndarray, shape (...)
+    c, s : float or ndarray
         :math:`\cos\theta` and :math:`\sin\theta`, as from :func:`shoulder_angles`.
 
     Returns
     -------
-    tuple of two ndarrays
+    tuple of two floats or ndarrays
         :math:`(\cos\frac{\theta}{2}, \sin\frac{\theta}{2})`.
 
     Examples
@@ -236,56 +218,54 @@ def half_angle_cos_sin(c: Array, s: Array) -> tuple[Array, Array]:
     >>> bool(np.allclose(c, np.cos(theta / 2)) and np.allclose(s, np.sin(theta / 2)))
     True
     """
-    f = _FLOAT if type(c) is float else _ARRAY
-    return f.half_cos_sin(c, s)
+    return functions_for(type(c)).half_cos_sin(c, s)
 
 
-def relative_rotation_coefficients(q: tuple, half1: Array | tuple[Array, Array]
-                                   ) -> tuple[Array, Array, Array, Array]:
-    r"""The four coefficients of :math:`L = r_z(\theta_1)^{-1} q_D` (thesis 4.14-4.17).
+def relative_rotation_coefficients(r_D: tuple, half1: tuple) -> tuple:
+    r"""The four coefficients :math:`L = \mathsf r_1^* \mathsf r_D` of the rotation equations
+    :eq:`eq-ik-theta6-system` (thesis 4.14-4.17).
 
-    With :math:`q_D = (w, x, y, z)` and :math:`\bar c_1 = \cos\frac{\theta_1}{2}`,
-    :math:`\bar s_1 = \sin\frac{\theta_1}{2}`:
+    With :math:`\mathsf r_D = r_w + r_x\mathbf i + r_y\mathbf j + r_z\mathbf k`,
+    :math:`\mathsf r_1 = \bar c_1 + \bar s_1\mathbf k`, :math:`\bar c_1 =
+    \cos\frac{\theta_1}{2}` and :math:`\bar s_1 = \sin\frac{\theta_1}{2}`:
 
     .. math::
 
-        L = (\bar c_1 w + \bar s_1 z,\; \bar c_1 x + \bar s_1 y,\;
-             \bar c_1 y - \bar s_1 x,\; \bar c_1 z - \bar s_1 w),
+        L = (r_w\bar c_1 + r_z\bar s_1,\; r_x\bar c_1 + r_y\bar s_1,\;
+             r_y\bar c_1 - r_x\bar s_1,\; r_z\bar c_1 - r_w\bar s_1),
 
-    the right-hand sides of the thesis's equations :math:`M_2 = N_2` (4.14)-(4.17).
+    the right-hand sides of the rotation part of :math:`M_2 = N_2`.
 
     Parameters
     ----------
-    q : sequence of four ndarrays, each of shape (...)
-        Components :math:`(w, x, y, z)` of the zero-pose-relative rotation :math:`q_D`.
-    half1 : ndarray, shape (...), or a pair of them
-        :math:`\theta_1 / 2`, or its cosine and sine (see :func:`half_angle_cos_sin`).
+    r_D : sequence of four floats or arrays
+        :math:`(r_w, r_x, r_y, r_z)`, see :func:`target_rotation`.
+    half1 : pair of floats or arrays
+        :math:`(\bar c_1, \bar s_1)` (see :func:`half_angle_cos_sin`).
 
     Returns
     -------
-    tuple of four ndarrays
+    tuple of four floats or arrays
         :math:`(L_w, L_x, L_y, L_z)`.
 
     Examples
     --------
-    >>> half = np.float64(0.25)
-    >>> q = np.cos(half), 0.0, 0.0, np.sin(half)  # a pure turn about z by 0.5 rad
-    >>> [round(float(c), 12) for c in relative_rotation_coefficients(q, half)]
+    >>> half = (math.cos(0.25), math.sin(0.25))
+    >>> r_D = half[0], 0.0, 0.0, half[1]           # a pure turn about z by 0.5 rad
+    >>> [round(c, 12) for c in relative_rotation_coefficients(r_D, half)]
     [1.0, 0.0, 0.0, 0.0]
     """
-    w, x, y, z = q
-    if type(half1) is tuple:
-        c, s = half1
-    else:
-        f = _FLOAT if type(half1) is float else _ARRAY
-        c, s = f.cos(half1), f.sin(half1)
+    w, x, y, z = r_D
+    c, s = half1
     return c * w + s * z, c * x + s * y, c * y - s * x, c * z - s * w
 
 
 def wrist_angles(L: tuple, sigma: ArrayLike) -> tuple[Array, Array, Array, Array, Array]:
-    r""":math:`\theta_5` and the half sum/difference of :math:`\theta_{234}` and :math:`\theta_6`.
+    r""":math:`\theta_5` and the half sum and difference of :math:`\theta_{234}` and
+    :math:`\theta_6`, chapter 8's :eq:`eq-ik-wrist`.
 
-    Expanding :math:`r_{-y}(\theta_{234})\, r_{-z}(\theta_5)\, r_{-y}(\theta_6)` gives
+    Expanding :math:`\mathsf r_{-\mathbf j}(\theta_{234})\, \mathsf r_{-\mathbf k}(\theta_5)
+    \, \mathsf r_{-\mathbf j}(\theta_6)` gives
 
     .. math::
 
@@ -294,118 +274,71 @@ def wrist_angles(L: tuple, sigma: ArrayLike) -> tuple[Array, Array, Array, Array
         \qquad \Sigma = \theta_{234} + \theta_6,\ \Delta = \theta_{234} - \theta_6,
 
     with :math:`\bar c_5 = \cos\frac{\theta_5}{2}`, :math:`\bar s_5 = \sin\frac{\theta_5}{2}`.
-    Hence, with the wrist branch :math:`\sigma = \pm 1`,
+    Hence, with the wrist branch :math:`\sigma = \pm 1` (the sign of :math:`\bar s_5`),
 
     .. math::
 
-        \bar c_5 = \sqrt{L_w^2 + L_y^2},\quad \bar s_5 = \sigma\sqrt{L_x^2 + L_z^2},\quad
-        \theta_5 = 2\operatorname{atan2}(\bar s_5, \bar c_5),
-
+        \theta_5 = 2\operatorname{atan2}\Big(\sigma\sqrt{L_x^2 + L_z^2},\;
+                   \sqrt{L_w^2 + L_y^2}\Big),\qquad
         \tfrac{\Sigma}{2} = \operatorname{atan2}(-L_y, L_w),\qquad
         \tfrac{\Delta}{2} = \operatorname{atan2}(\sigma L_x, -\sigma L_z).
 
     No division by :math:`\bar s_5` or :math:`\bar c_5` occurs (the thesis divides by them
     in 4.18-4.21 and then solves the 0/0-prone (4.28)); every quantity is an ``atan2`` of
     two directly computed numbers, so :math:`\theta_5` keeps full accuracy near 0 and
-    :math:`\pm\pi`. Equivalently :math:`\cos\theta_5 = \bar c_5^2 - \bar s_5^2` is the
-    projection of the flange :math:`z` axis on the joint-2 axis.
-    The branch :math:`\sigma = -1` is the wrist flip of :math:`\sigma = +1`
-    (:func:`wrist_flip`), which the solver uses instead of a second call.
+    :math:`\pm\pi`. Both wrist branches come from this one formula, :math:`\sigma = +1`
+    ("not flipped") and :math:`\sigma = -1` ("flipped"); :math:`\theta_5` is computed as
+    :math:`\sigma \cdot 2\operatorname{atan2}(\sqrt{L_x^2 + L_z^2}, \sqrt{L_w^2 + L_y^2})`,
+    the same number (``atan2`` is odd in its first argument, exactly), with :math:`-\pi`
+    written :math:`\pi`.
 
     Parameters
     ----------
-    L : tuple of four ndarrays, shape (...)
+    L : tuple of four floats or arrays
         Output of :func:`relative_rotation_coefficients`.
-    sigma : ndarray or float
+    sigma : float or ndarray
         Wrist branch, +1 (:math:`\theta_5 \in [0, \pi]`) or -1, broadcast against ``L``.
 
     Returns
     -------
-    theta5, half_sum, half_diff, c5bar, s5bar : ndarrays
-        :math:`\theta_5`, :math:`\Sigma/2`, :math:`\Delta/2`, and the magnitudes
-        :math:`|\bar c_5|`, :math:`|\bar s_5|`.
-
-    Examples
-    --------
-    >>> L = (np.cos(0.3) * np.cos(0.1), np.sin(0.3) * np.sin(0.2),
-    ...      -np.cos(0.3) * np.sin(0.1), -np.sin(0.3) * np.cos(0.2))
-    >>> [round(float(v), 12) for v in wrist_angles(L, 1.0)[:3]]
-    [0.6, 0.1, 0.2]
-    """
-    Lw, Lx, Ly, Lz = L
-    f = _FLOAT if type(Lw) is float else _ARRAY
-    c5bar = f.sqrt(Lw * Lw + Ly * Ly)
-    s5bar = f.sqrt(Lx * Lx + Lz * Lz)
-    # (sigma * sigma = 1 gives c5bar the broadcast shape: atan2 is fastest on equal shapes)
-    theta5 = f.no_minus_pi(2.0 * f.atan2(sigma * s5bar, (sigma * sigma) * c5bar))
-    half_sum = f.atan2(-Ly, Lw)
-    half_diff = f.atan2(sigma * Lx, -sigma * Lz)
-    return theta5, half_sum, half_diff, c5bar, s5bar
-
-
-def wrist_flip(theta5: Array, half_diff: Array) -> tuple[Array, Array]:
-    r"""The other wrist branch from one: :math:`\theta_5 \to -\theta_5`,
-    :math:`\frac{\Delta}{2} \to \frac{\Delta}{2} \mp \pi`.
-
-    Changing the wrist branch :math:`\sigma` of :func:`wrist_angles` negates the ``atan2``
-    of :math:`\theta_5` and turns the direction of :math:`\frac{\Delta}{2}` by
-    :math:`\pi`; :math:`\frac{\Sigma}{2}`, :math:`\bar c_5` and :math:`|\bar s_5|` stay.
-    So :math:`\theta_{234}` and :math:`\theta_6` move by :math:`\mp\pi` and
-    :math:`\pm\pi`: the familiar wrist flip :math:`(\theta_4 + \pi, -\theta_5,
-    \theta_6 + \pi)` (mod :math:`2\pi`). It reaches the same orientation because
-    :math:`r_{-y}(\pi)\, r_{-z}(-\theta_5)\, r_{-y}(-\pi) = (-j)\, r_{-z}(-\theta_5)\, j
-    = r_{-z}(\theta_5)`. The results are those of ``atan2`` with :math:`\sigma` changed:
-    :math:`\theta_5 \in (-\pi, \pi]` and :math:`\frac{\Delta}{2} \in [-\pi, \pi]`.
-
-    Parameters
-    ----------
-    theta5, half_diff : ndarray or float
-        :math:`\theta_5` and :math:`\frac{\Delta}{2}` of one wrist branch.
-
-    Returns
-    -------
-    theta5, half_diff : ndarrays or floats
-        Those of the other branch.
+    theta5, half_sum, half_diff : floats or ndarrays
+        :math:`\theta_5 \in (-\pi, \pi]`, :math:`\Sigma/2` and :math:`\Delta/2`.
+    c5bar, s5bar : floats or ndarrays
+        The magnitudes :math:`|\bar c_5| = \sqrt{L_w^2 + L_y^2}` and
+        :math:`|\bar s_5| = \sqrt{L_x^2 + L_z^2}`.
 
     Examples
     --------
     >>> L = (math.cos(0.3) * math.cos(0.1), math.sin(0.3) * math.sin(0.2),
     ...      -math.cos(0.3) * math.sin(0.1), -math.sin(0.3) * math.cos(0.2))
-    >>> theta5, half_sum, half_diff, c5bar, s5bar = wrist_angles(L, 1.0)
-    >>> flipped = wrist_angles(L, -1.0)
-    >>> [round(a - b, 15) for a, b in zip(wrist_flip(theta5, half_diff), flipped[::2])]
-    [0.0, 0.0]
+    >>> [round(v, 12) for v in wrist_angles(L, 1.0)[:3]]
+    [0.6, 0.1, 0.2]
+    >>> [round(v, 12) for v in wrist_angles(L, -1.0)[:3]]      # the flipped wrist
+    [-0.6, 0.1, -2.94159265359]
     """
-    f = _FLOAT if type(theta5) is float else _ARRAY
-    return f.no_minus_pi(-theta5), half_diff - f.copysign(math.pi, half_diff)
+    Lw, Lx, Ly, Lz = L
+    f = functions_for(type(Lw))
+    c5bar = f.sqrt(Lw * Lw + Ly * Ly)
+    s5bar = f.sqrt(Lx * Lx + Lz * Lz)
+    theta5 = f.no_minus_pi(sigma * (2.0 * f.atan2(s5bar, c5bar)))    # atan2 is odd in y
+    half_sum = f.atan2(-Ly, Lw)
+    return theta5, half_sum, half_difference(L, sigma), c5bar, s5bar
 
 
-def arm_plane_wrist(p5: tuple, c1: Array, s1: Array, d1: float) -> tuple[Array, Array]:
-    r"""Wrist centre in the arm plane: :math:`P = (c_1 x_5 + s_1 y_5,\; z_5 - d_1)`.
-
-    The plane of the planar 3R chain (joints 2, 3, 4) contains the shoulder point
-    :math:`(0, 0, d_1)` and is spanned by :math:`x_1 = (c_1, s_1, 0)` and :math:`y_1 = z_0`.
-
-    Parameters
-    ----------
-    p5 : sequence of three ndarrays, shape (...)
-        Wrist-centre coordinates.
-    c1, s1 : ndarray
-        Cosine and sine of :math:`\theta_1`, broadcast against ``p5``.
-    d1 : float
-        Base height.
-
-    Returns
-    -------
-    Px, Py : ndarrays
+def half_difference(L: tuple, sigma: ArrayLike) -> Array:
+    r"""The half difference :math:`\tfrac{\theta_{234} - \theta_6}{2} =
+    \operatorname{atan2}(\sigma L_x, -\sigma L_z)` of :func:`wrist_angles`, the one wrist
+    quantity that depends on the branch :math:`\sigma` otherwise than by its sign.
 
     Examples
     --------
-    >>> [round(v, 12) for v in arm_plane_wrist((0.3, -0.11235, 0.2), 1.0, 0.0, 0.1519)]
-    [0.3, 0.0481]
+    >>> L = (math.cos(0.3) * math.cos(0.1), math.sin(0.3) * math.sin(0.2),
+    ...      -math.cos(0.3) * math.sin(0.1), -math.sin(0.3) * math.cos(0.2))
+    >>> round(half_difference(L, 1.0), 12), round(half_difference(L, -1.0), 12)
+    (0.2, -2.94159265359)
     """
-    x5, y5, z5 = p5
-    return c1 * x5 + s1 * y5, z5 - d1
+    _, Lx, _, Lz = L
+    return functions_for(type(Lx)).atan2(sigma * Lx, -sigma * Lz)
 
 
 def theta234_sine_cosine(L: tuple, sigma: ArrayLike, c5bar: Array, s5bar: Array
@@ -423,9 +356,10 @@ def theta234_sine_cosine(L: tuple, sigma: ArrayLike, c5bar: Array, s5bar: Array
         \cos\theta_{234} = \sigma\,\frac{L_x L_y - L_w L_z}{\bar c_5 \bar s_5}
 
     (the two numerators have the squared sum :math:`\bar c_5^2 \bar s_5^2`). Undefined at
-    the wrist singularity, :math:`\bar c_5 \bar s_5 = 0`, where :math:`\theta_{234}` is
-    chosen from its family instead (:func:`feasible_theta234`) and its sine and cosine
-    taken directly.
+    the wrist singularity, :math:`\bar c_5 \bar s_5 = 0`, where only
+    :math:`\theta_{234} \pm \theta_6` is determined and
+    :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>` chooses :math:`\theta_{234}` from its family
+    (:func:`feasible_theta234`).
 
     Examples
     --------
@@ -441,40 +375,77 @@ def theta234_sine_cosine(L: tuple, sigma: ArrayLike, c5bar: Array, s5bar: Array
     return k * (Lw * Lx + Ly * Lz), k * (Lx * Ly - Lw * Lz)
 
 
-def wrist1_point(Px: Array, Py: Array, theta234: Array, d5: float,
-                 sine_cosine: tuple | None = None) -> tuple[Array, Array]:
-    r"""Wrist-1 point in the arm plane, :math:`(X, Y) = P - d_5 (s_{234}, -c_{234})`.
+def arm_plane_wrist(p5: tuple, c1: Array, s1: Array, d1: float) -> tuple[Array, Array]:
+    r"""The wrist centre in the arm plane, :math:`(u_5, v_5) = (c_1 x_5 + s_1 y_5,\;
+    z_5 - d_1)`.
 
-    The wrist-2 axis :math:`z_4 = (c_1 s_{234},\, s_1 s_{234},\, -c_{234})` carries the
-    offset :math:`d_5` from the wrist-1 point to the wrist centre; the thesis undoes it with
-    :math:`Q_4^{-1}` in (4.33)-(4.34) (where the printed :math:`Q_4^{-1}` is a copy of
-    :math:`Q_5^{-1}`). :math:`(X, Y)` is the point the planar 2R chain
-    :math:`a_2, a_3` must reach: :math:`X = a_2 c_2 + a_3 c_{23}`, :math:`Y = a_2 s_2 + a_3 s_{23}`.
+    The arm plane, the plane of the planar chain of joints 2, 3 and 4, contains the shoulder
+    point :math:`(0, 0, d_1)` and is spanned by :math:`x_1 = (c_1, s_1, 0)` (the :math:`u`
+    axis) and the vertical (the :math:`v` axis).
+
+    Parameters
+    ----------
+    p5 : sequence of three floats or arrays
+        Wrist-centre coordinates :math:`(x_5, y_5, z_5)`.
+    c1, s1 : float or ndarray
+        Cosine and sine of :math:`\theta_1`, broadcast against ``p5``.
+    d1 : float
+        Base height.
+
+    Returns
+    -------
+    u5, v5 : floats or ndarrays
+
+    Examples
+    --------
+    >>> [round(v, 12) for v in arm_plane_wrist((0.3, -0.11235, 0.2), 1.0, 0.0, 0.1519)]
+    [0.3, 0.0481]
+    """
+    x5, y5, z5 = p5
+    return c1 * x5 + s1 * y5, z5 - d1
+
+
+def wrist1_point(u5: Array, v5: Array, sin234: Array, cos234: Array, d5: float
+                 ) -> tuple[Array, Array]:
+    r"""The wrist-1 point in the arm plane, :eq:`eq-ik-wrist1-point`:
+    :math:`(u_4, v_4) = (u_5 - d_5 \sin\theta_{234},\; v_5 + d_5\cos\theta_{234})`.
+
+    The offset :math:`d_5` from the wrist-1 point to the wrist centre is :math:`Q_4`'s
+    translation turned by :math:`\theta_2 + \theta_3`, :math:`d_5(\sin\theta_{234},
+    -\cos\theta_{234})` in the plane; the thesis removes it with :math:`Q_4^{-1}` in
+    (4.33)-(4.34) (where the printed :math:`Q_4^{-1}` is a copy of :math:`Q_5^{-1}`).
+    :math:`(u_4, v_4)` is the point the planar two-link arm :math:`a_2, a_3` must reach.
+
+    Parameters
+    ----------
+    u5, v5 : float or ndarray
+        The wrist centre in the arm plane (:func:`arm_plane_wrist`).
+    sin234, cos234 : float or ndarray
+        :math:`\sin\theta_{234}` and :math:`\cos\theta_{234}` (for example from
+        :func:`theta234_sine_cosine`).
+    d5 : float
+
+    Returns
+    -------
+    u4, v4 : floats or ndarrays
 
     Examples
     --------
     The thesis's pose, arm straight up: the wrist-1 point is :math:`|a_2 + a_3|` above the
     shoulder.
 
-    >>> X, Y = wrist1_point(0.0, 0.54235, -np.pi, 0.08535)
-    >>> round(float(X), 12), round(float(Y), 12)
+    >>> u4, v4 = wrist1_point(0.0, 0.54235, math.sin(-math.pi), math.cos(-math.pi), 0.08535)
+    >>> round(u4, 12), round(v4, 12)
     (0.0, 0.457)
-
-    ``sine_cosine``, when given, is :math:`(\sin\theta_{234}, \cos\theta_{234})`
-    already known (:func:`theta234_sine_cosine`).
     """
-    if sine_cosine is None:
-        f = _FLOAT if type(theta234) is float else _ARRAY
-        sine_cosine = f.sin(theta234), f.cos(theta234)
-    s234, c234 = sine_cosine
-    return Px - d5 * s234, Py + d5 * c234
+    return u5 - d5 * sin234, v5 + d5 * cos234
 
 
-def elbow_triangle(X: Array, Y: Array, a2: float, a3: float
+def elbow_triangle(u4: Array, v4: Array, a2: float, a3: float
                    ) -> tuple[Array, Array, Array, Array, Array]:
-    r"""The law of cosines of the planar 2R chain, the part both elbow branches share.
+    r"""The law of cosines of the planar two-link arm, the part both elbow branches share.
 
-    See :func:`elbow_angles`: with :math:`\rho^2 = X^2 + Y^2`,
+    See :func:`elbow_angles`: with :math:`\rho^2 = u_4^2 + v_4^2`,
 
     .. math::
 
@@ -486,13 +457,13 @@ def elbow_triangle(X: Array, Y: Array, a2: float, a3: float
 
     Parameters
     ----------
-    X, Y : ndarray or float
-        Wrist-1 point in the arm plane, relative to the shoulder.
+    u4, v4 : float or ndarray
+        The wrist-1 point in the arm plane, relative to the shoulder.
     a2, a3 : float
 
     Returns
     -------
-    cos_num, k, outer, inner, angle3 : ndarrays or floats
+    cos_num, k, outer, inner, angle3 : floats or ndarrays
         :math:`c`, :math:`k`, the reach margins of :func:`elbow_angles` and
         :math:`|\theta_3|`.
 
@@ -502,8 +473,8 @@ def elbow_triangle(X: Array, Y: Array, a2: float, a3: float
     >>> round(angle3, 6)
     1.326258
     """
-    f = _FLOAT if type(X) is float else _ARRAY
-    rho2 = X * X + Y * Y
+    f = functions_for(type(u4))
+    rho2 = u4 * u4 + v4 * v4
     rho = f.sqrt(rho2)
     r_out = abs(a2 + a3)
     r_in = abs(a2 - a3)
@@ -516,91 +487,129 @@ def elbow_triangle(X: Array, Y: Array, a2: float, a3: float
     return cos_num, k, outer, inner, f.atan2(k, cos_num)
 
 
-def elbow_angles(X: Array, Y: Array, a2: float, a3: float, elbow_sign: ArrayLike,
+def elbow_angles(u4: Array, v4: Array, a2: float, a3: float, elbow: ArrayLike,
                  triangle: tuple | None = None) -> tuple[Array, Array, Array, Array, Array]:
-    r"""Planar 2R: :math:`\theta_3` from the law of cosines, :math:`\theta_2` by ``atan2``.
+    r"""The planar two-link arm: :math:`\theta_3` by the law of cosines :eq:`eq-ik-theta3`,
+    then :math:`\theta_2` by :eq:`eq-ik-theta2`.
 
-    With :math:`\rho^2 = X^2 + Y^2` the law of cosines (thesis 4.37) reads
-    :math:`2 a_2 a_3 \cos\theta_3 = \rho^2 - a_2^2 - a_3^2`, and
+    With :math:`\rho^2 = u_4^2 + v_4^2` the law of cosines (thesis 4.37) reads
+    :math:`2 a_2 a_3 \cos\theta_3 = \rho^2 - a_2^2 - a_3^2`; squaring and subtracting from
+    :math:`(2 a_2 a_3)^2` gives its sine,
 
     .. math::
 
         (2 a_2 a_3 \sin\theta_3)^2 = K = \big((a_2 + a_3)^2 - \rho^2\big)
                                          \big(\rho^2 - (a_2 - a_3)^2\big),
 
-    whose factors are computed as products of sums and differences of lengths, so that the
-    sine keeps the digits the data carry near full stretch (:math:`\rho = |a_2 + a_3|`) or
-    full fold (there :math:`\theta_3` itself is ill-conditioned: a rounding of
-    :math:`\rho` moves it by about :math:`\sqrt{\varepsilon}`). Then
+    and :math:`\theta_3 = \pm\arccos\frac{\rho^2 - a_2^2 - a_3^2}{2 a_2 a_3}` is computed as
+    the same angle
 
     .. math::
 
         \theta_3 = \pm\operatorname{atan2}\!\big(\sqrt{K},\;
                    \operatorname{sgn}(a_2 a_3)(\rho^2 - a_2^2 - a_3^2)\big),\qquad
-        \theta_2 = \operatorname{atan2}(Y k_1 - X k_2,\; X k_1 + Y k_2),
+        \theta_2 = \operatorname{atan2}(v_4 k_1 - u_4 k_2,\; u_4 k_1 + v_4 k_2),
 
-    with :math:`k_1 = a_2 + a_3\cos\theta_3`, :math:`k_2 = a_3 \sin\theta_3` (thesis 4.41,
-    which is right), :math:`\cos\theta_3` and :math:`\sin\theta_3` taken from the same two
-    numbers divided by :math:`2|a_2 a_3|`. Negative :math:`K` (the point is out of the 2R
-    chain's reach) is clipped to zero: the arm is then stretched or folded towards the
-    point.
+    with :math:`k_1 = a_2 + a_3\cos\theta_3`, :math:`k_2 = a_3 \sin\theta_3` (thesis 4.41),
+    :math:`\cos\theta_3` and :math:`\sin\theta_3` taken from the same two numbers divided by
+    :math:`2|a_2 a_3|`. Why not the ``arccos``: the factors of :math:`K` are products of sums
+    and differences of lengths, so the sine keeps the digits the data carry near a stretched
+    (:math:`\rho = |a_2 + a_3|`) or folded elbow, where it is exactly 0 when :math:`\rho`
+    is; there the ``arccos`` of a cosine that rounds to :math:`1 - 2\varepsilon` returns
+    :math:`\sqrt{4\varepsilon} \approx 3 \cdot 10^{-8}` (the thesis's printed
+    :math:`\theta_3 = \pm 2.98 \cdot 10^{-8}`). Away from there both agree to rounding.
+    Negative :math:`K` (the point is out of the two-link arm's reach) is clipped to zero:
+    the arm is then stretched or folded towards the point.
 
     Parameters
     ----------
-    X, Y : ndarray, shape (..., 1, m)
-        Wrist-1 point in the arm plane, relative to the shoulder.
+    u4, v4 : float or ndarray
+        The wrist-1 point in the arm plane, relative to the shoulder.
     a2, a3 : float
         Upper-arm and forearm lengths (signed, as UR publishes them).
-    elbow_sign : ndarray, shape (2, 1), or float
-        ``[[1], [-1]]``: the elbow branches (sign of :math:`\sin\theta_3` when
-        :math:`a_2 a_3 > 0`), on the second-last axis; +1.0 or -1.0 for one branch with
-        float inputs.
+    elbow : float or ndarray
+        The elbow branch: +1.0 ("up", the sign of :math:`\sin\theta_3` when
+        :math:`a_2 a_3 > 0`) or -1.0 ("down"), or an array of signs that broadcasts against
+        ``u4``.
     triangle : tuple, optional
-        :func:`elbow_triangle` of the same point, when already computed (one pose solved
-        branch by branch computes it once for both elbows).
+        :func:`elbow_triangle` of the same point, when already computed (it is the same for
+        both elbows).
 
     Returns
     -------
-    theta2, theta3 : ndarrays, shape (..., 2, m)
-    outer, inner : ndarrays, shape (..., 1, m)
+    theta2, theta3 : floats or ndarrays
+    outer, inner : floats or ndarrays
         :math:`(|a_2 + a_3| - \rho)(|a_2 + a_3| + \rho)` and
         :math:`(\rho - |a_2 - a_3|)(\rho + |a_2 - a_3|)` before clipping; a negative value
         says the point is beyond the outer or inside the inner reach.
-    sin3 : ndarray, shape (..., 1, m)
+    sin3 : floats or ndarrays
         :math:`|\sin\theta_3|`.
 
     Examples
     --------
-    >>> t2, t3, outer, inner, s3 = elbow_angles(np.array([[-0.3]]), np.array([[0.2]]),
-    ...                                         -0.24365, -0.21325, np.array([[1.0], [-1.0]]))
-    >>> np.round(t2.ravel(), 6), np.round(t3.ravel(), 6), bool(outer > 0), bool(inner > 0)
-    (array([-1.199206,  0.0232  ]), array([ 1.326258, -1.326258]), True, True)
+    >>> up = elbow_angles(-0.3, 0.2, -0.24365, -0.21325, 1.0)
+    >>> down = elbow_angles(-0.3, 0.2, -0.24365, -0.21325, -1.0)
+    >>> [round(v, 6) for v in (up[0], up[1], down[0], down[1])]
+    [-1.199206, 1.326258, 0.0232, -1.326258]
     """
-    f = _FLOAT if type(X) is float else _ARRAY
-    cos_num, k, outer, inner, angle3 = triangle or elbow_triangle(X, Y, a2, a3)
+    f = functions_for(type(u4))
+    cos_num, k, outer, inner, angle3 = triangle or elbow_triangle(u4, v4, a2, a3)
     m = 2.0 * abs(a2 * a3)
     # the folded elbow has theta3 = pi on both branches
-    theta3 = f.no_minus_pi(angle3 * elbow_sign)
+    theta3 = f.no_minus_pi(angle3 * elbow)
     k1 = a2 + (a3 / m) * cos_num
     k2 = (a3 / m) * k
     # + 0.0: never -0.0, so theta2 is never -pi
-    theta2 = f.atan2(Y * k1 - elbow_sign * (X * k2) + 0.0, X * k1 + elbow_sign * (Y * k2))
+    theta2 = f.atan2(v4 * k1 - elbow * (u4 * k2) + 0.0, u4 * k1 + elbow * (v4 * k2))
     return theta2, theta3, outer, inner, k / m
 
 
-def feasible_theta234(Px: Array, Py: Array, theta234_ref: Array, a2: float, a3: float,
+def reach_gap(u4: Array, v4: Array, a2: float, a3: float) -> Array:
+    r"""How far the wrist-1 point lies outside the two-link arm's reach,
+    :math:`\max(\rho - |a_2 + a_3|,\; |a_2 - a_3| - \rho,\; 0)`, :math:`\rho =
+    \sqrt{u_4^2 + v_4^2}`: the distance by which the clipped elbow of :func:`elbow_angles`
+    misses the point (in the arm plane).
+
+    Examples
+    --------
+    >>> round(reach_gap(0.5, 0.0, -0.24365, -0.21325), 12), reach_gap(0.3, 0.0, -0.24365, -0.21325)
+    (0.0431, 0.0)
+    """
+    f = functions_for(type(u4))
+    rho = f.sqrt(u4 * u4 + v4 * v4)
+    r_out, r_in = abs(a2 + a3), abs(a2 - a3)
+    return f.maximum(f.maximum(rho - r_out, r_in - rho), 0.0)
+
+
+def shoulder_gap(x5: Array, y5: Array, h2: Array, d4: float) -> Array:
+    r"""How far the wrist centre lies inside the shoulder cylinder (0 outside):
+    :math:`d_4 - \sqrt{x_5^2 + y_5^2} = \max(-h^2, 0) / (d_4 + \sqrt{x_5^2 + y_5^2})`, the
+    distance (normal to the arm plane) by which the clipped :math:`\theta_1` of
+    :func:`shoulder_angles` misses the pose; written with ``h2`` to keep its digits.
+
+    Examples
+    --------
+    >>> round(shoulder_gap(0.1, 0.0, 0.1**2 - 0.11235**2, 0.11235), 12)
+    0.01235
+    """
+    f = functions_for(type(x5))
+    return f.clip0(-h2) / (d4 + f.sqrt(x5 * x5 + y5 * y5))
+
+
+def feasible_theta234(u5: Array, v5: Array, theta234_ref: Array, a2: float, a3: float,
                       d5: float) -> Array:
     r"""The angle :math:`\theta_{234}` nearest to a wanted value for which the arm reaches.
 
     Used at a wrist singularity, where only :math:`\theta_{234} \pm \theta_6` is fixed by
-    the orientation: the wrist-1 point :math:`(X, Y) = P - d_5 (\sin t, -\cos t)` then
-    moves on a circle of radius :math:`d_5` about :math:`P`, and the 2R chain reaches it iff
+    the orientation: the wrist-1 point :math:`(u_4, v_4) = (u_5, v_5) - d_5 (\sin t,
+    -\cos t)` then moves on a circle of radius :math:`d_5` about the wrist centre
+    :math:`P = (u_5, v_5)`, and the two-link arm reaches it iff
     :math:`(a_2 - a_3)^2 \le \rho^2(t) \le (a_2 + a_3)^2` with
 
     .. math::
 
         \rho^2(t) = |P|^2 + d_5^2 - 2 d_5 |P| \sin(t - \psi),
-        \qquad \psi = \operatorname{atan2}(P_y, P_x).
+        \qquad \psi = \operatorname{atan2}(v_5, u_5).
 
     Each bound :math:`\rho^2 = R^2` gives :math:`\sin(t - \psi) = s_R =
     (|P|^2 + d_5^2 - R^2) / (2 d_5 |P|)`, solved as
@@ -608,12 +617,12 @@ def feasible_theta234(Px: Array, Py: Array, theta234_ref: Array, a2: float, a3: 
     :math:`F_R = (R - |P| + d_5)(R + |P| - d_5)(|P| + d_5 - R)(|P| + d_5 + R)` (digits kept
     at tangency). The wanted angle is returned when it is feasible, otherwise the feasible
     boundary point nearest to it; when nothing is feasible the outer-reach tangency (the
-    closest approach) is returned and the caller's forward-kinematics check rejects it.
+    closest approach) is returned and the caller's check rejects it.
 
     Parameters
     ----------
-    Px, Py : ndarray, shape (...)
-        Wrist centre in the arm plane (see :func:`arm_plane_wrist`).
+    u5, v5 : ndarray, shape (...)
+        The wrist centre in the arm plane (see :func:`arm_plane_wrist`).
     theta234_ref : ndarray, shape (...)
         The wanted :math:`\theta_{234}`.
     a2, a3, d5 : float
@@ -632,9 +641,9 @@ def feasible_theta234(Px: Array, Py: Array, theta234_ref: Array, a2: float, a3: 
     >>> np.round(np.abs(t), 6)
     array([3.141593])
     """
-    Px, Py, theta234_ref = np.broadcast_arrays(Px, Py, theta234_ref)
-    norm_p = np.sqrt(Px * Px + Py * Py)
-    psi = np.arctan2(Py, Px)
+    u5, v5, theta234_ref = np.broadcast_arrays(u5, v5, theta234_ref)
+    norm_p = np.sqrt(u5 * u5 + v5 * v5)
+    psi = np.arctan2(v5, u5)
     two_d5p = 2.0 * d5 * norm_p
     u_ref = wrap_angle(theta234_ref - psi)
     sin_ref = np.sin(u_ref)
@@ -658,3 +667,88 @@ def feasible_theta234(Px: Array, Py: Array, theta234_ref: Array, a2: float, a3: 
     # nothing feasible at all: the outer tangency u = pi/2 is the closest approach
     best = np.where(np.any(usable, axis=-1), best, 0.5 * np.pi)
     return np.where(ok, theta234_ref, psi + best)
+
+
+def candidate_solutions(X: ArrayLike, d1: float, a2: float, a3: float, d4: float, d5: float,
+                        d6: float) -> NDArray[np.float64]:
+    r"""The eight candidate solutions of chapter 8: the steps above, in the chapter's order.
+
+    For the flange pose :math:`X = (\mathsf r, p)` of a UR arm in its base frame (UR's
+    standard DH frames, no base or tool transform) and each shoulder branch :math:`s`
+    (:math:`h_\pm = \pm h`), wrist branch :math:`w` (:math:`\sigma = \pm 1`) and elbow
+    branch :math:`e`:
+
+    1. :math:`\theta_1` from the wrist centre :math:`p_5 = p - d_6 z_6`
+       (:eq:`eq-ik-wrist-point`, :eq:`eq-ik-theta1`);
+    2. the coefficients :math:`L = \mathsf r_1^* \mathsf r_D` of the rotation equations,
+       :math:`\mathsf r_D = \mathsf r\, q_0^*` (:eq:`eq-ik-theta6-system`);
+    3. :math:`\theta_5`, :math:`\theta_{234}` and :math:`\theta_6` from :math:`L`
+       (:eq:`eq-ik-wrist`);
+    4. the wrist-1 point :math:`(u_4, v_4)` (:eq:`eq-ik-wrist1-point`), then the two-link arm
+       :math:`\theta_3`, :math:`\theta_2` (:eq:`eq-ik-theta3`, :eq:`eq-ik-theta2`) and
+       :math:`\theta_4 = \theta_{234} - \theta_2 - \theta_3`.
+
+    Row :math:`k = 4s + 2e + w` holds :math:`(\theta_1, \dots, \theta_6)`, each in
+    :math:`(-\pi, \pi]`. These are candidates: a step that has no exact solution (a target out
+    of reach) clips, and :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>` keeps a row only if it
+    reproduces the pose. It returns these same rows, bit for bit, for every row it marks
+    valid away from a wrist singularity. At a wrist singularity
+    (:math:`\bar c_5 \bar s_5 = 0`) only :math:`\theta_{234} \pm \theta_6` is fixed and
+    it chooses a member of the family; this function refuses such a pose.
+
+    Parameters
+    ----------
+    X : array_like, shape (4, 4) or (..., 4, 4)
+        Flange pose(s) :math:`X_{06}`, rigid transforms.
+    d1, a2, a3, d4, d5, d6 : float
+        UR's standard DH lengths (see
+        :func:`dqlab.ik.ur_parameters <dqlab.ik.ur_closed_form.ur_parameters>`).
+
+    Returns
+    -------
+    ndarray, shape (..., 8, 6)
+        The joint angles :math:`\theta_1, \dots, \theta_6` of the eight rows.
+
+    Raises
+    ------
+    ValueError
+        If ``X`` is not a rigid transform, or a pose is wrist-singular.
+
+    Examples
+    --------
+    >>> from dqlab.models import ur3
+    >>> from dqlab.ik import ur, ur_parameters
+    >>> robot = ur3()
+    >>> X = robot.fk([0.3, -1.2, 1.1, -0.4, 0.9, 0.2])
+    >>> p = ur_parameters(robot)
+    >>> rows = candidate_solutions(X, p["d1"], p["a2"], p["a3"], p["d4"], p["d5"], p["d6"])
+    >>> rows[4].round(6)                                 # shoulder right, elbow up, wrist
+    array([ 0.3, -1.2,  1.1, -0.4,  0.9,  0.2])
+    >>> bool(np.array_equal(rows, ur(robot, X).solutions))
+    True
+    """
+    X = check_transform(X, name="X")
+    entries = components(X.reshape(X.shape[:-2] + (16,)))    # row by row
+    p, z6 = entries[3:12:4], entries[2:11:4]                  # position, z axis
+    q = quaternion_from_matrix_entries(*entries[0:3], *entries[4:7], *entries[8:11])
+    r_D = target_rotation(q)                                           # r_D = q q0*
+    p5 = wrist_center(p, z6, d6)                                       # eq-ik-wrist-point
+    rows = [None] * 8
+    for s, shoulder in enumerate((1.0, -1.0)):           # left (h+ = +h), right (h+ = -h)
+        theta1, c1, s1, *_ = shoulder_angles(p5[0], p5[1], d4, shoulder)     # eq-ik-theta1
+        L = relative_rotation_coefficients(r_D, half_angle_cos_sin(c1, s1))  # eq-ik-theta6-system
+        u5, v5 = arm_plane_wrist(p5, c1, s1, d1)                       # the arm plane
+        for w, sigma in enumerate((1.0, -1.0)):          # wrist not flipped, flipped
+            theta5, half_sum, half_diff, c5bar, s5bar = wrist_angles(L, sigma)  # eq-ik-wrist
+            if not functions_for(type(c5bar)).smallest(c5bar * s5bar) > 0.0:
+                raise ValueError("X is wrist-singular (theta5 = 0 or pi): only theta234 +- "
+                                 "theta6 is determined; dqlab.ik.ur chooses a member")
+            theta234, theta6 = half_sum + half_diff, half_sum - half_diff
+            sin234, cos234 = theta234_sine_cosine(L, sigma, c5bar, s5bar)
+            u4, v4 = wrist1_point(u5, v5, sin234, cos234, d5)          # eq-ik-wrist1-point
+            for e, elbow in enumerate((1.0, -1.0)):      # elbow up, down
+                theta2, theta3, *_ = elbow_angles(u4, v4, a2, a3, elbow)   # eq-ik-theta3-atan2
+                theta4 = theta234 - theta2 - theta3                        # and eq-ik-theta2
+                rows[4 * s + 2 * e + w] = (theta1, theta2, theta3, wrap_angle(theta4),
+                                           theta5, wrap_angle(theta6))
+    return np.moveaxis(np.array(rows, dtype=float), (0, 1), (-2, -1))

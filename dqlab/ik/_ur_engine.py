@@ -1,0 +1,580 @@
+r"""The speed machinery of :func:`dqlab.ik.ur`: the steps of :mod:`dqlab.ik.ur_steps`, run
+fast, with the checks, flags and reasons of the result.
+
+What it does. :func:`solve` solves one pose on Python floats (:func:`solve_single`, one
+branch at a time, where numpy's per-call overhead would dominate) and a batch on arrays
+(:func:`solve_batch`): the batch axis goes last, ``(branch axes..., n)``, so that every
+operation runs over long contiguous rows; all eight branches are computed at once on arrays
+of shape ``(2, 2, 2, n)`` over (shoulder, elbow, wrist), with the branch axes first; big
+batches are cut into blocks of :data:`CHUNK` poses whose temporaries stay in the cache; the
+results of a batch live in one allocation (:class:`Block`: the floats, then the booleans),
+written in place by the steps and handed to the caller as poses-first views; one pose
+takes its flipped wrist (:math:`\sigma = -1`) from the :math:`\sigma = +1` values by exact
+sign identities, computing only the half difference anew; the residuals come from the
+steps' clipping instead of forward kinematics. It also handles what the readable path
+leaves out: a base, a tool, joint offsets, the choice of a member of the family at a wrist
+singularity, the validity of each row, the singularity flags and the reason of a pose
+without solution.
+
+Tested equal to the readable path. Every row it marks valid away from a wrist singularity
+is, bit for bit, the row of :func:`dqlab.ik.ur_steps.candidate_solutions` (on floats for
+one pose, on arrays for a batch): ``tests/test_ik_ur.py::test_engine_equals_the_readable_path``.
+A pose given as a list takes the same path as the same pose as an array (bitwise the same
+result); one pose solved alone and within a batch agree to the last bit wherever ``math``
+and numpy evaluate ``atan2`` alike, and to a tested bound elsewhere.
+"""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._checks import (
+    as_float_array,
+    component_rows,
+    real_array,
+    rigid_rows,
+    unit_dual_quaternion_or_raise,
+)
+from .._kernels import (
+    quaternion_from_matrix_entries,
+    quaternion_rotate,
+    translation_from_dual_quaternion_entries,
+)
+from ..dualquat import (
+    dual_quaternion_conjugate,
+    dual_quaternion_from_transform,
+    dual_quaternion_inverse,
+    dual_quaternion_product,
+)
+from ..rotations import wrap_angle
+from ..transforms import transform_inverse
+from . import ur_steps as steps
+from .result import IKResult, finish
+from .targets import RIGID_TOL, parse_targets, pose_errors
+
+__all__ = ["solve", "solve_single", "solve_batch", "Block", "CHUNK", "REASON_SHOULDER",
+           "REASON_OUTER", "REASON_INNER", "REASON_REACH", "REASON_TOL"]
+
+CHUNK = 2048                     # poses per block: temporaries of 128 kB at most (L2-sized)
+NEAR_WRIST = 1e-3                # |sin theta5| below which a clipped row is moved
+_FLOAT64 = np.dtype(np.float64)
+_FLAGS = ("wrist_singular", "shoulder_singular", "elbow_singular", "unreachable")
+_EYE_BYTES = np.eye(4).tobytes()
+_SHOULDER = np.array([[1.0], [-1.0]])     # h+- = +h, -h: axis 0 of (s, n)
+_SIGMA = np.array([[1.0], [-1.0]])        # wrist branch w = 0, 1, axis -2 of (s, w, n)
+_ELBOW = np.array([[[1.0]], [[-1.0]]])    # elbow branch e = 0, 1, axis -3 of (s, e, w, n)
+
+#: Why a pose has no solution (``IKResult.reason``), from the first step that fails.
+REASON_SHOULDER = ("shoulder: the wrist centre p5 = p6 - d6 z6 lies inside the cylinder "
+                   "x5^2 + y5^2 < d4^2 about the base axis")
+REASON_OUTER = ("elbow: the wrist-1 point is farther from the shoulder than |a2| + |a3| on "
+                "every branch")
+REASON_INNER = ("elbow: the wrist-1 point is closer to the shoulder than ||a2| - |a3|| on "
+                "every branch")
+REASON_REACH = "elbow: the wrist-1 point is out of the forearm's reach on every branch"
+REASON_TOL = "no branch reproduces the pose within tol"
+
+
+def solve(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals):
+    """:func:`dqlab.ik.ur` after its checks of ``tol``, ``singular_tol``, ``pose_tol`` and
+    ``residuals``, with ``prm`` the robot's :func:`~dqlab.ik.ur_parameters`: one pose on
+    floats when it can, else the batch path."""
+    if type(target) is not np.ndarray or target.dtype is not _FLOAT64:
+        target = real_array(target, "target")   # a list takes the same path as an array
+    if tool is None and residuals == "equations" and pose_tol <= RIGID_TOL:
+        result = solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref)
+        if result is not None:
+            return result
+    return solve_batch(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals)
+
+
+# --------------------------------------------------------------------------------------
+# One pose on Python floats
+
+
+def _single_flange(robot, target, pose_tol):
+    """The rotation quaternion, position and z axis of one flange pose as floats, checked
+    as :func:`~dqlab.ik.targets.parse_targets` checks it; None when the pose is not a
+    plain (4, 4) or (8,) one, the robot has a base or a tool, or the check fails (the batch
+    path then raises its message)."""
+    if not robot.bare:
+        return None
+    if target.shape == (4, 4):
+        rows = rigid_rows(target, pose_tol)
+        if rows is None:
+            return None
+        a, b, c = rows
+        q = quaternion_from_matrix_entries(a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2])
+        return q, (a[3], b[3], c[3]), (a[2], b[2], c[2])
+    if target.shape == (8,):
+        Q = target.tolist()
+        try:
+            unit_dual_quaternion_or_raise(Q, "target", pose_tol)
+        except ValueError:
+            return None
+        q = tuple(Q[:4])
+        return (q, translation_from_dual_quaternion_entries(*Q),
+                quaternion_rotate(*q, 0.0, 0.0, 1.0))
+    return None
+
+
+def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref):
+    """One pose on Python floats: the loop of :func:`~dqlab.ik.ur_steps.candidate_solutions`
+    with the checks and flags of the batch path.
+
+    Returns the :class:`~dqlab.ik.result.IKResult` of the pose, the same as the batch
+    path's, or None when the pose needs what only the batch path does: a wrist near its
+    singularity (the wrist family), a wrist centre inside the shoulder cylinder or no valid
+    row (the reasons), a base or tool, or a target that fails its check (the error message).
+    """
+    flange = _single_flange(robot, target, pose_tol)
+    if flange is None:
+        return None
+    if q_ref is not None:
+        theta6_reference(q_ref, ())                # checked; it matters only at the wrist
+    q, p, z6 = flange
+    d1, a2, a3, d4, d5 = prm["d1"], prm["a2"], prm["a3"], prm["d4"], prm["d5"]
+    offsets = prm["offsets"] if any(prm["offsets"]) else None
+    r_D = steps.target_rotation(q)
+    p5 = steps.wrist_center(p, z6, prm["d6"])
+    solutions, errors = [0.0] * 48, [0.0] * 8     # (8, 6) row by row; rows not valid stay 0
+    any_valid = wrist_singular = elbow_singular = False
+    for s, shoulder in enumerate((1.0, -1.0)):
+        theta1, c1, s1, h, h2 = steps.shoulder_angles(p5[0], p5[1], d4, shoulder)
+        if h2 < 0.0:
+            return None
+        L = steps.relative_rotation_coefficients(r_D, steps.half_angle_cos_sin(c1, s1))
+        u5, v5 = steps.arm_plane_wrist(p5, c1, s1, d1)
+        theta5, half_sum, half_diff, c5bar, s5bar = steps.wrist_angles(L, 1.0)
+        sin5 = 2.0 * s5bar * c5bar
+        if sin5 < NEAR_WRIST:
+            return None
+        sin234, cos234 = steps.theta234_sine_cosine(L, 1.0, c5bar, s5bar)
+        for w, sigma in enumerate((1.0, -1.0)):
+            if w == 1:
+                # the flipped wrist, sigma = -1, from the sigma = +1 values: wrist_angles'
+                # theta5 and theta234_sine_cosine's k = sigma / (c5bar s5bar) change sign
+                # exactly; the half difference is computed anew
+                theta5 = -theta5 if theta5 != math.pi else theta5      # never -pi
+                half_diff = steps.half_difference(L, sigma)
+                sin234, cos234 = -sin234, -cos234
+            theta234 = half_sum + half_diff
+            theta6 = wrap_angle(half_sum - half_diff)
+            u4, v4 = steps.wrist1_point(u5, v5, sin234, cos234, d5)
+            triangle = steps.elbow_triangle(u4, v4, a2, a3)
+            # the residual of the rows: the clipping of the elbow, if any (h2 >= 0: no
+            # shoulder gap); margins >= 0 mean the wrist-1 point is within reach, gap 0
+            if triangle[2] < 0.0 or triangle[3] < 0.0:
+                error = errors[4 * s + w] = errors[4 * s + 2 + w] = steps.reach_gap(
+                    u4, v4, a2, a3)
+                if error > tol:                 # both rows stay zero, as finish() writes them
+                    continue
+            for k, elbow in ((4 * s + w, 1.0), (4 * s + 2 + w, -1.0)):   # k = 4 s + 2 e + w
+                theta2, theta3, _, _, sin3 = steps.elbow_angles(u4, v4, a2, a3, elbow, triangle)
+                row = [theta1, theta2, theta3, wrap_angle(theta234 - theta2 - theta3),
+                       theta5, theta6]
+                if offsets is not None:
+                    row = [wrap_angle(t - o) for t, o in zip(row, offsets, strict=True)]
+                solutions[6 * k:6 * k + 6] = row
+                elbow_singular = elbow_singular or sin3 < singular_tol
+            any_valid = True
+            wrist_singular = wrist_singular or sin5 < singular_tol
+    if not any_valid:
+        return None
+    numbers = np.fromiter(solutions + errors, float, 56)    # (8, 6) solutions, 8 errors
+    errors = numbers[48:]
+    flags = {"wrist_singular": np.array(wrist_singular),
+             "shoulder_singular": np.array(h < singular_tol * d4),
+             "elbow_singular": np.array(elbow_singular), "unreachable": np.array(False)}
+    return IKResult(numbers[:48].reshape(8, 6), errors <= tol, errors, np.zeros(8), flags,
+                    np.array("", dtype=object))
+
+
+# --------------------------------------------------------------------------------------
+# A batch on arrays, the poses last
+
+
+@dataclass
+class _Flange:
+    """The flange poses :math:`X_{06}` of a block of n targets, batch axis last: rotation
+    quaternions ``q`` (4, n) and wrist centres ``p5`` (3, n) in the base frame 0."""
+
+    q: np.ndarray
+    p5: np.ndarray
+
+    def __getitem__(self, part):
+        return _Flange(self.q[:, part], self.p5[:, part])
+
+
+@dataclass
+class _Options:
+    """What the steps need besides the poses: tolerances, residual mode, the tool change
+    ``tool_fix`` (``None``, or :math:`X_{6T_r}^{-1} X_{6T}` from the robot's tool to the
+    one asked for) for forward kinematics."""
+
+    tol: float
+    singular_tol: float
+    residuals: str
+    tool_fix: np.ndarray
+
+
+@dataclass
+class _Branches:
+    """The eight candidate joint vectors of a block of n poses and the intermediate values
+    the checks need; arrays over the branch axes (s, e, w) with the poses last."""
+
+    solutions: np.ndarray      # (6, 8, n), wrapped to (-pi, pi]
+    h: np.ndarray              # (n,) sqrt(x5^2 + y5^2 - d4^2), clipped at 0
+    h2: np.ndarray             # (n,) x5^2 + y5^2 - d4^2 before clipping (negative: inside)
+    sin5: np.ndarray           # (2, 1, n) |sin(theta5)| = 2 |sin(theta5 / 2) cos(theta5 / 2)|
+    u4: np.ndarray             # (2, 1, 2, n) wrist-1 point in the arm plane
+    v4: np.ndarray
+    sin3: np.ndarray           # (2, 1, 2, n) |sin(theta3)|, the same on both elbow branches
+    outer: np.ndarray          # (2, 1, 2, n) margin to the outer reach (negative: beyond)
+    inner: np.ndarray          # (2, 1, 2, n) margin to the inner reach
+    represented: np.ndarray    # (2, 2, n) over (s, w) rows standing for a wrist family, or None
+
+
+@dataclass
+class Block:
+    """The results of n poses, poses last: ``solutions`` (6, 8, n), ``valid``,
+    ``position_error``, ``rotation_error`` (8, n), ``flags`` (n,) each, ``reason`` (n,).
+    A block of a batch is a view of the whole batch's arrays (``out[part]``), which
+    :func:`_solve_block` fills; :meth:`result` gives them to the caller poses first, as
+    transposed views (the arrays are written where the steps compute them, row by row)."""
+
+    solutions: np.ndarray
+    valid: np.ndarray
+    position_error: np.ndarray
+    rotation_error: np.ndarray
+    flags: dict
+    reason: np.ndarray
+
+    @classmethod
+    def empty(cls, n):
+        """The arrays of n poses, the numbers all in one allocation: one large block of
+        memory, which the allocator keeps for the next call more readily than many (memory
+        handed back to the system costs a page fault per 4 kB when it is used again)."""
+        reason = np.empty(n, dtype=object)
+        reason.fill("")
+        floats = np.empty(64 * n + -(-12 * n // 8))    # 48 + 8 + 8 floats, 12 booleans
+        solutions = floats[:48 * n].reshape(6, 8, n)
+        pe = floats[48 * n:56 * n].reshape(8, n)
+        re = floats[56 * n:64 * n].reshape(8, n)
+        bools = floats[64 * n:].view(bool)
+        valid = bools[:8 * n].reshape(8, n)
+        flags = {name: bools[(8 + i) * n:(9 + i) * n] for i, name in enumerate(_FLAGS)}
+        return cls(solutions, valid, pe, re, flags, reason)
+
+    def __getitem__(self, part):
+        return Block(self.solutions[..., part], self.valid[:, part],
+                     self.position_error[:, part], self.rotation_error[:, part],
+                     {name: flag[part] for name, flag in self.flags.items()},
+                     self.reason[part])
+
+    def result(self, batch):
+        """The :class:`~dqlab.ik.result.IKResult` of poses of leading shape ``batch``, poses
+        first."""
+        return finish(self.solutions.T.reshape(batch + (8, 6)),
+                      self.valid.T.reshape(batch + (8,)),
+                      self.position_error.T.reshape(batch + (8,)),
+                      self.rotation_error.T.reshape(batch + (8,)),
+                      {name: f.reshape(batch) for name, f in self.flags.items()},
+                      self.reason.reshape(batch))
+
+
+def solve_batch(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals):
+    """Any poses (one or a batch) with array operations, without a Python loop over the
+    poses, in blocks of :data:`CHUNK`."""
+    targets = parse_targets(target, tol=pose_tol)
+    tool, tool_dq, tool_fix = _tool(robot, tool, pose_tol)
+    batch = targets.batch
+    n = math.prod(batch)
+    theta6_ref = theta6_reference(q_ref, batch)
+    targets = targets.reshape((n,))
+    flange = _flange(robot, targets, tool, tool_dq, prm["d6"])
+    options = _Options(tol, singular_tol, residuals, tool_fix)
+    out = Block.empty(n)
+    for start in range(0, n, CHUNK):
+        part = slice(start, start + CHUNK)
+        if n <= CHUNK:                                    # one block: no slicing
+            _solve_block(robot, prm, flange, targets, theta6_ref, options, out)
+        else:
+            _solve_block(robot, prm, flange[part], targets[part],
+                         None if theta6_ref is None else theta6_ref[part], options, out[part])
+    return out.result(batch)
+
+
+def _flange(robot, targets, tool, tool_dq, d6):
+    r"""The flange poses :math:`X_{06} = X_{W0}^{-1} X_{WT}^* X_{6T}^{-1}` of the targets
+    (checked, of leading shape (n,)), read on components. They are written over rows of the
+    components read, once used: nothing else of the size of the batch stays in memory."""
+    moved = robot.base.tobytes() != _EYE_BYTES
+    tooled = tool.tobytes() != _EYE_BYTES
+    n = math.prod(targets.batch)
+    if targets.kind == "transform" and not (moved or tooled):
+        # Shepperd's quaternion of the rotation block; the position and z axis read off
+        e = targets.take_transform_entries()                  # (16, n), ours to overwrite
+        q, p, z6 = e[12:16], e[3:12:4], e[2:11:4]
+        _write_rows(q, quaternion_from_matrix_entries(*e[0:3], *e[4:7], *e[8:11]))  # bottom row
+    else:
+        Q = targets.dual_quaternions
+        if moved:
+            Q = dual_quaternion_product(
+                dual_quaternion_conjugate(dual_quaternion_from_transform(robot.base)), Q)
+        if tooled:
+            if tool_dq is None:
+                tool_dq = dual_quaternion_from_transform(tool)
+            Q = dual_quaternion_product(Q, dual_quaternion_inverse(tool_dq))
+        c = component_rows(Q.reshape(n, 8))                   # (8, n), ours to overwrite
+        q, p = c[:4], c[4:7]
+        z6 = np.array(quaternion_rotate(*q, 0.0, 0.0, 1.0))
+        _write_rows(p, translation_from_dual_quaternion_entries(*c))   # over the dual part
+    _write_rows(p, steps.wrist_center(p, z6, d6))
+    return _Flange(q=q, p5=p)
+
+
+def _write_rows(out, rows):
+    """Write the arrays ``rows`` into the rows of ``out``."""
+    for target, row in zip(out, rows, strict=True):
+        target[...] = row
+
+
+def _tool(robot, tool, pose_tol):
+    """The tool to solve for (checked), its dual quaternion and the change from the
+    robot's own tool for forward kinematics (or None)."""
+    if tool is None:
+        return robot.tool, None, None
+    tool_dq = dual_quaternion_from_transform(tool, tol=pose_tol, name="tool")
+    tool = np.asarray(tool, dtype=float)
+    if tool.shape != (4, 4):
+        raise ValueError(f"tool must have shape (4, 4), got {tool.shape}")
+    robot_tool = robot.tool
+    fix = None if np.array_equal(tool, robot_tool) else transform_inverse(robot_tool) @ tool
+    return tool, tool_dq, fix
+
+
+def theta6_reference(q_ref, batch):
+    """The theta6 of ``q_ref`` (checked) for every pose, shape (n,), or None."""
+    if q_ref is None:
+        return None
+    q_ref = as_float_array(q_ref, "q_ref", (6,))
+    try:
+        return np.broadcast_to(q_ref[..., 5], batch).reshape(math.prod(batch))
+    except ValueError:
+        raise ValueError(f"q_ref of shape {q_ref.shape} does not broadcast against the "
+                         f"poses' leading shape {batch}") from None
+
+
+def _solve_block(robot, prm, flange, targets, theta6_ref, options, out):
+    """Every branch of a block of n poses (batch axis last), checked and flagged, written
+    into ``out`` (a :class:`Block` of n poses)."""
+    branches = _branches(prm, flange, theta6_ref, options.tol, out.solutions)
+    pe, re = _errors(robot, prm, flange, branches, targets, options, out)   # (8, n) each
+    ok = np.less_equal(pe, options.tol, out=out.valid)
+    if options.residuals == "fk" or branches.represented is not None:   # else re is 0
+        ok &= re <= options.tol
+    any_valid = ok.any(axis=0)                                              # (n,)
+    _flags(prm, branches, ok, any_valid, options.singular_tol, out.flags)
+    if not any_valid.all():
+        out.reason[...] = _reasons(prm, flange, branches, any_valid, options.tol)
+
+
+def _branches(prm, flange, theta6_ref, tol, out):
+    """The steps for every branch at once: the candidate joint vectors of a block of
+    poses, written into ``out`` (6, 8, n)."""
+    d1, d4 = prm["d1"], prm["d4"]
+    p5 = flange.p5
+
+    # theta1: arrays (2, n) over the shoulder branch s
+    theta1, c1, s1, h, h2 = steps.shoulder_angles(p5[0], p5[1], d4, _SHOULDER)
+
+    # the rotation: r_D = q q0^*, L = r1^* r_D, arrays (2, 1, n) over (s, w)
+    r_D = steps.target_rotation(flange.q)
+    L = steps.relative_rotation_coefficients(r_D, steps.half_angle_cos_sin(c1, s1))
+    L = tuple(c[:, None] for c in L)
+    # arrays (2, 2, n) over (s, w), sigma = +1, -1 (half_sum, c5bar, s5bar: (2, 1, n))
+    theta5, half_sum, half_diff, c5bar, s5bar = steps.wrist_angles(L, _SIGMA)
+    u5, v5 = steps.arm_plane_wrist(p5, c1, s1, d1)
+    u5 = u5[:, None, :]                                       # (2, 1, n)
+    family = (prm, half_sum, half_diff, s5bar, c5bar, u5, v5, theta6_ref, tol)
+    theta234, theta6, represented = _wrist_family(*family)
+    if represented is None:          # no wrist family: c5bar s5bar > 0 everywhere
+        sine_cosine = steps.theta234_sine_cosine(L, _SIGMA, c5bar, s5bar)    # (2, 2, n)
+    else:                            # a member of a wrist family: its own sine and cosine
+        with np.errstate(divide="ignore", invalid="ignore"):  # 0/0 only in the family
+            sine_cosine = steps.theta234_sine_cosine(L, _SIGMA, c5bar, s5bar)
+        for part, f in zip(sine_cosine, (np.sin, np.cos), strict=True):
+            part[represented] = f(theta234[represented])
+
+    # the planar chain: arrays (2, 2, 2, n) over (s, e, w)
+    u4, v4, theta2, theta3, outer, inner, sin3 = _planar_chain(prm, u5, v5, *sine_cosine)
+    # Near the wrist singularity theta234 comes from coefficients of the size of theta5 and
+    # may be off by eps / |theta5|: enough to put the wrist-1 point of a stretched or folded
+    # elbow out of reach. Such rows move within their wrist family to where the forearm
+    # reaches (and are checked by forward kinematics).
+    sin5 = 2.0 * s5bar * c5bar                                # (2, 1, n), |sin theta5|
+    near = sin5 < NEAR_WRIST
+    repair = _out_of_reach(prm, outer, inner, tol) & near if near.any() else None
+    if repair is not None and repair.any():
+        theta234, theta6, represented = _wrist_family(*family, repair=repair)
+        cols = np.flatnonzero(repair.any(axis=(0, 1)))        # the poses concerned
+        moved, member = represented[..., cols], theta234[..., cols]
+        sin234, cos234 = (np.where(moved, f(member), part[..., cols])   # the rows moved
+                          for f, part in zip((np.sin, np.cos), sine_cosine, strict=True))
+        chain = (u4, v4, theta2, theta3, outer, inner, sin3)
+        for whole, part in zip(chain, _planar_chain(prm, u5[..., cols], v5[..., cols],
+                                                    sin234, cos234), strict=True):
+            whole[..., cols] = part
+    # theta4 = theta234 - theta2 - theta3, in (-4 pi, 4 pi) before wrapping
+    theta4 = wrap_angle(theta234[:, None] - theta2 - theta3)
+    _joint_vectors((theta1[:, None, None, :], theta2, theta3, theta4, theta5[:, None],
+                    wrap_angle(theta6)[:, None]), prm["offsets"], out)
+    return _Branches(solutions=out, h=h, h2=h2, sin5=sin5, u4=u4, v4=v4,
+                     sin3=sin3, outer=outer, inner=inner, represented=represented)
+
+
+def _wrist_family(prm, half_sum, half_diff, s5bar, c5bar, u5, v5, theta6_ref, tol,
+                  repair=None):
+    """theta234 and theta6 (2, 2, n) from the half sum and difference; at a wrist
+    singularity, where only theta234 -+ theta6 is fixed, the member of the family whose
+    theta6 is nearest ``theta6_ref`` among those the arm can reach; for the rows in
+    ``repair`` (near the singularity), the member nearest the computed theta234 that the arm
+    can reach (``repair``, when given, marks some rows). Also returns the mask of the rows
+    so chosen (None when there is none)."""
+    theta234 = half_sum + half_diff
+    theta6 = half_sum - half_diff
+    rep_tol = tol / (8.0 * max(1.0, abs(prm["d6"])))
+    if repair is None and min(s5bar.min(), c5bar.min()) > rep_tol:
+        return theta234, theta6, None                         # no family (the common case)
+    exact = (s5bar <= rep_tol) | (c5bar <= rep_tol)           # (2, 1, n)
+    rep = np.broadcast_to(exact, theta234.shape) if repair is None else exact | repair
+    # the few poses concerned, cols, as arrays (2, 2, m)
+    cols = np.flatnonzero(rep.any(axis=(0, 1)))
+    rep_c = rep[..., cols]
+    shape = rep_c.shape
+    exact = np.broadcast_to(exact[..., cols], shape)
+    # rep0: theta5 near 0, where theta234 + theta6 is fixed (near pi, theta234 - theta6)
+    rep0 = np.broadcast_to(s5bar[..., cols] <= c5bar[..., cols], shape)
+    ref = prm["offsets"][5] + (0.0 if theta6_ref is None else theta6_ref[cols])
+    full_sum = np.broadcast_to(2.0 * half_sum[..., cols], shape)
+    full_diff = 2.0 * half_diff[..., cols]
+    want = np.where(exact, np.where(rep0, full_sum - ref, full_diff + ref),
+                    theta234[..., cols])[rep_c]
+    got = steps.feasible_theta234(np.broadcast_to(u5[..., cols], shape)[rep_c],
+                                  np.broadcast_to(v5[..., cols], shape)[rep_c], want,
+                                  prm["a2"], prm["a3"], prm["d5"])
+    theta6_got = np.where(rep0[rep_c], full_sum[rep_c] - got, got - full_diff[rep_c])
+    for whole, member in ((theta234, got), (theta6, theta6_got)):
+        part = whole[..., cols]
+        part[rep_c] = wrap_angle(member)
+        whole[..., cols] = part
+    return theta234, theta6, rep
+
+
+def _out_of_reach(prm, outer, inner, tol):
+    """Rows (2, 2, n) over (s, w) whose wrist-1 point lies more than tol / 2 beyond the
+    forearm's reach on some elbow branch."""
+    r_out, r_in = abs(prm["a2"] + prm["a3"]), abs(prm["a2"] - prm["a3"])
+    far = (outer < -tol * r_out) | (inner < -tol * r_in)     # (2, 1 or 2, 2, n)
+    return far.any(axis=1)
+
+
+def _planar_chain(prm, u5, v5, sin234, cos234):
+    """The wrist-1 point (2, 1, 2, n) and the elbow angles (2, 2, 2, n)."""
+    u4, v4 = steps.wrist1_point(u5, v5, sin234, cos234, prm["d5"])   # (2, 2, n), (s, w)
+    u4, v4 = u4[:, None], v4[:, None]                         # (2, 1, 2, n)
+    theta2, theta3, outer, inner, sin3 = steps.elbow_angles(u4, v4, prm["a2"], prm["a3"],
+                                                            _ELBOW)
+    return u4, v4, theta2, theta3, outer, inner, sin3
+
+
+def _joint_vectors(thetas, offsets, out):
+    """Write the joint vectors (6, 8, n) -- joint j of row k = 4 s + 2 e + w of pose i at
+    ``[j, k, i]`` -- from the six angle arrays over (s, e, w, n) into ``out``, joint offsets
+    removed."""
+    view = out.reshape(6, 2, 2, 2, out.shape[-1])   # splits the row axis: a view of ``out``
+    for j, theta in enumerate(thetas):
+        view[j] = theta
+    if any(offsets):
+        out[...] = wrap_angle(out - np.array(offsets)[:, None, None])
+
+
+def _errors(robot, prm, flange, branches, targets, options, out):
+    """Position and rotation errors (8, n) of every row, written into ``out`` (a
+    :class:`Block`): from the clipping of the steps (``residuals="equations"``) or by
+    forward kinematics (``"fk"``)."""
+    pe, re = out.position_error, out.rotation_error
+    if options.residuals == "fk":
+        pe.T[...], re.T[...] = _fk_errors(robot, branches.solutions.T,
+                                          targets.transforms[:, None], options.tool_fix)
+        return pe, re
+    re[...] = 0.0
+    _clipping_distance(prm, flange, branches, pe)
+    if branches.represented is not None:
+        n = branches.solutions.shape[2]
+        rows = np.broadcast_to(branches.represented[:, None], (2, 2, 2, n)).reshape(8, n)
+        k, i = np.nonzero(rows)                               # row k of pose i
+        pe[k, i], re[k, i] = _fk_errors(robot, branches.solutions[:, k, i].T,
+                                        targets[i].transforms, options.tool_fix)
+    return pe, re
+
+
+def _clipping_distance(prm, flange, branches, out):
+    """Distance (8, n) a row misses the pose by, from the clipping of the steps: the
+    wrist centre inside the shoulder cylinder (normal to the arm plane) and the wrist-1 point
+    out of the forearm's reach (in it); written into ``out``."""
+    n = flange.q.shape[1]
+    inside = branches.h2.min() < 0.0   # some wrist centre inside the shoulder cylinder
+    if not inside and branches.outer.min() >= 0.0 and branches.inner.min() >= 0.0:
+        out[...] = 0.0                                        # nothing was clipped
+        return
+    e = steps.reach_gap(branches.u4, branches.v4, prm["a2"], prm["a3"])     # (2, 1, 2, n)
+    if inside:
+        e1 = steps.shoulder_gap(flange.p5[0], flange.p5[1], branches.h2, prm["d4"])  # (n,)
+        e = np.sqrt(e1 * e1 + e * e)
+    out.reshape(2, 2, 2, n)[...] = e                          # splits the rows: a view
+
+
+def _fk_errors(robot, solutions, X_target, tool_fix):
+    """pose_errors of robot.fk of joint vectors (..., 6) against X_target (..., 4, 4),
+    with the tool changed by ``tool_fix`` when not None."""
+    X = robot.fk(solutions)
+    if tool_fix is not None:
+        X = X @ tool_fix
+    return pose_errors(X, X_target)
+
+
+def _flags(prm, branches, ok, any_valid, singular_tol, out):
+    """The singularity and reach flags (n,) of a block, over its valid rows, written into
+    ``out`` (the block's flags)."""
+    n = ok.shape[1]
+    ok4 = ok.reshape(2, 2, 2, n)
+    shoulder = np.less(branches.h, singular_tol * prm["d4"], out=out["shoulder_singular"])
+    shoulder &= any_valid
+    np.logical_not(any_valid, out=out["unreachable"])
+    # |sin theta5| (2, 1, 1, n) over (s, w) and |sin theta3| (2, 1, 2, n) over (s, w)
+    for name, sine in (("wrist_singular", branches.sin5[:, None]),
+                       ("elbow_singular", branches.sin3)):
+        if sine.min() < singular_tol:
+            (ok4 & (sine < singular_tol)).reshape(8, n).any(axis=0, out=out[name])
+        else:
+            out[name][...] = False
+
+
+def _reasons(prm, flange, branches, any_valid, tol):
+    """Why each pose of a block without a valid row has none (n,): the first step that
+    fails on every branch."""
+    reason = np.full(any_valid.shape, "", dtype=object)
+    if any_valid.all():
+        return reason
+    none = ~any_valid
+    outer, inner = branches.outer < 0, branches.inner < 0
+    reason[none] = REASON_TOL
+    reason[none & (outer | inner).all(axis=(0, 1, 2))] = REASON_REACH
+    reason[none & inner.all(axis=(0, 1, 2))] = REASON_INNER
+    reason[none & outer.all(axis=(0, 1, 2))] = REASON_OUTER
+    gap = steps.shoulder_gap(flange.p5[0], flange.p5[1], branches.h2, prm["d4"])
+    reason[none & (gap > tol)] = REASON_SHOULDER
+    return reason
