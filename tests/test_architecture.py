@@ -177,12 +177,15 @@ CORE = [p for p in SOURCES if (module_name(p) + ".").split(".")[1] in
 def test_the_core_tells_floats_from_arrays_in_one_place():
     """One switch between the float path and the array path of a formula: the mapping
     dqlab._kernels.functions_for from the type of a number to its functions. No other
-    place of the core tests for a float, except wrap_angle, which skips its argument check
-    for a Python float."""
+    place of the core tests for a float, except where the test is not a choice of formula:
+    wrap_angle and check_scalar, which skip their argument checks for a Python float, and
+    the calibrated solver's _dot, which skips the entries that are the float 0.0 (the
+    structural zeros of its Jacobian's entries)."""
     from dqlab._kernels import functions_for
 
     sites = {(module_name(p), name) for p in CORE for name, _ in float_switches(p)}
-    assert sites == {("dqlab.rotations", "wrap_angle")}
+    assert sites == {("dqlab.rotations", "wrap_angle"), ("dqlab._checks", "check_scalar"),
+                     ("dqlab.ik.ur_calibrated", "_dot")}
     floats, arrays = functions_for(float), functions_for(np.ndarray)
     assert floats.atan2 is math.atan2 and arrays.atan2 is np.arctan2
     assert functions_for(np.float64) is arrays and functions_for((float, np.ndarray)) is arrays

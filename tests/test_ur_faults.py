@@ -194,7 +194,8 @@ def test_a_flooding_peer_cannot_hold_a_read_past_its_deadline():
         reader = R.RTDEReader("127.0.0.1", fake.ports[1])
         reader.connect(timeout=1.0)
         try:
-            for timeout in (0.0, 0.2, 1.0):
+            reader.read(timeout=1.0)            # the flood has started: data is waiting
+            for timeout in (1.0, 0.2, 0.0):
                 start = time.monotonic()
                 got = reader.read(timeout=timeout)
                 assert time.monotonic() - start <= timeout + 0.25
