@@ -3,22 +3,9 @@ argument). Scalars go through :func:`dqlab._checks.check_scalar`, like everywher
 
 import numpy as np
 
-from .._checks import check_scalar, real_array
+from .._checks import real_array
 
 _FLOAT64 = np.dtype(np.float64)
-
-
-def number(value, name, *, minimum=0.0, strict=True):
-    """``value`` as a finite float above ``minimum`` (or equal, if not ``strict``): the call
-    of :func:`dqlab._checks.check_scalar` that :mod:`dqlab.sim.backend` makes (new code
-    calls ``check_scalar`` itself).
-
-    >>> number(0.5, "dt")
-    0.5
-    >>> number(0.0, "payload", strict=False)
-    0.0
-    """
-    return check_scalar(value, name, minimum=minimum, strict=strict)
 
 
 def vector(value, n, name):

@@ -36,11 +36,10 @@ import time as _time
 
 import numpy as np
 
-from .._checks import real_array
+from .._checks import check_scalar, real_array
 from ..models import ur3
 from ..transforms import transform_inverse
 from ..ur import ROBOT_MODE_RUNNING, URState, check_pose, pose_from_transform
-from ..ur._args import real_number
 from ..ur.motion import (
     GAIN,
     LOOKAHEAD_TIME,
@@ -54,7 +53,6 @@ from ..ur.motion import (
     Timeline,
 )
 from ..ur.script import UnsafeTargetError, as_safety_limits, plan_program
-from ._checks import number
 from .simulation import ArmSimulation, ComputedTorque
 
 __all__ = ["MujocoBackend", "UR3_HOME"]
@@ -62,12 +60,6 @@ __all__ = ["MujocoBackend", "UR3_HOME"]
 #: Where the simulated arm starts, away from the singularities: upper arm up, forearm
 #: horizontal, wrist bent.
 UR3_HOME = (0.0, -math.pi / 2, math.pi / 2, -math.pi / 2, -math.pi / 2, 0.0)
-
-
-def _number(value, name, strict=True):
-    """``dqlab.sim._checks.number``, after refusing complex numbers, text, bools and
-    sequences by name (a complex numpy scalar would otherwise lose its imaginary part)."""
-    return number(real_number(value, name), name, strict=strict)
 
 
 class MujocoBackend:
@@ -133,7 +125,7 @@ class MujocoBackend:
         if not callable(getattr(self.controller, "torque", None)):
             raise TypeError(f"controller must have a torque(sim, q, qd, qdd) method, got "
                             f"{type(self.controller).__name__}")
-        self.period = _number(period, "period")
+        self.period = check_scalar(period, "period", minimum=0.0, strict=True)
         self.clock = clock
         self.q_home = self._target(q_home, "q_home")
         self._connected = False
@@ -148,7 +140,7 @@ class MujocoBackend:
     # -- connection ---------------------------------------------------------------------------
     def connect(self, timeout=1.0):
         """Start the simulation with the arm at rest at ``q_home`` (time 0)."""
-        _number(timeout, "timeout", strict=False)
+        check_scalar(timeout, "timeout", minimum=0.0)
         self.sim.reset(self.q_home)
         self.timeline = Timeline(self.q_home)
         self._connected = True
@@ -176,7 +168,7 @@ class MujocoBackend:
     def advance(self, duration):
         """Run the simulation for ``duration`` seconds under the controller."""
         self._require_connected()
-        duration = _number(duration, "duration", strict=False)
+        duration = check_scalar(duration, "duration", minimum=0.0)
         if duration > MAX_DURATION:
             raise ValueError(f"duration = {duration!r} s is longer than {MAX_DURATION:g} s")
         sim = self.sim
@@ -243,8 +235,9 @@ class MujocoBackend:
         """
         self._require_connected()
         target = self._target(q, "q")
-        a, v = _number(a, "a"), _number(v, "v")
-        t, r = _number(t, "t", strict=False), _number(r, "r", strict=False)
+        a = check_scalar(a, "a", minimum=0.0, strict=True)
+        v = check_scalar(v, "v", minimum=0.0, strict=True)
+        t, r = check_scalar(t, "t", minimum=0.0), check_scalar(r, "r", minimum=0.0)
         self._run(("movej", target, {"a": a, "v": v, "t": t, "r": r}))
 
     def movel(self, pose, *, a=MOVEL_A, v=MOVEL_V, t=0.0, r=0.0):
@@ -267,8 +260,9 @@ class MujocoBackend:
         pose = check_pose(pose, "pose")
         if pose.shape != (6,):
             raise ValueError(f"pose must be one UR pose vector of shape (6,), got {pose.shape}")
-        a, v = _number(a, "a"), _number(v, "v")
-        t, r = _number(t, "t", strict=False), _number(r, "r", strict=False)
+        a = check_scalar(a, "a", minimum=0.0, strict=True)
+        v = check_scalar(v, "v", minimum=0.0, strict=True)
+        t, r = check_scalar(t, "t", minimum=0.0), check_scalar(r, "r", minimum=0.0)
         self._run(("movel", pose, {"a": a, "v": v, "t": t, "r": r}))
 
     def servoj(self, q, *, t=SERVOJ_T, lookahead_time=LOOKAHEAD_TIME, gain=GAIN):
@@ -285,9 +279,9 @@ class MujocoBackend:
         """
         self._require_connected()
         target = self._target(q, "q")
-        t = _number(t, "t")
-        lookahead_time = _number(lookahead_time, "lookahead_time")
-        gain = _number(gain, "gain")
+        t = check_scalar(t, "t", minimum=0.0, strict=True)
+        lookahead_time = check_scalar(lookahead_time, "lookahead_time", minimum=0.0, strict=True)
+        gain = check_scalar(gain, "gain", minimum=0.0, strict=True)
         if not 0.03 <= lookahead_time <= 0.2:
             raise ValueError(f"lookahead_time must be in [0.03, 0.2] s, got {lookahead_time}")
         if not 100 <= gain <= 2000:
@@ -304,5 +298,5 @@ class MujocoBackend:
             If ``a`` is not a positive number (or above the limits' acceleration).
         """
         self._require_connected()
-        a = _number(a, "a")
+        a = check_scalar(a, "a", minimum=0.0, strict=True)
         self._run(("stopj", None, {"a": a}))
