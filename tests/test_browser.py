@@ -47,6 +47,10 @@ CHROMIUM_ARGS = [
     "--no-first-run", "--disable-quic",
 ]
 
+# A page (its scenes' frames included) must load and typeset within this: generous, since
+# the check is that it renders, not how fast, and the machine may be busy.
+PAGE_LOAD_MS = 120_000
+
 #: Largest document of one 3D view: the scene's commands, not the 0.85 MB viewer script,
 #: which the built book ships once in _static/dqlab/.
 MAX_VIEW_BYTES = 500_000
@@ -243,8 +247,8 @@ def test_page_renders(page_path, site, browser):
         f"request failed: {request.url[:200]} ({request.failure})"))
     page.on("response", on_response)
     try:
-        page.goto(f"{site}/{page_path}", wait_until="load")
-        page.wait_for_function(_MATHJAX_DONE, timeout=30_000)
+        page.goto(f"{site}/{page_path}", wait_until="load", timeout=PAGE_LOAD_MS)
+        page.wait_for_function(_MATHJAX_DONE, timeout=PAGE_LOAD_MS)
 
         math = page.evaluate(_MATH_REPORT)
         if math["maths"]:
@@ -301,7 +305,7 @@ def test_joint_sliders_move_the_arm_and_its_jacobian(browser):
     errors = []
     page.on("pageerror", lambda error: errors.append(str(error)))
     try:
-        page.set_content(view.document(bundle="inline"), wait_until="load")
+        page.set_content(view.document(bundle="inline"), wait_until="load", timeout=PAGE_LOAD_MS)
         page.wait_for_function("() => window.dqlabJoints && dqlabJoints.ready", timeout=30_000)
         assert page.locator("input.dqlab-joint").count() == 6
         page.wait_for_timeout(300)
@@ -339,8 +343,9 @@ def test_equations_scroll_inside_their_box_on_a_phone(site, browser):
     page itself does not get wider than the screen."""
     page = browser.new_page(viewport={"width": 390, "height": 844})
     try:
-        page.goto(f"{site}/book/09-differential-kinematics.html", wait_until="load")
-        page.wait_for_function(_MATHJAX_DONE, timeout=30_000)
+        page.goto(f"{site}/book/09-differential-kinematics.html", wait_until="load",
+                  timeout=PAGE_LOAD_MS)
+        page.wait_for_function(_MATHJAX_DONE, timeout=PAGE_LOAD_MS)
         report = page.evaluate("""() => {
           const wide = Array.from(document.querySelectorAll('mjx-container[display="true"]'))
             .filter(m => m.scrollWidth > m.clientWidth + 1);
@@ -360,7 +365,7 @@ def test_equations_scroll_inside_their_box_on_a_phone(site, browser):
 def test_download_menu_offers_the_book_pdf(site, browser):
     page = browser.new_page(viewport={"width": 1280, "height": 900})
     try:
-        page.goto(f"{site}/book/05-dual-quaternions.html", wait_until="load")
+        page.goto(f"{site}/book/05-dual-quaternions.html", wait_until="load", timeout=PAGE_LOAD_MS)
         link = page.locator("a.dqlab-book-pdf")
         assert link.count() == 1
         href = link.get_attribute("href")
