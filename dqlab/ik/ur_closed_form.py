@@ -134,6 +134,10 @@ __all__ = ["ur", "ur_parameters", "distinct_solutions", "SOLUTION_ORDER"]
 SOLUTION_ORDER = tuple(
     (s, e, w) for s in ("left", "right") for e in ("up", "down") for w in ("noflip", "flip"))
 
+#: The names of the eight rows, ``"shoulder elbow wrist"`` (``"left up noflip"``, ...), as an
+#: :class:`~dqlab.ik.result.IKResult` of :func:`ur` prints them.
+ROW_NAMES = tuple(" ".join(branch) for branch in SOLUTION_ORDER)
+
 _CHECKED = weakref.WeakKeyDictionary()    # robot -> its parameters (links are immutable)
 
 
@@ -333,9 +337,14 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
             nominal_ur(robot)
         except ValueError as why:
             raise ValueError(f"{exc}; nor is it a calibrated UR: {why}") from None
-        return calibrated_ur(robot, target, ur, tol=tol, tool=tool, q_ref=q_ref,
-                             singular_tol=singular_tol, pose_tol=pose_tol, residuals=residuals)
-    return solve(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals)
+        result = calibrated_ur(robot, target, ur, tol=tol, tool=tool, q_ref=q_ref,
+                               singular_tol=singular_tol, pose_tol=pose_tol,
+                               residuals=residuals)
+    else:
+        result = solve(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref,
+                       residuals)
+    result.row_names = ROW_NAMES
+    return result
 
 
 def distinct_solutions(result: IKResult, atol: float = 1e-9) -> NDArray[np.bool_]:
