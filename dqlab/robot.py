@@ -50,6 +50,15 @@ from .inertia import LinkInertia
 
 __all__ = ["Link", "Robot", "REVOLUTE", "PRISMATIC"]
 
+class _Offset:
+    """with_tool's default: the tool is given by its offset x, y, z."""
+
+    def __repr__(self):
+        return "<offset x, y, z>"
+
+
+_OFFSET = _Offset()
+
 REVOLUTE = "revolute"
 PRISMATIC = "prismatic"
 
@@ -403,7 +412,7 @@ class Robot:
         if limits is None:
             lims = [None] * n
         else:
-            lim = as_float_array(limits, "limits")
+            lim = real_array(limits, "limits")
             if lim.shape not in ((2,), (n, 2)):
                 raise ValueError(f"limits must have shape (2,) or ({n}, 2), got {lim.shape}")
             lims = [tuple(row) for row in np.broadcast_to(lim, (n, 2)).tolist()]
@@ -414,7 +423,7 @@ class Robot:
                  for i in range(n)]
         return cls(links, convention=convention, base=base, tool=tool, name=name)
 
-    def with_tool(self, X_nT: ArrayLike | None = None, *, x: float = 0.0, y: float = 0.0,
+    def with_tool(self, X_nT: ArrayLike = _OFFSET, *, x: float = 0.0, y: float = 0.0,
                   z: float = 0.0) -> "Robot":
         r"""The same robot with another tool: a transform :math:`X_{nT}`, or an offset of
         the tool centre point along the flange's axes.
@@ -428,7 +437,7 @@ class Robot:
         ----------
         X_nT : array_like, shape (4, 4), optional
             The pose of the TCP in the flange frame (a rigid transform). Not together with
-            ``x``, ``y``, ``z``.
+            ``x``, ``y``, ``z``; ``robot.with_tool()`` removes the tool.
         x, y, z : float, optional
             The TCP's position in the flange frame, metres (rotation: none).
 
@@ -455,11 +464,14 @@ class Robot:
         ('UR5e', True, False)
         """
         offset = [check_scalar(v, k) for k, v in (("x", x), ("y", y), ("z", z))]
-        if X_nT is None:
+        if X_nT is _OFFSET:
             X_nT = np.eye(4)
             X_nT[:3, 3] = offset
         elif any(offset):
             raise ValueError("give the tool as X_nT or as the offset x, y, z, not both")
+        if X_nT is None:
+            raise TypeError("X_nT must be a 4x4 transform, got None (robot.with_tool() "
+                            "without arguments removes the tool)")
         X_nT = _check_transform_like(X_nT, "X_nT")
         return type(self)(self._links, convention=self._convention, base=self._base,
                           tool=X_nT, name=self.name)
