@@ -276,3 +276,40 @@ def test_closest_ur_solution_limits_and_errors():
         closest_ur_solution(robot, np.stack([X, X]), np.tile(Q_NOW, (3, 1)))
     with pytest.raises(ValueError, match="within the joint limits"):
         closest_ur_solution(robot, X, [0, 0, 0, 0, 0, 0], limits=np.tile([0.0, 0.01], (6, 1)))
+
+
+def test_closest_solution_where_a_wrap_rounds_back_within_the_limits():
+    """A joint whose nearest equivalent falls just outside a limit by the rounding of one
+    wrap formula and within it by the other's (found by the README's batch)."""
+    robot = ur5e().with_tool(z=0.15)
+    q = np.array([0.24922976250609086, -0.9208492660821479, -5.772769971235005,
+                  -3.844964399535359, 5.592344663120784, -4.240273895255029])
+    best = closest_solution(ur(robot, robot.fk(q)), q, robot.limits)
+    assert np.allclose(best, q, atol=1e-9)
+
+
+@pytest.mark.parametrize("limited", [True, False])
+def test_closest_solution_of_one_target_equals_the_batch_path(limited):
+    """One target is chosen on Python floats; a batch on arrays: the same answers."""
+    robot = ur5e().with_tool(z=0.15)
+    rng = np.random.default_rng(8)
+    q = rng.uniform(-2 * np.pi + 1e-3, 2 * np.pi - 1e-3, (400, 6))
+    q_ref = np.where(rng.random((400, 1)) < 0.5, q, rng.uniform(-6, 6, (400, 6)))
+    limits = robot.limits if limited else None
+    if limited:
+        limits[2] = [-np.pi, 1.0]
+        q[:, 2] = np.clip(q[:, 2], -np.pi, 1.0)
+        q_ref[:, 2] = np.clip(q_ref[:, 2], -np.pi, 1.0)
+    result = ur(robot, robot.fk(q))
+    batch = closest_solution(result, q_ref, limits)
+    for i in range(len(q)):
+        one = IKResultRow(result, i)
+        assert np.array_equal(closest_solution(one, q_ref[i], limits), batch[i]), i
+        if not limited:
+            assert np.array_equal(closest_solution(one, q_ref[i], wrapped=True),
+                                  result.best(q_ref)[i])
+
+
+def IKResultRow(result, i):
+    return dqlab.ik.IKResult(result.solutions[i], result.valid[i], result.position_error[i],
+                             result.rotation_error[i])

@@ -163,7 +163,9 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
     flange = _single_flange(robot, target, pose_tol, tool)
     if flange is None:
         return None
-    if q_ref is not None:
+    if q_ref is not None and not (type(q_ref) is np.ndarray and q_ref.dtype is _FLOAT64
+                                  and q_ref.shape == (6,)
+                                  and math.isfinite(math.fsum(q_ref.tolist()))):
         theta6_reference(q_ref, ())                # checked; it matters only at the wrist
     q, p, z6 = flange
     d1, a2, a3, d4, d5 = prm["d1"], prm["a2"], prm["a3"], prm["d4"], prm["d5"]

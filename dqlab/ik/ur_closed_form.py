@@ -446,8 +446,12 @@ def closest_ur_solution(robot: Robot, target: ArrayLike, q_now: ArrayLike, *,
     lim = real_array(limits, "limits")
     if lim.shape in ((2,), (6, 2)):
         lo, hi = np.broadcast_to(lim, (6, 2)).T
-        outside = (q_now < lo) | (q_now > hi)
-        if outside.any():
+        if q_now.shape == (6,):             # one joint vector: on floats
+            outside = [not a <= v <= b for v, a, b in zip(q_now.tolist(), lo.tolist(),
+                                                          hi.tolist(), strict=True)]
+        else:
+            outside = (q_now < lo) | (q_now > hi)
+        if np.any(outside):
             first = tuple(np.argwhere(outside)[0])
             j, value = int(first[-1]), float(q_now[first])
             hint = (" (joint angles are radians: degrees? convert with np.radians)"
