@@ -43,9 +43,8 @@ def _joint_limits(limits, n):
     lim = real_array(limits, "limits")
     if lim.shape not in ((2,), (n, 2)):
         raise ValueError(f"limits must have shape (2,) or ({n}, 2), got {lim.shape}")
-    lo = np.broadcast_to(lim[..., 0], (n,))
-    hi = np.broadcast_to(lim[..., 1], (n,))
-    if not np.all(lo <= hi):          # NaN fails this too
+    lo, hi = lim.T if lim.ndim == 2 else (np.full(n, lim[0]), np.full(n, lim[1]))
+    if not (lo <= hi).all():          # NaN fails this too
         raise ValueError(f"limits must be rows (lo, hi) with lo <= hi, got {lim.tolist()}")
     return lo, hi
 
@@ -125,7 +124,7 @@ def closest_solution(result, q_ref: ArrayLike, limits: ArrayLike | None = None, 
     if wrapped and bounds is not None:
         raise ValueError("wrapped=True returns a row as the solver gives it, which ignores "
                          "limits; give one or the other")
-    if not np.all(np.any(valid, axis=-1)):
+    if not valid.any(axis=-1).all():
         raise ValueError("some targets have no valid solution; check result.reason")
     batch = np.broadcast_shapes(valid.shape[:-1], q_ref.shape[:-1])
     if not batch:                          # one target: on Python floats

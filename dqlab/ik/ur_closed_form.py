@@ -445,22 +445,24 @@ def closest_ur_solution(robot: Robot, target: ArrayLike, q_now: ArrayLike, *,
     q_now = as_float_array(q_now, "q_now", (6,))
     lim = real_array(limits, "limits")
     if lim.shape in ((2,), (6, 2)):
-        lo, hi = np.broadcast_to(lim, (6, 2)).T
+        lo, hi = lim.T if lim.ndim == 2 else (np.full(6, lim[0]), np.full(6, lim[1]))
         if q_now.shape == (6,):             # one joint vector: on floats
-            outside = [not a <= v <= b for v, a, b in zip(q_now.tolist(), lo.tolist(),
-                                                          hi.tolist(), strict=True)]
+            outside = any(not a <= v <= b for v, a, b in zip(q_now.tolist(), lo.tolist(),
+                                                             hi.tolist(), strict=True))
         else:
-            outside = (q_now < lo) | (q_now > hi)
-        if np.any(outside):
-            first = tuple(np.argwhere(outside)[0])
+            outside = not ((q_now >= lo) & (q_now <= hi)).all()
+        if outside:
+            first = tuple(np.argwhere((q_now < lo) | (q_now > hi))[0])
             j, value = int(first[-1]), float(q_now[first])
             hint = (" (joint angles are radians: degrees? convert with np.radians)"
                     if abs(value) > 2 * np.pi else "")
             raise ValueError(f"q_now: joint {j + 1} = {value:.6g} is outside its limits "
                              f"[{lo[j]:.6g}, {hi[j]:.6g}]{hint}")
-    target = real_array(target, "target")
-    trailing = target.shape[-2:] if target.shape[-2:] == (4, 4) else target.shape[-1:]
-    leading = target.shape[:target.ndim - len(trailing)]
+    if type(target) is not np.ndarray:
+        target = real_array(target, "target")
+    shape = target.shape
+    trailing = shape[-2:] if shape[-2:] == (4, 4) else shape[-1:]
+    leading = shape[:len(shape) - len(trailing)]
     if q_now.shape[:-1] != leading:          # one q_now for many targets, or the other way
         try:
             batch = np.broadcast_shapes(leading, q_now.shape[:-1])
@@ -470,8 +472,8 @@ def closest_ur_solution(robot: Robot, target: ArrayLike, q_now: ArrayLike, *,
         target = np.broadcast_to(target, batch + trailing)
         q_now = np.broadcast_to(q_now, batch + (6,))
     result = ur(robot, target, tol=tol, q_ref=q_now, **options)
-    failed = ~result.success
-    if failed.any():
+    if not result.valid.any(axis=-1).all():
+        failed = ~result.valid.any(axis=-1)
         where = tuple(int(i) for i in np.argwhere(failed)[0]) if failed.ndim else ()
         which = f"target {where}" if where else "the target"
         raise ValueError(f"{which} has no solution: {result.reason[where]}")
