@@ -464,7 +464,8 @@ def ur3e() -> Robot:
     tool, base at the foot of joint 1, limits :math:`\pm 2\pi`. Source:
     :data:`UR_CURRENT_DH`. Every current model is built the same way; its links carry the
     inertias of :data:`UR_DYNAMICS` and the rated speeds of :data:`UR_MAX_JOINT_SPEED_DEG`
-    where they are published (not for the UR15, the UR18's inertias or the UR8 Long).
+    where they are published (neither for the UR15 nor the UR8 Long; no inertias for the
+    UR18).
 
     Returns
     -------
