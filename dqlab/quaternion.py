@@ -5,7 +5,10 @@ Conventions (the book's preface): a quaternion is stored scalar first,
 rule :math:`i^2 = j^2 = k^2 = ijk = -1`; a unit quaternion acts on a vector by the active
 rotation :math:`p' = q\,p\,q^*`. Every function takes array-likes of shape ``(..., 4)``
 (quaternions), ``(..., 3)`` (vectors) or ``(..., 3, 3)`` (matrices) and broadcasts over the
-leading axes. pyquaternion uses the same order; scipy's ``(x, y, z, w)`` does not.
+leading axes. pyquaternion uses the same order; scipy's ``(x, y, z, w)`` does not (nor do
+ROS messages or Eigen's ``coeffs()``): :func:`quaternion_from_xyzw` and
+:func:`xyzw_from_quaternion` convert. A unit quaternion given in the wrong order is a unit
+quaternion of another rotation, so no check can catch it: convert at the boundary.
 
 Array functions do the work; :class:`Quaternion` is a thin wrapper for notebooks.
 """

@@ -609,8 +609,9 @@ class Robot:
             j = idx[where[-1]]
             value = sub[tuple(where)]
             lk = self._links[j]
+            # beyond two turns no joint angle is plausible in radians: degrees, probably
             hint = ("; joint angles are in radians (degrees? convert with np.radians)"
-                    if lk.is_revolute and abs(value) > 2 * math.pi else "")
+                    if lk.is_revolute and abs(value) > 4 * math.pi else "")
             raise ValueError(
                 f"joint {j + 1} ({lk.joint}) = {value:.6g} is beyond its limits "
                 f"[{lk.limits[0]:.6g}, {lk.limits[1]:.6g}]{hint}")

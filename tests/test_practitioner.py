@@ -84,6 +84,8 @@ def test_link_docstring_and_joint_limit_error_point_at_the_usual_mistakes():
     with pytest.raises(ValueError, match=r"joint 6 \(revolute\) = 1.5 is beyond its limits "
                                          r"\[-1, 1\]$"):        # no hint within 2 pi
         narrow.check_joints([0, 0, 0, 0, 0, 1.5], limits="all")
+    with pytest.raises(ValueError, match=r"= 7 is beyond its limits \[-6.28319, 6.28319\]$"):
+        ur5e().check_joints([0, 0, 0, 0, 0, 7.0], limits="all")   # within two turns: no hint
 
 
 # -- the tool -----------------------------------------------------------------------------

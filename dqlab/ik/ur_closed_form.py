@@ -209,7 +209,10 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     target : array_like, shape (..., 4, 4) or (..., 8)
         Target pose(s) of the TCP in the world frame, as rigid transforms or unit dual
         quaternions ``(q_r, q_d)`` (told apart by the trailing shape; see
-        :func:`dqlab.ik.targets.parse_targets`).
+        :func:`dqlab.ik.targets.parse_targets`), each part scalar first, ``(w, x, y, z)``.
+        A quaternion stored scalar last (scipy, ROS, Eigen) converts with
+        :func:`dqlab.quaternion.quaternion_from_xyzw`; given in the wrong order it is still
+        a unit quaternion, of another rotation, which no check can detect.
     tool : array_like, shape (4, 4), optional
         Flange-to-TCP transform :math:`X_{6T}` to use instead of ``robot.tool``.
     q_ref : array_like, shape (6,) or (..., 6), optional
@@ -455,7 +458,7 @@ def closest_ur_solution(robot: Robot, target: ArrayLike, q_now: ArrayLike, *,
             first = tuple(np.argwhere((q_now < lo) | (q_now > hi))[0])
             j, value = int(first[-1]), float(q_now[first])
             hint = (" (joint angles are radians: degrees? convert with np.radians)"
-                    if abs(value) > 2 * np.pi else "")
+                    if abs(value) > 4 * np.pi else "")     # beyond two turns
             raise ValueError(f"q_now: joint {j + 1} = {value:.6g} is outside its limits "
                              f"[{lo[j]:.6g}, {hi[j]:.6g}]{hint}")
     if type(target) is not np.ndarray:
