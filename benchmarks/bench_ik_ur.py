@@ -9,6 +9,13 @@ ur_analytic_ik's time to each method's (above 1: faster than ur_analytic_ik).
   quaternions (the thesis's pose-file form), with the residuals from the solved equations
   (default) or from forward kinematics of every row (``residuals="fk"``);
 - ``dqlab.ik.ur`` single: one call per pose in a Python loop;
+- ``dqlab.ik.ur`` with a tool (the UR3 with a TCP 0.15 m along the flange's z axis), single
+  pose and batch: one pose with a tool is solved on Python floats as one without;
+- ``dqlab.ik.ur`` on a calibrated UR3 (every :math:`\theta, a, d, \alpha` off by up to 2 mm
+  and 2 mrad, seeded; ``dqlab.ik.ur_calibrated``: the nominal closed form, then Newton steps
+  on the calibrated chain), batch and single (the single loop on the first 500 poses), on
+  poses of the calibrated arm; the share of poses whose generating configuration is found
+  and the worst error of a valid row are printed;
 - ``ur_analytic_ik`` (C++ with Python bindings): one call per pose in a Python loop, the
   only way it is offered;
 - ``dqlab.ik.numerical`` (damped least squares, one solution per pose, warm-started 0.1 rad
@@ -43,8 +50,10 @@ import numpy as np
 from timing import calls_lasting, interleaved_best
 
 from dqlab.dualquat import dual_quaternion_from_transform
+from dqlab.identify import dh_parameters, robot_from_dh_parameters
 from dqlab.ik import ur
 from dqlab.models import ur3
+from dqlab.rotations import wrap_angle
 from dqlab.testing import quiet_stdout
 
 
@@ -103,6 +112,36 @@ def main():
     jobs["dqlab.ik.ur single pose, in a loop"] = (single_loop(T[:n_loop]), 1, n_loop)
     jobs["dqlab.ik.ur single pose, residuals='fk'"] = (single_loop(T[:n_loop], residuals="fk"),
                                                         1, n_loop)
+    tooled = robot.with_tool(z=0.15)
+    T_tool = np.ascontiguousarray(tooled.fk(q))
+    jobs["dqlab.ik.ur batch, with a tool"] = batch(lambda: ur(tooled, T_tool))
+
+    def tool_loop():
+        for X in T_tool[:n_loop]:
+            ur(tooled, X)
+
+    jobs["dqlab.ik.ur single pose with a tool, in a loop"] = (tool_loop, 1, n_loop)
+
+    # a calibrated UR3: every theta, a, d, alpha off by up to 2 mm / 2 mrad
+    calibrated = robot_from_dh_parameters(
+        robot, dh_parameters(robot) + np.random.default_rng(7).uniform(-2e-3, 2e-3, 24))
+    T_cal = np.ascontiguousarray(calibrated.fk(q))
+    cal = ur(calibrated, T_cal)
+    found = np.any(cal.valid & np.all(np.abs(wrap_angle(cal.solutions - q[:, None]))
+                                      < 1e-6, axis=-1), axis=-1)
+    print(f"calibrated UR3 (2 mm / 2 mrad): generating configuration found on "
+          f"{found.mean():.2%} of {n} poses; worst error of a valid row "
+          f"{cal.position_error[cal.valid].max():.1e} m, "
+          f"{cal.rotation_error[cal.valid].max():.1e} rad")
+    jobs["dqlab.ik.ur calibrated batch"] = batch(lambda: ur(calibrated, T_cal))
+    n_cal = min(n, 500)
+
+    def calibrated_loop():
+        for X in T_cal[:n_cal]:
+            ur(calibrated, X)
+
+    jobs[f"dqlab.ik.ur calibrated single pose, in a loop ({n_cal})"] = (calibrated_loop, 1,
+                                                                         n_cal)
     if ur_analytic_ik is not None:
         ik = ur_analytic_ik.ur3.inverse_kinematics
 
@@ -171,6 +210,15 @@ def main():
     print("\nfirst call of a run (untimed above), us/pose: " + "; ".join(
         f"{label.removeprefix('dqlab.ik.')} {seconds * 1e6:.2f}"
         for label, seconds in first_calls.items()))
+    timed = dict(rows)
+    nominal_single = timed["dqlab.ik.ur single pose, in a loop"]
+    nominal_batch = timed["dqlab.ik.ur batch, 4x4 poses"]
+    calibrated_single = timed[f"dqlab.ik.ur calibrated single pose, in a loop ({n_cal})"]
+    print(f"\ncalibrated / nominal: single pose {calibrated_single / nominal_single:.1f}"
+          f", batch {timed['dqlab.ik.ur calibrated batch'] / nominal_batch:.1f} (goal: at most "
+          f"5); with a tool / without: single pose "
+          f"{timed['dqlab.ik.ur single pose with a tool, in a loop'] / nominal_single:.2f}, "
+          f"batch {timed['dqlab.ik.ur batch, with a tool'] / nominal_batch:.2f}")
     single = [seconds for label, seconds in rows if label.startswith("dqlab.ik.numerical single")]
     peer = [seconds for label, seconds in rows if label.startswith("roboticstoolbox ik_LM")]
     if single and peer:

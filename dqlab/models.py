@@ -32,7 +32,7 @@ from .robot import PRISMATIC, Link, Robot
 __all__ = [
     "ur3", "ur5", "ur10", "ur3_mdh", "desk_arm", "scara_rsm5", "six_r",
     "ur3e", "ur5e", "ur7e", "ur10e", "ur12e", "ur16e", "ur15", "ur18", "ur8_long", "ur20",
-    "ur30", "UR_CURRENT_DH", "UR_MAX_JOINT_SPEED_DEG", "UR_PUBLISHED_MASSES", "UR_MODELS",
+    "ur30", "UR_CURRENT_DH", "UR_MAX_JOINT_SPEED_DEG", "UR_MODELS",
     "UR_DH", "UR_ALPHA", "UR3_MDH", "DESK_ARM", "SCARA_RSM5",
     "desk_arm_joints_from_lab", "desk_arm_lab_from_joints",
     "ChainShape", "UR_SHAPE", "DESK_ARM_SHAPE", "SCARA_SHAPE",
@@ -389,20 +389,70 @@ UR_MAX_JOINT_SPEED_DEG.update({
 })
 UR_MAX_JOINT_SPEED_DEG["UR7e"] = UR_MAX_JOINT_SPEED_DEG["UR5e"]      # the same arm, renamed
 
-#: Published link masses (kg) and centres of mass (m, in the DH frame of the link), links 1
-#: to 6, from the same page of Universal Robots as :data:`UR_CURRENT_DH` (which also gives
-#: the UR20's inertia matrices), to be carried by the links once they hold inertias.
-UR_PUBLISHED_MASSES = {
-    "UR3e": ((1.98, (0.0, -0.02, 0.0)), (3.4445, (0.13, 0.0, 0.1157)),
-             (1.437, (0.05, 0.0, 0.0238)), (0.871, (0.0, 0.0, 0.01)),
-             (0.805, (0.0, 0.0, 0.01)), (0.261, (0.0, 0.0, -0.02))),
-    "UR5e": ((3.761, (0.0, -0.02561, 0.00193)), (8.058, (0.2125, 0.0, 0.11336)),
-             (2.846, (0.15, 0.0, 0.0265)), (1.37, (0.0, -0.0018, 0.01634)),
-             (1.3, (0.0, 0.0018, 0.01634)), (0.365, (0.0, 0.0, -0.001159))),
-    "UR20": ((16.343, (0.0, -0.0610, 0.0062)), (29.632, (0.5226, 0.0, 0.2098)),
-             (7.879, (0.3234, 0.0, 0.0604)), (3.054, (0.0, -0.0026, 0.0393)),
-             (3.126, (0.0, 0.0024, 0.0379)), (0.846, (0.0, -0.0003, -0.0318))),
-}
+# The inertial parameters of the current models, added to :data:`UR_DYNAMICS` (one table:
+# ``mass`` kg and ``com`` m in the DH frame of each link, ``tensor`` about the centre of mass
+# in the axes of that frame, ``(ixx, iyy, izz, ixy, ixz, iyz)`` kg m^2, where one is
+# published; without it :func:`ur_link_inertias` uses its stated cylinders). Sources:
+#
+# - UR3e, UR5e, UR20: masses and centres of mass from Universal Robots' page "DH parameters
+#   for calculations of kinematics and dynamics" (the ``ur_dh`` reference). For the UR3e and
+#   the UR5e the page gives no inertia matrix ("negligible due to their smaller size"): the
+#   cylinders. For the UR20 it gives the matrices to four decimals; the tensors here are the
+#   same matrices to five decimals from the physical parameters of Universal Robots' ROS 2
+#   description (``config/ur20/physical_parameters.yaml``, whose inertial frames are the DH
+#   frames), which round to the page's.
+# - UR10e and UR16e: the masses, centres of mass (converted from the ROS link frames back to
+#   the DH frames, as the file's comments give the conversion) and tensors of the same ROS 2
+#   description (``config/ur10e/``, ``config/ur16e/physical_parameters.yaml``, taken there
+#   from the maker's page and, for the tensors, from URSim); the UR10e's masses and centres
+#   of links 1-5 are also those of the maker's page.
+# - UR30: masses and centres of mass of the ROS 2 description (``config/ur30/``, taken there
+#   from the maker's page); its tensors are the UR16e's copied digit for digit, which a 30 kg
+#   arm with 0.64 m and 0.50 m tubes cannot have, so the cylinders are used instead.
+# - UR7e and UR12e are the UR5e and the UR10e renamed. The UR15, UR18 and UR8 Long have no
+#   published inertial parameters in these sources: their links carry none (a simulation
+#   then gives them the rods of :func:`rod_link_inertias`).
+UR_DYNAMICS.update({
+    "UR3e": {"mass": (1.98, 3.4445, 1.437, 0.871, 0.805, 0.261),
+             "com": ((0.0, -0.02, 0.0), (0.13, 0.0, 0.1157), (0.05, 0.0, 0.0238),
+                     (0.0, 0.0, 0.01), (0.0, 0.0, 0.01), (0.0, 0.0, -0.02))},
+    "UR5e": {"mass": (3.761, 8.058, 2.846, 1.37, 1.3, 0.365),
+             "com": ((0.0, -0.02561, 0.00193), (0.2125, 0.0, 0.11336), (0.15, 0.0, 0.0265),
+                     (0.0, -0.0018, 0.01634), (0.0, 0.0018, 0.01634),
+                     (0.0, 0.0, -0.001159))},
+    "UR10e": {"mass": (7.369, 13.051, 3.989, 2.1, 1.98, 0.615),
+              "com": ((0.021, 0.0, 0.027), (0.38, 0.0, 0.158), (0.24, 0.0, 0.068),
+                      (0.0, 0.007, 0.018), (0.0, 0.007, 0.018), (0.0, 0.0, -0.026)),
+              "tensor": ((0.03408, 0.03529, 0.02156, 0.00002, -0.00425, 0.00008),
+                         (0.02814, 0.77068, 0.76943, 0.00005, -0.01561, 0.00002),
+                         (0.01014, 0.30928, 0.30646, 0.00008, 0.00916, 0.0),
+                         (0.00296, 0.00222, 0.00258, -0.00001, 0.0, -0.00024),
+                         (0.00296, 0.00222, 0.00258, -0.00001, 0.0, -0.00024),
+                         (0.00040, 0.00041, 0.00034, 0.0, 0.0, 0.0))},
+    "UR16e": {"mass": (7.369, 10.450, 4.321, 2.180, 2.033, 0.907),
+              "com": ((0.0, -0.016, 0.030), (0.302, 0.0, 0.160), (0.194, 0.0, 0.065),
+                      (0.0, -0.009, 0.011), (0.0, 0.018, 0.012), (0.0, 0.0, -0.044)),
+              "tensor": ((0.03351, 0.03374, 0.02100, 0.00002, -0.00001, 0.00374),
+                         (0.02796, 0.47558, 0.47635, -0.00010, -0.00720, 0.00003),
+                         (0.01091, 0.12060, 0.11714, 0.00006, 0.01012, 0.00001),
+                         (0.00609, 0.00245, 0.00579, -0.00001, 0.0, 0.00083),
+                         (0.00389, 0.00219, 0.00363, -0.00001, 0.0, -0.00045),
+                         (0.00117, 0.00118, 0.00084, 0.0, 0.0, 0.0))},
+    "UR20": {"mass": (16.343, 29.632, 7.879, 3.054, 3.126, 0.846),
+             "com": ((0.0, -0.0610, 0.0062), (0.5226, 0.0, 0.2098), (0.3234, 0.0, 0.0604),
+                     (0.0, -0.0026, 0.0393), (0.0, 0.0024, 0.0379), (0.0, -0.0003, -0.0318)),
+             "tensor": ((0.08866, 0.07632, 0.08418, -0.00011, -0.00011, 0.00720),
+                        (0.14670, 4.66590, 4.63480, 0.00019, -0.05163, 0.00004),
+                        (0.02612, 0.75763, 0.75327, -0.00005, -0.02898, -0.00001),
+                        (0.00555, 0.00537, 0.00402, -0.00001, -0.00002, 0.00036),
+                        (0.00586, 0.00578, 0.00427, -0.00001, -0.00002, -0.00037),
+                        (0.00092, 0.00091, 0.00117, 0.0, 0.0, 0.0))},
+    "UR30": {"mass": (16.343, 28.542, 7.156, 3.054, 3.126, 0.926),
+             "com": ((-0.0001, -0.06, 0.0069), (0.3894, 0.0, 0.2103), (0.2257, 0.0, 0.0629),
+                     (0.0, -0.0048, 0.0353), (0.0, 0.0046, 0.0341), (0.0, 0.0, -0.0293))},
+})
+UR_DYNAMICS["UR7e"] = UR_DYNAMICS["UR5e"]
+UR_DYNAMICS["UR12e"] = UR_DYNAMICS["UR10e"]
 
 
 def ur3e() -> Robot:
@@ -412,7 +462,10 @@ def ur3e() -> Robot:
     :math:`d_4 = 0.13105`, :math:`d_5 = 0.08535`, :math:`d_6 = 0.0921` m, the twists of
     :data:`UR_ALPHA`, and the conventions of :func:`ur3` (those of ``ur_analytic_ik``): no
     tool, base at the foot of joint 1, limits :math:`\pm 2\pi`. Source:
-    :data:`UR_CURRENT_DH`.
+    :data:`UR_CURRENT_DH`. Every current model is built the same way; its links carry the
+    inertias of :data:`UR_DYNAMICS` and the rated speeds of :data:`UR_MAX_JOINT_SPEED_DEG`
+    where they are published (neither for the UR15 nor the UR8 Long; no inertias for the
+    UR18).
 
     Returns
     -------

@@ -5,7 +5,10 @@ Conventions (the book's preface): a quaternion is stored scalar first,
 rule :math:`i^2 = j^2 = k^2 = ijk = -1`; a unit quaternion acts on a vector by the active
 rotation :math:`p' = q\,p\,q^*`. Every function takes array-likes of shape ``(..., 4)``
 (quaternions), ``(..., 3)`` (vectors) or ``(..., 3, 3)`` (matrices) and broadcasts over the
-leading axes. pyquaternion uses the same order; scipy's ``(x, y, z, w)`` does not.
+leading axes. pyquaternion uses the same order; scipy's ``(x, y, z, w)`` does not (nor do
+ROS messages or Eigen's ``coeffs()``): :func:`quaternion_from_xyzw` and
+:func:`xyzw_from_quaternion` convert. A unit quaternion given in the wrong order is a unit
+quaternion of another rotation, so no check can catch it: convert at the boundary.
 
 Array functions do the work; :class:`Quaternion` is a thin wrapper for notebooks.
 """
@@ -1034,3 +1037,67 @@ def angular_velocity_from_quaternion_rate(q, q_dot, *, frame="world", tol=1e-9):
     if frame == "body":
         return 2.0 * quaternion_product(quaternion_conjugate(q), q_dot)[..., 1:]
     raise ValueError(f"frame must be 'world' or 'body', got {frame!r}")
+
+
+__all__ += ["quaternion_from_xyzw", "xyzw_from_quaternion"]
+
+
+def quaternion_from_xyzw(q_xyzw: ArrayLike) -> NDArray[np.float64]:
+    r"""A quaternion stored scalar last, ``(x, y, z, w)``, in dqlab's order ``(w, x, y, z)``.
+
+    scipy (``Rotation.as_quat``), ROS messages, Eigen's ``coeffs()`` and many file formats
+    store the scalar last; every function of dqlab takes it first. Nothing can tell the two
+    orders apart from the numbers (both are unit quaternions, of different rotations), so a
+    quaternion given in the wrong order is taken silently: convert at the boundary.
+
+    Parameters
+    ----------
+    q_xyzw : array_like, shape (..., 4)
+        Quaternions ``(x, y, z, w)``.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        The same quaternions as ``(w, x, y, z)``.
+
+    Raises
+    ------
+    ValueError
+        If ``q_xyzw`` is not of shape (..., 4) or holds NaN or infinity.
+
+    See Also
+    --------
+    xyzw_from_quaternion : the other way.
+
+    Examples
+    --------
+    A quarter turn about z, as scipy prints it, ``[0, 0, sin(pi/4), cos(pi/4)]``:
+
+    >>> import numpy as np
+    >>> quaternion_from_xyzw([0.0, 0.0, np.sin(np.pi / 4), np.cos(np.pi / 4)]).round(6)
+    array([0.707107, 0.      , 0.      , 0.707107])
+    """
+    q = as_float_array(q_xyzw, "q_xyzw", _Q)
+    return q[..., [3, 0, 1, 2]]
+
+
+def xyzw_from_quaternion(q: ArrayLike) -> NDArray[np.float64]:
+    r"""A quaternion in dqlab's order ``(w, x, y, z)`` stored scalar last, ``(x, y, z, w)``
+    (the order of scipy, ROS and Eigen's ``coeffs()``; see :func:`quaternion_from_xyzw`).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+        Quaternions ``(w, x, y, z)``.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+
+    Examples
+    --------
+    >>> xyzw_from_quaternion([1.0, 0.0, 0.0, 0.0])
+    array([0., 0., 0., 1.])
+    """
+    q = as_float_array(q, "q", _Q)
+    return q[..., [1, 2, 3, 0]]

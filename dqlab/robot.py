@@ -44,10 +44,20 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._chain import CompiledChain
-from ._checks import as_float_array, real_array
+from ._checks import as_float_array, check_scalar, real_array
+from .dualquat import dual_quaternion_from_transform
 from .inertia import LinkInertia
 
 __all__ = ["Link", "Robot", "REVOLUTE", "PRISMATIC"]
+
+class _Offset:
+    """with_tool's default: the tool is given by its offset x, y, z."""
+
+    def __repr__(self):
+        return "<offset x, y, z>"
+
+
+_OFFSET = _Offset()
 
 REVOLUTE = "revolute"
 PRISMATIC = "prismatic"
@@ -106,6 +116,11 @@ class Link:
     Notes
     -----
     A link is immutable: a :class:`Robot` precomputes the constant parts of its chain.
+
+    The parameters come in the order ``a, alpha, d``; makers' tables print ``d, a, alpha``.
+    Pass them by name, as below, or build the whole robot from the table's columns with
+    :meth:`Robot.from_dh_table` (which also gives revolute joints the :math:`\pm 2\pi`
+    limits of a UR joint by default; a bare ``Link`` has no limits).
 
     Examples
     --------
@@ -304,6 +319,163 @@ class Robot:
         self._tool = _check_transform_like(tool, "tool")
         self._prepare()
 
+    @classmethod
+    def from_dh_table(cls, *, d: ArrayLike, a: ArrayLike, alpha: ArrayLike,
+                      theta_offset: ArrayLike | None = None, joint: str | tuple = REVOLUTE,
+                      limits: ArrayLike | None = (-2 * math.pi, 2 * math.pi),
+                      max_speed: ArrayLike | None = None, convention: str = "dh",
+                      base: ArrayLike | None = None, tool: ArrayLike | None = None,
+                      name: str = "") -> "Robot":
+        r"""A robot from a maker's parameter table, column by column, by name.
+
+        Makers print their tables in the order :math:`d, a, \alpha` (Universal Robots:
+        :math:`d_i, a_i, \alpha_i`), :class:`Link` takes ``Link(a, alpha, d)``: every column
+        here is a keyword, so the order cannot be mixed up, and every column must have one
+        entry per joint.
+
+        Parameters
+        ----------
+        d, a, alpha : array_like, shape (n,)
+            The columns of the table: offsets :math:`d_i` (m), lengths :math:`a_i` (m) and
+            twists :math:`\alpha_i` (radians; ``np.radians`` converts a table in degrees).
+            In modified DH (``convention="mdh"``) they are :math:`r_i, a_{i-1},
+            \alpha_{i-1}`, as :class:`Link` reads them.
+        theta_offset : array_like, shape (n,), optional
+            :math:`\theta^0_i` (radians), :math:`\theta_i = q_i + \theta^0_i`; zeros by
+            default.
+        joint : str or sequence of str, optional
+            ``"revolute"`` (default) or ``"prismatic"``, for all joints or one per joint.
+        limits : array_like, shape (2,) or (n, 2), or None, optional
+            Joint limits, for all joints or per joint. Default :math:`\pm 2\pi`, the range
+            of a UR joint (a revolute joint that turns one full turn each way); ``None``: no
+            limits.
+        max_speed : array_like, shape (n,), optional
+            The joints' rated speeds (rad/s), see :class:`Link`.
+        convention : {"dh", "mdh"}, optional
+        base, tool : array_like, shape (4, 4), optional
+            As for :class:`Robot`; :meth:`with_tool` sets a tool afterwards.
+        name : str, optional
+
+        Returns
+        -------
+        Robot
+
+        Raises
+        ------
+        ValueError
+            If a column is not a list of n finite numbers (the message names it), the
+            columns have different lengths, a twist exceeds :math:`2\pi` in magnitude (a
+            table in degrees?), or a limit or joint type is invalid.
+
+        Examples
+        --------
+        The UR5e as Universal Robots print it (d, a, alpha):
+
+        >>> import numpy as np
+        >>> robot = Robot.from_dh_table(
+        ...     d=[0.1625, 0, 0, 0.1333, 0.0997, 0.0996],
+        ...     a=[0, -0.425, -0.3922, 0, 0, 0],
+        ...     alpha=[np.pi / 2, 0, 0, np.pi / 2, -np.pi / 2, 0], name="my UR5e")
+        >>> from dqlab.models import ur5e
+        >>> bool(np.allclose(robot.fk([0.1] * 6), ur5e().fk([0.1] * 6), atol=1e-15))
+        True
+        >>> robot.limits[0]
+        array([-6.28318531,  6.28318531])
+        """
+        columns = {"d": d, "a": a, "alpha": alpha}
+        if theta_offset is not None:
+            columns["theta_offset"] = theta_offset
+        if max_speed is not None:
+            columns["max_speed"] = max_speed
+        values = {}
+        for key, column in columns.items():
+            v = as_float_array(column, key)
+            if v.ndim != 1 or v.size == 0:
+                raise ValueError(f"{key} must be a column of the table, one number per joint "
+                                 f"(shape (n,)), got shape {v.shape}")
+            values[key] = v
+        n = values["d"].size
+        for key, v in values.items():
+            if v.size != n:
+                sizes = ", ".join(f"{k}: {w.size}" for k, w in values.items())
+                raise ValueError(f"the columns of the table must have one entry per joint; "
+                                 f"got {sizes} ({key} differs from d)")
+        big = np.abs(values["alpha"]) > 2 * math.pi
+        if big.any():
+            i = int(np.flatnonzero(big)[0])
+            raise ValueError(f"alpha[{i}] = {values['alpha'][i]:g} is more than 2 pi: twists "
+                             "are in radians (a table in degrees? convert with np.radians)")
+        theta0 = values.get("theta_offset", np.zeros(n))
+        joints = (joint,) * n if isinstance(joint, (str, int)) else tuple(joint)
+        if len(joints) != n:
+            raise ValueError(f"joint must be one type or one per joint ({n}), got {joint!r}")
+        if limits is None:
+            lims = [None] * n
+        else:
+            lim = real_array(limits, "limits")
+            if lim.shape not in ((2,), (n, 2)):
+                raise ValueError(f"limits must have shape (2,) or ({n}, 2), got {lim.shape}")
+            lims = [tuple(row) for row in np.broadcast_to(lim, (n, 2)).tolist()]
+        speeds = values.get("max_speed", [None] * n)
+        links = [Link(a=values["a"][i], alpha=values["alpha"][i], d=values["d"][i],
+                      theta_offset=theta0[i], joint=joints[i], limits=lims[i],
+                      max_speed=None if speeds[i] is None else float(speeds[i]))
+                 for i in range(n)]
+        return cls(links, convention=convention, base=base, tool=tool, name=name)
+
+    def with_tool(self, X_nT: ArrayLike = _OFFSET, *, x: float = 0.0, y: float = 0.0,
+                  z: float = 0.0) -> "Robot":
+        r"""The same robot with another tool: a transform :math:`X_{nT}`, or an offset of
+        the tool centre point along the flange's axes.
+
+        ``robot.with_tool(z=0.15)`` is a gripper whose TCP lies 0.15 m along the flange's z
+        axis, :math:`X_{nT} = T(x, y, z)` with the flange's orientation. The tool replaces
+        the robot's own (it is not composed with it); the links and the base are kept, and
+        the robot itself is not changed.
+
+        Parameters
+        ----------
+        X_nT : array_like, shape (4, 4), optional
+            The pose of the TCP in the flange frame (a rigid transform). Not together with
+            ``x``, ``y``, ``z``; ``robot.with_tool()`` removes the tool.
+        x, y, z : float, optional
+            The TCP's position in the flange frame, metres (rotation: none).
+
+        Returns
+        -------
+        Robot
+
+        Raises
+        ------
+        ValueError
+            If ``X_nT`` is not a rigid 4x4 transform, an offset is not a finite number, or
+            both a transform and an offset are given.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from dqlab.models import ur5e
+        >>> robot = ur5e().with_tool(z=0.15)
+        >>> q = [0.3, -1.2, 1.1, -0.4, 0.9, 0.2]
+        >>> X_WF, X_WT = ur5e().fk(q), robot.fk(q)
+        >>> bool(np.allclose(X_WT[:3, 3], X_WF[:3, 3] + 0.15 * X_WF[:3, 2]))
+        True
+        >>> robot.name, ur5e().bare, robot.bare
+        ('UR5e', True, False)
+        """
+        offset = [check_scalar(v, k) for k, v in (("x", x), ("y", y), ("z", z))]
+        if X_nT is _OFFSET:
+            X_nT = np.eye(4)
+            X_nT[:3, 3] = offset
+        elif any(offset):
+            raise ValueError("give the tool as X_nT or as the offset x, y, z, not both")
+        if X_nT is None:
+            raise TypeError("X_nT must be a 4x4 transform, got None (robot.with_tool() "
+                            "without arguments removes the tool)")
+        X_nT = _check_transform_like(X_nT, "X_nT")
+        return type(self)(self._links, convention=self._convention, base=self._base,
+                          tool=X_nT, name=self.name)
+
     # -- read-only description -------------------------------------------------------------
     @property
     def links(self):
@@ -334,6 +506,23 @@ class Robot:
         return self._bare
 
     @property
+    def base_dq(self):
+        """:math:`X_{W0}` as a unit dual quaternion ``(q_r, q_d)``, shape (8,) (a copy)."""
+        return self._base_dq.copy()
+
+    @property
+    def tool_dq(self):
+        """:math:`X_{nT}` as a unit dual quaternion ``(q_r, q_d)``, shape (8,) (a copy).
+
+        Examples
+        --------
+        >>> from dqlab.models import ur5e
+        >>> ur5e().with_tool(z=0.15).tool_dq
+        array([1.   , 0.   , 0.   , 0.   , 0.   , 0.   , 0.   , 0.075])
+        """
+        return self._tool_dq.copy()
+
+    @property
     def limits(self):
         """Joint limits as an array of shape (n, 2): lowest, highest."""
         return np.array([link.limits for link in self._links], dtype=float)
@@ -351,6 +540,9 @@ class Robot:
         self._prismatic_idx = np.flatnonzero(~self._revolute)
         self._bare = bool(np.array_equal(self._base, np.eye(4))
                           and np.array_equal(self._tool, np.eye(4)))
+        # the base and the tool as unit dual quaternions (8,), for the solvers' fast paths
+        self._base_dq = dual_quaternion_from_transform(self._base)
+        self._tool_dq = dual_quaternion_from_transform(self._tool)
         # (theta_i offset, d_i offset, revolute?) of every link
         self._joint_constants = [(lk.theta_offset, lk.d, lk.is_revolute) for lk in self._links]
         self._L, self._R = _link_constants(self._links, self._convention)
@@ -417,9 +609,12 @@ class Robot:
             j = idx[where[-1]]
             value = sub[tuple(where)]
             lk = self._links[j]
+            # beyond two turns no joint angle is plausible in radians: degrees, probably
+            hint = ("; joint angles are in radians (degrees? convert with np.radians)"
+                    if lk.is_revolute and abs(value) > 4 * math.pi else "")
             raise ValueError(
                 f"joint {j + 1} ({lk.joint}) = {value:.6g} is beyond its limits "
-                f"[{lk.limits[0]:.6g}, {lk.limits[1]:.6g}]")
+                f"[{lk.limits[0]:.6g}, {lk.limits[1]:.6g}]{hint}")
         return q
 
     def _link_parameters(self, q):

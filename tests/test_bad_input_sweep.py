@@ -18,6 +18,7 @@ import dqlab
 from dqlab import dynamics, ik, jacobian
 from dqlab.identify import dh_parameters, robot_from_dh_parameters
 from dqlab.models import desk_arm, scara_rsm5, ur3
+from dqlab.robot import Robot
 from dqlab.ur.calibration import robot_from_joint_origins
 
 UR3 = ur3()
@@ -28,6 +29,8 @@ V = np.array([1.0, 2.0, 3.0])
 R = dqlab.rot_z(0.3) @ dqlab.rot_x(0.2)
 T = dqlab.transform_from(R, V)
 D = dqlab.dual_quaternion_from_transform(T)
+DH = {"d": [lk.d for lk in UR3.links], "a": [lk.a for lk in UR3.links],
+      "alpha": [lk.alpha for lk in UR3.links]}
 
 GOOD_CALLS = {
     # quaternion.py
@@ -38,6 +41,7 @@ GOOD_CALLS = {
     "matrix_from_quaternion": (Q,), "quaternion_exp": (Q,), "quaternion_log": (Q,),
     "quaternion_power": (Q, 0.5), "slerp": (Q, [1.0, 0, 0, 0], 0.3),
     "quaternion_distance": (Q, [1.0, 0, 0, 0]),
+    "quaternion_from_xyzw": (Q,), "xyzw_from_quaternion": (Q,),
     # rotations.py
     "rot_x": (0.3,), "rot_y": (0.3,), "rot_z": (0.3,), "matrix_from_euler_zxz": (V,),
     "euler_zxz_from_matrix": (R,), "matrix_from_rpy": (V,), "rpy_from_matrix": (R,),
@@ -91,6 +95,13 @@ OTHER_CALLS = {
     "dynamics.gravity": (lambda gravity: dynamics.gravity_torques(UR3, Q6, gravity=gravity),
                          ([0.0, 0.0, -9.81],)),
     "ik.ur(calibrated)": (lambda target: ik.ur(CALIBRATED, target), (CALIBRATED.fk(Q6),)),
+    "ik.closest_ur_solution": (lambda target, q_now: ik.closest_ur_solution(UR3, target, q_now),
+                               (UR3.fk(Q6), Q6)),
+    "Robot.from_dh_table": (
+        lambda d, a, alpha: Robot.from_dh_table(d=d, a=a, alpha=alpha).fk(np.zeros(6)),
+        (DH["d"], DH["a"], DH["alpha"])),
+    "Robot.with_tool": (lambda X_nT: UR3.with_tool(X_nT).tool, (T,)),
+    "Robot.with_tool(z)": (lambda z: UR3.with_tool(z=z).tool, (0.15,)),
     "ur.calibration.robot_from_joint_origins": (robot_from_joint_origins,
                                                 (np.tile(np.eye(4), (6, 1, 1)),)),
 }

@@ -89,9 +89,9 @@ def test_renamed_models_are_the_same_arms():
 def test_published_speeds_and_masses_are_complete_rows():
     for name, speeds in models.UR_MAX_JOINT_SPEED_DEG.items():
         assert name in UR_DH and len(speeds) == 6 and min(speeds) >= 120.0
-    for name, rows in models.UR_PUBLISHED_MASSES.items():
-        assert name in UR_DH and len(rows) == 6
-        assert all(mass > 0 and len(com) == 3 for mass, com in rows)
-    # the arm gets lighter towards the wrist, as every published table has it
-    for rows in models.UR_PUBLISHED_MASSES.values():
-        assert rows[1][0] > rows[2][0] > rows[5][0]
+    for name, table in models.UR_DYNAMICS.items():
+        assert name in UR_DH and len(table["mass"]) == 6 and len(table["com"]) == 6
+        assert all(mass > 0 for mass in table["mass"])
+        assert all(len(com) == 3 for com in table["com"])
+        # the arm gets lighter towards the wrist, as every published table has it
+        assert table["mass"][1] > table["mass"][2] > table["mass"][5]

@@ -26,7 +26,9 @@ Helpers for the UR solutions: ``SOLUTION_ORDER`` (the meaning of the eight rows)
 ``ur_parameters`` and ``distinct_solutions``. For any solver, :mod:`dqlab.ik.solutions` picks
 the solution to send a robot: ``closest_solution`` (the valid solution nearest a
 configuration, as its :math:`2\pi`-equivalent within the joint limits) and
-``equivalent_solutions`` (every such equivalent).
+``equivalent_solutions`` (every such equivalent). ``closest_ur_solution`` answers the
+common question in one call: the joints to send a UR (with its tool, within its limits) to
+reach a pose from where it stands.
 """
 
 from .damped_least_squares import numerical
@@ -37,12 +39,14 @@ from .solutions import closest_solution, equivalent_solutions
 from .targets import pose_errors
 from .ur_closed_form import (
     SOLUTION_ORDER,
+    closest_ur_solution,
     distinct_solutions,
     ur,
     ur_parameters,
 )
 
 __all__ = [
-    "IKResult", "SOLUTION_ORDER", "closest_solution", "desk_arm", "distinct_solutions",
-    "equivalent_solutions", "numerical", "pose_errors", "scara", "ur", "ur_parameters",
+    "IKResult", "SOLUTION_ORDER", "closest_solution", "closest_ur_solution", "desk_arm",
+    "distinct_solutions", "equivalent_solutions", "numerical", "pose_errors", "scara", "ur",
+    "ur_parameters",
 ]

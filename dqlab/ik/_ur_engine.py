@@ -37,7 +37,9 @@ from .._checks import (
     unit_dual_quaternion_or_raise,
 )
 from .._kernels import (
+    dual_quaternion_mul,
     quaternion_from_matrix_entries,
+    quaternion_mul,
     quaternion_rotate,
     translation_from_dual_quaternion_entries,
 )
@@ -61,6 +63,7 @@ NEAR_WRIST = 1e-3                # |sin theta5| below which a clipped row is mov
 _FLOAT64 = np.dtype(np.float64)
 _FLAGS = ("wrist_singular", "shoulder_singular", "elbow_singular", "unreachable")
 _EYE_BYTES = np.eye(4).tobytes()
+_DQ_IDENTITY = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
 _SHOULDER = np.array([[1.0], [-1.0]])     # h+- = +h, -h: axis 0 of (s, n)
 _SIGMA = np.array([[1.0], [-1.0]])        # wrist branch w = 0, 1, axis -2 of (s, w, n)
 _ELBOW = np.array([[[1.0]], [[-1.0]]])    # elbow branch e = 0, 1, axis -3 of (s, e, w, n)
@@ -82,8 +85,8 @@ def solve(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residual
     floats when it can, else the batch path."""
     if type(target) is not np.ndarray or target.dtype is not _FLOAT64:
         target = real_array(target, "target")   # a list takes the same path as an array
-    if tool is None and residuals == "equations" and pose_tol <= RIGID_TOL:
-        result = solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref)
+    if residuals == "equations" and pose_tol <= RIGID_TOL:
+        result = solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool)
         if result is not None:
             return result
     return solve_batch(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals)
@@ -93,45 +96,76 @@ def solve(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residual
 # One pose on Python floats
 
 
-def _single_flange(robot, target, pose_tol):
-    """The rotation quaternion, position and z axis of one flange pose as floats, checked
-    as :func:`~dqlab.ik.targets.parse_targets` checks it; None when the pose is not a
-    plain (4, 4) or (8,) one, the robot has a base or a tool, or the check fails (the batch
-    path then raises its message)."""
-    if not robot.bare:
-        return None
+def _single_flange(robot, target, pose_tol, tool):
+    """The rotation quaternion, position and z axis of one flange pose
+    :math:`X_{06} = X_{W0}^{-1} X_{WT}^* X_{6T}^{-1}` as floats, the target checked as
+    :func:`~dqlab.ik.targets.parse_targets` checks it; None when the pose is not a plain
+    (4, 4) or (8,) one, or a check fails (the batch path then raises its message)."""
     if target.shape == (4, 4):
         rows = rigid_rows(target, pose_tol)
         if rows is None:
             return None
         a, b, c = rows
         q = quaternion_from_matrix_entries(a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2])
-        return q, (a[3], b[3], c[3]), (a[2], b[2], c[2])
-    if target.shape == (8,):
-        Q = target.tolist()
+        if robot.bare and tool is None:
+            return q, (a[3], b[3], c[3]), (a[2], b[2], c[2])
+        Q = q + quaternion_mul(0.0, 0.5 * a[3], 0.5 * b[3], 0.5 * c[3], *q)
+    elif target.shape == (8,):
+        Q = tuple(target.tolist())
         try:
             unit_dual_quaternion_or_raise(Q, "target", pose_tol)
         except ValueError:
             return None
-        q = tuple(Q[:4])
-        return (q, translation_from_dual_quaternion_entries(*Q),
-                quaternion_rotate(*q, 0.0, 0.0, 1.0))
-    return None
+    else:
+        return None
+    if not robot.bare or tool is not None:
+        base, tool = _single_base_tool(robot, tool, pose_tol)
+        if base is not None:                # X_{W0}^{-1} X_{WT}: the base's conjugate first
+            Q = dual_quaternion_mul(base, Q)
+        if tool is not None:                # X_{WT} X_{6T}^{-1}: the tool's conjugate last
+            Q = dual_quaternion_mul(Q, tool)
+    q = Q[:4]
+    return q, translation_from_dual_quaternion_entries(*Q), quaternion_rotate(*q, 0.0, 0.0, 1.0)
 
 
-def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref):
+def _single_base_tool(robot, tool, pose_tol):
+    """The conjugates (inverses) of the base's and the tool's dual quaternions as tuples of
+    floats, None for an identity; the tool argument, when given, in place of the robot's
+    (checked as :func:`_tool` checks it)."""
+    base = robot.base_dq.tolist()
+    base = None if base == _DQ_IDENTITY else _conjugate(base)
+    if tool is None:
+        tool_dq = robot.tool_dq.tolist()
+        return base, None if tool_dq == _DQ_IDENTITY else _conjugate(tool_dq)
+    tool_dq = dual_quaternion_from_transform(tool, tol=pose_tol, name="tool")
+    if np.shape(tool) != (4, 4):
+        raise ValueError(f"tool must have shape (4, 4), got {np.shape(tool)}")
+    return base, _conjugate(tool_dq.tolist())
+
+
+def _conjugate(Q):
+    """:math:`Q^* = q_r^* + \\varepsilon q_d^*` on eight floats, the inverse of a unit dual
+    quaternion."""
+    rw, rx, ry, rz, dw, dx, dy, dz = Q
+    return rw, -rx, -ry, -rz, dw, -dx, -dy, -dz
+
+
+def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=None):
     """One pose on Python floats: the loop of :func:`~dqlab.ik.ur_steps.candidate_solutions`
     with the checks and flags of the batch path.
 
     Returns the :class:`~dqlab.ik.result.IKResult` of the pose, the same as the batch
     path's, or None when the pose needs what only the batch path does: a wrist near its
     singularity (the wrist family), a wrist centre inside the shoulder cylinder or no valid
-    row (the reasons), a base or tool, or a target that fails its check (the error message).
+    row (the reasons), or a target that fails its check (the error message). A base and a
+    tool (``tool``, else the robot's) are taken off the target first, on floats.
     """
-    flange = _single_flange(robot, target, pose_tol)
+    flange = _single_flange(robot, target, pose_tol, tool)
     if flange is None:
         return None
-    if q_ref is not None:
+    if q_ref is not None and not (type(q_ref) is np.ndarray and q_ref.dtype is _FLOAT64
+                                  and q_ref.shape == (6,)
+                                  and math.isfinite(math.fsum(q_ref.tolist()))):
         theta6_reference(q_ref, ())                # checked; it matters only at the wrist
     q, p, z6 = flange
     d1, a2, a3, d4, d5 = prm["d1"], prm["a2"], prm["a3"], prm["d4"], prm["d5"]

@@ -5,7 +5,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 
-@dataclass
+@dataclass(repr=False)
 class IKResult:
     """Solutions of an inverse-kinematics problem, for one target or a batch.
 
@@ -27,6 +27,35 @@ class IKResult:
     history : dict of str to ndarray, optional
         What an iterative solver records per iteration when asked (see
         :func:`dqlab.ik.damped_least_squares.numerical`); None otherwise.
+    row_names : tuple of str, optional
+        What each of the ``k`` rows stands for (for :func:`dqlab.ik.ur_closed_form.ur`, the
+        branches of :data:`~dqlab.ik.ur_closed_form.SOLUTION_ORDER`, such as
+        ``"left up noflip"``); printed by ``repr``.
+
+    Notes
+    -----
+    ``repr`` (and ``print``) give a short summary, not the arrays: for one target a line
+    per row (its name, whether it is valid, its errors and its joint values in degrees),
+    for a batch the counts of valid rows, the targets without a solution by reason, the
+    flags that are set and the largest error of a valid row.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dqlab.models import ur5e
+    >>> from dqlab.ik import ur
+    >>> robot = ur5e().with_tool(z=0.15)
+    >>> print(ur(robot, robot.fk([0.3, -1.2, 1.1, -0.4, 0.9, 0.2])))
+    IKResult: one target, 8 of 8 rows valid; flags: none
+      row  name               valid  err [m]  err [rad]  q [deg]
+      0    left up noflip     yes    0        0          -137.4 170 67.2 -34.3 105.5 179.1
+      1    left up flip       yes    0        0          -137.4 -170.4 60.4 132.9 -105.5 -0.9
+      2    left down noflip   yes    0        0          -137.4 -125.8 -67.2 36 105.5 179.1
+      3    left down flip     yes    0        0          -137.4 -112.7 -60.4 -164 -105.5 -0.9
+      4    right up noflip    yes    0        0          17.2 -68.8 63 -22.9 51.6 11.5
+      5    right up flip      yes    0        0          17.2 -53 64.7 139.7 -51.6 -168.5
+      6    right down noflip  yes    0        0          17.2 -8.5 -63 42.9 51.6 11.5
+      7    right down flip    yes    0        0          17.2 8.7 -64.7 -152.7 -51.6 -168.5
     """
 
     solutions: np.ndarray
@@ -36,6 +65,7 @@ class IKResult:
     flags: dict = field(default_factory=dict)
     reason: np.ndarray = None
     history: dict = None
+    row_names: tuple = None
 
     def __post_init__(self):
         if self.reason is None:
@@ -62,6 +92,90 @@ class IKResult:
         from .solutions import closest_solution
 
         return closest_solution(self, q_ref, wrapped=True)
+
+    def __repr__(self):
+        return summary(self)
+
+
+def _short(x):
+    """A number in a few significant digits (0 for an exact zero)."""
+    return "0" if x == 0.0 else f"{x:.2g}"
+
+
+def summary(result: IKResult) -> str:
+    """The text of ``repr(result)``: a short summary of an :class:`IKResult`.
+
+    Parameters
+    ----------
+    result : IKResult
+
+    Returns
+    -------
+    str
+        For one target, a title line (valid rows, flags set) and one line per row: its name
+        (``row_names``, else its index), whether it is valid, its position and rotation
+        errors and its joints in degrees (rounded to 0.1). For a batch, the title line, the
+        number of targets by count of valid rows, the targets without a solution grouped
+        by reason, the flags set (on how many targets) and the largest error of a valid row.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dqlab.models import ur3
+    >>> from dqlab.ik import ur
+    >>> robot = ur3()
+    >>> X = robot.fk([[0.3, -1.2, 1.1, -0.4, 0.9, 0.2], [0, -np.pi / 2, 0, -np.pi / 2, 0, 0]])
+    >>> X[1, 2, 3] += 1.0                  # out of reach
+    >>> print(summary(ur(robot, X)))              # doctest: +ELLIPSIS
+    IKResult: 2 targets (shape (2,)), rows of 8 branches x 6 joints
+      targets with 8 valid rows: 1
+      targets with 0 valid rows: 1
+      no solution: 1 target: elbow: the wrist-1 point is farther from the shoulder than ...
+      flags: unreachable on 1 target
+      largest error of a valid row: 0 m, 0 rad
+    """
+    valid = np.asarray(result.valid)
+    k, n = np.shape(result.solutions)[-2:]
+    names = (tuple(result.row_names) if result.row_names is not None
+             else tuple(str(i) for i in range(k)))
+    flags = {name: np.asarray(f) for name, f in (result.flags or {}).items()}
+    if valid.ndim == 1:
+        set_ = [name for name, f in flags.items() if bool(f)]
+        lines = [f"IKResult: one target, {int(valid.sum())} of {k} rows valid; flags: "
+                 f"{', '.join(set_) or 'none'}"]
+        if result.reason is not None and str(result.reason):
+            lines.append(f"  no solution: {result.reason}")
+        pe, re = np.asarray(result.position_error), np.asarray(result.rotation_error)
+        table = [("row", "name", "valid", "err [m]", "err [rad]", "q [deg]")]
+        for i in range(k):
+            q = " ".join("0" if abs(v) < 0.05 else f"{v:.1f}".rstrip("0").rstrip(".")
+                         for v in np.degrees(result.solutions[i]))
+            table.append((str(i), names[i], "yes" if valid[i] else "no", _short(pe[i]),
+                          _short(re[i]), q if valid[i] else "-"))
+        widths = [max(len(r[c]) for r in table) for c in range(5)]
+        lines += ["  " + "  ".join(c.ljust(w) for c, w in zip(r, widths + [0], strict=True))
+                  .rstrip() for r in table]
+        return "\n".join(lines)
+    batch = valid.shape[:-1]
+    count = valid.sum(axis=-1)
+    label = "branches" if result.row_names is not None else "rows"
+    lines = [f"IKResult: {int(np.prod(batch))} targets (shape {batch}), rows of {k} {label} "
+             f"x {n} joints"]
+    for c in sorted(set(count.ravel().tolist()), reverse=True):
+        lines.append(f"  targets with {c} valid rows: {int(np.sum(count == c))}")
+    if result.reason is not None:
+        reasons = np.asarray(result.reason, dtype=object)[count == 0]
+        for why in sorted(set(str(r) for r in reasons)):
+            m = int(sum(str(r) == why for r in reasons))
+            lines.append(f"  no solution: {m} target{'s' * (m != 1)}: {why or '(no reason given)'}")
+    set_ = [(name, int(np.sum(f))) for name, f in flags.items() if np.any(f)]
+    lines.append("  flags: " + (", ".join(f"{name} on {m} target{'s' * (m != 1)}"
+                                          for name, m in set_) or "none"))
+    if valid.any():
+        pe = np.asarray(result.position_error)[valid].max()
+        re = np.asarray(result.rotation_error)[valid].max()
+        lines.append(f"  largest error of a valid row: {_short(pe)} m, {_short(re)} rad")
+    return "\n".join(lines)
 
 
 def finish(solutions: np.ndarray, valid: np.ndarray, position_error: np.ndarray,

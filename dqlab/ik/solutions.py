@@ -43,9 +43,8 @@ def _joint_limits(limits, n):
     lim = real_array(limits, "limits")
     if lim.shape not in ((2,), (n, 2)):
         raise ValueError(f"limits must have shape (2,) or ({n}, 2), got {lim.shape}")
-    lo = np.broadcast_to(lim[..., 0], (n,))
-    hi = np.broadcast_to(lim[..., 1], (n,))
-    if not np.all(lo <= hi):          # NaN fails this too
+    lo, hi = lim.T if lim.ndim == 2 else (np.full(n, lim[0]), np.full(n, lim[1]))
+    if not (lo <= hi).all():          # NaN fails this too
         raise ValueError(f"limits must be rows (lo, hi) with lo <= hi, got {lim.tolist()}")
     return lo, hi
 
@@ -125,9 +124,11 @@ def closest_solution(result, q_ref: ArrayLike, limits: ArrayLike | None = None, 
     if wrapped and bounds is not None:
         raise ValueError("wrapped=True returns a row as the solver gives it, which ignores "
                          "limits; give one or the other")
-    if not np.all(np.any(valid, axis=-1)):
+    if not valid.any(axis=-1).all():
         raise ValueError("some targets have no valid solution; check result.reason")
     batch = np.broadcast_shapes(valid.shape[:-1], q_ref.shape[:-1])
+    if not batch:                          # one target: on Python floats
+        return _closest_one(solutions, valid, q_ref, bounds, wrapped)
     rows = np.broadcast_to(solutions, batch + (k, n)).reshape(-1, k, n)
     index = _nearest_rows(rows, np.broadcast_to(valid, batch + (k,)).reshape(-1, k),
                           np.broadcast_to(q_ref, batch + (n,)).reshape(-1, n), bounds)
@@ -146,6 +147,23 @@ def closest_solution(result, q_ref: ArrayLike, limits: ArrayLike | None = None, 
     if bounds is None:
         return ref + wrap_angle(chosen - ref)
     return _nearest_equivalent(chosen, ref, *bounds)[0]
+
+
+def _closest_one(rows, valid, q_ref, bounds, wrapped):
+    """:func:`closest_solution` of one target: rows (k, n), valid (k,), q_ref (n,), with
+    :func:`_nearest_equivalent` on the whole (k, n) block at once (the chunked loop of a
+    batch would cost more than the work)."""
+    if bounds is None:
+        u, reach = q_ref + wrap_angle(rows - q_ref), valid
+    else:
+        u, inside = _nearest_equivalent(rows, q_ref, *bounds)
+        reach = valid if inside is None else valid & inside.all(axis=-1)
+    distance = np.where(reach, np.square(u - q_ref).sum(axis=-1), np.inf)
+    best = int(np.argmin(distance))
+    if not reach[best]:
+        raise ValueError(f"the target has no valid solution within the joint limits "
+                         f"{np.stack(bounds, axis=-1).tolist()}")
+    return rows[best].copy() if wrapped else u[best]
 
 
 _CHUNK = 4096      # targets per block: a block's (k, 4096) temporaries stay in the cache
@@ -184,7 +202,8 @@ def _nearest_rows(rows, valid, q_ref, bounds):
                 below, above = d < lo, d > hi
                 if below.any() or above.any():
                     u, inside = _nearest_equivalent(d, ref, lo, hi)
-                    reach &= inside
+                    if inside is not None:   # None: within the limits after all (rounding)
+                        reach &= inside
                     np.copyto(d, u)
                 d -= ref
             np.multiply(d, d, out=w)

@@ -177,19 +177,43 @@ def _kind(a, position, name):
         if kind == "position":
             return kind
         want = "(..., 3) (a position)"
-    elif kind == "position" and not position:
+    elif kind == "position" and not position and a.shape[-2:] != (3, 3):
         want = ("(..., 4, 4) (a transform) or (..., 8) (a unit dual quaternion), got shape "
                 f"{a.shape}: a position, which only a position-only solve accepts "
                 "(position_only=True where the solver has one)")
         raise ValueError(f"{name} must have shape {want}")
-    elif kind is not None:
+    elif kind is not None and not (kind == "position" and not position):
         return kind
     else:
         want = "(..., 4, 4) (a transform) or (..., 8) (a unit dual quaternion)"
         if position:
             want = ("(..., 4, 4) (a transform), (..., 8) (a unit dual quaternion) or "
                     "(..., 3) (a position)")
-    raise ValueError(f"{name} must have shape {want}, got shape {a.shape}")
+    raise ValueError(f"{name} must have shape {want}, got shape {a.shape}{_hint(a.shape)}")
+
+
+#: What a target of another trailing shape probably is, and how to make a pose of it.
+_HINTS = {
+    (3, 3): ("a rotation matrix? A pose needs the position too: "
+             "dqlab.transforms.transform_from(R, p)"),
+    (3, 4): "the top three rows of a transform? Append the row [0, 0, 0, 1]",
+    (6,): ("a UR pose vector [x, y, z, rx, ry, rz]? Convert it with "
+           "dqlab.ur.transform_from_pose(p)"),
+    (7,): ("a position and a quaternion? Build the transform with "
+           "dqlab.transforms.transform_from(dqlab.matrix_from_quaternion(q), p); quaternions "
+           "are (w, x, y, z) in dqlab, dqlab.quaternion.quaternion_from_xyzw converts from "
+           "(x, y, z, w)"),
+    (4,): ("a quaternion? A pose needs the position too: "
+           "dqlab.dual_quaternion_from_rotation_translation(q, p), with q as (w, x, y, z)"),
+}
+
+
+def _hint(shape):
+    """``": <what it probably is>"`` for a target of the wrong shape, or ``""``."""
+    for trailing, hint in _HINTS.items():
+        if len(shape) >= len(trailing) and shape[len(shape) - len(trailing):] == trailing:
+            return f": {hint}"
+    return ""
 
 
 def pose_errors(X: ArrayLike, X_target: ArrayLike

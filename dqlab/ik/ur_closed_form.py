@@ -113,7 +113,7 @@ import weakref
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._checks import check_tolerance
+from .._checks import as_float_array, check_tolerance, real_array
 from ..models import UR_SHAPE
 from ..robot import Robot
 from ..rotations import wrap_angle
@@ -126,13 +126,19 @@ from ._ur_engine import (  # noqa: F401  (the reasons, re-exported)
     solve,
 )
 from .result import IKResult
+from .solutions import closest_solution
 from .ur_calibrated import calibrated_ur, nominal_ur
 
-__all__ = ["ur", "ur_parameters", "distinct_solutions", "SOLUTION_ORDER"]
+__all__ = ["ur", "ur_parameters", "distinct_solutions", "closest_ur_solution", "SOLUTION_ORDER",
+           "ROW_NAMES"]
 
 #: ``(shoulder, elbow, wrist)`` labels of the eight rows, in order ``k = 4 s + 2 e + w``.
 SOLUTION_ORDER = tuple(
     (s, e, w) for s in ("left", "right") for e in ("up", "down") for w in ("noflip", "flip"))
+
+#: The names of the eight rows, ``"shoulder elbow wrist"`` (``"left up noflip"``, ...), as an
+#: :class:`~dqlab.ik.result.IKResult` of :func:`ur` prints them.
+ROW_NAMES = tuple(" ".join(branch) for branch in SOLUTION_ORDER)
 
 _CHECKED = weakref.WeakKeyDictionary()    # robot -> its parameters (links are immutable)
 
@@ -203,7 +209,10 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     target : array_like, shape (..., 4, 4) or (..., 8)
         Target pose(s) of the TCP in the world frame, as rigid transforms or unit dual
         quaternions ``(q_r, q_d)`` (told apart by the trailing shape; see
-        :func:`dqlab.ik.targets.parse_targets`).
+        :func:`dqlab.ik.targets.parse_targets`), each part scalar first, ``(w, x, y, z)``.
+        A quaternion stored scalar last (scipy, ROS, Eigen) converts with
+        :func:`dqlab.quaternion.quaternion_from_xyzw`; given in the wrong order it is still
+        a unit quaternion, of another rotation, which no check can detect.
     tool : array_like, shape (4, 4), optional
         Flange-to-TCP transform :math:`X_{6T}` to use instead of ``robot.tool``.
     q_ref : array_like, shape (6,) or (..., 6), optional
@@ -333,9 +342,14 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
             nominal_ur(robot)
         except ValueError as why:
             raise ValueError(f"{exc}; nor is it a calibrated UR: {why}") from None
-        return calibrated_ur(robot, target, ur, tol=tol, tool=tool, q_ref=q_ref,
-                             singular_tol=singular_tol, pose_tol=pose_tol, residuals=residuals)
-    return solve(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals)
+        result = calibrated_ur(robot, target, ur, tol=tol, tool=tool, q_ref=q_ref,
+                               singular_tol=singular_tol, pose_tol=pose_tol,
+                               residuals=residuals)
+    else:
+        result = solve(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref,
+                       residuals)
+    result.row_names = ROW_NAMES
+    return result
 
 
 def distinct_solutions(result: IKResult, atol: float = 1e-9) -> NDArray[np.bool_]:
@@ -374,3 +388,96 @@ def distinct_solutions(result: IKResult, atol: float = 1e-9) -> NDArray[np.bool_
     earlier = np.tril(np.ones((k, k), dtype=bool), -1)
     return valid & ~np.any(same & earlier, axis=-1)
 
+
+
+def closest_ur_solution(robot: Robot, target: ArrayLike, q_now: ArrayLike, *,
+                        limits: ArrayLike | None = None, tol: float = 1e-9,
+                        **options) -> NDArray[np.float64]:
+    r"""The joints to send a UR standing at ``q_now`` to reach ``target``: one call.
+
+    Every solution of :func:`ur` (the robot's tool and base included; a calibrated UR
+    too), every :math:`2\pi`-equivalent of it within the joint limits (a UR joint turns
+    :math:`\pm 2\pi`, so each joint has two candidates), and among them the joint vector
+    nearest ``q_now``: :func:`~dqlab.ik.solutions.closest_solution` of :func:`ur`, with
+    ``q_now`` also as the reference at a wrist singularity.
+
+    Parameters
+    ----------
+    robot : dqlab.robot.Robot
+        A UR-family arm, with its tool (:meth:`~dqlab.robot.Robot.with_tool`).
+    target : array_like, shape (..., 4, 4) or (..., 8)
+        The TCP pose(s) in the world frame (as for :func:`ur`).
+    q_now : array_like, shape (6,) or (..., 6)
+        The robot's current joints, radians; within the joint limits.
+    limits : array_like, shape (2,) or (6, 2), optional
+        Joint limits; default ``robot.limits``.
+    tol : float
+        As for :func:`ur`.
+    **options
+        Further keywords of :func:`ur` (``singular_tol``, ``pose_tol``, ``tool``).
+
+    Returns
+    -------
+    ndarray, shape (..., 6)
+
+    Raises
+    ------
+    ValueError
+        If a target has no solution (the message gives the solver's reason), no solution
+        is within the limits, or ``q_now`` is outside the limits (a hint if it looks like
+        degrees), besides the errors of :func:`ur`.
+
+    Examples
+    --------
+    A UR5e with a gripper whose TCP is 0.15 m along the flange's z axis, at ``q_now``, sent
+    to a pose 5 cm lower:
+
+    >>> import numpy as np
+    >>> from dqlab.models import ur5e
+    >>> robot = ur5e().with_tool(z=0.15)
+    >>> q_now = np.array([0.3, -1.2, 1.1, -0.4, 0.9, 0.2])
+    >>> X = robot.fk(q_now)
+    >>> X[2, 3] -= 0.05
+    >>> q = closest_ur_solution(robot, X, q_now)
+    >>> q.round(3)
+    array([ 0.3  , -1.205,  1.234, -0.529,  0.9  ,  0.2  ])
+    >>> bool(np.allclose(robot.fk(q), X, atol=1e-12))
+    True
+    """
+    limits = robot.limits if limits is None else limits
+    q_now = as_float_array(q_now, "q_now", (6,))
+    lim = real_array(limits, "limits")
+    if lim.shape in ((2,), (6, 2)):
+        lo, hi = lim.T if lim.ndim == 2 else (np.full(6, lim[0]), np.full(6, lim[1]))
+        if q_now.shape == (6,):             # one joint vector: on floats
+            outside = any(not a <= v <= b for v, a, b in zip(q_now.tolist(), lo.tolist(),
+                                                             hi.tolist(), strict=True))
+        else:
+            outside = not ((q_now >= lo) & (q_now <= hi)).all()
+        if outside:
+            first = tuple(np.argwhere((q_now < lo) | (q_now > hi))[0])
+            j, value = int(first[-1]), float(q_now[first])
+            hint = (" (joint angles are radians: degrees? convert with np.radians)"
+                    if abs(value) > 4 * np.pi else "")     # beyond two turns
+            raise ValueError(f"q_now: joint {j + 1} = {value:.6g} is outside its limits "
+                             f"[{lo[j]:.6g}, {hi[j]:.6g}]{hint}")
+    if type(target) is not np.ndarray:
+        target = real_array(target, "target")
+    shape = target.shape
+    trailing = shape[-2:] if shape[-2:] == (4, 4) else shape[-1:]
+    leading = shape[:len(shape) - len(trailing)]
+    if q_now.shape[:-1] != leading:          # one q_now for many targets, or the other way
+        try:
+            batch = np.broadcast_shapes(leading, q_now.shape[:-1])
+        except ValueError:
+            raise ValueError(f"q_now of shape {q_now.shape} does not broadcast against the "
+                             f"targets' leading shape {leading}") from None
+        target = np.broadcast_to(target, batch + trailing)
+        q_now = np.broadcast_to(q_now, batch + (6,))
+    result = ur(robot, target, tol=tol, q_ref=q_now, **options)
+    if not result.valid.any(axis=-1).all():
+        failed = ~result.valid.any(axis=-1)
+        where = tuple(int(i) for i in np.argwhere(failed)[0]) if failed.ndim else ()
+        which = f"target {where}" if where else "the target"
+        raise ValueError(f"{which} has no solution: {result.reason[where]}")
+    return closest_solution(result, q_now, limits)

@@ -1,0 +1,99 @@
+"""The UR models' inertial parameters and rated joint speeds: one table each
+(models.UR_DYNAMICS, models.UR_MAX_JOINT_SPEED_DEG), carried by every model's links."""
+
+import math
+
+import numpy as np
+import pytest
+
+from dqlab import dynamics, models
+from dqlab.models import UR_DYNAMICS, UR_MAX_JOINT_SPEED_DEG, UR_MODELS
+from dqlab.ur.script import SafetyLimits
+
+#: What the sources leave out (see the comment above UR_DYNAMICS.update in dqlab.models).
+NO_DYNAMICS = {"UR15", "UR18", "UR8 Long"}
+NO_SPEEDS = {"UR15", "UR8 Long"}
+#: Tensors published for these; the others get the stated cylinders.
+FULL_TENSORS = {"UR10", "UR3", "UR5", "UR10e", "UR12e", "UR16e", "UR20"}
+
+#: The UR20's inertia matrices as Universal Robots' page prints them (four decimals, row
+#: major), the independent check of the five-decimal tensors of the table.
+UR20_PAGE = (
+    (0.0887, -0.0001, -0.0001, -0.0001, 0.0763, 0.0072, -0.0001, 0.0072, 0.0842),
+    (0.1467, 0.0002, -0.0516, 0.0002, 4.6659, 0.0000, -0.0516, 0.0000, 4.6348),
+    (0.0261, -0.0001, -0.0290, -0.0001, 0.7576, -0.0000, -0.0290, -0.0000, 0.7533),
+    (0.0056, -0.0000, -0.0000, -0.0000, 0.0054, 0.0004, -0.0000, 0.0004, 0.0040),
+    (0.0059, -0.0000, 0.0000, -0.0000, 0.0058, -0.0004, 0.0000, -0.0004, 0.0043),
+    (0.0009, 0.0000, 0.0000, 0.0000, 0.0009, 0.0000, 0.0000, 0.0000, 0.0012),
+)
+
+
+def test_the_tables_cover_every_model_but_the_unpublished():
+    assert set(UR_DYNAMICS) == set(UR_MODELS) - NO_DYNAMICS
+    assert set(UR_MAX_JOINT_SPEED_DEG) == set(UR_MODELS) - NO_SPEEDS
+    assert not hasattr(models, "UR_PUBLISHED_MASSES")           # one table, not two
+
+
+@pytest.mark.parametrize("name", sorted(UR_MODELS))
+def test_every_model_carries_its_table(name):
+    robot = UR_MODELS[name]()
+    if name in NO_DYNAMICS:
+        assert all(link.inertia is None for link in robot.links)
+    else:
+        table = UR_DYNAMICS[name]
+        assert [link.inertia.mass for link in robot.links] == list(table["mass"])
+        np.testing.assert_allclose([link.inertia.com for link in robot.links], table["com"],
+                                   rtol=0, atol=1e-15)      # a cylinder's: its ends' midpoint
+        assert ("tensor" in table) == (name in FULL_TENSORS)
+        if "tensor" in table:
+            for link, (ixx, iyy, izz, ixy, ixz, iyz) in zip(robot.links, table["tensor"],
+                                                               strict=True):
+                np.testing.assert_array_equal(
+                    link.inertia.tensor, [[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+        for link in robot.links:            # a rigid body's tensor, whatever its source
+            moments = np.linalg.eigvalsh(link.inertia.tensor)
+            assert moments.min() > 0 and moments[0] + moments[1] >= moments[2]
+    if name in NO_SPEEDS:
+        assert all(link.max_speed is None for link in robot.links)
+    else:
+        assert [link.max_speed for link in robot.links] == [
+            math.radians(v) for v in UR_MAX_JOINT_SPEED_DEG[name]]
+
+
+def test_ur20_tensors_round_to_the_page():
+    for row, page in zip(UR_DYNAMICS["UR20"]["tensor"], UR20_PAGE, strict=True):
+        ixx, iyy, izz, ixy, ixz, iyz = row
+        matrix = np.array([ixx, ixy, ixz, ixy, iyy, iyz, ixz, iyz, izz])
+        np.testing.assert_allclose(matrix, page, atol=0.5e-4 + 1e-12)
+
+
+def test_renamed_models_share_their_tables():
+    assert UR_DYNAMICS["UR7e"] is UR_DYNAMICS["UR5e"]
+    assert UR_DYNAMICS["UR12e"] is UR_DYNAMICS["UR10e"]
+
+
+def test_safety_limits_of_a_model_are_its_rated_speeds():
+    limits = SafetyLimits.for_robot(models.ur5e())
+    np.testing.assert_array_equal(limits.max_joint_speed, np.full(6, math.pi))   # 180 deg/s
+    np.testing.assert_array_equal(limits.joint_limits, models.ur5e().limits)
+    np.testing.assert_allclose(SafetyLimits.for_robot(models.ur20()).max_joint_speed,
+                               np.radians([120, 120, 150, 210, 210, 210]), rtol=1e-15)
+    with pytest.raises(ValueError, match=r"UR15 has no rated speed for joints \[1, 2, 3, 4, 5, "
+                                         r"6\]"):
+        SafetyLimits.for_robot(models.ur15())
+
+
+def test_heavier_model_needs_more_shoulder_torque_to_hold_the_arm_out():
+    """A check of the tables' scale through the dynamics: the shoulder's gravity torque with
+    the arm stretched out horizontally is the arm's moment about the shoulder axis."""
+    q = np.array([0.0, 0.0, 0.0, -np.pi / 2, 0.0, 0.0])
+    torque = {name: abs(dynamics.gravity_torques(UR_MODELS[name](), q)[1])
+              for name in ("UR3e", "UR5e", "UR10e", "UR16e", "UR20", "UR30")}
+    assert torque["UR3e"] < torque["UR5e"] < torque["UR16e"] < torque["UR10e"] < torque["UR20"]
+    assert torque["UR30"] < torque["UR20"]          # the same shoulder, shorter tubes
+    # the UR5e by hand: sum of m_i g times the horizontal distance of each centre of mass
+    robot = models.ur5e()
+    frames = robot.fk(q, all_frames=True)
+    moment = sum(link.inertia.mass * 9.81 * (X[:3, :3] @ link.inertia.com + X[:3, 3])[0]
+                 for link, X in zip(robot.links, frames[1:], strict=True))
+    assert torque["UR5e"] == pytest.approx(abs(moment), rel=1e-12)
