@@ -81,13 +81,16 @@ def test_the_exercise_sentences_follow_the_checks(facts):
         number = int(path.name[:2])
         n = len(counts[path.name])
         assert facts[f"exercises_ch{number}"].startswith(f"{n} exercise"), number
+        assert facts[f"weeks_ch{number}"] == teaching_facts._weeks(
+            teaching_facts.CHAPTER_PLAN[path.stem][2])
 
 
 def test_the_guide_uses_the_computed_facts():
     text = GUIDE.read_text(encoding="utf-8")
     used = set(re.findall(r"\{\{\s*(\w+)\s*\}\}", text))
     assert {"chapter_table", "exercise_checks", "browser_cells", "core_weeks",
-            "course_weeks", "exercises_ch14", "exercises_ch15"} <= used
+            "course_weeks", "exercises_ch14", "exercises_ch15", "weeks_ch14",
+            "weeks_ch15"} <= used
     assert used <= set(teaching_facts.facts()) | {"book_version", "book_date"}
     # no chapter's time is typed in the guide: the plan's table is the only one
     assert "| chapter | before | after | time |" not in text

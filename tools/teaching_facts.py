@@ -15,9 +15,9 @@ MyST substitutions it sets (``{{ name }}`` in ``book/teaching-guide.md`` and oth
     Per chapter, its code cells, how many of them run in the in-browser copy and how many
     are tagged ``native-only`` (and skipped there), with what those need
     (:func:`browser_table`).
-``exercises_chN``
+``exercises_chN``, ``weeks_chN``
     For chapter ``N`` (1, 2, ...): how many exercises it has and which check themselves, in
-    words (:func:`exercise_sentence`).
+    words (:func:`exercise_sentence`), and its time from :data:`CHAPTER_PLAN`.
 """
 
 import json
@@ -199,6 +199,7 @@ def facts(book=editions.BOOK):
     for path in editions.chapters(book):
         number = int(re.match(r"(\d\d)-", path.name)[1])
         out[f"exercises_ch{number}"] = exercise_sentence(counts[path.name], number)
+        out[f"weeks_ch{number}"] = _weeks(CHAPTER_PLAN[path.stem][2])
     return out
 
 
