@@ -11,3 +11,16 @@ document.addEventListener("DOMContentLoaded", function () {
     entry.removeAttribute("role");
   });
 });
+
+// The table of contents' toggles of an entry with sub-pages (a <summary> holding only an
+// icon) are named after their entry: "Pages of <entry>".
+document.addEventListener("DOMContentLoaded", function () {
+  document.querySelectorAll("li.has-children > details > summary").forEach(function (summary) {
+    if (summary.textContent.trim() || summary.hasAttribute("aria-label")) {
+      return;
+    }
+    const entry = summary.closest("li.has-children").querySelector(":scope > a");
+    summary.setAttribute("aria-label",
+                         "Pages of " + (entry ? entry.textContent.trim() : "this entry"));
+  });
+});

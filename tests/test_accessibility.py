@@ -40,11 +40,6 @@ WCAG_TAGS = ["wcag2a", "wcag2aa", "wcag21a", "wcag21aa"]
 FAILING_IMPACTS = {"serious", "critical"}
 ARTIFACTS = ROOT / "test-artifacts" / "accessibility"
 
-#: Pages of chapters maintained separately whose figures and 3D views do not carry their
-#: descriptions yet: axe-core checks them like every page, the book's own rules for figure
-#: and view descriptions wait for them (matched on the page's name).
-AWAITING_DESCRIPTIONS = ("08-inverse-kinematics", "simulating-the-arm")
-
 __doc__ = __doc__.replace("{AXE_VERSION}", AXE_VERSION)
 
 
@@ -136,8 +131,6 @@ def test_page_is_accessible(page_path, site, browser, axe):  # noqa: F811
     problems = [f"{v['impact']} {v['id']} ({v['help']}) on {len(v['nodes'])} element(s), "
                 f"e.g. {v['nodes'][0]['target']}: {v['nodes'][0]['summary'][:200]}"
                 for v in violations if v["impact"] in FAILING_IMPACTS]
-    if any(stem in page_path for stem in AWAITING_DESCRIPTIONS):
-        figures = {"images": [], "views": []}
     problems += [f"image {img['src']} has no text description" if not img["alt"]
                  else f"image {img['src']} is described by a file name: {img['alt']!r}"
                  for img in figures["images"]

@@ -171,11 +171,6 @@ def test_a_pasted_solution_passes_its_automatic_check(out, monkeypatch):
     assert "dls_by_svd agrees with the reference on 200 random inputs" in printed
 
 
-#: Exercises with a computed answer that have no automatic check yet (chapters maintained
-#: separately); the test below fails when one gets a check, so that it leaves this list.
-AWAITING_CHECKS = {"ch8-ex3", "ch8-ex4"}
-
-
 def test_every_computed_exercise_of_parts_one_to_three_checks_itself(capsys):
     counts, computed = editions.check_counts(), editions.computed_exercises()
     parts = editions.parts()
@@ -189,7 +184,7 @@ def test_every_computed_exercise_of_parts_one_to_three_checks_itself(capsys):
                     if counts[p.name][label] == 0}
     with capsys.disabled():
         print("\n" + "\n".join(report))
-    assert missing == AWAITING_CHECKS & {label for p in CHAPTERS for label in counts[p.name]}, (
+    assert not missing, (
         f"exercises with a computed answer and no automatic check: {sorted(missing)}")
 
 
@@ -228,6 +223,11 @@ def test_the_reference_answers_pass_every_automatic_check(out, chapter, monkeypa
 
 @pytest.mark.parametrize("label, wrong", [
     ("ch2-ex3", "p_moving = np.array([1.0, 0.0, 0.0])\np_fixed = np.array([0.0, -1.0, 0.0])"),
+    ("ch8-ex3", "d_not_flipped, d_flipped = 0.45690, 0.45690\nfailing_rows = [0, 1, 2, 3]"),
+    ("ch8-ex4", "path = np.repeat(X_target[None], 40, axis=0)\n"
+                "path[:, 0, 3] += np.linspace(0.0, 0.20, 40)\n"
+                "cold_q = warm_q = ik.numerical(robot, path, q_home, error_damping=0.0)"
+                ".solutions[:, 0]"),
     ("ch10-ex3", "n_samples = 4400\nf_symmetric = 0.375\n"
                  "def report_times(R, V):\n    return 1.0, 1.5, 3.5"),
 ])
