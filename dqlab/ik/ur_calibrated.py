@@ -497,35 +497,31 @@ def _newton(links, tool, q, X_target, tol, max_iter):
     below ``_STOP tol``, or it stops making progress (after ``_GIVE_UP_AFTER`` steps, less
     than halving its error in two steps), or ``max_iter`` steps. Returns the joint vectors,
     whether each converged, the TCP poses (m, 4, 4) and the singularity measures (3, m) at
-    them. Many rows go through in blocks (temporaries that stay in the cache).
+    them.
 
     The first ``_PLAIN_STEPS`` steps are taken by every row together, none stopped or taken
-    out: from the closed form's start, millimetres away, Newton's quadratic convergence
-    brings nearly every row below the stop in three steps, and whole arrays cost less than
-    following each row (a row already there takes a step of the size of its error). The
-    few rows still above the stop go on alone (:func:`_newton_rows`), with the kernel for
-    their number."""
-    if q.shape[0] > _BLOCK:
-        parts = [_newton(links, tool, q[i:i + _BLOCK], X_target[i:i + _BLOCK], tol, max_iter)
-                 for i in range(0, q.shape[0], _BLOCK)]
-        return (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
-                np.concatenate([p[2] for p in parts]), np.concatenate([p[3] for p in parts],
-                                                                      axis=1))
-    chain = _chain(links, tool, q.shape[0])
+    out (:func:`_plain_steps`): from the closed form's start, millimetres away, Newton's
+    quadratic convergence brings nearly every row below the stop in three steps, and whole
+    arrays cost less than following each row (a row already there takes a step of the size
+    of its error). The few rows still above the stop then go on together, each stopped as
+    soon as it is done (:func:`_newton_rows`). Many rows go through in blocks of
+    ``_BLOCK`` (temporaries that stay in the cache)."""
+    m = q.shape[0]
     q = q.copy()
-    targets = chain.targets(X_target)
-    frames = chain.frames(q)
+    converged, size = np.zeros(m, dtype=bool), np.zeros(m)
+    X, measures = np.zeros((m, 4, 4)), np.zeros((3, m))
     plain = min(_PLAIN_STEPS, max_iter)
-    for _ in range(plain):
-        q += _shortened(chain.newton_step(frames, chain.residual(frames, targets)))
-        frames = chain.frames(q)
-    X, measures = chain.transforms(frames), chain.singularity_measures(frames)
-    size = _error_size(chain.residual(frames, targets))
+    for i in range(0, m, _BLOCK):
+        rows = slice(i, i + _BLOCK)
+        q[rows], size[rows], X[rows], measures[:, rows] = _plain_steps(
+            links, tool, q[rows], X_target[rows], plain)
     converged = size <= _STOP * tol
     left = np.flatnonzero(size > _STOP * tol)           # (NaN stops)
     if left.size and plain < max_iter:
-        q[left], converged[left], X[left], measures[:, left] = _newton_rows(
-            links, tool, q[left], X_target[left], tol, plain, max_iter)
+        for i in range(0, left.size, _BLOCK):
+            rows = left[i:i + _BLOCK]
+            q[rows], converged[rows], X[rows], measures[:, rows] = _newton_rows(
+                links, tool, q[rows], X_target[rows], tol, plain, max_iter)
     lost = np.flatnonzero(~np.isfinite(q).all(axis=1))  # a step that overflowed: back to 0
     if lost.size:
         q[lost] = np.where(np.isfinite(q[lost]), q[lost], 0.0)
@@ -533,6 +529,21 @@ def _newton(links, tool, q, X_target, tol, max_iter):
         frames = again.frames(q[lost])
         X[lost], measures[:, lost] = again.transforms(frames), again.singularity_measures(frames)
     return q, converged, X, measures
+
+
+def _plain_steps(links, tool, q, X_target, steps):
+    """``steps`` Newton steps of every row (m, 6), none stopped: the joint vectors, the size
+    of their errors (:func:`_error_size`), the TCP poses (m, 4, 4) and the singularity
+    measures (3, m) at them."""
+    chain = _chain(links, tool, q.shape[0])
+    q = q.copy()
+    targets = chain.targets(X_target)
+    frames = chain.frames(q)
+    for _ in range(steps):
+        q += _shortened(chain.newton_step(frames, chain.residual(frames, targets)))
+        frames = chain.frames(q)
+    return (q, _error_size(chain.residual(frames, targets)), chain.transforms(frames),
+            chain.singularity_measures(frames))
 
 
 def _error_size(e):
