@@ -19,7 +19,7 @@ from dqlab import dynamics, ik, jacobian
 from dqlab.identify import dh_parameters, robot_from_dh_parameters
 from dqlab.models import desk_arm, scara_rsm5, ur3
 from dqlab.robot import Robot
-from dqlab.ur.calibration import robot_from_joint_origins
+from dqlab.ur.calibration import CalibrationConf, robot_from_corrections, robot_from_joint_origins
 
 UR3 = ur3()
 CALIBRATED = robot_from_dh_parameters(UR3, dh_parameters(UR3) + 1e-3)   # a calibrated UR3
@@ -104,6 +104,10 @@ OTHER_CALLS = {
     "Robot.with_tool(z)": (lambda z: UR3.with_tool(z=z).tool, (0.15,)),
     "ur.calibration.robot_from_joint_origins": (robot_from_joint_origins,
                                                 (np.tile(np.eye(4), (6, 1, 1)),)),
+    "ur.calibration.robot_from_corrections": (
+        lambda delta_theta, delta_a, delta_d, delta_alpha: robot_from_corrections(
+            CalibrationConf(delta_theta, delta_a, delta_d, delta_alpha), "UR3").fk(Q6),
+        ((0.0,) * 6, (1e-4,) * 6, (-1e-4,) * 6, (1e-4,) * 6)),
 }
 
 

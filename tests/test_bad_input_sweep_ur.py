@@ -21,6 +21,7 @@ import dqlab
 from dqlab import ur
 from dqlab.models import ur3
 from dqlab.ur import rtde, script
+from dqlab.ur.calibration import CalibrationConf
 
 UR3 = ur3()
 Q0 = np.array([0.4, -1.3, 1.1, -1.2, -1.4, 0.6])           # a regular configuration
@@ -243,6 +244,9 @@ CASES = [
      ("controller_version",), {}),
     ("ControllerStandIn.start_timeout", lambda v, tmp: ur.ControllerStandIn(start_timeout=v),
      30.0, ("start_timeout",), {}),
+    ("ControllerStandIn.calibration",
+     lambda v, tmp: ur.ControllerStandIn(calibration=CalibrationConf(v, v, v, v)), (0.0,) * 6,
+     ("delta_theta", "calibration"), {}),
     # the MuJoCo back end
     ("MujocoBackend.movej.q", lambda v, tmp: mujoco().movej(v), Q1, ("q",), {}),
     ("MujocoBackend.movej.a", lambda v, tmp: mujoco().movej(Q1, a=v), 1.4, ("a",), {}),

@@ -285,3 +285,31 @@ def test_not_a_calibrated_ur_is_refused():
     p[3] += 0.2                                          # alpha1
     with pytest.raises(ValueError, match="link 1 of a calibrated UR twists"):
         ur(robot_from_dh_parameters(ur5e(), p), np.eye(4))
+
+
+def test_repeated_rows_are_those_of_the_pairwise_definition():
+    """_Polished.unique (joints 1, 3, 5 first, all six where they agree) against every pair
+    of rows compared on all six joints, with repeats shifted by 2 pi, near misses that
+    differ in one joint only, and rows that did not converge."""
+    from dqlab.ik import ur_calibrated as module
+    from dqlab.rotations import wrap_angle
+
+    rng = np.random.default_rng(90)
+    n = 400
+    polished = module._Polished.empty(n)
+    q = rng.uniform(-np.pi, np.pi, (n, 8, 6))
+    copies = rng.integers(0, 8, (n, 3, 2))                   # row b becomes a copy of row a
+    for i in range(n):
+        for a, b in copies[i]:
+            q[i, b] = q[i, a] + 2 * np.pi * rng.integers(-1, 2, 6)
+            if rng.random() < 0.3:                          # ... or a near miss
+                q[i, b, rng.integers(0, 6)] += rng.choice([5e-7, 2e-6])
+    polished.q[:] = q.reshape(-1, 6)
+    polished.converged[:] = rng.random(8 * n) < 0.9
+    Q = np.where(polished.converged[:, None], polished.q, np.nan).reshape(-1, 8, 6)
+    with np.errstate(invalid="ignore"):
+        same = np.abs(wrap_angle(Q[:, :, None] - Q[:, None])).max(axis=-1) < 1e-6
+    repeats = (same & np.tri(8, k=-1, dtype=bool)).any(axis=-1).reshape(-1)
+    expected = polished.converged & ~repeats
+    assert repeats.sum() > 300 and (expected != polished.converged).any()
+    np.testing.assert_array_equal(polished.unique(), expected)

@@ -325,7 +325,7 @@ def test_calibration_conf_of_another_robot_or_model_is_refused(tmp_path):
     path.write_text(_conf_text(deltas))
     with pytest.raises(CalibrationError, match="not a UR5e") as caught:
         robot_from_calibration_conf(path, "UR5e")
-    assert caught.value.field == "delta_a, delta_d"
+    assert caught.value.field == "delta_theta, delta_a, delta_d, delta_alpha"
 
 
 @pytest.mark.parametrize("field, text", [

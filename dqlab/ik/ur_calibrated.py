@@ -77,9 +77,10 @@ _STOP = 0.1            # a Newton branch stops when its errors are below _STOP t
 _DAMPING = 1e-12       # lambda = _DAMPING tr(J^T J) / 6
 _MAX_STEP = 0.5        # longest Newton step, rad (a longer one is shortened)
 _GIVE_UP_AFTER = 8     # steps after which a branch must keep halving its error
+_PLAIN_STEPS = 3       # first steps taken by every branch together, none stopped
 _BLOCK = 2048          # branches per block of the Newton steps
 _RESTART_ITER = 10     # Newton steps of a restart at most
-_FEW_ROWS = 64         # up to this many branches, the kernel working on whole matrices
+_FEW_ROWS = 192        # up to this many branches, the kernel working on whole matrices
 _SAMPLES = np.random.default_rng(20260531).uniform(-np.pi, np.pi, (64, 6))
 
 
@@ -342,11 +343,20 @@ class _Polished:
 
     def unique(self):
         """Converged rows that do not repeat a converged row of lower number of their pose
-        (joint-wise within 1e-6 rad, modulo 2 pi)."""
-        Q = np.where(self.converged[:, None], self.q, np.nan).reshape(-1, 8, 6)
+        (joint-wise within 1e-6 rad, modulo 2 pi). The 28 pairs of rows of a pose are
+        compared on joints 1, 3 and 5 first (the shoulder, elbow and wrist tell the branches
+        apart), and on all six joints where those agree."""
+        Q = self.q.reshape(-1, 8, 6)
+        converged = self.converged.reshape(-1, 8)
+        earlier, later = _PAIRS
         with np.errstate(invalid="ignore"):
-            same = np.abs(wrap_angle(Q[:, :, None] - Q[:, None])).max(axis=-1) < 1e-6
-        repeats = (same & np.tri(8, k=-1, dtype=bool)).any(axis=-1).reshape(-1)
+            coarse = np.abs(wrap_angle(Q[:, earlier][..., _COARSE]
+                                       - Q[:, later][..., _COARSE])).max(axis=-1) < 1e-6
+            pose, pair = np.nonzero(coarse & converged[:, earlier] & converged[:, later])
+            same = np.abs(wrap_angle(Q[pose, earlier[pair]]
+                                     - Q[pose, later[pair]])).max(axis=-1) < 1e-6
+        repeats = np.zeros(self.converged.size, dtype=bool)
+        repeats[8 * pose[same] + later[pair[same]]] = True
         return self.converged & ~repeats
 
     def are_new(self, rows, q, unique):
@@ -418,6 +428,10 @@ def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, to
         ok = unique[sibling]
         owners.append(wanted[ok])
         starts.append(_flip(nominal.robot, polished.q[sibling[ok]], bits))
+    _restart(chain, polished, unique, np.concatenate(owners), np.concatenate(starts), X_0T,
+             tol, max_iter)
+    wanted = wanted[~unique[wanted]]                    # still missing after the flips
+    owners, starts = [], []
     kernel = _MatrixChain(*chain)
     wanted = wanted[found[wanted]]
     failed = wanted[~polished.converged[wanted]]        # restart those only near a
@@ -437,8 +451,9 @@ def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, to
             for t in (0.05, -0.05, 0.2, -0.2, 0.6, -0.6):
                 owners.append(rows[near])
                 starts.append(q[near] + t * V[near, -1])
-    _restart(chain, polished, unique, np.concatenate(owners), np.concatenate(starts), X_0T,
-             tol, max_iter)
+    if owners:
+        _restart(chain, polished, unique, np.concatenate(owners), np.concatenate(starts),
+                 X_0T, tol, max_iter)
 
 
 def _restart(chain, polished, unique, owners, starts, X_0T, tol, max_iter):
@@ -482,13 +497,64 @@ def _newton(links, tool, q, X_target, tol, max_iter):
     below ``_STOP tol``, or it stops making progress (after ``_GIVE_UP_AFTER`` steps, less
     than halving its error in two steps), or ``max_iter`` steps. Returns the joint vectors,
     whether each converged, the TCP poses (m, 4, 4) and the singularity measures (3, m) at
-    them. Many rows go through in blocks (temporaries that stay in the cache)."""
-    if q.shape[0] > _BLOCK:
-        parts = [_newton(links, tool, q[i:i + _BLOCK], X_target[i:i + _BLOCK], tol, max_iter)
-                 for i in range(0, q.shape[0], _BLOCK)]
-        return (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
-                np.concatenate([p[2] for p in parts]), np.concatenate([p[3] for p in parts],
-                                                                      axis=1))
+    them.
+
+    The first ``_PLAIN_STEPS`` steps are taken by every row together, none stopped or taken
+    out (:func:`_plain_steps`): from the closed form's start, millimetres away, Newton's
+    quadratic convergence brings nearly every row below the stop in three steps, and whole
+    arrays cost less than following each row (a row already there takes a step of the size
+    of its error). The few rows still above the stop then go on together, each stopped as
+    soon as it is done (:func:`_newton_rows`). Many rows go through in blocks of
+    ``_BLOCK`` (temporaries that stay in the cache)."""
+    m = q.shape[0]
+    q = q.copy()
+    converged, size = np.zeros(m, dtype=bool), np.zeros(m)
+    X, measures = np.zeros((m, 4, 4)), np.zeros((3, m))
+    plain = min(_PLAIN_STEPS, max_iter)
+    for i in range(0, m, _BLOCK):
+        rows = slice(i, i + _BLOCK)
+        q[rows], size[rows], X[rows], measures[:, rows] = _plain_steps(
+            links, tool, q[rows], X_target[rows], plain)
+    converged = size <= _STOP * tol
+    left = np.flatnonzero(size > _STOP * tol)           # (NaN stops)
+    if left.size and plain < max_iter:
+        for i in range(0, left.size, _BLOCK):
+            rows = left[i:i + _BLOCK]
+            q[rows], converged[rows], X[rows], measures[:, rows] = _newton_rows(
+                links, tool, q[rows], X_target[rows], tol, plain, max_iter)
+    lost = np.flatnonzero(~np.isfinite(q).all(axis=1))  # a step that overflowed: back to 0
+    if lost.size:
+        q[lost] = np.where(np.isfinite(q[lost]), q[lost], 0.0)
+        again = _chain(links, tool, lost.size)
+        frames = again.frames(q[lost])
+        X[lost], measures[:, lost] = again.transforms(frames), again.singularity_measures(frames)
+    return q, converged, X, measures
+
+
+def _plain_steps(links, tool, q, X_target, steps):
+    """``steps`` Newton steps of every row (m, 6), none stopped: the joint vectors, the size
+    of their errors (:func:`_error_size`), the TCP poses (m, 4, 4) and the singularity
+    measures (3, m) at them."""
+    chain = _chain(links, tool, q.shape[0])
+    q = q.copy()
+    targets = chain.targets(X_target)
+    frames = chain.frames(q)
+    for _ in range(steps):
+        q += _shortened(chain.newton_step(frames, chain.residual(frames, targets)))
+        frames = chain.frames(q)
+    return (q, _error_size(chain.residual(frames, targets)), chain.transforms(frames),
+            chain.singularity_measures(frames))
+
+
+def _error_size(e):
+    """The larger of the position and rotation errors (Euclidean) of residuals e (m, 6)."""
+    ee = e * e
+    return np.sqrt(np.maximum(ee[:, :3].sum(axis=1), ee[:, 3:].sum(axis=1)))
+
+
+def _newton_rows(links, tool, q, X_target, tol, first, max_iter):
+    """Steps ``first`` to ``max_iter`` of :func:`_newton`, each row stopped as soon as it is
+    below the stop or no longer halving its error (returns as :func:`_newton` does)."""
     m = q.shape[0]
     chain = _chain(links, tool, m)
     q = q.copy()
@@ -498,13 +564,12 @@ def _newton(links, tool, q, X_target, tol, max_iter):
     before = np.full((2, m), np.inf)           # ... and at the two previous iterates
     stop = _STOP * tol
     active = np.arange(m)
-    for iteration in range(max_iter + 1):
+    for iteration in range(first, max_iter + 1):
         whole = active.size == m
         part = frames if whole else chain.take(frames, active)
         e = chain.residual(part, targets if whole else chain.take(targets, active))
-        ee = e * e
         before[:, active] = before[1, active], size[active]
-        size[active] = np.sqrt(np.maximum(ee[:, :3].sum(axis=1), ee[:, 3:].sum(axis=1)))
+        size[active] = _error_size(e)
         keep = size[active] > stop             # NaN stops too
         if iteration >= _GIVE_UP_AFTER:        # no longer making progress: give up
             keep &= size[active] < 0.5 * before[0, active]
@@ -512,17 +577,16 @@ def _newton(links, tool, q, X_target, tol, max_iter):
             break
         if not keep.all():
             active, part, e = active[keep], chain.take(part, np.flatnonzero(keep)), e[keep]
-        step = chain.newton_step(part, e)
-        longest = np.abs(step).max(axis=1, keepdims=True)
-        step *= np.minimum(1.0, _MAX_STEP / np.maximum(longest, 1e-300))
-        q[active] += step
+        q[active] += _shortened(chain.newton_step(part, e))
         chain.put(frames, active, q[active])
-    converged = size <= stop
-    lost = ~np.isfinite(q).all(axis=1)         # a step that overflowed: back to zero
-    if lost.any():
-        q[lost] = np.where(np.isfinite(q[lost]), q[lost], 0.0)
-        chain.put(frames, np.flatnonzero(lost), q[lost])
-    return q, converged, chain.transforms(frames), chain.singularity_measures(frames)
+    return q, size <= stop, chain.transforms(frames), chain.singularity_measures(frames)
+
+
+def _shortened(step):
+    """Newton steps (m, 6) longer than ``_MAX_STEP`` (largest joint) shortened to it."""
+    with np.errstate(invalid="ignore"):
+        longest = np.abs(step).max(axis=1, keepdims=True)
+        return step * np.minimum(1.0, _MAX_STEP / np.maximum(longest, 1e-300))
 
 
 def _flags(polished, valid, singular_tol, d4):
@@ -644,6 +708,8 @@ def _measures(z1, z3, z5, x2, x3, o5):
 
 
 _DIAGONAL = np.arange(6)
+_PAIRS = np.array([(k, i) for i in range(8) for k in range(i)]).T     # (2, 28): rows k < i
+_COARSE = [0, 2, 4]
 
 
 class _EntryChain:

@@ -61,6 +61,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._checks import real_array
 from ..ik import pose_errors
 from ..models import UR_MODELS
 from ..robot import Link, Robot
@@ -71,7 +72,8 @@ __all__ = ["CalibrationError", "KinematicsInfo", "CalibrationConf", "MODEL_TOLER
            "ROBOT_STATE", "KINEMATICS_INFO", "UNCALIBRATED", "kinematics_info_from_robot",
            "message_from_kinematics_info", "kinematics_info_from_message",
            "read_kinematics_info", "robot_from_kinematics_info", "read_calibration_conf",
-           "robot_from_calibration_conf", "robot_from_joint_origins",
+           "robot_from_calibration_conf", "robot_from_corrections",
+           "robot_from_joint_origins",
            "read_ros_calibration", "robot_from_ros_calibration", "ROS_LINKS"]
 
 #: Message type of a robot-state message, and sub-package type of the kinematics info.
@@ -375,8 +377,8 @@ def robot_from_kinematics_info(info: KinematicsInfo, *, model=None, name: str = 
     Returns
     -------
     Robot
-        Standard DH with the package's parameters, limits :math:`\\pm 2\\pi`, no base, no
-        tool.
+        Standard DH with the package's parameters; the model's joint limits, rated speeds
+        and inertias (without a model: limits :math:`\\pm 2\\pi`); no base, no tool.
 
     Raises
     ------
@@ -401,9 +403,17 @@ def robot_from_kinematics_info(info: KinematicsInfo, *, model=None, name: str = 
 
 
 def _robot(theta, a, d, alpha, model, name):
+    """The calibrated arm: these DH parameters, and the model's joint limits, rated speeds,
+    inertias and joint names (without a model: limits of +-2 pi and nothing else)."""
     label = name or f"{_model_name(model) or 'UR'} (calibrated)"
-    return Robot([Link(a=ai, alpha=al, d=di, theta_offset=t, limits=_LIMITS)
-                  for t, ai, di, al in zip(theta, a, d, alpha, strict=True)],
+    ratings = [{"limits": _LIMITS}] * 6
+    if model is not None:
+        nominal = _nominal(model)
+        if len(nominal.links) == 6:
+            ratings = [{"limits": lk.limits, "name": lk.name, "inertia": lk.inertia,
+                        "max_speed": lk.max_speed} for lk in nominal.links]
+    return Robot([Link(a=ai, alpha=al, d=di, theta_offset=t, **rating)
+                  for t, ai, di, al, rating in zip(theta, a, d, alpha, ratings, strict=True)],
                  convention="dh", name=label)
 
 
@@ -603,16 +613,77 @@ def robot_from_calibration_conf(path, model, *, checksum=None, name: str = "") -
         if conf.joint_checksum != wanted:
             raise CalibrationError(path, "joint_checksum", f"{conf.joint_checksum} in the "
                                    f"file, {wanted} expected: another robot's calibration")
+    return robot_from_corrections(conf, model, name=name, source=path)
+
+
+def robot_from_corrections(corrections: CalibrationConf, model, *, name: str = "",
+                           source: str = "corrections") -> Robot:
+    r"""The calibrated arm of a model and its corrections (a :class:`CalibrationConf`).
+
+    :math:`\theta^0_i = \theta^{nom}_i + \delta\theta_i`, :math:`a_i = a^{nom}_i + \delta a_i`,
+    :math:`d_i = d^{nom}_i + \delta d_i`, :math:`\alpha_i = \alpha^{nom}_i + \delta\alpha_i`,
+    with the published (nominal) parameters of the model: what
+    :func:`robot_from_calibration_conf` does with a file, and what the controller stand-in
+    serves (``ControllerStandIn(calibration=...)``).
+
+    Parameters
+    ----------
+    corrections : CalibrationConf
+        The deltas (each 6 finite numbers, metres and radians); the checksums and status
+        are not used.
+    model : str or Robot
+        A name of :data:`dqlab.models.UR_MODELS` (``"UR5e"``) or a nominal UR robot.
+    name : str, optional
+        The robot's name (default: the model's, "calibrated").
+    source : str
+        Named in error messages.
+
+    Returns
+    -------
+    Robot
+        Standard DH; the model's joint limits, rated speeds and inertias; no base, no tool.
+
+    Raises
+    ------
+    TypeError
+        If ``corrections`` is not a :class:`CalibrationConf`.
+    CalibrationError
+        Naming the delta: not 6 finite numbers; or deltas that do not fit the model
+        (farther than :data:`MODEL_TOLERANCE` from it).
+
+    Examples
+    --------
+    >>> corrections = CalibrationConf(delta_theta=(0, 0.001, 0, 0, 0, 0),
+    ...                               delta_a=(0, -0.0005, 0, 0, 0, 0),
+    ...                               delta_d=(0,) * 6, delta_alpha=(0,) * 6)
+    >>> robot = robot_from_corrections(corrections, "UR3")
+    >>> robot.name, robot.links[1].a, robot.links[1].theta_offset
+    ('UR3 (calibrated)', -0.24415, 0.001)
+    """
+    if not isinstance(corrections, CalibrationConf):
+        raise TypeError(f"corrections must be a CalibrationConf, got "
+                        f"{type(corrections).__name__}")
+    deltas = {}
+    for field in _DELTAS:
+        try:
+            values = real_array(getattr(corrections, field), field)
+        except (TypeError, ValueError) as exc:
+            raise CalibrationError(source, field, f"not a sequence of real numbers ({exc})"
+                                   ) from None
+        if values.shape != (6,) or not np.isfinite(values).all():
+            raise CalibrationError(source, field, f"must be 6 finite numbers, got "
+                                   f"{values.tolist()}")
+        deltas[field] = values.tolist()
     nominal = _nominal(model)
     links = nominal.links
     if len(links) != 6 or nominal.convention != "dh":
         raise ValueError(f"model must be a six-joint standard-DH robot, got {nominal!r}")
-    theta = [lk.theta_offset + dt for lk, dt in zip(links, conf.delta_theta, strict=True)]
-    a = [lk.a + da for lk, da in zip(links, conf.delta_a, strict=True)]
-    d = [lk.d + dd for lk, dd in zip(links, conf.delta_d, strict=True)]
-    alpha = [lk.alpha + dl for lk, dl in zip(links, conf.delta_alpha, strict=True)]
+    theta = [lk.theta_offset + dt for lk, dt in zip(links, deltas["delta_theta"], strict=True)]
+    a = [lk.a + da for lk, da in zip(links, deltas["delta_a"], strict=True)]
+    d = [lk.d + dd for lk, dd in zip(links, deltas["delta_d"], strict=True)]
+    alpha = [lk.alpha + dl for lk, dl in zip(links, deltas["delta_alpha"], strict=True)]
     robot = _robot(theta, a, d, alpha, model, name)
-    _check_model(robot, model, path, "delta_a, delta_d")
+    _check_model(robot, model, source, ", ".join(_DELTAS))
     return robot
 
 

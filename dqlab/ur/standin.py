@@ -15,7 +15,10 @@ controller's protocols for the client code of :mod:`dqlab.ur.client` to run unch
   :meth:`ControllerStandIn.log`) and nothing moves. On connection it sends what a controller
   sends: the version message (:mod:`dqlab.ur.secondary`, where its messages are encoded)
   and a robot state with the arm's kinematics info (:mod:`dqlab.ur.calibration`); the
-  client reads and discards them; :mod:`dqlab.ur.calibration` reads the second.
+  client reads and discards them; :mod:`dqlab.ur.calibration` reads the second. The arm is
+  the model's nominal one (joint checksums ``0xFFFFFFFF``, as the simulator reports), or,
+  with ``calibration=``, the model with a calibration's corrections: then the arm moves,
+  reports its TCP and sends its kinematics info as a calibrated controller does.
 - **RTDE output** (port 30004 on a robot; see :mod:`dqlab.ur.rtde`): protocol version
   negotiation (versions 1 and 2), the controller version (reported as 5.11.0.0 by default),
   output recipe set-up, start and pause, and data packages at the requested frequency (at
@@ -44,13 +47,19 @@ import subprocess
 import sys
 import tempfile
 import time
+import zlib
 
 import numpy as np
 
 from .._checks import real_array
 from . import rtde
 from ._args import positive_number
-from .calibration import kinematics_info_from_robot, message_from_kinematics_info
+from .calibration import (
+    CalibrationConf,
+    kinematics_info_from_robot,
+    message_from_kinematics_info,
+    robot_from_corrections,
+)
 from .kinematic_arm import KinematicBackend
 from .secondary import SecondaryInterfaceBackend, version_message
 from .state import HOME
@@ -225,6 +234,15 @@ class ControllerStandIn:
         Reported over RTDE.
     start_timeout : float
         s to wait for the process to be ready.
+    calibration : dqlab.ur.calibration.CalibrationConf, optional
+        The arm's calibration, as the controller's ``calibration.conf`` holds it: the
+        corrections of :math:`\theta_i, a_i, d_i, \alpha_i` added to the model's published
+        parameters (:func:`dqlab.ur.calibration.robot_from_corrections`), the joints'
+        checksums and the calibration status. The stand-in's arm is then that calibrated
+        arm, and its kinematics info carries its parameters, the checksums (where the
+        corrections have none, the CRC-32 of each joint's four corrections: UR's own
+        checksum is not published) and the status (default 2, linearised). Default: the
+        nominal arm, uncalibrated.
 
     Attributes
     ----------
@@ -243,12 +261,22 @@ class ControllerStandIn:
     array([ 0.2, -1.4,  0.3, -1.6,  0.1,  0. ])
     >>> standin.running
     False
+
+    A calibrated arm, whose calibration a client reads back:
+
+    >>> from dqlab.ur.calibration import CalibrationConf, read_kinematics_info
+    >>> factory = CalibrationConf(delta_theta=(0, 0.001, 0, 0, 0, 0), delta_a=(0,) * 6,
+    ...                           delta_d=(0,) * 6, delta_alpha=(0,) * 6)
+    >>> with ControllerStandIn("ur5e", calibration=factory) as standin:
+    ...     info = read_kinematics_info(standin.host, standin.secondary_port)
+    >>> info.theta[1], info.calibration_status
+    (0.001, 2)
     """
 
     host = LOOPBACK
 
     def __init__(self, model="ur3", q0=None, *, speedup=1.0, secondary_port=0, rtde_port=0,
-                 controller_version=(5, 11, 0, 0), start_timeout=30.0):
+                 controller_version=(5, 11, 0, 0), start_timeout=30.0, calibration=None):
         from .. import models
 
         if not isinstance(model, str) or not callable(getattr(models, model, None)) \
@@ -265,7 +293,15 @@ class ControllerStandIn:
                                         for v in version):
             raise ValueError(f"controller_version must be 4 ints (major, minor, bugfix, build),"
                              f" got {controller_version!r}")
-        self._config = {"model": model, "q0": q0.tolist(),
+        if calibration is not None:
+            if not isinstance(calibration, CalibrationConf):
+                raise TypeError(f"calibration must be a dqlab.ur.calibration.CalibrationConf "
+                                f"(or None), got {type(calibration).__name__}")
+            # refused here, with the field, before any process starts
+            robot_from_corrections(calibration, getattr(models, model)(),
+                                   source="calibration")
+            calibration = _served_calibration(calibration)
+        self._config = {"model": model, "q0": q0.tolist(), "calibration": calibration,
                         "speedup": positive_number(speedup, "speedup"),
                         "secondary_port": _port(secondary_port, "secondary_port"),
                         "rtde_port": _port(rtde_port, "rtde_port"),
@@ -467,13 +503,51 @@ class _RTDEConnection:
         return rtde.pack(rtde.DATA_PACKAGE, head + st.pack(*flat))
 
 
+def _served_calibration(calibration):
+    """A calibration as the stand-in's configuration holds it (JSON): the corrections as
+    floats, the checksums (the CRC-32 of each joint's four corrections where there are
+    none) and the status (2, linearised, where there is none)."""
+    served = {k: [float(v) for v in getattr(calibration, k)] for k in
+              ("delta_theta", "delta_a", "delta_d", "delta_alpha")}
+    checksum = calibration.joint_checksum
+    if checksum is None:
+        checksum = [zlib.crc32(struct.pack(">4d", *(served[k][i] for k in served)))
+                    for i in range(6)]
+    status = calibration.calibration_status
+    served["joint_checksum"] = [int(c) for c in checksum]
+    served["calibration_status"] = 2 if status is None else int(status)
+    return served
+
+
+def _arm_robot(config):
+    """The stand-in's arm: the model, with the calibration's corrections if it has one (the
+    corrected DH parameters; the model's joint limits, speeds, inertias, base and tool)."""
+    from .. import models
+    from ..robot import Link, Robot
+
+    nominal = getattr(models, config["model"])()
+    if config.get("calibration") is None:
+        return nominal
+    corrected = robot_from_corrections(CalibrationConf(**config["calibration"]), nominal)
+    links = [Link(a=c.a, alpha=c.alpha, d=c.d, theta_offset=c.theta_offset, joint=n.joint,
+                  limits=n.limits, name=n.name, inertia=n.inertia, max_speed=n.max_speed)
+             for c, n in zip(corrected.links, nominal.links, strict=True)]
+    return Robot(links, convention=nominal.convention, base=nominal.base, tool=nominal.tool,
+                 name=f"{nominal.name} (calibrated)")
+
+
 def _greeting(config, robot):
     """What the stand-in sends a new client of its secondary interface, as a real controller
     does: the version message, then a robot state with the arm's kinematics info. (The one
     place where it encodes that stream's messages, with :mod:`dqlab.ur.secondary` and
     :mod:`dqlab.ur.calibration`.)"""
-    return (version_message(config["controller_version"])
-            + message_from_kinematics_info(kinematics_info_from_robot(robot)))
+    calibration = config.get("calibration")
+    if calibration is None:
+        info = kinematics_info_from_robot(robot)
+    else:
+        info = kinematics_info_from_robot(robot, checksum=calibration["joint_checksum"],
+                                          calibration_status=calibration["calibration_status"])
+    return version_message(config["controller_version"]) + message_from_kinematics_info(info)
 
 
 def _log(message):
@@ -487,10 +561,8 @@ def _serve(config_json):
     that client with a message in its log, and keeps serving: a program is refused as a
     whole (nothing moves) when any of its lines fails, for any reason.
     """
-    from .. import models
-
     config = json.loads(config_json)
-    robot = getattr(models, config["model"])()
+    robot = _arm_robot(config)
     arm = KinematicBackend(robot, config["q0"], speedup=config["speedup"])
     arm.connect()
     greeting = _greeting(config, robot)
