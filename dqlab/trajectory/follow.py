@@ -195,9 +195,9 @@ class FollowReport:
     position_error, rotation_error : ndarray, shape (N,)
         Distance (m) and angle (rad) between each point's solution and its target, as the
         solver measures them: the numerical method by the forward kinematics; the closed
-        form by the residual of its equations (the clipping of its steps,
-        :func:`dqlab.ik.ur_closed_form.ur`'s default ``residuals="equations"``), which is exactly 0 when no
-        step was clipped, so an independent check takes ``robot.fk`` of the joints. The
+        form by the residual of its equations (the clipping of its steps, the default
+        ``residuals="equations"`` of :func:`dqlab.ik.ur_closed_form.ur`), which is exactly 0
+        when no step was clipped, so an independent check takes ``robot.fk`` of the joints. The
         rotation error is 0 when only positions were followed.
     max_step : ndarray, shape (N - 1,)
         Largest joint change between consecutive points, radians.
