@@ -171,7 +171,11 @@ def transform_inverse(T: ArrayLike, *, tol: float = 1e-9) -> NDArray[np.float64]
     >>> np.allclose(transform_inverse(X) @ X, np.eye(4))
     True
     """
-    T = check_transform(T, tol)
+    return _rigid_inverse(check_transform(T, tol))
+
+
+def _rigid_inverse(T):
+    """:func:`transform_inverse` of transforms already checked (float arrays (..., 4, 4))."""
     Rt = np.swapaxes(T[..., :3, :3], -1, -2)
     out = np.zeros(T.shape)
     out[..., :3, :3] = Rt

@@ -58,7 +58,8 @@ from ..dualquat import dual_quaternion_from_transform
 from ..models import UR_ALPHA, UR_SHAPE
 from ..robot import Link, Robot
 from ..rotations import wrap_angle
-from ..transforms import transform_inverse
+from ..transforms import _rigid_inverse
+from . import _newton_compiled as _compiled
 from .result import IKResult, finish
 from .targets import parse_targets, pose_errors
 
@@ -270,8 +271,8 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
     X_W = targets.transforms.reshape((-1, 4, 4))
     n = X_W.shape[0]
     X_6T = robot.tool if tool is None else _checked_tool(tool, pose_tol)
-    X_0T = transform_inverse(robot.base) @ X_W          # the targets in frame 0 ...
-    X_T6 = transform_inverse(X_6T)
+    X_0T = _rigid_inverse(robot.base) @ X_W             # the targets in frame 0 ...
+    X_T6 = _rigid_inverse(X_6T)                         # (base and tool checked already)
     X_06 = X_0T @ X_T6                                  # ... and the flanges they mean
     wide = max(tol, 2.0 * nominal.position_gap)
 
@@ -304,7 +305,7 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
     done = np.flatnonzero(polished.done)
     pe = start.position_error.reshape(n * 8).copy()
     re = start.rotation_error.reshape(n * 8).copy()
-    pe[done], re[done] = pose_errors(polished.X[done], X_0T[done // 8])
+    pe[done], re[done] = polished.errors[:, done]
     valid = polished.converged & (pe <= tol) & (re <= tol)
     flags = _flags(polished, valid, singular_tol, nominal.robot.links[3].d)
     flags["not_converged"] = (exact & ~valid).reshape(n, 8).any(axis=1)
@@ -323,22 +324,25 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
 class _Polished:
     """The branches of n poses after Newton, row ``8 i + k`` for branch k of pose i: joint
     vectors ``q`` (8 n, 6), which rows were polished (``done``) and converged, the TCP pose
-    ``X`` (8 n, 4, 4) in frame 0 and the singularity measures (3, 8 n) at ``q``."""
+    ``X`` (8 n, 4, 4) in frame 0, the singularity measures (3, 8 n) at ``q`` and the
+    position and rotation errors (2, 8 n) from the target (:func:`pose_errors`)."""
 
     q: np.ndarray
     done: np.ndarray
     converged: np.ndarray
     X: np.ndarray
     measures: np.ndarray
+    errors: np.ndarray
 
     @classmethod
     def empty(cls, n):
         return cls(np.zeros((8 * n, 6)), np.zeros(8 * n, dtype=bool),
-                   np.zeros(8 * n, dtype=bool), np.zeros((8 * n, 4, 4)), np.zeros((3, 8 * n)))
+                   np.zeros(8 * n, dtype=bool), np.zeros((8 * n, 4, 4)), np.zeros((3, 8 * n)),
+                   np.zeros((2, 8 * n)))
 
-    def record(self, rows, q, converged, X, measures):
+    def record(self, rows, q, converged, X, measures, errors):
         self.q[rows], self.converged[rows], self.X[rows] = q, converged, X
-        self.measures[:, rows] = measures
+        self.measures[:, rows], self.errors[:, rows] = measures, errors
         self.done[rows] = True
 
     def unique(self):
@@ -346,6 +350,8 @@ class _Polished:
         (joint-wise within 1e-6 rad, modulo 2 pi). The 28 pairs of rows of a pose are
         compared on joints 1, 3 and 5 first (the shoulder, elbow and wrist tell the branches
         apart), and on all six joints where those agree."""
+        if _compiled.ready():
+            return _compiled.unique(self.q, self.converged)
         Q = self.q.reshape(-1, 8, 6)
         converged = self.converged.reshape(-1, 8)
         earlier, later = _PAIRS
@@ -362,6 +368,8 @@ class _Polished:
     def are_new(self, rows, q, unique):
         """Whether each joint vector ``q[j]`` differs from every unique row of the pose of
         ``rows[j]``."""
+        if _compiled.ready():
+            return _compiled.are_new(rows, q, self.q, unique)
         Q = np.where(unique[:, None], self.q, np.nan).reshape(-1, 8, 6)[rows // 8]
         with np.errstate(invalid="ignore"):
             same = np.abs(wrap_angle(Q - q[:, None])).max(axis=-1) < 1e-6
@@ -370,9 +378,7 @@ class _Polished:
     def is_new(self, row, q, unique):
         """Whether the joint vector ``q`` (6,) differs from every unique row of the pose of
         ``row``."""
-        pose = slice(row - row % 8, row - row % 8 + 8)
-        others = self.q[pose][unique[pose]]
-        return not (np.abs(wrap_angle(others - q)).max(axis=-1) < 1e-6).any()
+        return bool(self.are_new(np.array([row]), q[None], unique)[0])
 
 
 def _checked_tool(tool, pose_tol):
@@ -404,7 +410,7 @@ def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, to
     The first restart that converges to a solution the pose does not have yet replaces the
     branch; ``polished`` is updated in place."""
     unique = polished.unique()
-    missing = polished.done & ~unique
+    missing = polished.done & ~unique & found
     if not missing.any():
         return
     poses = np.flatnonzero(missing.reshape(-1, 8).any(axis=1)
@@ -413,7 +419,7 @@ def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, to
         first = 8 * poses + np.argmax(unique.reshape(-1, 8)[poses], axis=1)
         X_cal6 = polished.X[first] @ X_T6               # the calibrated flange at q*
         X_exact6 = nominal.robot.fk(polished.q[first])
-        corrected = exact_solutions(X_0T[poses] @ X_T6 @ transform_inverse(X_cal6)
+        corrected = exact_solutions(X_0T[poses] @ X_T6 @ _rigid_inverse(X_cal6)
                                     @ X_exact6)
         rows = (8 * poses[:, None] + np.arange(8)).reshape(-1)
         use = missing[rows] & corrected.valid.reshape(-1)
@@ -461,7 +467,7 @@ def _restart(chain, polished, unique, owners, starts, X_0T, tol, max_iter):
     that converges to a solution its pose does not have replaces the row."""
     if not owners.size:
         return
-    q, converged, X, measures = _newton(*chain, starts, X_0T[owners // 8], tol,
+    q, converged, X, measures, errors = _newton(*chain, starts, X_0T[owners // 8], tol,
                                         min(max_iter, _RESTART_ITER))
     new = converged & polished.are_new(owners, q, unique)
     fixed = np.zeros(unique.size, dtype=bool)
@@ -469,7 +475,7 @@ def _restart(chain, polished, unique, owners, starts, X_0T, tol, max_iter):
         row = owners[j]
         if fixed[row] or not polished.is_new(row, q[j], unique):   # taken meanwhile
             continue
-        polished.record(row, q[j], True, X[j], measures[:, j])
+        polished.record(row, q[j], True, X[j], measures[:, j], errors[:, j])
         unique[row] = fixed[row] = True
 
 
@@ -496,8 +502,8 @@ def _newton(links, tool, q, X_target, tol, max_iter):
     (m, 4, 4) of frame 0, until each row's position and rotation errors (Euclidean) are
     below ``_STOP tol``, or it stops making progress (after ``_GIVE_UP_AFTER`` steps, less
     than halving its error in two steps), or ``max_iter`` steps. Returns the joint vectors,
-    whether each converged, the TCP poses (m, 4, 4) and the singularity measures (3, m) at
-    them.
+    whether each converged, the TCP poses (m, 4, 4), the singularity measures (3, m) at
+    them and their position and rotation errors (2, m) (:func:`pose_errors`).
 
     The first ``_PLAIN_STEPS`` steps are taken by every row together, none stopped or taken
     out (:func:`_plain_steps`): from the closed form's start, millimetres away, Newton's
@@ -505,7 +511,14 @@ def _newton(links, tool, q, X_target, tol, max_iter):
     arrays cost less than following each row (a row already there takes a step of the size
     of its error). The few rows still above the stop then go on together, each stopped as
     soon as it is done (:func:`_newton_rows`). Many rows go through in blocks of
-    ``_BLOCK`` (temporaries that stay in the cache)."""
+    ``_BLOCK`` (temporaries that stay in the cache).
+
+    With numba installed, the same steps run compiled, branch by branch
+    (:mod:`dqlab.ik._newton_compiled`, tested equal to this path)."""
+    if _compiled.ready():
+        return _compiled.newton(links, tool, q, X_target, tol, max_iter, plain=_PLAIN_STEPS,
+                                stop_factor=_STOP, give_up_after=_GIVE_UP_AFTER,
+                                damping=_DAMPING, max_step=_MAX_STEP)
     m = q.shape[0]
     q = q.copy()
     converged, size = np.zeros(m, dtype=bool), np.zeros(m)
@@ -528,7 +541,7 @@ def _newton(links, tool, q, X_target, tol, max_iter):
         again = _chain(links, tool, lost.size)
         frames = again.frames(q[lost])
         X[lost], measures[:, lost] = again.transforms(frames), again.singularity_measures(frames)
-    return q, converged, X, measures
+    return q, converged, X, measures, np.stack(pose_errors(X, X_target))
 
 
 def _plain_steps(links, tool, q, X_target, steps):

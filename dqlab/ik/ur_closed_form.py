@@ -144,12 +144,22 @@ _CHECKED = weakref.WeakKeyDictionary()    # robot -> its parameters (links are i
 
 
 def _parameters(robot):
-    """:func:`ur_parameters` of a robot, checked once per robot."""
+    """:func:`ur_parameters` of a robot, checked once per robot (the ValueError of a robot
+    without the UR shape is remembered too, and raised again)."""
     try:
-        return _CHECKED[robot]
+        prm = _CHECKED[robot]
     except (KeyError, TypeError):
-        prm = _CHECKED[robot] = ur_parameters(robot)
-        return prm
+        try:
+            prm = ur_parameters(robot)
+        except ValueError as exc:
+            prm = exc
+        try:
+            _CHECKED[robot] = prm
+        except TypeError:                       # not weakly referenceable: not remembered
+            pass
+    if isinstance(prm, ValueError):
+        raise ValueError(str(prm))
+    return prm
 
 
 def ur_parameters(robot: Robot, *, atol: float = 1e-12) -> dict:

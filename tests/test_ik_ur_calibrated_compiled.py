@@ -1,0 +1,130 @@
+"""The compiled kernels of the calibrated UR solver (dqlab.ik._newton_compiled, with numba)
+against the numpy path of dqlab.ik.ur_calibrated, which stays the one used without numba:
+the Newton steps row by row, the repeated-row tests, and whole results of dqlab.ik.ur on
+random and near-singular poses."""
+
+import numpy as np
+import pytest
+from test_ik_ur_calibrated import calibrated, physically_calibrated, singular_poses
+
+from dqlab.ik import _newton_compiled as compiled
+from dqlab.ik import ur
+from dqlab.ik import ur_calibrated as module
+from dqlab.ik.targets import pose_errors
+from dqlab.rotations import rot_x
+
+pytest.importorskip("numba")
+
+
+@pytest.fixture
+def numpy_path(monkeypatch):
+    """A function that runs its argument with the compiled kernels switched off."""
+    def run(f, *args, **kwargs):
+        with monkeypatch.context() as m:
+            m.setattr(compiled, "_READY", False)
+            return f(*args, **kwargs)
+    return run
+
+
+def chain_and_starts(robot, seed, n):
+    """The calibrated chain of robot (with a tool), and start rows as the solver makes
+    them: the nearest exact UR's branches of poses of the calibrated arm, plus random starts
+    (many of which converge nowhere or elsewhere), a start at a singularity and a start
+    that is not a number."""
+    tool = np.eye(4)
+    tool[:3, :3], tool[:3, 3] = rot_x(0.3), (0.02, -0.01, 0.12)
+    robot.tool = tool
+    nominal = module._nominal(robot)
+    rng = np.random.default_rng(seed)
+    X = robot.fk(rng.uniform(-np.pi, np.pi, (n, 6)))
+    start = ur(nominal.robot, X @ np.linalg.inv(tool), tol=2 * nominal.position_gap)
+    q0 = start.solutions.reshape(-1, 6)[start.valid.reshape(-1)]
+    targets = np.repeat(X, 8, axis=0)[start.valid.reshape(-1)]
+    far = rng.uniform(-np.pi, np.pi, (50, 6))
+    singular = np.array([[0.3, -1.2, 1.1, -0.4, 0.0, 0.2]])          # theta5 = 0: wrist
+    odd = np.array([[np.nan, 0.0, 0.0, 0.0, 0.0, 0.0]])
+    q0 = np.concatenate([q0, far, singular, odd])
+    targets = np.concatenate([targets, targets[:50], targets[:1], targets[:1]])
+    return (nominal.links, tool), q0, targets
+
+
+@pytest.mark.parametrize("make", [calibrated, physically_calibrated])
+def test_compiled_newton_equals_the_numpy_path(make, numpy_path):
+    robot = make(41)
+    chain, q0, targets = chain_and_starts(robot, 42, 300)
+    for max_iter in (16, 3, 1):
+        q, converged, X, measures, errors = module._newton(*chain, q0, targets, 1e-9, max_iter)
+        q_n, converged_n, X_n, measures_n, errors_n = numpy_path(
+            module._newton, *chain, q0, targets, 1e-9, max_iter)
+        np.testing.assert_array_equal(converged, converged_n)
+        if max_iter == 16:
+            assert converged.sum() > 0.9 * len(q0)
+        # the same rows reach the same solutions, to well within the stop (1e-10)
+        assert np.abs(q - q_n)[converged].max(initial=0.0) < 1e-9
+        assert np.isfinite(q).all() and np.isfinite(q_n).all()      # overflowed: back to 0
+        # what is reported belongs to the joint vectors returned, in both paths
+        robot.tool = chain[1]
+        for qq, XX, ee, mm in ((q, X, errors, measures), (q_n, X_n, errors_n, measures_n)):
+            assert np.abs(XX - robot.fk(qq)).max() < 1e-12
+            np.testing.assert_allclose(ee, np.stack(pose_errors(XX, targets)), atol=1e-15)
+            frames = module._MatrixChain(*chain).frames(qq)
+            np.testing.assert_allclose(mm, module._MatrixChain.singularity_measures(frames),
+                                       atol=1e-12)
+        far = slice(-52, -2)
+        assert converged[far].sum() < 50                     # random starts: some fail
+
+
+def test_compiled_repeats_equal_the_numpy_path(numpy_path):
+    rng = np.random.default_rng(43)
+    n = 300
+    polished = module._Polished.empty(n)
+    q = rng.uniform(-np.pi, np.pi, (n, 8, 6))
+    for i in range(n):
+        for a, b in rng.integers(0, 8, (3, 2)):
+            q[i, b] = q[i, a] + 2 * np.pi * rng.integers(-1, 2, 6)
+            if rng.random() < 0.3:
+                q[i, b, rng.integers(0, 6)] += rng.choice([5e-7, 2e-6])
+    q[0, 3, 2] = np.nan
+    polished.q[:] = q.reshape(-1, 6)
+    polished.converged[:] = rng.random(8 * n) < 0.9
+    unique = polished.unique()
+    np.testing.assert_array_equal(unique, numpy_path(polished.unique))
+    rows = rng.integers(0, 8 * n, 500)
+    candidates = polished.q[rng.integers(0, 8 * n, 500)]
+    candidates[::3] = polished.q[rows[::3]] + 2 * np.pi
+    new = polished.are_new(rows, candidates, unique)
+    np.testing.assert_array_equal(new, numpy_path(polished.are_new, rows, candidates, unique))
+    assert new.any() and not new.all()
+    assert polished.is_new(5, polished.q[5] + 1.0, unique) == numpy_path(
+        polished.is_new, 5, polished.q[5] + 1.0, unique)
+
+
+@pytest.mark.parametrize("kind", ["random", "wrist", "elbow", "shoulder"])
+def test_results_are_the_same_with_and_without_the_compiled_kernels(kind, numpy_path):
+    robot = calibrated(44)
+    if kind == "random":
+        q = np.random.default_rng(45).uniform(-np.pi, np.pi, (300, 6))
+    else:
+        q = singular_poses(robot, kind, 1e-2, 100, 46)
+    X = robot.fk(q)
+    fast, plain = ur(robot, X), numpy_path(ur, robot, X)
+    np.testing.assert_array_equal(fast.valid, plain.valid)
+    both = fast.valid & plain.valid
+    d = np.abs(np.angle(np.exp(1j * (fast.solutions - plain.solutions))))[both]
+    assert d.max() < 1e-8
+    for name in fast.flags:
+        np.testing.assert_array_equal(fast.flags[name], plain.flags[name])
+    np.testing.assert_array_equal(fast.reason, plain.reason)
+    one = ur(robot, X[0])
+    np.testing.assert_array_equal(one.valid, fast.valid[0])
+
+
+def test_ready_without_numba(monkeypatch):
+    """Without numba (as in the browser), ready() says so and the numpy path is used."""
+    monkeypatch.setattr(compiled, "_READY", None)
+    monkeypatch.setattr(compiled.importlib.util, "find_spec", lambda name: None)
+    assert compiled.ready() is False
+    robot = calibrated(47)
+    q = np.array([0.3, -1.2, 1.1, -0.4, 0.9, 0.2])
+    result = ur(robot, robot.fk(q))
+    assert result.count == 8 and (np.abs(result.solutions - q).max(axis=-1) < 1e-9).any()
