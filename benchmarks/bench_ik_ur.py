@@ -13,8 +13,9 @@ ur_analytic_ik's time to each method's (above 1: faster than ur_analytic_ik).
   pose and batch: one pose with a tool is solved on Python floats as one without;
 - ``dqlab.ik.ur`` on a calibrated UR3 (every :math:`\theta, a, d, \alpha` off by up to 2 mm
   and 2 mrad, seeded; ``dqlab.ik.ur_calibrated``: the nominal closed form, then Newton steps
-  on the calibrated chain), batch and single (the single loop on the first 500 poses), on
-  poses of the calibrated arm; the share of poses whose generating configuration is found
+  on the calibrated chain, compiled when numba is installed: ``benchmarks/
+  bench_ik_ur_calibrated.py`` times both paths), batch and single (the single loop on the
+  first 500 poses), on poses of the calibrated arm; the share of poses whose generating configuration is found
   and the worst error of a valid row are printed;
 - ``ur_analytic_ik`` (C++ with Python bindings): one call per pose in a Python loop, the
   only way it is offered;

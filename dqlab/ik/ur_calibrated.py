@@ -410,7 +410,7 @@ def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, to
     The first restart that converges to a solution the pose does not have yet replaces the
     branch; ``polished`` is updated in place."""
     unique = polished.unique()
-    missing = polished.done & ~unique & found
+    missing = polished.done & ~unique
     if not missing.any():
         return
     poses = np.flatnonzero(missing.reshape(-1, 8).any(axis=1)
