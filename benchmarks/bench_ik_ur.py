@@ -15,8 +15,8 @@ ur_analytic_ik's time to each method's (above 1: faster than ur_analytic_ik).
   and 2 mrad, seeded; ``dqlab.ik.ur_calibrated``: the nominal closed form, then Newton steps
   on the calibrated chain, compiled when numba is installed: ``benchmarks/
   bench_ik_ur_calibrated.py`` times both paths), batch and single (the single loop on the
-  first 500 poses), on poses of the calibrated arm; the share of poses whose generating configuration is found
-  and the worst error of a valid row are printed;
+  first 500 poses), on poses of the calibrated arm; the share of poses whose generating
+  configuration is found and the worst error of a valid row are printed;
 - ``ur_analytic_ik`` (C++ with Python bindings): one call per pose in a Python loop, the
   only way it is offered;
 - ``dqlab.ik.numerical`` (damped least squares, one solution per pose, warm-started 0.1 rad

@@ -22,8 +22,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from timing import calls_lasting, interleaved_best  # noqa: E402
 
 from dqlab import ik  # noqa: E402
-from dqlab.ik import _newton_compiled  # noqa: E402
 from dqlab.identify import dh_parameters, robot_from_dh_parameters  # noqa: E402
+from dqlab.ik import _newton_compiled  # noqa: E402
 from dqlab.models import ur5e  # noqa: E402
 
 

@@ -330,6 +330,18 @@ def rotation_vector_from_matrix_entries(r00, r01, r02, r10, r11, r12, r20, r21, 
         *quaternion_from_matrix_entries(r00, r01, r02, r10, r11, r12, r20, r21, r22))
 
 
+def rigid_inverse(T):
+    r"""The inverse of rigid transforms already checked (float arrays (..., 4, 4)):
+    :math:`(R^\mathsf{T}, -R^\mathsf{T} p)`; :func:`dqlab.transforms.transform_inverse`
+    checks its argument, then calls this."""
+    Rt = np.swapaxes(T[..., :3, :3], -1, -2)
+    out = np.zeros(T.shape)
+    out[..., :3, :3] = Rt
+    out[..., :3, 3] = -(Rt @ T[..., :3, 3:4])[..., 0]
+    out[..., 3, 3] = 1.0
+    return out
+
+
 def pose_error_entries(a, b):
     r"""Position and rotation errors between two poses given by their 16 entries, row by row
     (see :func:`dqlab.ik.targets.pose_errors`): :math:`\lVert p - p^\ast \rVert` and the

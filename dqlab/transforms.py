@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._checks import as_float_array, batch_shape, component_rows, rotation_or_raise
-from ._kernels import orthonormality
+from ._kernels import orthonormality, rigid_inverse
 from .rotations import check_rotation_matrix
 
 __all__ = [
@@ -171,17 +171,7 @@ def transform_inverse(T: ArrayLike, *, tol: float = 1e-9) -> NDArray[np.float64]
     >>> np.allclose(transform_inverse(X) @ X, np.eye(4))
     True
     """
-    return _rigid_inverse(check_transform(T, tol))
-
-
-def _rigid_inverse(T):
-    """:func:`transform_inverse` of transforms already checked (float arrays (..., 4, 4))."""
-    Rt = np.swapaxes(T[..., :3, :3], -1, -2)
-    out = np.zeros(T.shape)
-    out[..., :3, :3] = Rt
-    out[..., :3, 3] = -(Rt @ T[..., :3, 3:4])[..., 0]
-    out[..., 3, 3] = 1.0
-    return out
+    return rigid_inverse(check_transform(T, tol))
 
 
 def compose(*Ts: ArrayLike) -> NDArray[np.float64]:

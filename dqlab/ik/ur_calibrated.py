@@ -54,12 +54,15 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._kernels import rigid_inverse
 from ..dualquat import dual_quaternion_from_transform
 from ..models import UR_ALPHA, UR_SHAPE
 from ..robot import Link, Robot
 from ..rotations import wrap_angle
-from ..transforms import _rigid_inverse
-from . import _newton_compiled as _compiled
+from ._newton_compiled import are_new as compiled_are_new
+from ._newton_compiled import newton as compiled_newton
+from ._newton_compiled import ready as compiled_ready
+from ._newton_compiled import unique as compiled_unique
 from .result import IKResult, finish
 from .targets import parse_targets, pose_errors
 
@@ -271,8 +274,8 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
     X_W = targets.transforms.reshape((-1, 4, 4))
     n = X_W.shape[0]
     X_6T = robot.tool if tool is None else _checked_tool(tool, pose_tol)
-    X_0T = _rigid_inverse(robot.base) @ X_W             # the targets in frame 0 ...
-    X_T6 = _rigid_inverse(X_6T)                         # (base and tool checked already)
+    X_0T = rigid_inverse(robot.base) @ X_W             # the targets in frame 0 ...
+    X_T6 = rigid_inverse(X_6T)                         # (base and tool checked already)
     X_06 = X_0T @ X_T6                                  # ... and the flanges they mean
     wide = max(tol, 2.0 * nominal.position_gap)
 
@@ -350,8 +353,8 @@ class _Polished:
         (joint-wise within 1e-6 rad, modulo 2 pi). The 28 pairs of rows of a pose are
         compared on joints 1, 3 and 5 first (the shoulder, elbow and wrist tell the branches
         apart), and on all six joints where those agree."""
-        if _compiled.ready():
-            return _compiled.unique(self.q, self.converged)
+        if compiled_ready():
+            return compiled_unique(self.q, self.converged)
         Q = self.q.reshape(-1, 8, 6)
         converged = self.converged.reshape(-1, 8)
         earlier, later = _PAIRS
@@ -368,8 +371,8 @@ class _Polished:
     def are_new(self, rows, q, unique):
         """Whether each joint vector ``q[j]`` differs from every unique row of the pose of
         ``rows[j]``."""
-        if _compiled.ready():
-            return _compiled.are_new(rows, q, self.q, unique)
+        if compiled_ready():
+            return compiled_are_new(rows, q, self.q, unique)
         Q = np.where(unique[:, None], self.q, np.nan).reshape(-1, 8, 6)[rows // 8]
         with np.errstate(invalid="ignore"):
             same = np.abs(wrap_angle(Q - q[:, None])).max(axis=-1) < 1e-6
@@ -419,7 +422,7 @@ def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, to
         first = 8 * poses + np.argmax(unique.reshape(-1, 8)[poses], axis=1)
         X_cal6 = polished.X[first] @ X_T6               # the calibrated flange at q*
         X_exact6 = nominal.robot.fk(polished.q[first])
-        corrected = exact_solutions(X_0T[poses] @ X_T6 @ _rigid_inverse(X_cal6)
+        corrected = exact_solutions(X_0T[poses] @ X_T6 @ rigid_inverse(X_cal6)
                                     @ X_exact6)
         rows = (8 * poses[:, None] + np.arange(8)).reshape(-1)
         use = missing[rows] & corrected.valid.reshape(-1)
@@ -515,8 +518,8 @@ def _newton(links, tool, q, X_target, tol, max_iter):
 
     With numba installed, the same steps run compiled, branch by branch
     (:mod:`dqlab.ik._newton_compiled`, tested equal to this path)."""
-    if _compiled.ready():
-        return _compiled.newton(links, tool, q, X_target, tol, max_iter, plain=_PLAIN_STEPS,
+    if compiled_ready():
+        return compiled_newton(links, tool, q, X_target, tol, max_iter, plain=_PLAIN_STEPS,
                                 stop_factor=_STOP, give_up_after=_GIVE_UP_AFTER,
                                 damping=_DAMPING, max_step=_MAX_STEP)
     m = q.shape[0]
