@@ -37,10 +37,12 @@ keeps its contract (every branch, flags, reasons, batches) in three steps:
    with :math:`J` the geometric Jacobian at the TCP and :math:`\lambda = 10^{-12}\,
    \operatorname{tr}(J^\mathsf{T}J)/6` (a guard at exact singularities, negligible
    elsewhere); steps longer than half a radian are shortened. A branch stops when its error
-   is below :math:`10^{-12}` (or stops improving); it is valid when forward kinematics of the
+   is below a tenth of ``tol`` (or stops improving); it is valid when forward kinematics of the
    calibrated chain reproduces the target to ``tol``. A branch that started from a solution
    of the exact arm but does not get there is kept as an invalid row with its errors and
-   flagged ``"not_converged"``, never dropped silently.
+   flagged ``"not_converged"``, never dropped silently. With numba installed (the ``fast``
+   extra), these steps run compiled, branch by branch (``dqlab.ik._newton_compiled``, tested
+   to give the same solutions); numpy runs them otherwise.
 
 Near a singularity of the calibrated arm the Newton steps converge slowly (the Jacobian is
 nearly singular) and may end on a neighbouring branch; the tests measure how close to the
