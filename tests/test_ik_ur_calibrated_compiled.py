@@ -128,3 +128,15 @@ def test_ready_without_numba(monkeypatch):
     q = np.array([0.3, -1.2, 1.1, -0.4, 0.9, 0.2])
     result = ur(robot, robot.fk(q))
     assert result.count == 8 and (np.abs(result.solutions - q).max(axis=-1) < 1e-9).any()
+
+
+def test_the_generated_lanes_are_those_of_the_generator():
+    """dqlab/ik/_newton_lanes.py is what tools/generate_newton_lanes.py writes."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    run = subprocess.run([sys.executable, str(root / "tools" / "generate_newton_lanes.py"),
+                          "--check"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stdout + run.stderr
