@@ -468,17 +468,14 @@ def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, to
 def _near_singular(kernel, q):
     r"""Which joint vectors q (m, 6) are near a singularity of the calibrated arm (the
     smallest singular value of J below 1e-2 of the largest), and the most singular direction
-    there (the last right singular vector), (k, 6) for those k. The eigenvalues of
-    :math:`J^\mathsf{T} J` screen the rows first (a quarter of the cost of an SVD) with a
-    margin of two, and the SVD of the candidates decides."""
+    there, (k, 6) for those k: the eigenvector of :math:`J^\mathsf{T} J` of its smallest
+    eigenvalue (the last right singular vector of J), its largest entry made positive."""
     J = kernel.jacobian(kernel.frames(q))
-    w = np.maximum(np.linalg.eigvalsh(np.swapaxes(J, -1, -2) @ J), 0.0)   # ascending
-    maybe = np.flatnonzero(w[:, 0] < 4e-4 * w[:, -1])
-    near = np.zeros(q.shape[0], dtype=bool)
-    _, sigma, V = np.linalg.svd(J[maybe])
-    decided = sigma[:, -1] < 1e-2 * sigma[:, 0]
-    near[maybe[decided]] = True
-    return near, V[decided, -1]
+    w, V = np.linalg.eigh(np.swapaxes(J, -1, -2) @ J)                   # ascending
+    near = np.maximum(w[:, 0], 0.0) < 1e-4 * w[:, -1]
+    v = V[near, :, 0]
+    largest = np.take_along_axis(v, np.abs(v).argmax(axis=1)[:, None], axis=1)
+    return near, np.where(largest < 0.0, -v, v)
 
 
 def _restart(chain, polished, unique, owners, starts, X_0T, tol, max_iter):
