@@ -69,6 +69,50 @@ def frames():
     return head + [f"    for r in range({W}):"] + ["        " + line for line in b]
 
 
+# sin and cos: the angle reduced by multiples of pi/2 (Cody and Waite, pi/2 in three parts of
+# which the first two have 33 significant bits, so that k times them is exact), then the
+# polynomials of fdlibm's __kernel_sin and __kernel_cos on [-pi/4, pi/4]
+PIO2 = ("1.57079632673412561417e+00", "6.07710050630396597660e-11",
+        "2.02226624879595063154e-21")
+SIN = ("-1.66666666666666324348e-01", "8.33333333332248946124e-03",
+       "-1.98412698298579493134e-04", "2.75573137070700676789e-06",
+       "-2.50507602534068634195e-08", "1.58969099521155010221e-10")
+COS = ("4.16666666666666019037e-02", "-1.38888888888741095749e-03",
+       "2.48015872894767294178e-05", "-2.75573143513906633035e-07",
+       "2.08757232129817482790e-09", "-1.13596475577881948265e-11")
+
+
+def horner(coefficients):
+    """c0 + z (c1 + z (c2 + ...)) as text."""
+    text = coefficients[-1]
+    for c in reversed(coefficients[:-1]):
+        text = f"{c} + z * ({text})"
+    return text
+
+
+def angles():
+    """The cosines and sines of the joint angles q + theta0 of every lane."""
+    head = ["def angles(S, L):",
+            '    """c and s of every lane: the cosine and sine of q_i + theta0_i (the angle',
+            "    reduced by multiples of pi/2, then fdlibm's polynomials; within an ulp or two",
+            '    of the library functions)."""']
+    head += [f"    t{i} = L[{i}, 4]" for i in range(6)]
+    b = []
+    for i in range(6):
+        b += [f"x = {at(f'q{i}')} + t{i}",
+              "k = np.rint(x * 0.6366197723675814)",
+              f"u = ((x - k * {PIO2[0]}) - k * {PIO2[1]}) - k * {PIO2[2]}",
+              "z = u * u",
+              f"sn = u + u * z * ({horner(SIN)})",
+              f"cn = 1.0 - 0.5 * z + z * z * ({horner(COS)})",
+              "m = k - 4.0 * np.floor(0.25 * k)",
+              f"{at(f'c{i}')} = cn if m == 0.0 else (-sn if m == 1.0 else "
+              "(-cn if m == 2.0 else sn))",
+              f"{at(f's{i}')} = sn if m == 0.0 else (cn if m == 1.0 else "
+              "(-sn if m == 2.0 else -cn))"]
+    return head + [f"    for r in range({W}):"] + ["        " + line for line in b]
+
+
 def residual():
     """e0..e5 as locals: position error and half the skew part of R* R^T."""
     b = [f"e{k} = {at(f'tp{k}')} - {at(f'F{36 + k}')}" for k in range(3)]
@@ -158,12 +202,14 @@ def source():
              "",
              "import math",
              "",
+             "import numpy as np",
+             "",
              f"W = {W}",
              f"NV = {len(LAYOUT)}",
              "#: where each variable of a lane lives in S (times W)",
              "INDEX = {" + ", ".join(f'"{k}": {v}' for k, v in INDEX.items()) + "}",
              "", ""]
-    for f in (frames, step, size):
+    for f in (angles, frames, step, size):
         lines += f() + ["", ""]
     return "\n".join(lines).rstrip() + "\n"
 

@@ -28,6 +28,7 @@ import math
 import numpy as np
 
 from ._newton_lanes import INDEX, NV, W
+from ._newton_lanes import angles as lane_angles
 from ._newton_lanes import frames as lane_frames
 from ._newton_lanes import size as lane_size
 from ._newton_lanes import step as lane_step
@@ -183,14 +184,12 @@ def _load(links, q, X_target, rows, S):
         row = rows[r]
         for i in range(6):
             S[(_Q + i) * W + r] = q[row, i]
-            theta = q[row, i] + links[i, 4]
-            S[(_C + i) * W + r] = math.cos(theta)
-            S[(_S + i) * W + r] = math.sin(theta)
         for i in range(3):
             for j in range(3):
                 S[(_T + 3 * i + j) * W + r] = X_target[row, i, j]
             S[(_TP + i) * W + r] = X_target[row, i, 3]
         S[_ACT * W + r] = 1.0
+    lane_angles(S, links)
 
 
 def _recompute(links, S):
@@ -314,6 +313,6 @@ def _dot_rows(A, i, B, j):
 
 _Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE = (
     INDEX[name] for name in ("q0", "c0", "s0", "t00", "tp0", "F0", "x0", "act", "size"))
-_COMPILED += ["lane_frames", "lane_step", "lane_size", "_angles", "_same", "_unique",
-              "_are_new", "_frames", "_load", "_recompute", "_kernel", "_outputs",
+_COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_size", "_angles", "_same",
+              "_unique", "_are_new", "_frames", "_load", "_recompute", "_kernel", "_outputs",
               "_pose_errors", "_dot_rows"]
