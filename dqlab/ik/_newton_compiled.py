@@ -1,28 +1,37 @@
 r"""The Newton steps of :mod:`dqlab.ik.ur_calibrated`, compiled (optional: needs numba).
 
-:func:`newton` does what ``dqlab.ik.ur_calibrated._newton`` does on numpy arrays, one branch
-at a time in compiled code: forward kinematics of the calibrated chain, the residual
-:math:`e = (p^\ast - p,\ \tfrac12 (R^\ast R^\mathsf{T} - R R^{\ast\mathsf{T}})^\vee)`, the
-Jacobian at the TCP and the damped step
+:func:`newton` does what ``dqlab.ik.ur_calibrated._newton`` does on numpy arrays, in
+compiled code, eight branches at a time: forward kinematics of the calibrated chain, the
+residual :math:`e = (p^\ast - p,\ \tfrac12 (R^\ast R^\mathsf{T} - R R^{\ast\mathsf{T}})^\vee)`,
+the Jacobian at the TCP and the damped step
 :math:`(J^\mathsf{T} J + \lambda I)^{-1} J^\mathsf{T} e` by Cholesky, with the same stop,
-give-up and shortening rules and the same frames layout as ``_EntryChain``. It is tested
-equal to the numpy path, which stays the one the module's docstring describes and the one
-used where numba is not installed (``pip install dqlab[fast]`` installs it; the in-browser
-chapters run without it).
+give-up and shortening rules and the same frames layout as ``_EntryChain``. The steps
+themselves are straight-line code over the eight branches (``dqlab.ik._newton_lanes``,
+written by ``tools/generate_newton_lanes.py``), which the compiler turns into vector
+instructions; a branch that has stopped takes steps of zero while the others go on. It is
+tested equal to the numpy path, which stays the one the module's docstring describes and the
+one used where numba is not installed (``pip install dqlab[fast]`` installs it; the
+in-browser chapters run without it).
 
 :func:`unique` and :func:`are_new` are ``_Polished.unique`` and ``_Polished.are_new`` of
-that module, compiled the same way. :func:`ready` says whether numba is there; the first
-compilation takes seconds, and is cached on disk for the next processes.
+that module, compiled. :func:`ready` says whether numba is there; the first compilation
+takes seconds, and is cached on disk for the next processes.
 
 The kernel differs from the numpy path in one way that changes no result beyond rounding:
-after the first step, the cosine and sine of each joint angle are turned by the step
-(:func:`_turn`) instead of being computed again.
+after a step, the cosine and sine of each joint angle are turned by the step (Taylor series
+of a step below 0.02 rad) instead of being computed again.
 """
 
 import importlib.util
 import math
 
 import numpy as np
+
+from ._newton_lanes import INDEX, NV, W
+from ._newton_lanes import angles as lane_angles
+from ._newton_lanes import frames as lane_frames
+from ._newton_lanes import size as lane_size
+from ._newton_lanes import step as lane_step
 
 __all__ = ["ready", "newton", "unique", "are_new"]
 
@@ -89,26 +98,6 @@ def _angles(links, q, cs):
     for i in range(6):
         cs[i, 0] = math.cos(q[i] + links[i, 4])
         cs[i, 1] = math.sin(q[i] + links[i, 4])
-
-
-def _turn(links, q, step, cs):
-    r"""q += step, and cs turned by each step :math:`\delta`: :math:`(c, s) \leftarrow
-    (c \cos\delta - s \sin\delta,\ s \cos\delta + c \sin\delta)`, the cosine and sine of
-    a step below 0.02 rad by their Taylor series to :math:`\delta^7` (truncation below
-    1e-18), of a longer one from the new angle."""
-    for i in range(6):
-        d = step[i]
-        q[i] += d
-        if abs(d) < 0.02:
-            d2 = d * d
-            cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0 - d2 * (1.0 / 720.0)))
-            sd = d * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0 - d2 * (1.0 / 5040.0))))
-            c, s = cs[i, 0], cs[i, 1]
-            cs[i, 0] = c * cd - s * sd
-            cs[i, 1] = s * cd + c * sd
-        else:
-            cs[i, 0] = math.cos(q[i] + links[i, 4])
-            cs[i, 1] = math.sin(q[i] + links[i, 4])
 
 
 _TWO_PI = 2.0 * math.pi
@@ -188,161 +177,121 @@ def _frames(links, tool, no_tool, cs, F):
                 F[39 + 3 * k + j] = xk * tool[0, j] + yk * tool[1, j] + zk * tool[2, j]
 
 
-def _residual(F, X_target, e):
-    """e (6,): the position error and half the skew part of R* R^T (``_EntryChain``'s)."""
-    e[0] = X_target[0, 3] - F[36]
-    e[1] = X_target[1, 3] - F[37]
-    e[2] = X_target[2, 3] - F[38]
-    for k in range(3):
-        i, j = (2, 0, 1)[k], (1, 2, 0)[k]
-        tr_i = X_target[i, 0] * F[39 + 3 * j] + X_target[i, 1] * F[40 + 3 * j] \
-            + X_target[i, 2] * F[41 + 3 * j]
-        tr_j = X_target[j, 0] * F[39 + 3 * i] + X_target[j, 1] * F[40 + 3 * i] \
-            + X_target[j, 2] * F[41 + 3 * i]
-        e[3 + k] = 0.5 * (tr_i - tr_j)
+def _load(links, q, X_target, rows, S):
+    """Lanes 0..W-1 of S from the rows ``rows`` (W,): joints, cosines and sines of the
+    joint angles, targets; every lane active."""
+    for r in range(W):
+        row = rows[r]
+        for i in range(6):
+            S[(_Q + i) * W + r] = q[row, i]
+        for i in range(3):
+            for j in range(3):
+                S[(_T + 3 * i + j) * W + r] = X_target[row, i, j]
+            S[(_TP + i) * W + r] = X_target[row, i, 3]
+        S[_ACT * W + r] = 1.0
+    lane_angles(S, links)
 
 
-def _error_size(e):
-    """The larger of the position and rotation errors (Euclidean)."""
-    return math.sqrt(max(e[0] * e[0] + e[1] * e[1] + e[2] * e[2],
-                         e[3] * e[3] + e[4] * e[4] + e[5] * e[5]))
-
-
-def _jacobian(F, J):
-    """J (6, 6) at the TCP, row j holding column j of the Jacobian (linear part first)."""
-    px, py, pz = F[36], F[37], F[38]
-    J[0, 0], J[0, 1], J[0, 2], J[0, 3], J[0, 4], J[0, 5] = -py, px, 0.0, 0.0, 0.0, 1.0
-    for i in range(5):
-        zx, zy, zz = F[3 * i], F[3 * i + 1], F[3 * i + 2]
-        rx, ry, rz = px - F[15 + 3 * i], py - F[16 + 3 * i], pz - F[17 + 3 * i]
-        J[i + 1, 0] = zy * rz - zz * ry
-        J[i + 1, 1] = zz * rx - zx * rz
-        J[i + 1, 2] = zx * ry - zy * rx
-        J[i + 1, 3], J[i + 1, 4], J[i + 1, 5] = zx, zy, zz
-
-
-def _solve_damped(J, e, damping, H, g, inv, step):
-    """(J^T J + lambda I) x = J^T e, lambda = damping tr(J^T J) / 6, by Cholesky."""
-    trace = 0.0
-    for i in range(6):
-        for j in range(i + 1):
-            s = 0.0
-            for k in range(6):
-                s += J[i, k] * J[j, k]
-            H[i, j] = s
-        trace += H[i, i]
-        s = 0.0
-        for k in range(6):
-            s += J[i, k] * e[k]
-        g[i] = s
-    lam = (damping / 6.0) * trace
-    for i in range(6):
-        H[i, i] += lam
-    for j in range(6):                                  # L in H's lower triangle
-        s = H[j, j]
-        for k in range(j):
-            s -= H[j, k] * H[j, k]
-        H[j, j] = math.sqrt(s) if s >= 0.0 else math.nan
-        inv[j] = 1.0 / H[j, j]
-        for i in range(j + 1, 6):
-            s = H[i, j]
-            for k in range(j):
-                s -= H[i, k] * H[j, k]
-            H[i, j] = s * inv[j]
-    for i in range(6):                                  # L y = J^T e
-        s = g[i]
-        for k in range(i):
-            s -= H[i, k] * g[k]
-        g[i] = s * inv[i]
-    for i in range(5, -1, -1):                          # L^T x = y
-        s = g[i]
-        for k in range(i + 1, 6):
-            s -= H[k, i] * step[k]
-        step[i] = s * inv[i]
-
-
-def _step(F, e, damping, max_step, J, H, g, inv, step):
-    """The damped Newton step into ``step`` (6,), shortened to ``max_step``."""
-    _jacobian(F, J)
-    _solve_damped(J, e, damping, H, g, inv, step)
-    longest, nan = 0.0, False
-    for i in range(6):
-        if step[i] != step[i]:
-            nan = True
-        else:
-            longest = max(longest, abs(step[i]))
-    factor = math.nan if nan else min(1.0, max_step / max(longest, 1e-300))
-    for i in range(6):
-        step[i] *= factor
-
-
-def _row(links, tool, no_tool, q, X_target, stop, plain, max_iter, give_up_after, damping,
-         max_step, F, cs, e, J, H, g, inv, step):
-    """One branch: the plain steps, then steps until it stops; whether it converged."""
-    _angles(links, q, cs)
-    for _ in range(plain):
-        _frames(links, tool, no_tool, cs, F)
-        _residual(F, X_target, e)
-        _step(F, e, damping, max_step, J, H, g, inv, step)
-        _turn(links, q, step, cs)
-    _frames(links, tool, no_tool, cs, F)
-    _residual(F, X_target, e)
-    size = _error_size(e)
-    if size > stop and plain < max_iter:
-        size = math.inf
-        before0, before1 = math.inf, math.inf
-        for iteration in range(plain, max_iter + 1):
-            if iteration > plain:
-                _frames(links, tool, no_tool, cs, F)
-                _residual(F, X_target, e)
-            before0, before1 = before1, size
-            size = _error_size(e)
-            keep = size > stop
-            if iteration >= give_up_after:
-                keep = keep and size < 0.5 * before0
-            if iteration == max_iter or not keep:
-                break
-            _step(F, e, damping, max_step, J, H, g, inv, step)
-            _turn(links, q, step, cs)
-    return size <= stop
+def _recompute(links, S):
+    """Cosines and sines of the joints whose step was 0.02 rad or more (or not a number),
+    from their new angle (the Taylor series of the lanes' step is for short steps)."""
+    for r in range(W):
+        for i in range(6):
+            if not abs(S[(_X + i) * W + r]) < 0.02:
+                theta = S[(_Q + i) * W + r] + links[i, 4]
+                S[(_C + i) * W + r] = math.cos(theta)
+                S[(_S + i) * W + r] = math.sin(theta)
 
 
 def _kernel(links, tool, q, X_target, stop, plain, max_iter, give_up_after, damping,
             max_step, converged, X, measures, errors):
-    """Every branch (rows of q, in place)."""
+    """Every branch (rows of q, in place), W at a time: the plain steps of all lanes, then
+    each lane stepped while its rule says go on (the others take steps of 0)."""
     no_tool = True
     for i in range(4):
         for j in range(4):
             if tool[i, j] != (1.0 if i == j else 0.0):
                 no_tool = False
-    F, e, g, inv, step = np.empty(48), np.empty(6), np.empty(6), np.empty(6), np.empty(6)
-    J, H, cs = np.empty((6, 6)), np.empty((6, 6)), np.empty((6, 2))
-    for r in range(q.shape[0]):
-        qr = q[r]
-        converged[r] = _row(links, tool, no_tool, qr, X_target[r], stop, plain, max_iter,
-                            give_up_after, damping, max_step, F, cs, e, J, H, g, inv, step)
-        lost = False
-        for i in range(6):
-            if not math.isfinite(qr[i]):                # a step that overflowed: back to 0
-                qr[i] = 0.0
-                lost = True
-        if lost:
-            _angles(links, qr, cs)
-            _frames(links, tool, no_tool, cs, F)
-        for i in range(3):
-            for j in range(3):
-                X[r, i, j] = F[39 + 3 * i + j]
-            X[r, i, 3] = F[36 + i]
-        X[r, 3, 3] = 1.0
-        z3x, z3y, z3z = F[6], F[7], F[8]                # |z3 x z5|, |x2 x x3|, shoulder
-        z5x, z5y, z5z = F[12], F[13], F[14]
-        measures[0, r] = math.sqrt((z3y * z5z - z3z * z5y) ** 2 + (z3z * z5x - z3x * z5z) ** 2
-                                   + (z3x * z5y - z3y * z5x) ** 2)
-        ax, ay, az, bx, by, bz = F[30], F[31], F[32], F[33], F[34], F[35]
-        measures[1, r] = math.sqrt((ay * bz - az * by) ** 2 + (az * bx - ax * bz) ** 2
-                                   + (ax * by - ay * bx) ** 2)
-        measures[2, r] = abs(F[0] * F[28] - F[1] * F[27]) / math.hypot(F[0], F[1])
-        _pose_errors(X[r], X_target[r], errors[:, r])
+    S = np.zeros(NV * W)
+    F, cs = np.empty(48), np.empty((6, 2))
+    size, before0, before1 = np.empty(W), np.empty(W), np.empty(W)
+    going = np.zeros(W, dtype=np.bool_)
+    rows = np.empty(W, dtype=np.int64)
+    m = q.shape[0]
+    for first in range(0, m, W):
+        n = min(W, m - first)
+        for r in range(W):
+            rows[r] = first + min(r, n - 1)                 # extra lanes repeat the last row
+        _load(links, q, X_target, rows, S)
+        for _ in range(plain):
+            lane_frames(S, links, tool)
+            lane_step(S, damping, max_step)
+            _recompute(links, S)
+        lane_frames(S, links, tool)
+        lane_size(S)
+        more = False
+        for r in range(W):
+            size[r] = S[_SIZE * W + r]
+            going[r] = size[r] > stop and plain < max_iter
+            if going[r]:
+                size[r], before0[r], before1[r] = math.inf, math.inf, math.inf
+                more = True
+        iteration = plain
+        while more:
+            more = False
+            for r in range(W):
+                if going[r]:
+                    before0[r], before1[r] = before1[r], size[r]
+                    size[r] = S[_SIZE * W + r]
+                    keep = size[r] > stop
+                    if iteration >= give_up_after:
+                        keep = keep and size[r] < 0.5 * before0[r]
+                    going[r] = keep and iteration < max_iter
+                    more = more or going[r]
+                S[_ACT * W + r] = 1.0 if going[r] else 0.0
+            if not more:
+                break
+            lane_step(S, damping, max_step)
+            _recompute(links, S)
+            lane_frames(S, links, tool)
+            lane_size(S)
+            iteration += 1
+        for r in range(n):
+            row = first + r
+            converged[row] = size[r] <= stop
+            lost = False
+            for i in range(6):
+                v = S[(_Q + i) * W + r]
+                if not math.isfinite(v):                    # a step that overflowed: back to 0
+                    v = 0.0
+                    lost = True
+                q[row, i] = v
+            if lost:
+                _angles(links, q[row], cs)
+                _frames(links, tool, no_tool, cs, F)
+            else:
+                for k in range(48):
+                    F[k] = S[(_F + k) * W + r]
+            _outputs(F, X_target[row], X[row], measures[:, row], errors[:, row])
+
+
+def _outputs(F, X_target, X, measures, errors):
+    """The TCP pose X (4, 4), the singularity measures (3,) and the pose errors (2,) from
+    a branch's frames F."""
+    for i in range(3):
+        for j in range(3):
+            X[i, j] = F[39 + 3 * i + j]
+        X[i, 3] = F[36 + i]
+    X[3, 3] = 1.0
+    z3x, z3y, z3z = F[6], F[7], F[8]                    # |z3 x z5|, |x2 x x3|, shoulder
+    z5x, z5y, z5z = F[12], F[13], F[14]
+    measures[0] = math.sqrt((z3y * z5z - z3z * z5y) ** 2 + (z3z * z5x - z3x * z5z) ** 2
+                            + (z3x * z5y - z3y * z5x) ** 2)
+    ax, ay, az, bx, by, bz = F[30], F[31], F[32], F[33], F[34], F[35]
+    measures[1] = math.sqrt((ay * bz - az * by) ** 2 + (az * bx - ax * bz) ** 2
+                            + (ax * by - ay * bx) ** 2)
+    measures[2] = abs(F[0] * F[28] - F[1] * F[27]) / math.hypot(F[0], F[1])
+    _pose_errors(X, X_target, errors)
 
 
 def _pose_errors(X, X_target, out):
@@ -362,6 +311,8 @@ def _dot_rows(A, i, B, j):
     return A[i, 0] * B[j, 0] + A[i, 1] * B[j, 1] + A[i, 2] * B[j, 2]
 
 
-_COMPILED += ["_angles", "_turn", "_same", "_unique", "_are_new", "_frames", "_residual",
-              "_error_size", "_jacobian", "_solve_damped", "_step", "_row", "_kernel",
+_Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE = (
+    INDEX[name] for name in ("q0", "c0", "s0", "t00", "tp0", "F0", "x0", "act", "size"))
+_COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_size", "_angles", "_same",
+              "_unique", "_are_new", "_frames", "_load", "_recompute", "_kernel", "_outputs",
               "_pose_errors", "_dot_rows"]

@@ -447,9 +447,8 @@ def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, to
     wanted = wanted[found[wanted]]
     failed = wanted[~polished.converged[wanted]]        # restart those only near a
     if failed.size:                                     # singularity (else: no solution)
-        sigma = np.linalg.svd(kernel.jacobian(kernel.frames(q0[failed])), compute_uv=False)
-        wanted = np.union1d(wanted[polished.converged[wanted]],
-                            failed[sigma[:, -1] < 1e-2 * sigma[:, 0]])
+        near, _ = _near_singular(kernel, q0[failed])
+        wanted = np.union1d(wanted[polished.converged[wanted]], failed[near])
     bases = [(wanted, q0[wanted])]                      # the branch's own start
     for bits in (4, 5, 6, 7):                           # the other shoulder's solutions
         sibling = wanted ^ bits
@@ -457,14 +456,26 @@ def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, to
         bases.append((wanted[ok], polished.q[sibling[ok]]))
     for rows, q in bases:
         if rows.size:
-            _, sigma, V = np.linalg.svd(kernel.jacobian(kernel.frames(q)))
-            near = sigma[:, -1] < 1e-2 * sigma[:, 0]     # only near a singularity
+            near, direction = _near_singular(kernel, q)  # only near a singularity
             for t in (0.05, -0.05, 0.2, -0.2, 0.6, -0.6):
                 owners.append(rows[near])
-                starts.append(q[near] + t * V[near, -1])
+                starts.append(q[near] + t * direction)
     if owners:
         _restart(chain, polished, unique, np.concatenate(owners), np.concatenate(starts),
                  X_0T, tol, max_iter)
+
+
+def _near_singular(kernel, q):
+    r"""Which joint vectors q (m, 6) are near a singularity of the calibrated arm (the
+    smallest singular value of J below 1e-2 of the largest), and the most singular direction
+    there, (k, 6) for those k: the eigenvector of :math:`J^\mathsf{T} J` of its smallest
+    eigenvalue (the last right singular vector of J), its largest entry made positive."""
+    J = kernel.jacobian(kernel.frames(q))
+    w, V = np.linalg.eigh(np.swapaxes(J, -1, -2) @ J)                   # ascending
+    near = np.maximum(w[:, 0], 0.0) < 1e-4 * w[:, -1]
+    v = V[near, :, 0]
+    largest = np.take_along_axis(v, np.abs(v).argmax(axis=1)[:, None], axis=1)
+    return near, np.where(largest < 0.0, -v, v)
 
 
 def _restart(chain, polished, unique, owners, starts, X_0T, tol, max_iter):
