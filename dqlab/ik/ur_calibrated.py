@@ -41,8 +41,9 @@ keeps its contract (every branch, flags, reasons, batches) in three steps:
    calibrated chain reproduces the target to ``tol``. A branch that started from a solution
    of the exact arm but does not get there is kept as an invalid row with its errors and
    flagged ``"not_converged"``, never dropped silently. With numba installed (the ``fast``
-   extra), these steps run compiled, branch by branch (``dqlab.ik._newton_compiled``, tested
-   to give the same solutions); numpy runs them otherwise.
+   extra), these steps run compiled, on the eight branches of a pose at once
+   (``dqlab.ik._newton_compiled``, tested to give the same solutions); numpy runs them
+   otherwise.
 
 Near a singularity of the calibrated arm the Newton steps converge slowly (the Jacobian is
 nearly singular) and may end on a neighbouring branch; the tests measure how close to the
@@ -484,7 +485,7 @@ def _restart(chain, polished, unique, owners, starts, X_0T, tol, max_iter):
     if not owners.size:
         return
     q, converged, X, measures, errors = _newton(*chain, starts, X_0T[owners // 8], tol,
-                                        min(max_iter, _RESTART_ITER))
+                                                min(max_iter, _RESTART_ITER))
     new = converged & polished.are_new(owners, q, unique)
     fixed = np.zeros(unique.size, dtype=bool)
     for j in np.flatnonzero(new):                       # in the order of the starts
@@ -529,7 +530,7 @@ def _newton(links, tool, q, X_target, tol, max_iter):
     soon as it is done (:func:`_newton_rows`). Many rows go through in blocks of
     ``_BLOCK`` (temporaries that stay in the cache).
 
-    With numba installed, the same steps run compiled, branch by branch
+    With numba installed, the same steps run compiled, eight branches at a time
     (:mod:`dqlab.ik._newton_compiled`, tested equal to this path)."""
     if compiled_ready():
         return compiled_newton(links, tool, q, X_target, tol, max_iter, plain=_PLAIN_STEPS,
