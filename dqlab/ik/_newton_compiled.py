@@ -93,13 +93,6 @@ def are_new(rows, q_rows, q, unique):
     return out
 
 
-def _angles(links, q, cs):
-    """cs (6, 2): the cosines and sines of the joint angles theta_i = q_i + theta0_i."""
-    for i in range(6):
-        cs[i, 0] = math.cos(q[i] + links[i, 4])
-        cs[i, 1] = math.sin(q[i] + links[i, 4])
-
-
 _TWO_PI = 2.0 * math.pi
 
 
@@ -135,48 +128,6 @@ def _are_new(rows, q_rows, q, unique, out):
                 break
 
 
-def _frames(links, tool, no_tool, cs, F):
-    """Frames of one branch into F (48,) from the cosines and sines of its joint angles:
-    z_1..z_5, o_1..o_5, x_2, x_3, the TCP position and its rotation row by row
-    (``_EntryChain``'s layout)."""
-    ca, sa, a, d = links[0, 0], links[0, 1], links[0, 2], links[0, 3]
-    c, s = cs[0, 0], cs[0, 1]
-    x0, x1, x2 = c, s, 0.0
-    y0, y1, y2 = -ca * s, ca * c, sa
-    z0, z1, z2 = sa * s, -sa * c, ca
-    o0, o1, o2 = a * c, a * s, d
-    F[0], F[1], F[2] = z0, z1, z2
-    F[15], F[16], F[17] = o0, o1, o2
-    for i in range(1, 6):
-        ca, sa, a, d = links[i, 0], links[i, 1], links[i, 2], links[i, 3]
-        c, s = cs[i, 0], cs[i, 1]
-        n0, n1, n2 = c * x0 + s * y0, c * x1 + s * y1, c * x2 + s * y2
-        p0, p1, p2 = c * y0 - s * x0, c * y1 - s * x1, c * y2 - s * x2
-        o0, o1, o2 = o0 + d * z0 + a * n0, o1 + d * z1 + a * n1, o2 + d * z2 + a * n2
-        y0, y1, y2 = ca * p0 + sa * z0, ca * p1 + sa * z1, ca * p2 + sa * z2
-        z0, z1, z2 = ca * z0 - sa * p0, ca * z1 - sa * p1, ca * z2 - sa * p2
-        x0, x1, x2 = n0, n1, n2
-        if i < 5:
-            F[3 * i], F[3 * i + 1], F[3 * i + 2] = z0, z1, z2
-            F[15 + 3 * i], F[16 + 3 * i], F[17 + 3 * i] = o0, o1, o2
-        if i == 1 or i == 2:
-            F[27 + 3 * i], F[28 + 3 * i], F[29 + 3 * i] = x0, x1, x2
-    if no_tool:
-        F[36], F[37], F[38] = o0, o1, o2
-        F[39], F[40], F[41] = x0, y0, z0
-        F[42], F[43], F[44] = x1, y1, z1
-        F[45], F[46], F[47] = x2, y2, z2
-    else:
-        tx, ty, tz = tool[0, 3], tool[1, 3], tool[2, 3]
-        F[36] = o0 + tx * x0 + ty * y0 + tz * z0
-        F[37] = o1 + tx * x1 + ty * y1 + tz * z1
-        F[38] = o2 + tx * x2 + ty * y2 + tz * z2
-        for k in range(3):
-            xk, yk, zk = (x0, x1, x2)[k], (y0, y1, y2)[k], (z0, z1, z2)[k]
-            for j in range(3):
-                F[39 + 3 * k + j] = xk * tool[0, j] + yk * tool[1, j] + zk * tool[2, j]
-
-
 def _load(links, q, X_target, rows, S):
     """Lanes 0..W-1 of S from the rows ``rows`` (W,): joints, cosines and sines of the
     joint angles, targets; every lane active."""
@@ -207,13 +158,8 @@ def _kernel(links, tool, q, X_target, stop, plain, max_iter, give_up_after, damp
             max_step, converged, X, measures, errors):
     """Every branch (rows of q, in place), W at a time: the plain steps of all lanes, then
     each lane stepped while its rule says go on (the others take steps of 0)."""
-    no_tool = True
-    for i in range(4):
-        for j in range(4):
-            if tool[i, j] != (1.0 if i == j else 0.0):
-                no_tool = False
     S = np.zeros(NV * W)
-    F, cs = np.empty(48), np.empty((6, 2))
+    F = np.empty(48)
     size, before0, before1 = np.empty(W), np.empty(W), np.empty(W)
     going = np.zeros(W, dtype=np.bool_)
     rows = np.empty(W, dtype=np.int64)
@@ -256,22 +202,22 @@ def _kernel(links, tool, q, X_target, stop, plain, max_iter, give_up_after, damp
             lane_frames(S, links, tool)
             lane_size(S)
             iteration += 1
+        lost = False
+        for r in range(W):
+            for i in range(6):
+                if not math.isfinite(S[(_Q + i) * W + r]):  # a step that overflowed: back
+                    S[(_Q + i) * W + r] = 0.0               # to 0, and its frames again
+                    lost = True
+        if lost:
+            lane_angles(S, links)
+            lane_frames(S, links, tool)
         for r in range(n):
             row = first + r
             converged[row] = size[r] <= stop
-            lost = False
             for i in range(6):
-                v = S[(_Q + i) * W + r]
-                if not math.isfinite(v):                    # a step that overflowed: back to 0
-                    v = 0.0
-                    lost = True
-                q[row, i] = v
-            if lost:
-                _angles(links, q[row], cs)
-                _frames(links, tool, no_tool, cs, F)
-            else:
-                for k in range(48):
-                    F[k] = S[(_F + k) * W + r]
+                q[row, i] = S[(_Q + i) * W + r]
+            for k in range(48):
+                F[k] = S[(_F + k) * W + r]
             _outputs(F, X_target[row], X[row], measures[:, row], errors[:, row])
 
 
@@ -313,6 +259,6 @@ def _dot_rows(A, i, B, j):
 
 _Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE = (
     INDEX[name] for name in ("q0", "c0", "s0", "t00", "tp0", "F0", "x0", "act", "size"))
-_COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_size", "_angles", "_same",
-              "_unique", "_are_new", "_frames", "_load", "_recompute", "_kernel", "_outputs",
-              "_pose_errors", "_dot_rows"]
+_COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_size", "_same", "_unique",
+              "_are_new", "_load", "_recompute", "_kernel", "_outputs", "_pose_errors",
+              "_dot_rows"]
