@@ -313,3 +313,47 @@ def test_repeated_rows_are_those_of_the_pairwise_definition():
     expected = polished.converged & ~repeats
     assert repeats.sum() > 300 and (expected != polished.converged).any()
     np.testing.assert_array_equal(polished.unique(), expected)
+
+
+@pytest.mark.parametrize("compiled_kernels", [True, False])
+def test_one_pose_path_equals_the_array_path(compiled_kernels, monkeypatch):
+    """One pose takes _one_pose (a few numpy calls, or one compiled call) when Newton from
+    the exact arm's branches is all it takes; its result is the array path's (a batch of
+    one) bit for bit, on random poses and poses near each singularity, with a base and a
+    tool on the robot or a tool given to the call. Poses that need more (a restart, a
+    branch missed by a little, no branch at all) take the array path: both occur here."""
+    from dqlab.ik import _newton_compiled
+    from dqlab.ik import ur_calibrated as module
+    if compiled_kernels:
+        pytest.importorskip("numba")
+        assert _newton_compiled.ready()
+    else:
+        monkeypatch.setattr(_newton_compiled, "_READY", False)
+    robot = calibrated(90, model=ur10e)
+    base, tool = np.eye(4), np.eye(4)
+    base[:3, :3], base[:3, 3] = rot_z(-0.7), (0.1, 0.2, 0.5)
+    tool[:3, :3], tool[:3, 3] = rot_x(0.1), (0.01, 0.0, 0.18)
+    robot.base, robot.tool = base, tool
+    q = np.concatenate([np.random.default_rng(91).uniform(-np.pi, np.pi, (120, 6))]
+                       + [singular_poses(robot, kind, 1e-2, 20, 92)
+                          for kind in ("wrist", "elbow", "shoulder")])
+    X = robot.fk(q)
+    X[-1, :3, 3] = (5.0, 0.0, 0.0)                      # out of reach
+    lean = []
+    one_pose = module._one_pose
+    monkeypatch.setattr(module, "_one_pose", lambda *args: lean.append(one_pose(*args))
+                        or lean[-1])
+    other = np.eye(4)
+    other[:3, 3] = (0.0, 0.02, 0.25)
+    for i, T in enumerate(X):
+        given = {} if i % 3 else {"tool": other}
+        one, batch = ur(robot, T, **given), ur(robot, T[None], **given)
+        assert one.solutions.shape == (8, 6) and one.flags["unreachable"].shape == ()
+        for name in ("solutions", "valid", "position_error", "rotation_error", "reason"):
+            np.testing.assert_array_equal(getattr(one, name), getattr(batch, name)[0])
+        assert list(one.flags) == list(batch.flags)
+        for name, flag in one.flags.items():
+            np.testing.assert_array_equal(flag, batch.flags[name][0])
+    taken = np.array([r is not None for r in lean])
+    assert taken.size == len(X)                         # a batch of one does not take it
+    assert 0.5 < taken.mean() < 1.0 and not taken[-1]   # ... nor does every single pose

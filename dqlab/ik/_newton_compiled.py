@@ -33,7 +33,7 @@ from ._newton_lanes import frames as lane_frames
 from ._newton_lanes import size as lane_size
 from ._newton_lanes import step as lane_step
 
-__all__ = ["ready", "newton", "unique", "are_new"]
+__all__ = ["ready", "newton", "one_pose", "unique", "are_new"]
 
 _COMPILED = []     # the functions below the wrappers, compiled in place by ready()
 _READY = None      # ready()'s answer, once known
@@ -73,6 +73,27 @@ def newton(links, tool, q, X_target, tol, max_iter, *, plain, stop_factor, give_
             int(min(plain, max_iter)), int(max_iter), int(give_up_after), float(damping),
             float(max_step), converged, X, measures, errors)
     return q_out, converged, X, measures, errors
+
+
+def one_pose(links, tool, q_start, found, position_error, rotation_error, X_0T, tol,
+             max_iter, singular_tol, d4, *, plain, stop_factor, give_up_after, damping,
+             max_step):
+    """``dqlab.ik.ur_calibrated._one_pose`` after the closed form, compiled: the Newton steps
+    of the rows ``found`` (8,) of ``q_start`` (8, 6) towards ``X_0T`` (4, 4), then the
+    result's arrays. None when a row does not converge or two rows converge to the same
+    solution (the pose then takes the array path); else the solutions (8, 6) (wrapped,
+    zero where not valid), ``valid`` (8,), the position and rotation errors (8,) (the
+    polished rows' in place of the closed form's) and the flags (5,): wrist, shoulder and
+    elbow singular, unreachable, not converged."""
+    solutions, valid, flags = np.zeros((8, 6)), np.zeros(8, dtype=np.bool_), np.zeros(5, dtype=np.bool_)
+    pe, re = np.array(position_error, dtype=float), np.array(rotation_error, dtype=float)
+    done = _one_pose(np.asarray(links, dtype=float), np.ascontiguousarray(tool, dtype=float),
+                     np.ascontiguousarray(q_start, dtype=float), np.ascontiguousarray(found),
+                     np.ascontiguousarray(X_0T, dtype=float), float(tol),
+                     float(stop_factor * tol), int(min(plain, max_iter)), int(max_iter),
+                     int(give_up_after), float(damping), float(max_step), float(singular_tol),
+                     float(d4), solutions, valid, pe, re, flags)
+    return (solutions, valid, pe, re, flags) if done else None
 
 
 def unique(q, converged):
@@ -126,6 +147,53 @@ def _are_new(rows, q_rows, q, unique, out):
             if unique[k] and _same(q[k], q_rows[j]):
                 out[j] = False
                 break
+
+
+def _wrap(theta):
+    """``dqlab.rotations.wrap_angle`` of one angle: into (-pi, pi]."""
+    w = theta - _TWO_PI * np.rint(theta * (1.0 / _TWO_PI))
+    if not abs(w) < math.pi:
+        w = w - _TWO_PI if w > math.pi else (w + _TWO_PI if w <= -math.pi else w)
+    return w
+
+
+def _one_pose(links, tool, q_start, found, X_0T, tol, stop, plain, max_iter, give_up_after,
+              damping, max_step, singular_tol, d4, solutions, valid, pe, re, flags):
+    """:func:`one_pose`'s work: False as soon as the pose needs the array path."""
+    rows = np.flatnonzero(found)
+    k = rows.shape[0]
+    q, X_target = np.empty((k, 6)), np.empty((k, 4, 4))
+    for j in range(k):
+        q[j] = q_start[rows[j]]
+        X_target[j] = X_0T
+    converged, X = np.zeros(k, dtype=np.bool_), np.zeros((k, 4, 4))
+    measures, errors = np.zeros((3, k)), np.zeros((2, k))
+    _kernel(links, tool, q, X_target, stop, plain, max_iter, give_up_after, damping,
+            max_step, converged, X, measures, errors)
+    for j in range(k):
+        if not converged[j]:
+            return False
+        for i in range(j):
+            if _same(q[i], q[j]):
+                return False
+    exact = np.zeros(8, dtype=np.bool_)                 # the exact arm's own solutions
+    for r in range(8):
+        exact[r] = found[r] and pe[r] <= tol
+    for j in range(k):
+        r = rows[j]
+        pe[r], re[r] = errors[0, j], errors[1, j]
+        if pe[r] <= tol and re[r] <= tol:
+            valid[r] = True
+            for i in range(6):
+                solutions[r, i] = _wrap(q[j, i])
+            flags[0] = flags[0] or measures[0, j] < singular_tol
+            flags[1] = flags[1] or measures[2, j] / d4 < singular_tol
+            flags[2] = flags[2] or measures[1, j] < singular_tol
+    flags[3] = True
+    for r in range(8):
+        flags[3] = flags[3] and not valid[r]
+        flags[4] = flags[4] or (exact[r] and not valid[r])
+    return True
 
 
 def _load(links, q, X_target, rows, S):
@@ -260,5 +328,6 @@ def _dot_rows(A, i, B, j):
 _Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE = (
     INDEX[name] for name in ("q0", "c0", "s0", "t00", "tp0", "F0", "x0", "act", "size"))
 _COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_size", "_same", "_unique",
+              "_wrap", "_one_pose",
               "_are_new", "_load", "_recompute", "_kernel", "_outputs", "_pose_errors",
               "_dot_rows"]

@@ -52,7 +52,7 @@ wrist, elbow and shoulder singularities every generating configuration is still 
 
 import math
 import weakref
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -64,6 +64,7 @@ from ..robot import Link, Robot
 from ..rotations import wrap_angle
 from ._newton_compiled import are_new as compiled_are_new
 from ._newton_compiled import newton as compiled_newton
+from ._newton_compiled import one_pose as compiled_one_pose
 from ._newton_compiled import ready as compiled_ready
 from ._newton_compiled import unique as compiled_unique
 from .result import IKResult, finish
@@ -101,6 +102,7 @@ class _Nominal:
     position_gap: float
     rotation_gap: float
     links: tuple          # per link (cos alpha, sin alpha, a, d, theta offset)
+    matrix_chains: dict = field(default_factory=dict, compare=False)   # _matrix_chain's
 
 
 _NOMINAL = weakref.WeakKeyDictionary()        # calibrated robot -> _Nominal (links immutable)
@@ -287,6 +289,10 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
                            tol=tol, q_ref=q_ref, singular_tol=singular_tol)
 
     start = exact_solutions(X_06)
+    if batch == ():
+        result = _one_pose(nominal, start, X_0T[0], X_6T, tol, singular_tol, max_iter, wide)
+        if result is not None:
+            return result
     q0 = start.solutions.reshape(n * 8, 6).copy()
     errors = start.position_error.reshape(n * 8)
     found = start.valid.reshape(n * 8)                 # the branches the exact arm found
@@ -324,6 +330,59 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
                   pe.reshape(batch + (8,)), re.reshape(batch + (8,)),
                   {name: f.reshape(batch) for name, f in flags.items()},
                   reason.reshape(batch))
+
+
+def _one_pose(nominal, start, X_0T, tool, tol, singular_tol, max_iter, wide):
+    """The result of :func:`calibrated_ur` for one pose (``start`` the exact arm's
+    :class:`IKResult` of it, ``X_0T`` (4, 4) the target in frame 0) with a few numpy calls,
+    when Newton from the exact arm's branches is all it takes: every branch the exact arm
+    found converges, to distinct solutions, and none is missed by a little (nearly every
+    pose). None otherwise, and the pose takes the array path, which this is tested equal to.
+    With numba, all of it after the closed form is one compiled call
+    (``dqlab.ik._newton_compiled.one_pose``)."""
+    found, pe, re = start.valid, start.position_error, start.rotation_error
+    if (~found & (pe <= 10.0 * wide)).any() or not found.any():
+        return None
+    d4 = nominal.robot.links[3].d
+    if compiled_ready():
+        done = compiled_one_pose(nominal.links, tool, start.solutions, found, pe, re, X_0T,
+                                 tol, max_iter, singular_tol, d4, plain=_PLAIN_STEPS,
+                                 stop_factor=_STOP, give_up_after=_GIVE_UP_AFTER,
+                                 damping=_DAMPING, max_step=_MAX_STEP)
+        if done is None:
+            return None
+        solutions, valid, pe, re, flags = done
+    else:
+        rows = np.flatnonzero(found)
+        q, converged, _, measures, errors = _newton(nominal.links, tool, start.solutions[rows],
+                                                    np.broadcast_to(X_0T, (rows.size, 4, 4)),
+                                                    tol, max_iter)
+        if not converged.all() or _repeats(q):         # a branch to restart: _repair
+            return None
+        exact = found & (pe <= tol)
+        pe, re = pe.copy(), re.copy()
+        pe[rows], re[rows] = errors
+        polished = (errors[0] <= tol) & (errors[1] <= tol)
+        valid = np.zeros(8, dtype=bool)
+        valid[rows] = polished
+        solutions = np.zeros((8, 6))
+        solutions[rows] = wrap_angle(q)
+        wrist, elbow, shoulder = measures[:, polished]
+        flags = [(wrist < singular_tol).any(), (shoulder / d4 < singular_tol).any(),
+                 (elbow < singular_tol).any(), not polished.any(), (exact & ~valid).any()]
+    names = ("wrist_singular", "shoulder_singular", "elbow_singular", "unreachable",
+             "not_converged")
+    return finish(solutions, valid, pe, re,
+                  {name: np.array(flag, dtype=bool) for name, flag in zip(names, flags)},
+                  np.array(REASON_NOT_CONVERGED if flags[3] else "", dtype=object))
+
+
+def _repeats(q):
+    """Whether two joint vectors of q (k, 6) are the same solution: every joint within 1e-6
+    rad modulo 2 pi, the test of ``_Polished.unique``."""
+    d = q[:, None] - q[None]
+    same = np.abs(d - 2.0 * np.pi * np.rint(d / (2.0 * np.pi))).max(axis=-1) < 1e-6
+    return int(same.sum()) > q.shape[0]                 # the diagonal, and any other
 
 
 @dataclass
@@ -443,9 +502,10 @@ def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, to
     _restart(chain, polished, unique, np.concatenate(owners), np.concatenate(starts), X_0T,
              tol, max_iter)
     wanted = wanted[~unique[wanted]]                    # still missing after the flips
-    owners, starts = [], []
-    kernel = _MatrixChain(*chain)
     wanted = wanted[found[wanted]]
+    if not wanted.size:
+        return
+    kernel = _matrix_chain(nominal, chain[1])
     failed = wanted[~polished.converged[wanted]]        # restart those only near a
     if failed.size:                                     # singularity (else: no solution)
         near, _ = _near_singular(kernel, q0[failed])
@@ -455,15 +515,33 @@ def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, to
         sibling = wanted ^ bits
         ok = unique[sibling]
         bases.append((wanted[ok], polished.q[sibling[ok]]))
-    for rows, q in bases:
-        if rows.size:
-            near, direction = _near_singular(kernel, q)  # only near a singularity
-            for t in (0.05, -0.05, 0.2, -0.2, 0.6, -0.6):
-                owners.append(rows[near])
-                starts.append(q[near] + t * direction)
-    if owners:
-        _restart(chain, polished, unique, np.concatenate(owners), np.concatenate(starts),
-                 X_0T, tol, max_iter)
+    rows, q = (np.concatenate(part) for part in zip(*bases, strict=True))
+    if not rows.size:
+        return
+    base = np.repeat(np.arange(len(bases)), [r.size for r, _ in bases])
+    near, direction = _near_singular(kernel, q)          # only near a singularity
+    step = np.zeros_like(q)
+    step[near] = direction
+    owners, starts = [], []
+    for b in range(len(bases)):                         # base by base, each way in turn
+        these = np.flatnonzero(near & (base == b))
+        for t in (0.05, -0.05, 0.2, -0.2, 0.6, -0.6):
+            owners.append(rows[these])
+            starts.append(q[these] + t * step[these])
+    _restart(chain, polished, unique, np.concatenate(owners), np.concatenate(starts), X_0T,
+             tol, max_iter)
+
+
+def _matrix_chain(nominal, tool):
+    """The :class:`_MatrixChain` of a calibrated arm with the tool ``tool`` (4, 4), built
+    once for each of the last few tools used (one pose's repair needs it on every call)."""
+    key = tool.tobytes()
+    chain = nominal.matrix_chains.get(key)
+    if chain is None:
+        if len(nominal.matrix_chains) >= 4:
+            nominal.matrix_chains.clear()
+        chain = nominal.matrix_chains[key] = _MatrixChain(nominal.links, tool)
+    return chain
 
 
 def _near_singular(kernel, q):
