@@ -85,7 +85,8 @@ def one_pose(links, tool, q_start, found, position_error, rotation_error, X_0T, 
     zero where not valid), ``valid`` (8,), the position and rotation errors (8,) (the
     polished rows' in place of the closed form's) and the flags (5,): wrist, shoulder and
     elbow singular, unreachable, not converged."""
-    solutions, valid, flags = np.zeros((8, 6)), np.zeros(8, dtype=np.bool_), np.zeros(5, dtype=np.bool_)
+    solutions, valid = np.zeros((8, 6)), np.zeros(8, dtype=np.bool_)
+    flags = np.zeros(5, dtype=np.bool_)
     pe, re = np.array(position_error, dtype=float), np.array(rotation_error, dtype=float)
     done = _one_pose(np.asarray(links, dtype=float), np.ascontiguousarray(tool, dtype=float),
                      np.ascontiguousarray(q_start, dtype=float), np.ascontiguousarray(found),

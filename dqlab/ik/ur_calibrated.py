@@ -372,9 +372,9 @@ def _one_pose(nominal, start, X_0T, tool, tol, singular_tol, max_iter, wide):
                  (elbow < singular_tol).any(), not polished.any(), (exact & ~valid).any()]
     names = ("wrist_singular", "shoulder_singular", "elbow_singular", "unreachable",
              "not_converged")
-    return finish(solutions, valid, pe, re,
-                  {name: np.array(flag, dtype=bool) for name, flag in zip(names, flags)},
-                  np.array(REASON_NOT_CONVERGED if flags[3] else "", dtype=object))
+    flags = {name: np.array(flag, dtype=bool) for name, flag in zip(names, flags, strict=True)}
+    return finish(solutions, valid, pe, re, flags,
+                  np.array(REASON_NOT_CONVERGED if flags["unreachable"] else "", dtype=object))
 
 
 def _repeats(q):
