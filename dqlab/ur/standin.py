@@ -389,12 +389,20 @@ class ControllerStandIn:
             self._log_file = None
 
     def log(self):
-        """What the stand-in reported (refused programs, dropped clients), as text."""
+        """What the stand-in reported (refused programs, dropped clients), as text.
+
+        The stand-in writes its log through a copy of this file's descriptor, which shares
+        its offset: the log is read with ``os.pread``, which leaves the offset alone (a seek
+        here would send the stand-in's next line over the log's first ones)."""
         if self._log_file is None:
             return self._log_text
-        self._log_file.flush()
-        self._log_file.seek(0)
-        return self._log_file.read().decode("utf-8", errors="replace")
+        fd = self._log_file.fileno()
+        if hasattr(os, "pread"):
+            data = os.pread(fd, os.fstat(fd).st_size, 0)
+        else:                                   # (no pread: seek, read, and back to the end)
+            self._log_file.seek(0)
+            data = self._log_file.read()
+        return data.decode("utf-8", errors="replace")
 
     def __enter__(self):
         return self.start()
