@@ -209,7 +209,9 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
                 row = [theta1, theta2, theta3, wrap_angle(theta234 - theta2 - theta3),
                        theta5, theta6]
                 if offsets is not None:
-                    row = [wrap_angle(t - o) for t, o in zip(row, offsets, strict=True)]
+                    row = [t - o for t, o in zip(row, offsets, strict=True)]
+                    if not (min(row) > -math.pi and max(row) <= math.pi):   # (NaN: wrap)
+                        row = [wrap_angle(t) for t in row]
                 solutions[6 * k:6 * k + 6] = row
                 elbow_singular = elbow_singular or sin3 < singular_tol
             any_valid = True
