@@ -33,7 +33,7 @@ from ._newton_lanes import frames as lane_frames
 from ._newton_lanes import size as lane_size
 from ._newton_lanes import step as lane_step
 
-__all__ = ["ready", "newton", "one_pose", "unique", "are_new"]
+__all__ = ["ready", "newton", "one_pose", "unique", "are_new", "accept"]
 
 _COMPILED = []     # the functions below the wrappers, compiled in place by ready()
 _READY = None      # ready()'s answer, once known
@@ -115,6 +115,18 @@ def are_new(rows, q_rows, q, unique):
     return out
 
 
+def accept(owners, converged, q_starts, q, unique):
+    """``dqlab.ik.ur_calibrated._accept`` compiled: the starts j (in order) whose solution
+    ``q_starts[j]`` replaces row ``owners[j]``, each written to ``q`` and marked in
+    ``unique`` (both in place, C-contiguous) as it is taken."""
+    if not (q.flags.c_contiguous and unique.flags.c_contiguous):
+        raise ValueError("accept writes q and unique in place: they must be C-contiguous")
+    taken = np.empty(owners.shape[0], dtype=np.int64)
+    k = _accept(np.ascontiguousarray(owners, dtype=np.int64), np.ascontiguousarray(converged),
+                np.ascontiguousarray(q_starts, dtype=float), q, unique, taken)
+    return taken[:k]
+
+
 _TWO_PI = 2.0 * math.pi
 
 
@@ -148,6 +160,28 @@ def _are_new(rows, q_rows, q, unique, out):
             if unique[k] and _same(q[k], q_rows[j]):
                 out[j] = False
                 break
+
+
+def _accept(owners, converged, q_starts, q, unique, taken):
+    """:func:`accept`'s loop: the number of starts taken, their indices in ``taken``."""
+    fixed = np.zeros(unique.shape[0], dtype=np.bool_)
+    k = 0
+    for j in range(owners.shape[0]):
+        row = owners[j]
+        if not converged[j] or fixed[row]:
+            continue
+        first = row - row % 8
+        new = True
+        for i in range(first, first + 8):
+            if unique[i] and _same(q[i], q_starts[j]):
+                new = False
+                break
+        if new:
+            q[row] = q_starts[j]
+            unique[row] = fixed[row] = True
+            taken[k] = j
+            k += 1
+    return k
 
 
 def _wrap(theta):
@@ -329,6 +363,6 @@ def _dot_rows(A, i, B, j):
 _Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE = (
     INDEX[name] for name in ("q0", "c0", "s0", "t00", "tp0", "F0", "x0", "act", "size"))
 _COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_size", "_same", "_unique",
-              "_wrap", "_one_pose",
+              "_wrap", "_one_pose", "_accept",
               "_are_new", "_load", "_recompute", "_kernel", "_outputs", "_pose_errors",
               "_dot_rows"]

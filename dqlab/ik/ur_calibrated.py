@@ -57,18 +57,20 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._checks import rigid_rows
 from .._kernels import rigid_inverse
 from ..dualquat import dual_quaternion_from_transform
 from ..models import UR_ALPHA, UR_SHAPE
 from ..robot import Link, Robot
 from ..rotations import wrap_angle
+from ._newton_compiled import accept as compiled_accept
 from ._newton_compiled import are_new as compiled_are_new
 from ._newton_compiled import newton as compiled_newton
 from ._newton_compiled import one_pose as compiled_one_pose
 from ._newton_compiled import ready as compiled_ready
 from ._newton_compiled import unique as compiled_unique
 from .result import IKResult, finish
-from .targets import parse_targets, pose_errors
+from .targets import RIGID_TOL, parse_targets, pose_errors
 
 __all__ = ["calibrated_ur", "nominal_ur", "REASON_NOT_CONVERGED", "MAX_DISCREPANCY"]
 
@@ -89,6 +91,7 @@ _PLAIN_STEPS = 3       # first steps taken by every branch together, none stoppe
 _BLOCK = 2048          # branches per block of the Newton steps
 _RESTART_ITER = 10     # Newton steps of a restart at most
 _FEW_ROWS = 192        # up to this many branches, the kernel working on whole matrices
+_WAYS = np.array([0.05, -0.05, 0.2, -0.2, 0.6, -0.6])   # a repair's moves along a direction
 _SAMPLES = np.random.default_rng(20260531).uniform(-np.pi, np.pi, (64, 6))
 
 
@@ -274,14 +277,20 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
     nominal = _nominal(robot)
     if residuals not in ("fk", "equations"):
         raise ValueError(f"residuals must be 'fk' or 'equations', got {residuals!r}")
-    targets = parse_targets(target, tol=pose_tol)
-    batch = targets.batch
-    X_W = targets.transforms.reshape((-1, 4, 4))
+    if _plain_pose(target, pose_tol):                  # one transform, checked on floats
+        batch, X_W = (), target[None]
+    else:
+        targets = parse_targets(target, tol=pose_tol)
+        batch = targets.batch
+        X_W = targets.transforms.reshape((-1, 4, 4))
     n = X_W.shape[0]
-    X_6T = robot.tool if tool is None else _checked_tool(tool, pose_tol)
-    X_0T = rigid_inverse(robot.base) @ X_W             # the targets in frame 0 ...
-    X_T6 = rigid_inverse(X_6T)                         # (base and tool checked already)
-    X_06 = X_0T @ X_T6                                  # ... and the flanges they mean
+    if tool is None and robot.bare:                     # frame 0 is the world, TCP the flange
+        X_6T, X_T6, X_0T, X_06 = robot.tool, robot.tool, X_W, X_W
+    else:
+        X_6T = robot.tool if tool is None else _checked_tool(tool, pose_tol)
+        X_0T = rigid_inverse(robot.base) @ X_W         # the targets in frame 0 ...
+        X_T6 = rigid_inverse(X_6T)                     # (base and tool checked already)
+        X_06 = X_0T @ X_T6                              # ... and the flanges they mean
     wide = max(tol, 2.0 * nominal.position_gap)
 
     def exact_solutions(X, tol=wide):
@@ -330,6 +339,15 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
                   pe.reshape(batch + (8,)), re.reshape(batch + (8,)),
                   {name: f.reshape(batch) for name, f in flags.items()},
                   reason.reshape(batch))
+
+
+def _plain_pose(target, pose_tol):
+    """Whether ``target`` is one rigid transform, a (4, 4) float array that passes
+    :func:`~dqlab.ik.targets.parse_targets`'s check at the default tolerance (checked on
+    floats, as the closed form's one-pose path checks it); anything else is parsed."""
+    return (type(target) is np.ndarray and target.shape == (4, 4)
+            and target.dtype == np.float64 and pose_tol <= RIGID_TOL
+            and rigid_rows(target, pose_tol) is not None)
 
 
 def _one_pose(nominal, start, X_0T, tool, tol, singular_tol, max_iter, wide):
@@ -525,9 +543,9 @@ def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, to
     owners, starts = [], []
     for b in range(len(bases)):                         # base by base, each way in turn
         these = np.flatnonzero(near & (base == b))
-        for t in (0.05, -0.05, 0.2, -0.2, 0.6, -0.6):
-            owners.append(rows[these])
-            starts.append(q[these] + t * step[these])
+        if these.size:
+            owners.append(np.tile(rows[these], _WAYS.size))
+            starts.append((q[these] + _WAYS[:, None, None] * step[these]).reshape(-1, 6))
     _restart(chain, polished, unique, np.concatenate(owners), np.concatenate(starts), X_0T,
              tol, max_iter)
 
@@ -564,14 +582,29 @@ def _restart(chain, polished, unique, owners, starts, X_0T, tol, max_iter):
         return
     q, converged, X, measures, errors = _newton(*chain, starts, X_0T[owners // 8], tol,
                                                 min(max_iter, _RESTART_ITER))
+    if compiled_ready():
+        taken = compiled_accept(owners, converged, q, polished.q, unique)
+    else:
+        taken = _accept(polished, unique, owners, converged, q)
+    polished.record(owners[taken], q[taken], True, X[taken], measures[:, taken],
+                    errors[:, taken])
+
+
+def _accept(polished, unique, owners, converged, q):
+    """The starts j whose solution ``q[j]`` replaces row ``owners[j]``: in the order of the
+    starts, the first converged one of a row that the pose does not have yet (the rows taken
+    meanwhile included). Their rows' joints are written to ``polished.q`` and marked in
+    ``unique`` as they are taken."""
     new = converged & polished.are_new(owners, q, unique)
-    fixed = np.zeros(unique.size, dtype=bool)
+    taken, fixed = [], set()
     for j in np.flatnonzero(new):                       # in the order of the starts
         row = owners[j]
-        if fixed[row] or not polished.is_new(row, q[j], unique):   # taken meanwhile
+        if row in fixed or not polished.is_new(row, q[j], unique):   # taken meanwhile
             continue
-        polished.record(row, q[j], True, X[j], measures[:, j], errors[:, j])
-        unique[row] = fixed[row] = True
+        polished.q[row], unique[row] = q[j], True
+        fixed.add(row)
+        taken.append(j)
+    return np.array(taken, dtype=np.int64)
 
 
 def _flip(exact, q, bits):
