@@ -164,3 +164,43 @@ def test_the_lanes_cosines_and_sines_are_the_librarys():
             theta = S[(index["q0"] + i) * W:(index["q0"] + i + 1) * W] + links[i, 4]
             worst = max(worst, np.abs(c - np.cos(theta)).max(), np.abs(s - np.sin(theta)).max())
     assert worst <= 2.3e-16, worst
+
+
+def test_compiled_gram_and_acceptance_equal_the_numpy_path(numpy_path):
+    """J^T J from the lanes' frames equals the matrix kernel's to rounding (with a tool, at
+    and near singular configurations); the restarts' acceptance takes the same starts and
+    leaves the same rows and unique marks as the Python loop."""
+    robot = calibrated(48)
+    chain, q0, targets = chain_and_starts(robot, 49, 40)
+    q = q0[np.isfinite(q0).all(axis=1)]
+    kernel = module._MatrixChain(*chain)
+    J = kernel.jacobian(kernel.frames(q))
+    np.testing.assert_allclose(compiled.gram(*chain, q), np.swapaxes(J, -1, -2) @ J,
+                               rtol=0, atol=1e-13)
+    nominal = module._nominal(robot)
+    near, direction = module._near_singular(nominal, chain[1], q)
+    near_n, direction_n = numpy_path(module._near_singular, nominal, chain[1], q)
+    np.testing.assert_array_equal(near, near_n)
+    assert near.any() and not near.all()
+    np.testing.assert_allclose(direction, direction_n, rtol=0, atol=1e-9)
+    # acceptance: starts that repeat rows, each other, or fail, in one pose and across poses
+    rng = np.random.default_rng(50)
+    polished = module._Polished.empty(6)
+    polished.q[:] = rng.uniform(-np.pi, np.pi, (48, 6))
+    polished.converged[:] = rng.random(48) < 0.7
+    unique = polished.unique()
+    owners = rng.integers(0, 48, 120)
+    starts = rng.uniform(-np.pi, np.pi, (120, 6))
+    starts[::4] = polished.q[owners[::4] ^ 1] + 2 * np.pi     # a repeat of a neighbour
+    starts[1::7] = starts[0::7][:starts[1::7].shape[0]]        # a repeat of another start
+    converged = rng.random(120) < 0.8
+    fast = (polished.q.copy(), unique.copy())
+    taken = compiled.accept(owners, converged, starts, fast[0], fast[1])
+    other = module._Polished(polished.q.copy(), polished.done, polished.converged, polished.X,
+                             polished.measures, polished.errors)
+    plain_unique = unique.copy()
+    taken_n = numpy_path(module._accept, other, plain_unique, owners, converged, starts)
+    np.testing.assert_array_equal(taken, taken_n)
+    np.testing.assert_array_equal(fast[0], other.q)
+    np.testing.assert_array_equal(fast[1], plain_unique)
+    assert 0 < taken.size < converged.sum()

@@ -33,7 +33,7 @@ from ._newton_lanes import frames as lane_frames
 from ._newton_lanes import size as lane_size
 from ._newton_lanes import step as lane_step
 
-__all__ = ["ready", "newton", "one_pose", "unique", "are_new", "accept"]
+__all__ = ["ready", "newton", "one_pose", "unique", "are_new", "accept", "gram"]
 
 _COMPILED = []     # the functions below the wrappers, compiled in place by ready()
 _READY = None      # ready()'s answer, once known
@@ -127,6 +127,16 @@ def accept(owners, converged, q_starts, q, unique):
     return taken[:k]
 
 
+def gram(links, tool, q):
+    r""":math:`J^\mathsf{T} J` (m, 6, 6) of the calibrated chain (links, tool) at the joint
+    vectors q (m, 6), J the Jacobian at the TCP of ``_MatrixChain.jacobian``: the lanes'
+    frames, then the columns of ``_EntryChain._columns``."""
+    H = np.empty((q.shape[0], 6, 6))
+    _gram(np.asarray(links, dtype=float), np.ascontiguousarray(tool, dtype=float),
+          np.ascontiguousarray(q, dtype=float), H)
+    return H
+
+
 _TWO_PI = 2.0 * math.pi
 
 
@@ -164,11 +174,13 @@ def _are_new(rows, q_rows, q, unique, out):
 
 def _accept(owners, converged, q_starts, q, unique, taken):
     """:func:`accept`'s loop: the number of starts taken, their indices in ``taken``."""
+    fresh = np.empty(owners.shape[0], dtype=np.bool_)   # new to the pose before any is taken
+    _are_new(owners, q_starts, q, unique, fresh)
     fixed = np.zeros(unique.shape[0], dtype=np.bool_)
     k = 0
     for j in range(owners.shape[0]):
         row = owners[j]
-        if not converged[j] or fixed[row]:
+        if not (converged[j] and fresh[j]) or fixed[row]:
             continue
         first = row - row % 8
         new = True
@@ -182,6 +194,39 @@ def _accept(owners, converged, q_starts, q, unique, taken):
             taken[k] = j
             k += 1
     return k
+
+
+def _gram(links, tool, q, H):
+    """:func:`gram`'s work, W rows at a time."""
+    S = np.zeros(NV * W)
+    J = np.empty((6, 6))
+    m = q.shape[0]
+    for first in range(0, m, W):
+        n = min(W, m - first)
+        for r in range(W):
+            for i in range(6):
+                S[(_Q + i) * W + r] = q[first + min(r, n - 1), i]
+        lane_angles(S, links)
+        lane_frames(S, links, tool)
+        for r in range(n):
+            px, py, pz = S[(_F + 36) * W + r], S[(_F + 37) * W + r], S[(_F + 38) * W + r]
+            J[0, 0], J[1, 0], J[2, 0] = -py, px, 0.0      # joint 1: z_0 = (0, 0, 1), o_0 = 0
+            J[3, 0], J[4, 0], J[5, 0] = 0.0, 0.0, 1.0
+            for i in range(5):
+                zx, zy, zz = (S[(_F + 3 * i) * W + r], S[(_F + 3 * i + 1) * W + r],
+                              S[(_F + 3 * i + 2) * W + r])
+                rx = px - S[(_F + 15 + 3 * i) * W + r]
+                ry = py - S[(_F + 16 + 3 * i) * W + r]
+                rz = pz - S[(_F + 17 + 3 * i) * W + r]
+                J[0, i + 1], J[1, i + 1], J[2, i + 1] = (zy * rz - zz * ry, zz * rx - zx * rz,
+                                                         zx * ry - zy * rx)
+                J[3, i + 1], J[4, i + 1], J[5, i + 1] = zx, zy, zz
+            for a in range(6):
+                for b in range(6):
+                    total = 0.0
+                    for k in range(6):
+                        total += J[k, a] * J[k, b]
+                    H[first + r, a, b] = total
 
 
 def _wrap(theta):
@@ -363,6 +408,6 @@ def _dot_rows(A, i, B, j):
 _Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE = (
     INDEX[name] for name in ("q0", "c0", "s0", "t00", "tp0", "F0", "x0", "act", "size"))
 _COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_size", "_same", "_unique",
-              "_wrap", "_one_pose", "_accept",
+              "_wrap", "_one_pose", "_accept", "_gram",
               "_are_new", "_load", "_recompute", "_kernel", "_outputs", "_pose_errors",
               "_dot_rows"]

@@ -65,6 +65,7 @@ from ..robot import Link, Robot
 from ..rotations import wrap_angle
 from ._newton_compiled import accept as compiled_accept
 from ._newton_compiled import are_new as compiled_are_new
+from ._newton_compiled import gram as compiled_gram
 from ._newton_compiled import newton as compiled_newton
 from ._newton_compiled import one_pose as compiled_one_pose
 from ._newton_compiled import ready as compiled_ready
@@ -523,10 +524,9 @@ def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, to
     wanted = wanted[found[wanted]]
     if not wanted.size:
         return
-    kernel = _matrix_chain(nominal, chain[1])
     failed = wanted[~polished.converged[wanted]]        # restart those only near a
     if failed.size:                                     # singularity (else: no solution)
-        near, _ = _near_singular(kernel, q0[failed])
+        near, _ = _near_singular(nominal, chain[1], q0[failed])
         wanted = np.union1d(wanted[polished.converged[wanted]], failed[near])
     bases = [(wanted, q0[wanted])]                      # the branch's own start
     for bits in (4, 5, 6, 7):                           # the other shoulder's solutions
@@ -537,7 +537,7 @@ def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, to
     if not rows.size:
         return
     base = np.repeat(np.arange(len(bases)), [r.size for r, _ in bases])
-    near, direction = _near_singular(kernel, q)          # only near a singularity
+    near, direction = _near_singular(nominal, chain[1], q)   # only near a singularity
     step = np.zeros_like(q)
     step[near] = direction
     owners, starts = [], []
@@ -562,17 +562,24 @@ def _matrix_chain(nominal, tool):
     return chain
 
 
-def _near_singular(kernel, q):
-    r"""Which joint vectors q (m, 6) are near a singularity of the calibrated arm (the
-    smallest singular value of J below 1e-2 of the largest), and the most singular direction
-    there, (k, 6) for those k: the eigenvector of :math:`J^\mathsf{T} J` of its smallest
-    eigenvalue (the last right singular vector of J), its largest entry made positive."""
-    J = kernel.jacobian(kernel.frames(q))
-    w, V = np.linalg.eigh(np.swapaxes(J, -1, -2) @ J)                   # ascending
+def _near_singular(nominal, tool, q):
+    r"""Which joint vectors q (m, 6) are near a singularity of the calibrated arm with the
+    tool ``tool`` (the smallest singular value of J below 1e-2 of the largest), and the most
+    singular direction there, (k, 6) for those k: the eigenvector of :math:`J^\mathsf{T} J`
+    of its smallest eigenvalue (the last right singular vector of J), its largest entry made
+    positive. With numba, :math:`J^\mathsf{T} J` comes from the compiled frames
+    (``dqlab.ik._newton_compiled.gram``)."""
+    if compiled_ready():
+        H = compiled_gram(nominal.links, tool, q)
+    else:
+        kernel = _matrix_chain(nominal, tool)
+        J = kernel.jacobian(kernel.frames(q))
+        H = np.swapaxes(J, -1, -2) @ J
+    w, V = np.linalg.eigh(H)                                             # ascending
     near = np.maximum(w[:, 0], 0.0) < 1e-4 * w[:, -1]
     v = V[near, :, 0]
-    largest = np.take_along_axis(v, np.abs(v).argmax(axis=1)[:, None], axis=1)
-    return near, np.where(largest < 0.0, -v, v)
+    largest = v[np.arange(v.shape[0]), np.abs(v).argmax(axis=1)]
+    return near, np.where(largest[:, None] < 0.0, -v, v)
 
 
 def _restart(chain, polished, unique, owners, starts, X_0T, tol, max_iter):
