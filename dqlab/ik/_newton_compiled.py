@@ -76,12 +76,13 @@ def newton(links, tool, q, X_target, tol, max_iter, *, plain, stop_factor, give_
 
 
 def one_pose(links, tool, q_start, found, position_error, rotation_error, X_0T, tol,
-             max_iter, singular_tol, d4, *, plain, stop_factor, give_up_after, damping,
+             max_iter, singular_tol, d4, near, *, plain, stop_factor, give_up_after, damping,
              max_step):
     """``dqlab.ik.ur_calibrated._one_pose`` after the closed form, compiled: the Newton steps
     of the rows ``found`` (8,) of ``q_start`` (8, 6) towards ``X_0T`` (4, 4), then the
-    result's arrays. None when a row does not converge or two rows converge to the same
-    solution (the pose then takes the array path); else the solutions (8, 6) (wrapped,
+    result's arrays. None when the closed form found no row or missed one by ``near`` or
+    less, or when a row does not converge or two rows converge to the same solution (the
+    pose then takes the array path); else the solutions (8, 6) (wrapped,
     zero where not valid), ``valid`` (8,), the position and rotation errors (8,) (the
     polished rows' in place of the closed form's) and the flags (5,): wrist, shoulder and
     elbow singular, unreachable, not converged."""
@@ -93,7 +94,7 @@ def one_pose(links, tool, q_start, found, position_error, rotation_error, X_0T, 
                      np.ascontiguousarray(X_0T, dtype=float), float(tol),
                      float(stop_factor * tol), int(min(plain, max_iter)), int(max_iter),
                      int(give_up_after), float(damping), float(max_step), float(singular_tol),
-                     float(d4), solutions, valid, pe, re, flags)
+                     float(d4), float(near), solutions, valid, pe, re, flags)
     return (solutions, valid, pe, re, flags) if done else None
 
 
@@ -238,9 +239,14 @@ def _wrap(theta):
 
 
 def _one_pose(links, tool, q_start, found, X_0T, tol, stop, plain, max_iter, give_up_after,
-              damping, max_step, singular_tol, d4, solutions, valid, pe, re, flags):
+              damping, max_step, singular_tol, d4, near, solutions, valid, pe, re, flags):
     """:func:`one_pose`'s work: False as soon as the pose needs the array path."""
+    for r in range(8):
+        if not found[r] and pe[r] <= near:
+            return False
     rows = np.flatnonzero(found)
+    if rows.shape[0] == 0:
+        return False
     k = rows.shape[0]
     q, X_target = np.empty((k, 6)), np.empty((k, 4, 4))
     for j in range(k):

@@ -105,7 +105,7 @@ class _Nominal:
     robot: Robot
     position_gap: float
     rotation_gap: float
-    links: tuple          # per link (cos alpha, sin alpha, a, d, theta offset)
+    links: np.ndarray     # (6, 5): per link (cos alpha, sin alpha, a, d, theta offset)
     matrix_chains: dict = field(default_factory=dict, compare=False)   # _matrix_chain's
 
 
@@ -199,8 +199,9 @@ def _nominal(robot):
                          f"{rotation_gap:.3g} rad from this robot on sample configurations "
                          f"(a calibrated UR differs by millimetres; at most "
                          f"{MAX_DISCREPANCY} is accepted)")
-    constants = tuple((math.cos(lk.alpha), math.sin(lk.alpha), lk.a, lk.d, lk.theta_offset)
-                      for lk in links)
+    constants = np.array([(math.cos(lk.alpha), math.sin(lk.alpha), lk.a, lk.d, lk.theta_offset)
+                          for lk in links])
+    constants.flags.writeable = False
     nominal = _Nominal(exact, position_gap, rotation_gap, constants)
     _NOMINAL[robot] = nominal
     return nominal
@@ -360,18 +361,19 @@ def _one_pose(nominal, start, X_0T, tool, tol, singular_tol, max_iter, wide):
     With numba, all of it after the closed form is one compiled call
     (``dqlab.ik._newton_compiled.one_pose``)."""
     found, pe, re = start.valid, start.position_error, start.rotation_error
-    if (~found & (pe <= 10.0 * wide)).any() or not found.any():
-        return None
     d4 = nominal.robot.links[3].d
     if compiled_ready():
         done = compiled_one_pose(nominal.links, tool, start.solutions, found, pe, re, X_0T,
-                                 tol, max_iter, singular_tol, d4, plain=_PLAIN_STEPS,
-                                 stop_factor=_STOP, give_up_after=_GIVE_UP_AFTER,
-                                 damping=_DAMPING, max_step=_MAX_STEP)
+                                 tol, max_iter, singular_tol, d4, 10.0 * wide,
+                                 plain=_PLAIN_STEPS, stop_factor=_STOP,
+                                 give_up_after=_GIVE_UP_AFTER, damping=_DAMPING,
+                                 max_step=_MAX_STEP)
         if done is None:
             return None
         solutions, valid, pe, re, flags = done
     else:
+        if (~found & (pe <= 10.0 * wide)).any() or not found.any():
+            return None
         rows = np.flatnonzero(found)
         q, converged, _, measures, errors = _newton(nominal.links, tool, start.solutions[rows],
                                                     np.broadcast_to(X_0T, (rows.size, 4, 4)),
