@@ -14,8 +14,10 @@ one used where numba is not installed (``pip install dqlab[fast]`` installs it; 
 in-browser chapters run without it).
 
 :func:`unique` and :func:`are_new` are ``_Polished.unique`` and ``_Polished.are_new`` of
-that module, compiled. :func:`ready` says whether numba is there; the first compilation
-takes seconds, and is cached on disk for the next processes.
+that module, compiled; :func:`one_pose` is its ``_one_pose`` after the closed form,
+:func:`accept` its ``_accept`` (which restarts replace a row) and :func:`gram` the
+:math:`J^\mathsf{T} J` of its ``_near_singular``. :func:`ready` says whether numba is
+there; the first compilation takes seconds, and is cached on disk for the next processes.
 
 The kernel differs from the numpy path in one way that changes no result beyond rounding:
 after a step, the cosine and sine of each joint angle are turned by the step (Taylor series

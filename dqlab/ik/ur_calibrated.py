@@ -43,7 +43,9 @@ keeps its contract (every branch, flags, reasons, batches) in three steps:
    flagged ``"not_converged"``, never dropped silently. With numba installed (the ``fast``
    extra), these steps run compiled, on the eight branches of a pose at once
    (``dqlab.ik._newton_compiled``, tested to give the same solutions); numpy runs them
-   otherwise.
+   otherwise. One pose whose branches all converge, to distinct solutions, is finished with
+   a few calls (``_one_pose``, tested equal to the array path); the others go on to the
+   restarts of ``_repair``.
 
 Near a singularity of the calibrated arm the Newton steps converge slowly (the Jacobian is
 nearly singular) and may end on a neighbouring branch; the tests measure how close to the
