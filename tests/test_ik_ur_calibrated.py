@@ -357,3 +357,25 @@ def test_one_pose_path_equals_the_array_path(compiled_kernels, monkeypatch):
     taken = np.array([r is not None for r in lean])
     assert taken.size == len(X)                         # a batch of one does not take it
     assert 0.5 < taken.mean() < 1.0 and not taken[-1]   # ... nor does every single pose
+
+
+def test_repair_without_singular_directions(monkeypatch):
+    """Poses whose missing branches are nowhere near a singularity have no restart along a
+    singular direction: the repair ends without one (here every screen says "not near"),
+    and the rows it keeps still reproduce their poses."""
+    from dqlab.ik import ur_calibrated as module
+    robot = calibrated(93)
+    q = singular_poses(robot, "wrist", 1e-2, 300, 0)
+    T = robot.fk(q)
+    calls = []
+
+    def nowhere_near(nominal, tool, q):
+        calls.append(len(q))
+        return np.zeros(len(q), dtype=bool), np.zeros((0, 6))
+
+    monkeypatch.setattr(module, "_near_singular", nowhere_near)
+    result = ur(robot, T)
+    assert calls and result.count.sum() > 0
+    assert max(e.max() for e in errors(robot, result, T)) <= 1e-10
+    single = ur(robot, T[0])
+    np.testing.assert_array_equal(single.valid, result.valid[0])

@@ -358,8 +358,8 @@ def _one_pose(nominal, start, X_0T, tool, tol, singular_tol, max_iter, wide):
     """The result of :func:`calibrated_ur` for one pose (``start`` the exact arm's
     :class:`IKResult` of it, ``X_0T`` (4, 4) the target in frame 0) with a few numpy calls,
     when Newton from the exact arm's branches is all it takes: every branch the exact arm
-    found converges, to distinct solutions, and none is missed by a little (nearly every
-    pose). None otherwise, and the pose takes the array path, which this is tested equal to.
+    found converges, to distinct solutions, and none is missed by a little (five poses in
+    six). None otherwise, and the pose takes the array path, which this is tested equal to.
     With numba, all of it after the closed form is one compiled call
     (``dqlab.ik._newton_compiled.one_pose``)."""
     found, pe, re = start.valid, start.position_error, start.rotation_error
@@ -550,8 +550,9 @@ def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, to
         if these.size:
             owners.append(np.tile(rows[these], _WAYS.size))
             starts.append((q[these] + _WAYS[:, None, None] * step[these]).reshape(-1, 6))
-    _restart(chain, polished, unique, np.concatenate(owners), np.concatenate(starts), X_0T,
-             tol, max_iter)
+    if owners:                                          # (none near a singularity: none)
+        _restart(chain, polished, unique, np.concatenate(owners), np.concatenate(starts),
+                 X_0T, tol, max_iter)
 
 
 def _matrix_chain(nominal, tool):
