@@ -210,7 +210,7 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
                        theta5, theta6]
                 if offsets is not None:
                     row = [t - o for t, o in zip(row, offsets, strict=True)]
-                    if not (min(row) > -math.pi and max(row) <= math.pi):   # (NaN: wrap)
+                    if not (min(row) > -math.pi and max(row) <= math.pi):   # else wrap them
                         row = [wrap_angle(t) for t in row]
                 solutions[6 * k:6 * k + 6] = row
                 elbow_singular = elbow_singular or sin3 < singular_tol
