@@ -94,6 +94,9 @@ _PLAIN_STEPS = 3       # first steps taken by every branch together, none stoppe
 _BLOCK = 2048          # branches per block of the Newton steps
 _RESTART_ITER = 10     # Newton steps of a restart at most
 _FEW_ROWS = 192        # up to this many branches, the kernel working on whole matrices
+#: The flags of a result, in order (the compiled one-pose path returns them so).
+_FLAG_NAMES = ("wrist_singular", "shoulder_singular", "elbow_singular", "unreachable",
+               "not_converged")
 _WAYS = np.array([0.05, -0.05, 0.2, -0.2, 0.6, -0.6])   # a repair's moves along a direction
 _SAMPLES = np.random.default_rng(20260531).uniform(-np.pi, np.pi, (64, 6))
 
@@ -332,7 +335,7 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
     re = start.rotation_error.reshape(n * 8).copy()
     pe[done], re[done] = polished.errors[:, done]
     valid = polished.converged & (pe <= tol) & (re <= tol)
-    flags = _flags(polished, valid, singular_tol, nominal.robot.links[3].d)
+    flags = _flags(polished.measures, valid, singular_tol, nominal.robot.links[3].d)
     flags["not_converged"] = (exact & ~valid).reshape(n, 8).any(axis=1)
     reason = np.full(n, "", dtype=object)
     none = ~valid.reshape(n, 8).any(axis=1)
@@ -373,6 +376,7 @@ def _one_pose(nominal, start, X_0T, tool, tol, singular_tol, max_iter, wide):
         if done is None:
             return None
         solutions, valid, pe, re, flags = done
+        flags = dict(zip(_FLAG_NAMES, flags, strict=True))
     else:
         if (~found & (pe <= 10.0 * wide)).any() or not found.any():
             return None
@@ -380,32 +384,20 @@ def _one_pose(nominal, start, X_0T, tool, tol, singular_tol, max_iter, wide):
         q, converged, _, measures, errors = _newton(nominal.links, tool, start.solutions[rows],
                                                     np.broadcast_to(X_0T, (rows.size, 4, 4)),
                                                     tol, max_iter)
-        if not converged.all() or _repeats(q):         # a branch to restart: _repair
+        Q, M = np.zeros((8, 6)), np.zeros((3, 8))
+        Q[rows], M[:, rows] = q, measures
+        if not converged.all() or (found & ~_unique(Q, found)).any():   # a restart: _repair
             return None
         exact = found & (pe <= tol)
         pe, re = pe.copy(), re.copy()
         pe[rows], re[rows] = errors
-        polished = (errors[0] <= tol) & (errors[1] <= tol)
-        valid = np.zeros(8, dtype=bool)
-        valid[rows] = polished
-        solutions = np.zeros((8, 6))
-        solutions[rows] = wrap_angle(q)
-        wrist, elbow, shoulder = measures[:, polished]
-        flags = [(wrist < singular_tol).any(), (shoulder / d4 < singular_tol).any(),
-                 (elbow < singular_tol).any(), not polished.any(), (exact & ~valid).any()]
-    names = ("wrist_singular", "shoulder_singular", "elbow_singular", "unreachable",
-             "not_converged")
-    flags = {name: np.array(flag, dtype=bool) for name, flag in zip(names, flags, strict=True)}
+        valid = found & (pe <= tol) & (re <= tol)
+        solutions = wrap_angle(Q)
+        flags = _flags(M, valid, singular_tol, d4)
+        flags["not_converged"] = (exact & ~valid).any()
+    flags = {name: np.array(flag, dtype=bool).reshape(()) for name, flag in flags.items()}
     return finish(solutions, valid, pe, re, flags,
                   np.array(REASON_NOT_CONVERGED if flags["unreachable"] else "", dtype=object))
-
-
-def _repeats(q):
-    """Whether two joint vectors of q (k, 6) are the same solution: every joint within 1e-6
-    rad modulo 2 pi, the test of ``_Polished.unique``."""
-    d = q[:, None] - q[None]
-    same = np.abs(d - 2.0 * np.pi * np.rint(d / (2.0 * np.pi))).max(axis=-1) < 1e-6
-    return int(same.sum()) > q.shape[0]                 # the diagonal, and any other
 
 
 @dataclass
@@ -440,18 +432,7 @@ class _Polished:
         apart), and on all six joints where those agree."""
         if compiled_ready():
             return compiled_unique(self.q, self.converged)
-        Q = self.q.reshape(-1, 8, 6)
-        converged = self.converged.reshape(-1, 8)
-        earlier, later = _PAIRS
-        with np.errstate(invalid="ignore"):
-            coarse = np.abs(wrap_angle(Q[:, earlier][..., _COARSE]
-                                       - Q[:, later][..., _COARSE])).max(axis=-1) < 1e-6
-            pose, pair = np.nonzero(coarse & converged[:, earlier] & converged[:, later])
-            same = np.abs(wrap_angle(Q[pose, earlier[pair]]
-                                     - Q[pose, later[pair]])).max(axis=-1) < 1e-6
-        repeats = np.zeros(self.converged.size, dtype=bool)
-        repeats[8 * pose[same] + later[pair[same]]] = True
-        return self.converged & ~repeats
+        return _unique(self.q, self.converged)
 
     def are_new(self, rows, q, unique):
         """Whether each joint vector ``q[j]`` differs from every unique row of the pose of
@@ -467,6 +448,21 @@ class _Polished:
         """Whether the joint vector ``q`` (6,) differs from every unique row of the pose of
         ``row``."""
         return bool(self.are_new(np.array([row]), q[None], unique)[0])
+
+
+def _unique(q, converged):
+    """``_Polished.unique`` of the joint vectors q (8 n, 6) and their ``converged`` (8 n,)."""
+    Q, C = q.reshape(-1, 8, 6), converged.reshape(-1, 8)
+    earlier, later = _PAIRS
+    with np.errstate(invalid="ignore"):
+        coarse = np.abs(wrap_angle(Q[:, earlier][..., _COARSE]
+                                   - Q[:, later][..., _COARSE])).max(axis=-1) < 1e-6
+        pose, pair = np.nonzero(coarse & C[:, earlier] & C[:, later])
+        same = np.abs(wrap_angle(Q[pose, earlier[pair]]
+                                 - Q[pose, later[pair]])).max(axis=-1) < 1e-6
+    repeats = np.zeros(converged.size, dtype=bool)
+    repeats[8 * pose[same] + later[pair[same]]] = True
+    return converged & ~repeats
 
 
 def _checked_tool(tool, pose_tol):
@@ -742,9 +738,10 @@ def _shortened(step):
         return step * np.minimum(1.0, _MAX_STEP / np.maximum(longest, 1e-300))
 
 
-def _flags(polished, valid, singular_tol, d4):
-    """The singularity and reach flags (n,) of the calibrated arm, over the valid rows."""
-    wrist, elbow, shoulder = polished.measures
+def _flags(measures, valid, singular_tol, d4):
+    """The singularity and reach flags (n,) of the calibrated arm, over the valid rows (8 n,),
+    from the singularity measures (3, 8 n); in the order of :data:`_FLAG_NAMES`."""
+    wrist, elbow, shoulder = measures
     flags = {}
     for name, measure in (("wrist_singular", wrist), ("shoulder_singular", shoulder / d4),
                           ("elbow_singular", elbow)):
