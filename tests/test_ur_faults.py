@@ -120,25 +120,37 @@ class FakeController:
             conn.close()
 
 
+def send_until_stopped(conn, data, stop):
+    """Send all of ``data`` however long the reader leaves the socket full; False once the
+    connection is gone or the test is over.
+
+    ``sendall`` on the peer's 0.05 s timeout would give up on a full socket (the reader is
+    allowed to pause) and leave a package cut in half, so a timeout here only means retry.
+    """
+    data = memoryview(data)
+    while data:
+        if stop.is_set():
+            return False
+        try:
+            data = data[conn.send(data):]
+        except socket.timeout:
+            continue
+        except OSError:
+            return False
+    return True
+
+
 def flood(conn, stop):
     """Data packages as fast as the socket takes them."""
     k = 0
-    while not stop.is_set():
-        try:
-            conn.sendall(state_package(0.001 * k, HOME) * 64)
-        except OSError:
-            return
+    while send_until_stopped(conn, state_package(0.001 * k, HOME) * 64, stop):
         k += 1
 
 
 def steady(q):
     def stream(conn, stop):
         k = 0
-        while not stop.is_set():
-            try:
-                conn.sendall(state_package(0.008 * k, q))
-            except OSError:
-                return
+        while send_until_stopped(conn, state_package(0.008 * k, q), stop):
             k += 1
             time.sleep(0.008)
     return stream
