@@ -204,3 +204,43 @@ def test_compiled_gram_and_acceptance_equal_the_numpy_path(numpy_path):
     np.testing.assert_array_equal(fast[0], other.q)
     np.testing.assert_array_equal(fast[1], plain_unique)
     assert 0 < taken.size < converged.sum()
+
+
+@pytest.mark.parametrize("make", [calibrated, physically_calibrated])
+def test_compiled_closed_form_equals_the_one_pose_closed_form(make):
+    """The exact arm's closed form of one pose, compiled (module._exact_one_pose), is the
+    IKResult of the closed form's one-pose path on floats (dqlab.ik._ur_engine.solve_single)
+    bit for bit: solutions (joint offsets subtracted and wrapped), valid rows, errors and
+    flags, at three tolerances, on random poses, poses near each singularity and poses out
+    of reach; and None exactly where that path hands the pose to the batch path (a wrist
+    near its singularity, a wrist centre inside the shoulder cylinder, no valid row)."""
+    from dqlab.ik import _ur_engine, ur_parameters
+    assert compiled.ready()
+    robot = make(51)
+    nominal = module._nominal(robot)
+    assert any(nominal.exact[6:])                       # offsets to subtract
+    rng = np.random.default_rng(52)
+    q = np.concatenate([rng.uniform(-np.pi, np.pi, (150, 6))]
+                       + [singular_poses(robot, kind, distance, 15, 53)
+                          for kind in ("wrist", "elbow", "shoulder")
+                          for distance in (1e-2, 1e-4)])
+    X = robot.fk(q)
+    X[:10, :3, 3] *= 3.0                                 # out of reach
+    prm = ur_parameters(nominal.robot)
+    wide = 2 * nominal.position_gap
+    handed_over = compared = 0
+    for tol in (1e-9, wide, 10 * wide):
+        for T in X:
+            fast = module._exact_one_pose(nominal, T, tol, 5e-7)
+            floats = _ur_engine.solve_single(nominal.robot, prm, T, tol, 5e-7, 1e-9, None)
+            assert (fast is None) == (floats is None)
+            if fast is None:
+                handed_over += 1
+                continue
+            compared += 1
+            for name in ("solutions", "valid", "position_error", "rotation_error", "reason"):
+                np.testing.assert_array_equal(getattr(fast, name), getattr(floats, name))
+            assert list(fast.flags) == list(floats.flags)
+            for name, flag in fast.flags.items():
+                np.testing.assert_array_equal(flag, floats.flags[name])
+    assert handed_over >= 30 and compared >= 500, (handed_over, compared)

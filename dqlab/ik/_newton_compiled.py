@@ -16,7 +16,10 @@ in-browser chapters run without it).
 :func:`unique` and :func:`are_new` are ``_Polished.unique`` and ``_Polished.are_new`` of
 that module, compiled; :func:`one_pose` is its ``_one_pose`` after the closed form,
 :func:`accept` its ``_accept`` (which restarts replace a row) and :func:`gram` the
-:math:`J^\mathsf{T} J` of its ``_near_singular``. :func:`ready` says whether numba is
+:math:`J^\mathsf{T} J` of its ``_near_singular``. :func:`closed_form` is the nearest exact
+arm's closed form of one pose that the one-pose path starts from: the loop of
+``dqlab.ik._ur_engine.solve_single`` over the steps of ``dqlab.ik.ur_steps``, written out on
+floats (tested equal to it bit for bit). :func:`ready` says whether numba is
 there; the first compilation takes seconds, and is cached on disk for the next processes.
 
 The kernel differs from the numpy path in one way that changes no result beyond rounding:
@@ -35,7 +38,8 @@ from ._newton_lanes import frames as lane_frames
 from ._newton_lanes import size as lane_size
 from ._newton_lanes import step as lane_step
 
-__all__ = ["ready", "newton", "one_pose", "unique", "are_new", "accept", "gram"]
+__all__ = ["ready", "newton", "one_pose", "closed_form", "unique", "are_new", "accept",
+           "gram"]
 
 _COMPILED = []     # the functions below the wrappers, compiled in place by ready()
 _READY = None      # ready()'s answer, once known
@@ -140,7 +144,26 @@ def gram(links, tool, q):
     return H
 
 
+def closed_form(flange, constants, tol, singular_tol, near_wrist):
+    """``dqlab.ik._ur_engine.solve_single`` after the flange, compiled: the closed form of the
+    exact UR of ``constants`` (12,) (``d1, a2, a3, d4, d5, d6`` and the six joint offsets)
+    for the flange ``(q, p, z6)`` of ``_ur_engine._single_flange``. The solutions (8, 6),
+    ``valid`` (8,), the errors (8,) and the flags (3,) wrist, shoulder and elbow singular of
+    the result that function builds, or None where it returns None (a wrist within
+    ``near_wrist`` of its singularity, the wrist centre inside the shoulder cylinder, no
+    valid row): the same steps of ``dqlab.ik.ur_steps`` in the same order, on the same
+    floats (tested equal bit for bit)."""
+    q, p, z6 = flange
+    solutions, errors = np.zeros((8, 6)), np.zeros(8)
+    flags = np.zeros(3, dtype=np.bool_)
+    done = _closed_form(q[0], q[1], q[2], q[3], p[0], p[1], p[2], z6[0], z6[1], z6[2],
+                        constants, float(tol), float(singular_tol), float(near_wrist),
+                        solutions, errors, flags)
+    return (solutions, errors <= tol, errors, flags) if done else None
+
+
 _TWO_PI = 2.0 * math.pi
+_HALF_SQRT2 = math.sqrt(0.5)
 
 
 def _same(u, v):
@@ -238,6 +261,114 @@ def _wrap(theta):
     if not abs(w) < math.pi:
         w = w - _TWO_PI if w > math.pi else (w + _TWO_PI if w <= -math.pi else w)
     return w
+
+
+def _closed_form(qw, qx, qy, qz, px, py, pz, zx, zy, zz, constants, tol, singular_tol,
+                 near_wrist, solutions, errors, flags):
+    """:func:`closed_form`'s work: ``solve_single``'s loop, each line the step of
+    ``dqlab.ik.ur_steps`` named beside it; False where that function returns None."""
+    d1, a2, a3, d4, d5, d6 = (constants[0], constants[1], constants[2], constants[3],
+                              constants[4], constants[5])
+    offset = False
+    for i in range(6):
+        offset = offset or constants[6 + i] != 0.0
+    # target_rotation: r_D = q (1 - i) / sqrt 2
+    rw = _HALF_SQRT2 * (qw * 1.0 - qx * -1.0 - qy * 0.0 - qz * 0.0)
+    rx = _HALF_SQRT2 * (qw * -1.0 + qx * 1.0 + qy * 0.0 - qz * 0.0)
+    ry = _HALF_SQRT2 * (qw * 0.0 - qx * 0.0 + qy * 1.0 + qz * -1.0)
+    rz = _HALF_SQRT2 * (qw * 0.0 + qx * 0.0 - qy * -1.0 + qz * 1.0)
+    x5, y5, z5 = px - d6 * zx, py - d6 * zy, pz - d6 * zz          # wrist_center
+    any_valid = wrist_singular = elbow_singular = False
+    h = 0.0
+    m = 2.0 * abs(a2 * a3)
+    r_out, r_in = abs(a2 + a3), abs(a2 - a3)
+    for s in range(2):
+        shoulder = 1.0 if s == 0 else -1.0
+        h2 = x5 * x5 + y5 * y5 - d4 * d4                            # shoulder_angles
+        h = math.sqrt(h2 if h2 > 0.0 else 0.0)
+        hpm = shoulder * h
+        num_c = x5 * hpm - y5 * d4
+        num_s = y5 * hpm + x5 * d4
+        theta1 = math.atan2(num_s + 0.0, num_c)
+        r = math.sqrt(num_c * num_c + num_s * num_s)
+        c1, s1 = (num_c / r, num_s / r) if r > 0.0 else (1.0, 0.0)
+        if h2 < 0.0:
+            return False
+        big = math.sqrt(0.5 + 0.5 * abs(c1))                         # half_angle_cos_sin
+        other = 0.5 * s1 / big
+        if c1 >= 0.0:
+            hc, hs = big, other
+        else:
+            hc, hs = abs(other), (-big if s1 < 0.0 else big)
+        Lw, Lx = hc * rw + hs * rz, hc * rx + hs * ry               # relative_rotation_
+        Ly, Lz = hc * ry - hs * rx, hc * rz - hs * rw               # coefficients
+        u5, v5 = c1 * x5 + s1 * y5, z5 - d1                          # arm_plane_wrist
+        c5bar = math.sqrt(Lw * Lw + Ly * Ly)                         # wrist_angles
+        s5bar = math.sqrt(Lx * Lx + Lz * Lz)
+        theta5 = 1.0 * (2.0 * math.atan2(s5bar, c5bar))
+        if theta5 == -math.pi:
+            theta5 = math.pi
+        half_sum = math.atan2(-Ly, Lw)
+        half_diff = math.atan2(1.0 * Lx, -1.0 * Lz)                  # half_difference
+        sin5 = 2.0 * s5bar * c5bar
+        if sin5 < near_wrist:
+            return False
+        k = 1.0 / (c5bar * s5bar)                                    # theta234_sine_cosine
+        sin234, cos234 = k * (Lw * Lx + Ly * Lz), k * (Lx * Ly - Lw * Lz)
+        for w in range(2):
+            if w == 1:                                               # the flipped wrist
+                theta5 = -theta5 if theta5 != math.pi else theta5
+                half_diff = math.atan2(-1.0 * Lx, 1.0 * Lz)       # sigma = -1
+                sin234, cos234 = -sin234, -cos234
+            theta234 = half_sum + half_diff
+            theta6 = _wrap(half_sum - half_diff)
+            u4, v4 = u5 - d5 * sin234, v5 + d5 * cos234             # wrist1_point
+            rho2 = u4 * u4 + v4 * v4                                 # elbow_triangle
+            rho = math.sqrt(rho2)
+            outer = (r_out - rho) * (r_out + rho)
+            inner = (rho - r_in) * (rho + r_in)
+            kk = outer * inner
+            kk = math.sqrt(kk if kk > 0.0 else 0.0)
+            cos_num = rho2 - (a2 * a2 + a3 * a3)
+            if a2 * a3 < 0:
+                cos_num = -cos_num
+            angle3 = math.atan2(kk, cos_num)
+            if outer < 0.0 or inner < 0.0:
+                rho = math.sqrt(u4 * u4 + v4 * v4)                   # reach_gap
+                gap = rho - r_out
+                if r_in - rho > gap:
+                    gap = r_in - rho
+                if 0.0 > gap:
+                    gap = 0.0
+                errors[4 * s + w] = errors[4 * s + 2 + w] = gap
+                if gap > tol:
+                    continue
+            for e in range(2):
+                row = 4 * s + 2 * e + w
+                elbow = 1.0 if e == 0 else -1.0
+                theta3 = angle3 * elbow                              # elbow_angles
+                if theta3 == -math.pi:
+                    theta3 = math.pi
+                k1 = a2 + (a3 / m) * cos_num
+                k2 = (a3 / m) * kk
+                theta2 = math.atan2(v4 * k1 - elbow * (u4 * k2) + 0.0,
+                                    u4 * k1 + elbow * (v4 * k2))
+                t = solutions[row]
+                t[0], t[1], t[2] = theta1, theta2, theta3
+                t[3], t[4], t[5] = _wrap(theta234 - theta2 - theta3), theta5, theta6
+                if offset:
+                    inside = True
+                    for i in range(6):
+                        t[i] = t[i] - constants[6 + i]
+                        inside = inside and -math.pi < t[i] <= math.pi
+                    if not inside:
+                        for i in range(6):
+                            t[i] = _wrap(t[i])
+                elbow_singular = elbow_singular or kk / m < singular_tol
+            any_valid = True
+            wrist_singular = wrist_singular or sin5 < singular_tol
+    flags[0], flags[1], flags[2] = wrist_singular, h < singular_tol * d4, elbow_singular
+    return any_valid
 
 
 def _one_pose(links, tool, q_start, found, X_0T, tol, stop, plain, max_iter, give_up_after,
@@ -416,6 +547,6 @@ def _dot_rows(A, i, B, j):
 _Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE = (
     INDEX[name] for name in ("q0", "c0", "s0", "t00", "tp0", "F0", "x0", "act", "size"))
 _COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_size", "_same", "_unique",
-              "_wrap", "_one_pose", "_accept", "_gram",
+              "_wrap", "_closed_form", "_one_pose", "_accept", "_gram",
               "_are_new", "_load", "_recompute", "_kernel", "_outputs", "_pose_errors",
               "_dot_rows"]

@@ -44,8 +44,9 @@ keeps its contract (every branch, flags, reasons, batches) in three steps:
    extra), these steps run compiled, on the eight branches of a pose at once
    (``dqlab.ik._newton_compiled``, tested to give the same solutions); numpy runs them
    otherwise. One pose whose branches all converge, to distinct solutions, is finished with
-   a few calls (``_one_pose``, tested equal to the array path); the others go on to the
-   restarts of ``_repair``.
+   a few calls (``_one_pose``, tested equal to the array path; with numba, the exact arm's
+   closed form of the pose is compiled too); the others go on to the restarts of
+   ``_repair``.
 
 Near a singularity of the calibrated arm the Newton steps converge slowly (the Jacobian is
 nearly singular) and may end on a neighbouring branch; the tests measure how close to the
@@ -67,11 +68,14 @@ from ..robot import Link, Robot
 from ..rotations import wrap_angle
 from ._newton_compiled import accept as compiled_accept
 from ._newton_compiled import are_new as compiled_are_new
+from ._newton_compiled import closed_form as compiled_closed_form
 from ._newton_compiled import gram as compiled_gram
 from ._newton_compiled import newton as compiled_newton
 from ._newton_compiled import one_pose as compiled_one_pose
 from ._newton_compiled import ready as compiled_ready
 from ._newton_compiled import unique as compiled_unique
+from ._ur_engine import NEAR_WRIST
+from ._ur_engine import _single_flange as single_flange
 from .result import IKResult, finish
 from .targets import RIGID_TOL, parse_targets, pose_errors
 
@@ -105,12 +109,14 @@ _SAMPLES = np.random.default_rng(20260531).uniform(-np.pi, np.pi, (64, 6))
 class _Nominal:
     """What a calibrated robot's solves need, computed once per robot: the nearest exact UR
     (bare), the largest position and rotation differences between the two arms on sample
-    configurations, and the calibrated chain's constants for the Newton kernels."""
+    configurations, the calibrated chain's constants for the Newton kernels and the exact
+    arm's for its compiled closed form."""
 
     robot: Robot
     position_gap: float
     rotation_gap: float
     links: np.ndarray     # (6, 5): per link (cos alpha, sin alpha, a, d, theta offset)
+    exact: np.ndarray     # (12,): d1, a2, a3, d4, d5, d6 and the six offsets of the exact arm
     matrix_chains: dict = field(default_factory=dict, compare=False)   # _matrix_chain's
 
 
@@ -206,8 +212,9 @@ def _nominal(robot):
                          f"{MAX_DISCREPANCY} is accepted)")
     constants = np.array([(math.cos(lk.alpha), math.sin(lk.alpha), lk.a, lk.d, lk.theta_offset)
                           for lk in links])
-    constants.flags.writeable = False
-    nominal = _Nominal(exact, position_gap, rotation_gap, constants)
+    exact_constants = np.array([d[0], a2, a3, d[3], d[4], d[5], *offsets], dtype=float)
+    constants.flags.writeable = exact_constants.flags.writeable = False
+    nominal = _Nominal(exact, position_gap, rotation_gap, constants, exact_constants)
     _NOMINAL[robot] = nominal
     return nominal
 
@@ -304,7 +311,11 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
         return closed_form(nominal.robot, X[0] if X.shape[0] == 1 and batch == () else X,
                            tol=tol, q_ref=q_ref, singular_tol=singular_tol)
 
-    start = exact_solutions(X_06)
+    start = None
+    if batch == () and q_ref is None and compiled_ready():
+        start = _exact_one_pose(nominal, X_06[0], wide, singular_tol)
+    if start is None:
+        start = exact_solutions(X_06)
     if batch == ():
         result = _one_pose(nominal, start, X_0T[0], X_6T, tol, singular_tol, max_iter, wide)
         if result is not None:
@@ -355,6 +366,23 @@ def _plain_pose(target, pose_tol):
     return (type(target) is np.ndarray and target.shape == (4, 4)
             and target.dtype == np.float64 and pose_tol <= RIGID_TOL
             and rigid_rows(target, pose_tol) is not None)
+
+
+def _exact_one_pose(nominal, X_06, tol, singular_tol):
+    """The exact arm's closed form of one flange pose ``X_06`` (4, 4) with the tolerance
+    ``tol``, compiled (``dqlab.ik._newton_compiled.closed_form``): the :class:`IKResult` the
+    closed form's one-pose path gives (at its default ``pose_tol``), or None where that path
+    hands the pose to the batch path (and so does the caller)."""
+    flange = single_flange(nominal.robot, X_06, RIGID_TOL, None)
+    done = None if flange is None else compiled_closed_form(flange, nominal.exact, tol,
+                                                             singular_tol, NEAR_WRIST)
+    if done is None:
+        return None
+    solutions, valid, errors, flags = done
+    flags = dict(zip(("wrist_singular", "shoulder_singular", "elbow_singular"),
+                     (np.array(flag) for flag in flags.tolist()), strict=True))
+    flags["unreachable"] = np.array(False)
+    return IKResult(solutions, valid, errors, np.zeros(8), flags, np.array("", dtype=object))
 
 
 def _one_pose(nominal, start, X_0T, tool, tol, singular_tol, max_iter, wide):
