@@ -308,14 +308,15 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
     wide = max(tol, 2.0 * nominal.position_gap)
 
     def exact_solutions(X, tol=wide):
-        return closed_form(nominal.robot, X[0] if X.shape[0] == 1 and batch == () else X,
-                           tol=tol, q_ref=q_ref, singular_tol=singular_tol)
+        if batch == () and X.shape[0] == 1:             # one pose (compiled, with numba)
+            if q_ref is None and compiled_ready():
+                result = _exact_one_pose(nominal, X[0], tol, singular_tol)
+                if result is not None:
+                    return result
+            X = X[0]
+        return closed_form(nominal.robot, X, tol=tol, q_ref=q_ref, singular_tol=singular_tol)
 
-    start = None
-    if batch == () and q_ref is None and compiled_ready():
-        start = _exact_one_pose(nominal, X_06[0], wide, singular_tol)
-    if start is None:
-        start = exact_solutions(X_06)
+    start = exact_solutions(X_06)
     if batch == ():
         result = _one_pose(nominal, start, X_0T[0], X_6T, tol, singular_tol, max_iter, wide)
         if result is not None:
