@@ -147,7 +147,7 @@ def gram(links, tool, q):
 def closed_form(flange, constants, tol, singular_tol, near_wrist):
     """``dqlab.ik._ur_engine.solve_single`` after the flange, compiled: the closed form of the
     exact UR of ``constants`` (12,) (``d1, a2, a3, d4, d5, d6`` and the six joint offsets)
-    for the flange ``(q, p, z6)`` of ``_ur_engine._single_flange``. The solutions (8, 6),
+    for the flange ``(q, p, z6)`` (rotation quaternion, position, z axis). The solutions (8, 6),
     ``valid`` (8,), the errors (8,) and the flags (3,) wrist, shoulder and elbow singular of
     the result that function builds, or None where it returns None (a wrist within
     ``near_wrist`` of its singularity, the wrist centre inside the shoulder cylinder, no

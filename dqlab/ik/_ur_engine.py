@@ -59,7 +59,6 @@ __all__ = ["solve", "solve_single", "solve_batch", "Block", "CHUNK", "REASON_SHO
            "REASON_OUTER", "REASON_INNER", "REASON_REACH", "REASON_TOL"]
 
 CHUNK = 2048                     # poses per block: temporaries of 128 kB at most (L2-sized)
-NEAR_WRIST = 1e-3                # |sin theta5| below which a clipped row is moved
 _FLOAT64 = np.dtype(np.float64)
 _FLAGS = ("wrist_singular", "shoulder_singular", "elbow_singular", "unreachable")
 _EYE_BYTES = np.eye(4).tobytes()
@@ -182,7 +181,7 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
         u5, v5 = steps.arm_plane_wrist(p5, c1, s1, d1)
         theta5, half_sum, half_diff, c5bar, s5bar = steps.wrist_angles(L, 1.0)
         sin5 = 2.0 * s5bar * c5bar
-        if sin5 < NEAR_WRIST:
+        if sin5 < steps.NEAR_WRIST:
             return None
         sin234, cos234 = steps.theta234_sine_cosine(L, 1.0, c5bar, s5bar)
         for w, sigma in enumerate((1.0, -1.0)):
@@ -451,7 +450,7 @@ def _branches(prm, flange, theta6_ref, tol, out):
     # elbow out of reach. Such rows move within their wrist family to where the forearm
     # reaches (and are checked by forward kinematics).
     sin5 = 2.0 * s5bar * c5bar                                # (2, 1, n), |sin theta5|
-    near = sin5 < NEAR_WRIST
+    near = sin5 < steps.NEAR_WRIST
     repair = _out_of_reach(prm, outer, inner, tol) & near if near.any() else None
     if repair is not None and repair.any():
         theta234, theta6, represented = _wrist_family(*family, repair=repair)

@@ -61,7 +61,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._checks import rigid_rows
-from .._kernels import rigid_inverse
+from .._kernels import quaternion_from_matrix_entries, rigid_inverse
 from ..dualquat import dual_quaternion_from_transform
 from ..models import UR_ALPHA, UR_SHAPE
 from ..robot import Link, Robot
@@ -74,10 +74,9 @@ from ._newton_compiled import newton as compiled_newton
 from ._newton_compiled import one_pose as compiled_one_pose
 from ._newton_compiled import ready as compiled_ready
 from ._newton_compiled import unique as compiled_unique
-from ._ur_engine import NEAR_WRIST
-from ._ur_engine import _single_flange as single_flange
 from .result import IKResult, finish
 from .targets import RIGID_TOL, parse_targets, pose_errors
+from .ur_steps import NEAR_WRIST
 
 __all__ = ["calibrated_ur", "nominal_ur", "REASON_NOT_CONVERGED", "MAX_DISCREPANCY"]
 
@@ -374,9 +373,13 @@ def _exact_one_pose(nominal, X_06, tol, singular_tol):
     ``tol``, compiled (``dqlab.ik._newton_compiled.closed_form``): the :class:`IKResult` the
     closed form's one-pose path gives (at its default ``pose_tol``), or None where that path
     hands the pose to the batch path (and so does the caller)."""
-    flange = single_flange(nominal.robot, X_06, RIGID_TOL, None)
-    done = None if flange is None else compiled_closed_form(flange, nominal.exact, tol,
-                                                             singular_tol, NEAR_WRIST)
+    rows = rigid_rows(X_06, RIGID_TOL)                  # that path's check, and its flange:
+    if rows is None:                                    # rotation quaternion, position, z6
+        return None
+    a, b, c = rows
+    q = quaternion_from_matrix_entries(a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2])
+    done = compiled_closed_form((q, (a[3], b[3], c[3]), (a[2], b[2], c[2])), nominal.exact,
+                                tol, singular_tol, NEAR_WRIST)
     if done is None:
         return None
     solutions, valid, errors, flags = done

@@ -50,13 +50,18 @@ __all__ = [
     "target_rotation", "wrist_center", "shoulder_angles", "half_angle_cos_sin",
     "relative_rotation_coefficients", "wrist_angles", "half_difference", "theta234_sine_cosine",
     "arm_plane_wrist", "wrist1_point", "elbow_triangle", "elbow_angles", "reach_gap",
-    "shoulder_gap", "feasible_theta234", "candidate_solutions",
+    "shoulder_gap", "feasible_theta234", "candidate_solutions", "NEAR_WRIST",
 ]
 
 #: The arrays of the steps: float64 arrays of any shape (or Python floats).
 Array = NDArray[np.float64]
 
 _HALF_SQRT2 = math.sqrt(0.5)           # a Python float: it serves floats and arrays
+
+#: :math:`|\sin\theta_5|` below which the closed form treats the wrist as at its singularity:
+#: there :math:`\theta_{234}` comes from coefficients of the size of :math:`\theta_5`, and a
+#: row the forearm cannot reach moves within its wrist family (``dqlab.ik.ur``).
+NEAR_WRIST = 1e-3
 
 
 def target_rotation(q: tuple) -> tuple:
