@@ -10,8 +10,9 @@ the ratio). Prints the best CPU time per pose (``timing.interleaved_best``), the
 accuracy the calibrated solver keeps: the share of poses whose generating configuration is
 among the valid rows, and the largest position and rotation errors of a valid row.
 
-The calibrated solver is timed twice: with its Newton steps compiled (numba, the ``fast``
-extra; ``dqlab.ik._newton_compiled``) and on the numpy path it takes without numba.
+The calibrated solver is timed twice: with its Newton steps (and, for one pose, the nearest
+exact arm's closed form) compiled (numba, the ``fast`` extra; ``dqlab.ik._newton_compiled``)
+and on the numpy path it takes without numba.
 """
 
 import sys
