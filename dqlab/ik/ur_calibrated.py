@@ -383,8 +383,8 @@ def _exact_one_pose(nominal, X_06, tol, singular_tol):
     if done is None:
         return None
     solutions, valid, errors, flags = done
-    flags = dict(zip(("wrist_singular", "shoulder_singular", "elbow_singular"),
-                     (np.array(flag) for flag in flags.tolist()), strict=True))
+    flags = dict(zip(_FLAG_NAMES[:3], (np.array(flag) for flag in flags.tolist()),
+                     strict=True))                      # wrist, shoulder, elbow singular
     flags["unreachable"] = np.array(False)
     return IKResult(solutions, valid, errors, np.zeros(8), flags, np.array("", dtype=object))
 
