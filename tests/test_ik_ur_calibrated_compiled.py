@@ -244,3 +244,85 @@ def test_compiled_closed_form_equals_the_one_pose_closed_form(make):
             for name, flag in fast.flags.items():
                 np.testing.assert_array_equal(flag, floats.flags[name])
     assert handed_over >= 30 and compared >= 500, (handed_over, compared)
+
+
+def spectra(rng, n):
+    """J^T J-like matrices Q diag(lambda) Q^T (n, 6, 6), the smallest eigenvalue a ratio of
+    the largest spread from 1e-14 to 1, some within 1e-3 of the threshold 1e-4, some with
+    two small eigenvalues (the direction is then ill-defined)."""
+    Q, _ = np.linalg.qr(rng.normal(size=(n, 6, 6)))
+    top = 10.0 ** rng.uniform(-2, 2, n)
+    lam = top[:, None] * rng.uniform(0.05, 1.0, (n, 6))
+    lam[:, 0] = top * 10.0 ** rng.uniform(-14, 0, n)
+    edge = slice(0, n // 10)
+    lam[edge, 0] = top[edge] * 1e-4 * (1 + rng.uniform(-1e-3, 1e-3, n // 10))
+    lam[edge, 1:] = top[edge, None]                             # largest = top exactly
+    pair = slice(n // 10, n // 5)
+    lam[pair, 1] = lam[pair, 0] * (1 + 10.0 ** rng.uniform(-6, 0, n // 10))
+    return Q @ (lam[..., None] * np.swapaxes(Q, -1, -2)), lam
+
+
+def test_smallest_eigenvector_where_certain_is_eighs():
+    """The compiled screen (inverse and power iteration, with bounds) answers where it is
+    certain, as eigh does: the same near/not near, the same direction (largest entry
+    positive) to 1e-9 where the two smallest eigenvalues are apart; elsewhere it says it
+    does not know, and _near_singular asks eigh."""
+    compiled.ready()
+    rng = np.random.default_rng(52)
+    H, lam = spectra(rng, 4000)
+    H[-1] = np.eye(6) - np.outer(np.ones(6), np.ones(6)) / 6     # singular
+    H[-2] = np.nan
+    H[-3] = 0.0
+    near, V, known = compiled.smallest(H, 1e-4)
+    near_e, V_e = module._smallest_eigenvector(H[:-3])
+    ok = known[:-3]
+    np.testing.assert_array_equal(near[:-3][ok], near_e[ok])
+    assert not known[-3:-1].any() and not near[-3:-1].any()     # nothing to say: eigh's
+    assert near[-1] or not known[-1]                            # singular: near, or eigh's
+    lam = np.sort(lam[:-3], axis=1)
+    apart = lam[:, 1] > 2 * lam[:, 0]
+    assert np.abs(V[:-3] - V_e)[ok & near[:-3] & apart].max() < 1e-9
+    assert not V[:-3][~near[:-3]].any()                         # directions only where near
+    ratio = lam[:, 0] / lam[:, -1]
+    clear = (ratio < 0.5e-4) & apart | (ratio > 1e-2)
+    assert known[:-3][clear].mean() > 0.995                      # certain nearly everywhere
+    assert near_e.any() and (~near_e).any() and (~ok).any()      # ... but not at the edge
+
+
+def test_restarts_step_a_shared_start_once(numpy_path):
+    """A start shared by several rows (given once, with which) leaves the same rows, joint
+    vectors, errors and marks as the same start given once per row (fewer than _FEW_ROWS
+    starts either way: the numpy path's kernel is the same one)."""
+    robot = calibrated(53)
+    nominal = module._nominal(robot)
+    chain = (nominal.links, np.eye(4))
+    rng = np.random.default_rng(54)
+    X = robot.fk(rng.uniform(-np.pi, np.pi, (20, 6)))
+    start = ur(nominal.robot, X, tol=2 * nominal.position_gap)
+    rows = np.flatnonzero(start.valid.reshape(-1))
+    X_0T = X
+    owners = np.repeat(rows[::3], 3)                            # rows to restart, each from
+    moves = start.solutions.reshape(-1, 6)[owners ^ rng.integers(1, 8, owners.size)][::3]
+    moves = moves + rng.normal(0, 0.05, moves.shape)            # a sibling's start, moved,
+    which = np.repeat(np.arange(moves.shape[0]), 3)             # three rows sharing each
+    for run in (lambda f, *a: f(*a), numpy_path):
+        results = []
+        for shared in (False, True):
+            polished = module._Polished.empty(20)
+            polished.record(rows, *module._newton(*chain, start.solutions.reshape(-1, 6)[rows],
+                                                  X_0T[rows // 8], 1e-9, 16))
+            polished.converged[rows[::3]] = False
+            unique = polished.unique()
+            if shared:
+                run(module._restart, chain, polished, unique, owners, moves, X_0T, 1e-9, 16,
+                    which)
+            else:
+                run(module._restart, chain, polished, unique, owners, moves[which], X_0T, 1e-9,
+                    16)
+            results.append((polished, unique))
+        (a, ua), (b, ub) = results
+        np.testing.assert_array_equal(ua, ub)
+        for name in ("q", "done", "converged", "X", "measures", "errors"):
+            np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+        assert owners.size <= module._FEW_ROWS
+        assert (ua & ~a.converged).sum() == 0 and ua[rows[::3]].any()

@@ -39,7 +39,7 @@ from ._newton_lanes import size as lane_size
 from ._newton_lanes import step as lane_step
 
 __all__ = ["ready", "newton", "one_pose", "closed_form", "unique", "are_new", "accept",
-           "gram"]
+           "gram", "smallest"]
 
 _COMPILED = []     # the functions below the wrappers, compiled in place by ready()
 _READY = None      # ready()'s answer, once known
@@ -142,6 +142,27 @@ def gram(links, tool, q):
     _gram(np.asarray(links, dtype=float), np.ascontiguousarray(tool, dtype=float),
           np.ascontiguousarray(q, dtype=float), H)
     return H
+
+
+def smallest(H, ratio):
+    r"""The test and direction of ``dqlab.ik.ur_calibrated._near_singular`` from
+    :math:`H = J^\mathsf{T} J` (m, 6, 6), without a full eigendecomposition: whether the
+    smallest eigenvalue is below ``ratio`` times the largest (``near``, m), the eigenvector
+    of the smallest (m, 6; its largest entry positive), and where both are ``known`` (m).
+
+    Where the answer is certain it is known: not near when
+    :math:`1/\lVert H^{-1}\rVert \ge` ``ratio`` :math:`\lVert H\rVert` (bounds by the
+    trace and the largest row sum); near when the Rayleigh quotient of the eigenvector found
+    by inverse iteration (with :math:`H^{-1}` from Cholesky) is below ``ratio`` times that
+    of a few power iterations (a lower bound of the largest eigenvalue), the inverse
+    iteration having converged. Elsewhere (a Cholesky that fails, an iteration that does
+    not settle, a ratio too close to call) it is not known, and the caller asks
+    ``numpy.linalg.eigh``."""
+    m = H.shape[0]
+    near, known = np.zeros(m, dtype=np.bool_), np.zeros(m, dtype=np.bool_)
+    V = np.zeros((m, 6))
+    _smallest(np.ascontiguousarray(H, dtype=float), float(ratio), near, V, known)
+    return near, V, known
 
 
 def closed_form(flange, constants, tol, singular_tol, near_wrist):
@@ -253,6 +274,130 @@ def _gram(links, tool, q, H):
                     for k in range(6):
                         total += J[k, a] * J[k, b]
                     H[first + r, a, b] = total
+
+
+def _smallest(H, ratio, near, V, known):
+    """:func:`smallest`'s work, matrix by matrix."""
+    L, Li, G = np.empty((6, 6)), np.empty((6, 6)), np.empty((6, 6))
+    v, w, u = np.empty(6), np.empty(6), np.empty(6)
+    for r in range(H.shape[0]):
+        A = H[r]
+        trace, row_sum = 0.0, 0.0
+        for i in range(6):
+            trace += A[i, i]
+            total = 0.0
+            for j in range(6):
+                total += abs(A[i, j])
+            row_sum = max(row_sum, total)
+        largest = min(trace, row_sum)                   # >= the largest eigenvalue
+        if not (largest > 0.0 and largest < math.inf):
+            continue
+        ok = True                                       # Cholesky: A = L L^T
+        for j in range(6):
+            d = A[j, j]
+            for k in range(j):
+                d -= L[j, k] * L[j, k]
+            if not d > 0.0:
+                ok = False
+                break
+            L[j, j] = math.sqrt(d)
+            for i in range(j + 1, 6):
+                x = A[i, j]
+                for k in range(j):
+                    x -= L[i, k] * L[j, k]
+                L[i, j] = x / L[j, j]
+        if not ok:
+            continue
+        for j in range(6):                              # Li = L^-1 (lower), G = Li^T Li
+            for i in range(6):
+                Li[i, j] = 0.0
+            Li[j, j] = 1.0 / L[j, j]
+            for i in range(j + 1, 6):
+                x = 0.0
+                for k in range(j, i):
+                    x -= L[i, k] * Li[k, j]
+                Li[i, j] = x / L[i, i]
+        inverse_trace, inverse_row_sum = 0.0, 0.0
+        for i in range(6):
+            for j in range(6):
+                x = 0.0
+                for k in range(max(i, j), 6):
+                    x += Li[k, i] * Li[k, j]
+                G[i, j] = x
+            inverse_trace += G[i, i]
+        for i in range(6):
+            total = 0.0
+            for j in range(6):
+                total += abs(G[i, j])
+            inverse_row_sum = max(inverse_row_sum, total)
+        if 1.0 / min(inverse_trace, inverse_row_sum) >= ratio * largest:
+            known[r] = True                             # smallest >= ratio largest: not near
+            continue
+        best = 0                                        # inverse iteration, from the column
+        for i in range(6):                              # of H^-1 of largest diagonal
+            if G[i, i] > G[best, best]:
+                best = i
+        for i in range(6):
+            v[i] = G[i, best]
+        settled = False
+        for _ in range(64):
+            size = 0.0
+            for i in range(6):
+                x = 0.0
+                for j in range(6):
+                    x += G[i, j] * v[j]
+                w[i] = x
+                size += x * x
+            size = math.sqrt(size)
+            dot = 0.0
+            for i in range(6):
+                dot += w[i] * v[i]
+            scale = (1.0 if dot >= 0.0 else -1.0) / size
+            change = 0.0
+            for i in range(6):
+                x = w[i] * scale
+                change = max(change, abs(x - v[i]))
+                v[i] = x
+            if change <= 1e-14:
+                settled = True
+                break
+        lowest = _rayleigh(A, v)                        # >= the smallest eigenvalue
+        best = 0                                        # power iteration, from the column
+        for i in range(6):                              # of H of largest diagonal
+            if A[i, i] > A[best, best]:
+                best = i
+        for i in range(6):
+            w[i] = A[i, best]
+        for _ in range(8):
+            size = 0.0
+            for i in range(6):
+                x = 0.0
+                for j in range(6):
+                    x += A[i, j] * w[j]
+                u[i] = x
+                size += x * x
+            size = math.sqrt(size)
+            for i in range(6):
+                w[i] = u[i] / size
+        if settled and lowest < ratio * _rayleigh(A, w):   # <= the largest eigenvalue
+            near[r] = known[r] = True
+            top = 0
+            for i in range(6):
+                if abs(v[i]) > abs(v[top]):
+                    top = i
+            sign = 1.0 if v[top] > 0.0 else -1.0
+            for i in range(6):
+                V[r, i] = sign * v[i]
+
+
+def _rayleigh(A, v):
+    """v^T A v / v^T v."""
+    x, n = 0.0, 0.0
+    for i in range(6):
+        n += v[i] * v[i]
+        for j in range(6):
+            x += v[i] * A[i, j] * v[j]
+    return x / n
 
 
 def _wrap(theta):
@@ -547,6 +692,7 @@ def _dot_rows(A, i, B, j):
 _Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE = (
     INDEX[name] for name in ("q0", "c0", "s0", "t00", "tp0", "F0", "x0", "act", "size"))
 _COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_size", "_same", "_unique",
-              "_wrap", "_closed_form", "_one_pose", "_accept", "_gram",
+              "_wrap", "_closed_form", "_one_pose", "_accept", "_gram", "_smallest",
+              "_rayleigh",
               "_are_new", "_load", "_recompute", "_kernel", "_outputs", "_pose_errors",
               "_dot_rows"]

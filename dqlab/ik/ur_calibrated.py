@@ -73,6 +73,7 @@ from ._newton_compiled import gram as compiled_gram
 from ._newton_compiled import newton as compiled_newton
 from ._newton_compiled import one_pose as compiled_one_pose
 from ._newton_compiled import ready as compiled_ready
+from ._newton_compiled import smallest as compiled_smallest
 from ._newton_compiled import unique as compiled_unique
 from .result import IKResult, finish
 from .targets import RIGID_TOL, parse_targets, pose_errors
@@ -97,6 +98,7 @@ _PLAIN_STEPS = 3       # first steps taken by every branch together, none stoppe
 _BLOCK = 2048          # branches per block of the Newton steps
 _RESTART_ITER = 10     # Newton steps of a restart at most
 _FEW_ROWS = 192        # up to this many branches, the kernel working on whole matrices
+_NEAR = 1e-4          # near a singularity: smallest eigenvalue of J^T J below _NEAR largest
 #: The flags of a result, in order (the compiled one-pose path returns them so).
 _FLAG_NAMES = ("wrist_singular", "shoulder_singular", "elbow_singular", "unreachable",
                "not_converged")
@@ -556,31 +558,29 @@ def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, to
     wanted = wanted[found[wanted]]
     if not wanted.size:
         return
-    failed = wanted[~polished.converged[wanted]]        # restart those only near a
-    if failed.size:                                     # singularity (else: no solution)
-        near, _ = _near_singular(nominal, chain[1], q0[failed])
-        wanted = np.union1d(wanted[polished.converged[wanted]], failed[near])
-    bases = [(wanted, q0[wanted])]                      # the branch's own start
-    for bits in (4, 5, 6, 7):                           # the other shoulder's solutions
-        sibling = wanted ^ bits
-        ok = unique[sibling]
-        bases.append((wanted[ok], polished.q[sibling[ok]]))
-    rows, q = (np.concatenate(part) for part in zip(*bases, strict=True))
-    if not rows.size:
-        return
-    base = np.repeat(np.arange(len(bases)), [r.size for r, _ in bases])
-    near, direction = _near_singular(nominal, chain[1], q)   # only near a singularity
-    step = np.zeros_like(q)
+    shoulder = [wanted ^ bits for bits in (4, 5, 6, 7)]  # the other shoulder's solutions
+    known = np.unique(np.concatenate([s[unique[s]] for s in shoulder]))
+    q = np.concatenate([q0[wanted], polished.q[known]])   # each joint vector to move, once:
+    near, direction = _near_singular(nominal, chain[1], q)   # own starts, then siblings'
+    step = np.zeros_like(q)                             # solutions; only near a singularity
     step[near] = direction
-    owners, starts = [], []
-    for b in range(len(bases)):                         # base by base, each way in turn
-        these = np.flatnonzero(near & (base == b))
-        if these.size:
-            owners.append(np.tile(rows[these], _WAYS.size))
-            starts.append((q[these] + _WAYS[:, None, None] * step[these]).reshape(-1, 6))
-    if owners:                                          # (none near a singularity: none)
-        _restart(chain, polished, unique, np.concatenate(owners), np.concatenate(starts),
-                 X_0T, tol, max_iter)
+    keep = polished.converged[wanted] | near[:wanted.size]   # one that did not converge: only
+    bases = [(wanted[keep], np.flatnonzero(keep))]     # near one (else: no solution nearby)
+    for sibling in shoulder:
+        ok = keep & unique[sibling]
+        bases.append((wanted[ok], wanted.size + np.searchsorted(known, sibling[ok])))
+    owners, moves = [], []                              # base by base, each way in turn;
+    for rows, source in bases:                          # a move: joint vector, way
+        moved = near[source]
+        owners.append(np.tile(rows[moved], _WAYS.size))
+        moves.append((_WAYS.size * source[moved] + np.arange(_WAYS.size)[:, None]).ravel())
+    owners = np.concatenate(owners)
+    if not owners.size:                                 # (none near a singularity: none)
+        return
+    moves, which = np.unique(np.concatenate(moves), return_inverse=True)   # each once
+    vector, way = np.divmod(moves, _WAYS.size)
+    starts = q[vector] + _WAYS[way, None] * step[vector]
+    _restart(chain, polished, unique, owners, starts, X_0T, tol, max_iter, which)
 
 
 def _matrix_chain(nominal, tool):
@@ -601,33 +601,52 @@ def _near_singular(nominal, tool, q):
     singular direction there, (k, 6) for those k: the eigenvector of :math:`J^\mathsf{T} J`
     of its smallest eigenvalue (the last right singular vector of J), its largest entry made
     positive. With numba, :math:`J^\mathsf{T} J` comes from the compiled frames
-    (``dqlab.ik._newton_compiled.gram``)."""
-    if compiled_ready():
-        H = compiled_gram(nominal.links, tool, q)
-    else:
+    (``dqlab.ik._newton_compiled.gram``), and the test and direction from inverse iteration
+    (``dqlab.ik._newton_compiled.smallest``) wherever it is certain of them, ``eigh``
+    elsewhere."""
+    if not compiled_ready():
         kernel = _matrix_chain(nominal, tool)
         J = kernel.jacobian(kernel.frames(q))
-        H = np.swapaxes(J, -1, -2) @ J
+        near, v = _smallest_eigenvector(np.swapaxes(J, -1, -2) @ J)
+        return near, v[near]
+    H = compiled_gram(nominal.links, tool, q)
+    near, v, known = compiled_smallest(H, _NEAR)
+    if not known.all():
+        rest = ~known
+        near[rest], v[rest] = _smallest_eigenvector(H[rest])
+    return near, v[near]
+
+
+def _smallest_eigenvector(H):
+    r"""Whether the smallest eigenvalue of each :math:`J^\mathsf{T} J` of H (m, 6, 6) is below
+    ``_NEAR`` times its largest, and its eigenvector (m, 6), largest entry positive."""
     w, V = np.linalg.eigh(H)                                             # ascending
-    near = np.maximum(w[:, 0], 0.0) < 1e-4 * w[:, -1]
-    v = V[near, :, 0]
+    v = V[:, :, 0]
     largest = v[np.arange(v.shape[0]), np.abs(v).argmax(axis=1)]
-    return near, np.where(largest[:, None] < 0.0, -v, v)
+    return (np.maximum(w[:, 0], 0.0) < _NEAR * w[:, -1],
+            np.where(largest[:, None] < 0.0, -v, v))
 
 
-def _restart(chain, polished, unique, owners, starts, X_0T, tol, max_iter):
-    """Newton from ``starts`` (m, 6) for the rows ``owners`` (m,); the first start of a row
-    that converges to a solution its pose does not have replaces the row."""
+def _restart(chain, polished, unique, owners, starts, X_0T, tol, max_iter, which=None):
+    """Newton from ``starts`` (k, 6); row ``owners[j]`` is offered the solution reached from
+    start ``which[j]`` (start j without ``which``; the owners of a start are rows of one
+    pose, whose target it steps to). The first start of a row that converges to a solution
+    its pose does not have replaces the row."""
     if not owners.size:
         return
-    q, converged, X, measures, errors = _newton(*chain, starts, X_0T[owners // 8], tol,
+    if which is None:
+        which = np.arange(owners.size)
+    poses = np.empty(starts.shape[0], dtype=np.int64)
+    poses[which] = owners // 8
+    q, converged, X, measures, errors = _newton(*chain, starts, X_0T[poses], tol,
                                                 min(max_iter, _RESTART_ITER))
+    q, converged = q[which], converged[which]
     if compiled_ready():
         taken = compiled_accept(owners, converged, q, polished.q, unique)
     else:
         taken = _accept(polished, unique, owners, converged, q)
-    polished.record(owners[taken], q[taken], True, X[taken], measures[:, taken],
-                    errors[:, taken])
+    polished.record(owners[taken], q[taken], True, X[which[taken]], measures[:, which[taken]],
+                    errors[:, which[taken]])
 
 
 def _accept(polished, unique, owners, converged, q):
