@@ -15,16 +15,21 @@ in-browser chapters run without it).
 
 :func:`unique` and :func:`are_new` are ``_Polished.unique`` and ``_Polished.are_new`` of
 that module, compiled; :func:`one_pose` is its ``_one_pose`` after the closed form,
-:func:`accept` its ``_accept`` (which restarts replace a row) and :func:`gram` the
-:math:`J^\mathsf{T} J` of its ``_near_singular``. :func:`closed_form` is the nearest exact
+:func:`accept` its ``_accept`` (which restarts replace a row), :func:`gram` the
+:math:`J^\mathsf{T} J` of its ``_near_singular`` and :func:`smallest` that function's test
+and direction by inverse iteration wherever they are certain (``eigh`` answers elsewhere,
+and is what the numpy path uses). :func:`closed_form` is the nearest exact
 arm's closed form of one pose that the one-pose path starts from: the loop of
 ``dqlab.ik._ur_engine.solve_single`` over the steps of ``dqlab.ik.ur_steps``, written out on
 floats (tested equal to it bit for bit). :func:`ready` says whether numba is
 there; the first compilation takes seconds, and is cached on disk for the next processes.
 
-The kernel differs from the numpy path in one way that changes no result beyond rounding:
-after a step, the cosine and sine of each joint angle are turned by the step (Taylor series
-of a step below 0.02 rad) instead of being computed again.
+The compiled path differs from the numpy path in two ways that change no result beyond
+rounding: after a step, the cosine and sine of each joint angle are turned by the step
+(Taylor series of a step below 0.02 rad) instead of being computed again; and the most
+singular direction comes from inverse iteration instead of ``eigh`` (the same to 1e-9
+where the two smallest eigenvalues of :math:`J^\mathsf{T} J` are apart, tested; where they
+are not, neither direction is better defined than the other).
 """
 
 import importlib.util
