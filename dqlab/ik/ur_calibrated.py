@@ -526,7 +526,8 @@ def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, to
        either side.
 
     The first restart that converges to a solution the pose does not have yet replaces the
-    branch; ``polished`` is updated in place."""
+    branch; ``polished`` is updated in place. A joint vector that several branches of a pose
+    move (the same sibling's solution) is screened, and each of its moves stepped, once."""
     unique = polished.unique()
     missing = polished.done & ~unique
     if not missing.any():
@@ -560,24 +561,25 @@ def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, to
         return
     shoulder = [wanted ^ bits for bits in (4, 5, 6, 7)]  # the other shoulder's solutions
     known = np.unique(np.concatenate([s[unique[s]] for s in shoulder]))
-    q = np.concatenate([q0[wanted], polished.q[known]])   # each joint vector to move, once:
-    near, direction = _near_singular(nominal, chain[1], q)   # own starts, then siblings'
-    step = np.zeros_like(q)                             # solutions; only near a singularity
+    # the joint vectors to move, each once: the branches' own starts, then the solutions
+    q = np.concatenate([q0[wanted], polished.q[known]])
+    near, direction = _near_singular(nominal, chain[1], q)
+    step = np.zeros_like(q)
     step[near] = direction
-    keep = polished.converged[wanted] | near[:wanted.size]   # one that did not converge: only
-    bases = [(wanted[keep], np.flatnonzero(keep))]     # near one (else: no solution nearby)
-    for sibling in shoulder:
-        ok = keep & unique[sibling]
+    keep = polished.converged[wanted] | near[:wanted.size]   # a branch that did not converge
+    bases = [(wanted[keep], np.flatnonzero(keep))]     # only near a singularity (else: no
+    for sibling in shoulder:                            # solution nearby); per base, the
+        ok = keep & unique[sibling]                     # rows and their joint vectors in q
         bases.append((wanted[ok], wanted.size + np.searchsorted(known, sibling[ok])))
-    owners, moves = [], []                              # base by base, each way in turn;
-    for rows, source in bases:                          # a move: joint vector, way
-        moved = near[source]
+    owners, moves = [], []                              # base by base, each way in turn, the
+    for rows, source in bases:                          # vectors near a singularity moved;
+        moved = near[source]                            # a move: vector and way
         owners.append(np.tile(rows[moved], _WAYS.size))
         moves.append((_WAYS.size * source[moved] + np.arange(_WAYS.size)[:, None]).ravel())
     owners = np.concatenate(owners)
     if not owners.size:                                 # (none near a singularity: none)
         return
-    moves, which = np.unique(np.concatenate(moves), return_inverse=True)   # each once
+    moves, which = np.unique(np.concatenate(moves), return_inverse=True)   # each stepped once
     vector, way = np.divmod(moves, _WAYS.size)
     starts = q[vector] + _WAYS[way, None] * step[vector]
     _restart(chain, polished, unique, owners, starts, X_0T, tol, max_iter, which)
