@@ -338,22 +338,10 @@ def _smallest(H, ratio, near, V, known):
         if 1.0 / min(inverse_trace, inverse_row_sum) >= ratio * largest:
             known[r] = True                             # smallest >= ratio largest: not near
             continue
-        best = 0                                        # inverse iteration, from the column
-        for i in range(6):                              # of H^-1 of largest diagonal
-            if G[i, i] > G[best, best]:
-                best = i
-        for i in range(6):
-            v[i] = G[i, best]
-        settled = False
+        _largest_diagonal_column(G, v)                  # inverse iteration, from the column
+        settled = False                                 # of H^-1 of largest diagonal
         for _ in range(64):
-            size = 0.0
-            for i in range(6):
-                x = 0.0
-                for j in range(6):
-                    x += G[i, j] * v[j]
-                w[i] = x
-                size += x * x
-            size = math.sqrt(size)
+            size = _times(G, v, w)
             dot = 0.0
             for i in range(6):
                 dot += w[i] * v[i]
@@ -367,21 +355,9 @@ def _smallest(H, ratio, near, V, known):
                 settled = True
                 break
         lowest = _rayleigh(A, v)                        # >= the smallest eigenvalue
-        best = 0                                        # power iteration, from the column
-        for i in range(6):                              # of H of largest diagonal
-            if A[i, i] > A[best, best]:
-                best = i
-        for i in range(6):
-            w[i] = A[i, best]
-        for _ in range(8):
-            size = 0.0
-            for i in range(6):
-                x = 0.0
-                for j in range(6):
-                    x += A[i, j] * w[j]
-                u[i] = x
-                size += x * x
-            size = math.sqrt(size)
+        _largest_diagonal_column(A, w)                  # power iteration, from the column
+        for _ in range(8):                              # of H of largest diagonal
+            size = _times(A, w, u)
             for i in range(6):
                 w[i] = u[i] / size
         if settled and lowest < ratio * _rayleigh(A, w):   # <= the largest eigenvalue
@@ -393,6 +369,28 @@ def _smallest(H, ratio, near, V, known):
             sign = 1.0 if v[top] > 0.0 else -1.0
             for i in range(6):
                 V[r, i] = sign * v[i]
+
+
+def _largest_diagonal_column(A, out):
+    """out (6,): the column of A (6, 6) whose diagonal entry is the largest."""
+    best = 0
+    for i in range(6):
+        if A[i, i] > A[best, best]:
+            best = i
+    for i in range(6):
+        out[i] = A[i, best]
+
+
+def _times(A, v, out):
+    """out (6,) = A v; returns its length."""
+    size = 0.0
+    for i in range(6):
+        x = 0.0
+        for j in range(6):
+            x += A[i, j] * v[j]
+        out[i] = x
+        size += x * x
+    return math.sqrt(size)
 
 
 def _rayleigh(A, v):
@@ -698,6 +696,6 @@ _Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE = (
     INDEX[name] for name in ("q0", "c0", "s0", "t00", "tp0", "F0", "x0", "act", "size"))
 _COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_size", "_same", "_unique",
               "_wrap", "_closed_form", "_one_pose", "_accept", "_gram", "_smallest",
-              "_rayleigh",
+              "_largest_diagonal_column", "_times", "_rayleigh",
               "_are_new", "_load", "_recompute", "_kernel", "_outputs", "_pose_errors",
               "_dot_rows"]
