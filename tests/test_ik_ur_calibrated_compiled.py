@@ -7,10 +7,12 @@ import numpy as np
 import pytest
 from test_ik_ur_calibrated import calibrated, physically_calibrated, singular_poses
 
+from dqlab._kernels import quaternion_from_matrix_entries
 from dqlab.ik import _newton_compiled as compiled
 from dqlab.ik import ur
 from dqlab.ik import ur_calibrated as module
 from dqlab.ik.targets import pose_errors
+from dqlab.ik.ur_steps import NEAR_WRIST
 from dqlab.rotations import rot_x
 
 pytest.importorskip("numba")
@@ -244,6 +246,42 @@ def test_compiled_closed_form_equals_the_one_pose_closed_form(make):
             for name, flag in fast.flags.items():
                 np.testing.assert_array_equal(flag, floats.flags[name])
     assert handed_over >= 30 and compared >= 500, (handed_over, compared)
+
+
+@pytest.mark.parametrize("make", [calibrated, physically_calibrated])
+def test_compiled_closed_forms_equal_the_batch_closed_form(make):
+    """The exact arm's closed form of a batch, compiled pose by pose with the poses it does
+    not solve handed to the closed form (module._exact_poses, what the batch path starts
+    from), is the closed form's own IKResult of the batch bit for bit, every array of it, at
+    the three tolerances the solver uses (tol, twice and twenty times the arms' gap: at the
+    last, wrists up to about 0.01 rad from their singularity are at it)."""
+    assert compiled.ready()
+    robot = make(54)
+    nominal = module._nominal(robot)
+    rng = np.random.default_rng(55)
+    q = np.concatenate([rng.uniform(-np.pi, np.pi, (1500, 6))]
+                       + [singular_poses(robot, kind, distance, 50, 56)
+                          for kind in ("wrist", "elbow", "shoulder")
+                          for distance in (1e-2, 1e-4)])
+    X = robot.fk(q)
+    X[:20, :3, 3] *= 5.0                                 # out of reach
+    X[20:30, :3, 3] = [0.0, 0.0, 0.3]                    # wrist centre near the axis
+    handed_over = []
+    for tol in (1e-9, 2 * nominal.position_gap, 20 * nominal.position_gap):
+        fast = module._exact_poses(nominal, X, tol, 5e-7, ur)
+        batch = ur(nominal.robot, X, tol=tol)
+        for name in ("solutions", "valid", "position_error", "rotation_error", "reason"):
+            np.testing.assert_array_equal(getattr(fast, name), getattr(batch, name))
+        assert list(fast.flags) == list(batch.flags)
+        for name, flag in batch.flags.items():
+            np.testing.assert_array_equal(fast.flags[name], flag)
+        R = X[:, :3, :3].reshape(-1, 9).T
+        done = compiled.closed_forms(np.stack(quaternion_from_matrix_entries(*R), axis=-1),
+                                     X[:, :3, 3], X[:, :3, 2], nominal.exact, tol, 5e-7,
+                                     NEAR_WRIST)[-1]
+        handed_over.append(int((~done).sum()))
+    assert batch.reason[:20].all() and batch.rotation_error.any()   # some rows of each kind
+    assert handed_over[0] < handed_over[2] < len(X) // 4, handed_over
 
 
 def spectra(rng, n):

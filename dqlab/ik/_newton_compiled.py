@@ -21,8 +21,10 @@ and direction by inverse iteration wherever they are certain (``eigh`` answers e
 and is what the numpy path uses). :func:`closed_form` is the nearest exact
 arm's closed form of one pose that the one-pose path starts from: the loop of
 ``dqlab.ik._ur_engine.solve_single`` over the steps of ``dqlab.ik.ur_steps``, written out on
-floats (tested equal to it bit for bit). :func:`ready` says whether numba is
-there; the first compilation takes seconds, and is cached on disk for the next processes.
+floats (tested equal to it bit for bit), and :func:`closed_forms` the same for a batch of
+poses, which the batch path starts from (the poses it does not solve go to the closed form's
+own batch path). :func:`ready` says whether numba is there; the first compilation takes
+seconds, and is cached on disk for the next processes.
 
 The compiled path differs from the numpy path in two ways that change no result beyond
 rounding: after a step, the cosine and sine of each joint angle are turned by the step
@@ -42,9 +44,10 @@ from ._newton_lanes import angles as lane_angles
 from ._newton_lanes import frames as lane_frames
 from ._newton_lanes import size as lane_size
 from ._newton_lanes import step as lane_step
+from ._ur_engine import wrist_family_tol
 
-__all__ = ["ready", "newton", "one_pose", "closed_form", "unique", "are_new", "accept",
-           "gram", "smallest"]
+__all__ = ["ready", "newton", "one_pose", "closed_form", "closed_forms", "unique", "are_new",
+           "accept", "gram", "smallest"]
 
 _COMPILED = []     # the functions below the wrappers, compiled in place by ready()
 _READY = None      # ready()'s answer, once known
@@ -176,16 +179,44 @@ def closed_form(flange, constants, tol, singular_tol, near_wrist):
     for the flange ``(q, p, z6)`` (rotation quaternion, position, z axis). The solutions (8, 6),
     ``valid`` (8,), the errors (8,) and the flags (3,) wrist, shoulder and elbow singular of
     the result that function builds, or None where it returns None (a wrist within
-    ``near_wrist`` of its singularity, the wrist centre inside the shoulder cylinder, no
-    valid row): the same steps of ``dqlab.ik.ur_steps`` in the same order, on the same
-    floats (tested equal bit for bit)."""
+    ``near_wrist`` of its singularity or at it within ``tol``, the wrist centre inside the
+    shoulder cylinder, no valid row): the same steps of ``dqlab.ik.ur_steps`` in the same
+    order, on the same floats (tested equal bit for bit)."""
     q, p, z6 = flange
     solutions, errors = np.zeros((8, 6)), np.zeros(8)
     flags = np.zeros(3, dtype=np.bool_)
     done = _closed_form(q[0], q[1], q[2], q[3], p[0], p[1], p[2], z6[0], z6[1], z6[2],
                         constants, float(tol), float(singular_tol), float(near_wrist),
+                        wrist_family_tol(float(tol), constants[5]),
                         solutions, errors, flags)
     return (solutions, errors <= tol, errors, flags) if done else None
+
+
+def closed_forms(Q, P, Z, constants, tol, singular_tol, near_wrist):
+    """:func:`closed_form` of n flanges at once, pose by pose in compiled code: rotation
+    quaternions ``Q`` (n, 4), positions ``P`` (n, 3) and z axes ``Z`` (n, 3). The solutions
+    (n, 8, 6), ``valid`` (n, 8), the errors (n, 8), the flags (n, 3) and ``done`` (n,):
+    False where :func:`closed_form` returns None (those poses' other arrays are zeros)."""
+    n = Q.shape[0]
+    solutions, errors = np.zeros((n, 8, 6)), np.zeros((n, 8))
+    flags, done = np.zeros((n, 3), dtype=np.bool_), np.zeros(n, dtype=np.bool_)
+    _closed_forms(np.ascontiguousarray(Q, dtype=float), np.ascontiguousarray(P, dtype=float),
+                  np.ascontiguousarray(Z, dtype=float), constants, float(tol),
+                  float(singular_tol), float(near_wrist),
+                  wrist_family_tol(float(tol), constants[5]), solutions, errors, flags, done)
+    return solutions, done[:, None] & (errors <= tol), errors, flags, done
+
+
+def _closed_forms(Q, P, Z, constants, tol, singular_tol, near_wrist, family_tol, solutions,
+                  errors, flags, done):
+    """:func:`closed_forms`' work: :func:`_closed_form` of each pose, a pose it does not
+    solve cleared again."""
+    for i in range(Q.shape[0]):
+        done[i] = _closed_form(Q[i, 0], Q[i, 1], Q[i, 2], Q[i, 3], P[i, 0], P[i, 1], P[i, 2],
+                               Z[i, 0], Z[i, 1], Z[i, 2], constants, tol, singular_tol,
+                               near_wrist, family_tol, solutions[i], errors[i], flags[i])
+        if not done[i]:
+            solutions[i], errors[i], flags[i] = 0.0, 0.0, False
 
 
 _TWO_PI = 2.0 * math.pi
@@ -412,7 +443,7 @@ def _wrap(theta):
 
 
 def _closed_form(qw, qx, qy, qz, px, py, pz, zx, zy, zz, constants, tol, singular_tol,
-                 near_wrist, solutions, errors, flags):
+                 near_wrist, family_tol, solutions, errors, flags):
     """:func:`closed_form`'s work: ``solve_single``'s loop, each line the step of
     ``dqlab.ik.ur_steps`` named beside it; False where that function returns None."""
     d1, a2, a3, d4, d5, d6 = (constants[0], constants[1], constants[2], constants[3],
@@ -459,7 +490,7 @@ def _closed_form(qw, qx, qy, qz, px, py, pz, zx, zy, zz, constants, tol, singula
         half_sum = math.atan2(-Ly, Lw)
         half_diff = math.atan2(1.0 * Lx, -1.0 * Lz)                  # half_difference
         sin5 = 2.0 * s5bar * c5bar
-        if sin5 < near_wrist:
+        if sin5 < near_wrist or min(s5bar, c5bar) <= family_tol:
             return False
         k = 1.0 / (c5bar * s5bar)                                    # theta234_sine_cosine
         sin234, cos234 = k * (Lw * Lx + Ly * Lz), k * (Lx * Ly - Lw * Lz)
@@ -695,7 +726,6 @@ def _dot_rows(A, i, B, j):
 _Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE = (
     INDEX[name] for name in ("q0", "c0", "s0", "t00", "tp0", "F0", "x0", "act", "size"))
 _COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_size", "_same", "_unique",
-              "_wrap", "_closed_form", "_one_pose", "_accept", "_gram", "_smallest",
-              "_largest_diagonal_column", "_times", "_rayleigh",
-              "_are_new", "_load", "_recompute", "_kernel", "_outputs", "_pose_errors",
-              "_dot_rows"]
+              "_wrap", "_closed_form", "_closed_forms", "_one_pose", "_accept", "_gram",
+              "_smallest", "_largest_diagonal_column", "_times", "_rayleigh", "_are_new",
+              "_load", "_recompute", "_kernel", "_outputs", "_pose_errors", "_dot_rows"]

@@ -155,8 +155,9 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
 
     Returns the :class:`~dqlab.ik.result.IKResult` of the pose, the same as the batch
     path's, or None when the pose needs what only the batch path does: a wrist near its
-    singularity (the wrist family), a wrist centre inside the shoulder cylinder or no valid
-    row (the reasons), or a target that fails its check (the error message). A base and a
+    singularity (``|sin theta5|`` below ``NEAR_WRIST``, or at it within ``tol``: the wrist
+    family, :func:`wrist_family_tol`), a wrist centre inside the shoulder cylinder or no
+    valid row (the reasons), or a target that fails its check (the error message). A base and a
     tool (``tool``, else the robot's) are taken off the target first, on floats.
     """
     flange = _single_flange(robot, target, pose_tol, tool)
@@ -168,6 +169,7 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
         theta6_reference(q_ref, ())                # checked; it matters only at the wrist
     q, p, z6 = flange
     d1, a2, a3, d4, d5 = prm["d1"], prm["a2"], prm["a3"], prm["d4"], prm["d5"]
+    family_tol = wrist_family_tol(tol, prm["d6"])
     offsets = prm["offsets"] if any(prm["offsets"]) else None
     r_D = steps.target_rotation(q)
     p5 = steps.wrist_center(p, z6, prm["d6"])
@@ -181,7 +183,7 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
         u5, v5 = steps.arm_plane_wrist(p5, c1, s1, d1)
         theta5, half_sum, half_diff, c5bar, s5bar = steps.wrist_angles(L, 1.0)
         sin5 = 2.0 * s5bar * c5bar
-        if sin5 < steps.NEAR_WRIST:
+        if sin5 < steps.NEAR_WRIST or min(s5bar, c5bar) <= family_tol:
             return None
         sin234, cos234 = steps.theta234_sine_cosine(L, 1.0, c5bar, s5bar)
         for w, sigma in enumerate((1.0, -1.0)):
@@ -470,6 +472,15 @@ def _branches(prm, flange, theta6_ref, tol, out):
                      sin3=sin3, outer=outer, inner=inner, represented=represented)
 
 
+def wrist_family_tol(tol, d6):
+    r"""The :math:`\bar c_5` or :math:`\bar s_5` (cosine or sine of half of
+    :math:`\theta_5`) at or below which a pose is at the wrist singularity for the
+    tolerance ``tol``: its rows are members of a wrist family (:func:`_wrist_family`), whose
+    joint vectors stay within ``tol`` of the pose. :math:`\mathrm{tol} / (8 \max(1,
+    |d_6|))`."""
+    return tol / (8.0 * max(1.0, abs(d6)))
+
+
 def _wrist_family(prm, half_sum, half_diff, s5bar, c5bar, u5, v5, theta6_ref, tol,
                   repair=None):
     """theta234 and theta6 (2, 2, n) from the half sum and difference; at a wrist
@@ -480,7 +491,7 @@ def _wrist_family(prm, half_sum, half_diff, s5bar, c5bar, u5, v5, theta6_ref, to
     so chosen (None when there is none)."""
     theta234 = half_sum + half_diff
     theta6 = half_sum - half_diff
-    rep_tol = tol / (8.0 * max(1.0, abs(prm["d6"])))
+    rep_tol = wrist_family_tol(tol, prm["d6"])
     if repair is None and min(s5bar.min(), c5bar.min()) > rep_tol:
         return theta234, theta6, None                         # no family (the common case)
     exact = (s5bar <= rep_tol) | (c5bar <= rep_tol)           # (2, 1, n)

@@ -42,11 +42,11 @@ keeps its contract (every branch, flags, reasons, batches) in three steps:
    of the exact arm but does not get there is kept as an invalid row with its errors and
    flagged ``"not_converged"``, never dropped silently. With numba installed (the ``fast``
    extra), these steps run compiled, on the eight branches of a pose at once
-   (``dqlab.ik._newton_compiled``, tested to give the same solutions); numpy runs them
-   otherwise. One pose whose branches all converge, to distinct solutions, is finished with
-   a few calls (``_one_pose``, tested equal to the array path; with numba, the exact arm's
-   closed form of the pose is compiled too); the others go on to the restarts of
-   ``_repair``.
+   (``dqlab.ik._newton_compiled``, tested to give the same solutions), and so does the
+   exact arm's closed form of step 2, pose by pose (tested equal to it bit for bit); numpy
+   runs them otherwise. One pose whose branches all converge, to distinct solutions, is
+   finished with a few calls (``_one_pose``, tested equal to the array path); the others go
+   on to the restarts of ``_repair``.
 
 Near a singularity of the calibrated arm the Newton steps converge slowly (the Jacobian is
 nearly singular) and may end on a neighbouring branch; the tests measure how close to the
@@ -69,6 +69,7 @@ from ..rotations import wrap_angle
 from ._newton_compiled import accept as compiled_accept
 from ._newton_compiled import are_new as compiled_are_new
 from ._newton_compiled import closed_form as compiled_closed_form
+from ._newton_compiled import closed_forms as compiled_closed_forms
 from ._newton_compiled import gram as compiled_gram
 from ._newton_compiled import newton as compiled_newton
 from ._newton_compiled import one_pose as compiled_one_pose
@@ -315,6 +316,8 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
                 if result is not None:
                     return result
             X = X[0]
+        elif q_ref is None and pose_tol <= RIGID_TOL and compiled_ready():   # poses checked
+            return _exact_poses(nominal, X, tol, singular_tol, closed_form)   # as it would
         return closed_form(nominal.robot, X, tol=tol, q_ref=q_ref, singular_tol=singular_tol)
 
     start = exact_solutions(X_06)
@@ -389,6 +392,33 @@ def _exact_one_pose(nominal, X_06, tol, singular_tol):
                      strict=True))                      # wrist, shoulder, elbow singular
     flags["unreachable"] = np.array(False)
     return IKResult(solutions, valid, errors, np.zeros(8), flags, np.array("", dtype=object))
+
+
+def _exact_poses(nominal, X_06, tol, singular_tol, closed_form):
+    """The exact arm's closed form of the flange poses ``X_06`` (n, 4, 4) (rigid transforms,
+    checked) with the tolerance ``tol``, compiled pose by pose
+    (``dqlab.ik._newton_compiled.closed_forms``, the loop of :func:`_exact_one_pose`); the
+    poses that path hands on (a wrist near its singularity, a wrist centre inside the
+    shoulder cylinder, no valid row) are solved by ``closed_form`` itself. The
+    :class:`IKResult` ``closed_form`` gives for them all (tested equal)."""
+    R = X_06[:, :3, :3]
+    q = quaternion_from_matrix_entries(*(R[:, i, j] for i in range(3) for j in range(3)))
+    solutions, valid, errors, flags, done = compiled_closed_forms(
+        np.stack(q, axis=-1), X_06[:, :3, 3], X_06[:, :3, 2], nominal.exact, tol,
+        singular_tol, NEAR_WRIST)
+    flags = dict(zip(_FLAG_NAMES[:3], flags.T, strict=True))   # wrist, shoulder, elbow
+    flags["unreachable"] = np.zeros(done.shape, dtype=bool)
+    rotation_errors = np.zeros(errors.shape)
+    reason = np.full(done.shape, "", dtype=object)
+    rest = np.flatnonzero(~done)
+    if rest.size:
+        other = closed_form(nominal.robot, X_06[rest], tol=tol, singular_tol=singular_tol)
+        solutions[rest], valid[rest] = other.solutions, other.valid
+        errors[rest], rotation_errors[rest] = other.position_error, other.rotation_error
+        for name, flag in flags.items():
+            flag[rest] = other.flags[name]
+        reason[rest] = other.reason
+    return IKResult(solutions, valid, errors, rotation_errors, flags, reason)
 
 
 def _one_pose(nominal, start, X_0T, tool, tol, singular_tol, max_iter, wide):
