@@ -157,8 +157,8 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
     path's, or None when the pose needs what only the batch path does: a wrist near its
     singularity (``|sin theta5|`` below ``NEAR_WRIST``, or at it within ``tol``: the wrist
     family, :func:`wrist_family_tol`), a wrist centre inside the shoulder cylinder or no
-    valid row (the reasons), or a target that fails its check (the error message). A base and a
-    tool (``tool``, else the robot's) are taken off the target first, on floats.
+    valid row (the reasons), or a target that fails its check (the error message). A base
+    and a tool (``tool``, else the robot's) are taken off the target first, on floats.
     """
     flange = _single_flange(robot, target, pose_tol, tool)
     if flange is None:

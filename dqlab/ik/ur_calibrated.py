@@ -316,8 +316,9 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
                 if result is not None:
                     return result
             X = X[0]
-        elif q_ref is None and pose_tol <= RIGID_TOL and compiled_ready():   # poses checked
-            return _exact_poses(nominal, X, tol, singular_tol, closed_form)   # as it would
+        elif q_ref is None and pose_tol <= RIGID_TOL and compiled_ready():
+            # (the targets are checked at least as strictly as the closed form checks them)
+            return _exact_poses(nominal, X, tol, singular_tol, closed_form)
         return closed_form(nominal.robot, X, tol=tol, q_ref=q_ref, singular_tol=singular_tol)
 
     start = exact_solutions(X_06)
