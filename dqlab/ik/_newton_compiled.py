@@ -44,7 +44,6 @@ from ._newton_lanes import angles as lane_angles
 from ._newton_lanes import frames as lane_frames
 from ._newton_lanes import size as lane_size
 from ._newton_lanes import step as lane_step
-from ._ur_engine import wrist_family_tol
 
 __all__ = ["ready", "newton", "one_pose", "closed_form", "closed_forms", "unique", "are_new",
            "accept", "gram", "smallest"]
@@ -187,7 +186,6 @@ def closed_form(flange, constants, tol, singular_tol, near_wrist):
     flags = np.zeros(3, dtype=np.bool_)
     done = _closed_form(q[0], q[1], q[2], q[3], p[0], p[1], p[2], z6[0], z6[1], z6[2],
                         constants, float(tol), float(singular_tol), float(near_wrist),
-                        wrist_family_tol(float(tol), constants[5]),
                         solutions, errors, flags)
     return (solutions, errors <= tol, errors, flags) if done else None
 
@@ -202,19 +200,18 @@ def closed_forms(Q, P, Z, constants, tol, singular_tol, near_wrist):
     flags, done = np.zeros((n, 3), dtype=np.bool_), np.zeros(n, dtype=np.bool_)
     _closed_forms(np.ascontiguousarray(Q, dtype=float), np.ascontiguousarray(P, dtype=float),
                   np.ascontiguousarray(Z, dtype=float), constants, float(tol),
-                  float(singular_tol), float(near_wrist),
-                  wrist_family_tol(float(tol), constants[5]), solutions, errors, flags, done)
+                  float(singular_tol), float(near_wrist), solutions, errors, flags, done)
     return solutions, done[:, None] & (errors <= tol), errors, flags, done
 
 
-def _closed_forms(Q, P, Z, constants, tol, singular_tol, near_wrist, family_tol, solutions,
-                  errors, flags, done):
+def _closed_forms(Q, P, Z, constants, tol, singular_tol, near_wrist, solutions, errors, flags,
+                  done):
     """:func:`closed_forms`' work: :func:`_closed_form` of each pose, a pose it does not
     solve cleared again."""
     for i in range(Q.shape[0]):
         done[i] = _closed_form(Q[i, 0], Q[i, 1], Q[i, 2], Q[i, 3], P[i, 0], P[i, 1], P[i, 2],
                                Z[i, 0], Z[i, 1], Z[i, 2], constants, tol, singular_tol,
-                               near_wrist, family_tol, solutions[i], errors[i], flags[i])
+                               near_wrist, solutions[i], errors[i], flags[i])
         if not done[i]:
             solutions[i], errors[i], flags[i] = 0.0, 0.0, False
 
@@ -443,11 +440,12 @@ def _wrap(theta):
 
 
 def _closed_form(qw, qx, qy, qz, px, py, pz, zx, zy, zz, constants, tol, singular_tol,
-                 near_wrist, family_tol, solutions, errors, flags):
+                 near_wrist, solutions, errors, flags):
     """:func:`closed_form`'s work: ``solve_single``'s loop, each line the step of
     ``dqlab.ik.ur_steps`` named beside it; False where that function returns None."""
     d1, a2, a3, d4, d5, d6 = (constants[0], constants[1], constants[2], constants[3],
                               constants[4], constants[5])
+    family_tol = tol / (8.0 * max(1.0, abs(d6)))       # dqlab.ik._ur_engine.wrist_family_tol
     offset = False
     for i in range(6):
         offset = offset or constants[6 + i] != 0.0
