@@ -208,6 +208,17 @@ def test_compiled_gram_and_acceptance_equal_the_numpy_path(numpy_path):
     assert 0 < taken.size < converged.sum()
 
 
+def poses_of_every_kind(robot, seed, random, near):
+    """Poses (4, 4) of robot: ``random`` random ones, then ``near`` at 1e-2 and at 1e-4 from
+    each of its wrist, elbow and shoulder singularities."""
+    rng = np.random.default_rng(seed)
+    q = np.concatenate([rng.uniform(-np.pi, np.pi, (random, 6))]
+                       + [singular_poses(robot, kind, distance, near, seed + 1)
+                          for kind in ("wrist", "elbow", "shoulder")
+                          for distance in (1e-2, 1e-4)])
+    return robot.fk(q)
+
+
 @pytest.mark.parametrize("make", [calibrated, physically_calibrated])
 def test_compiled_closed_form_equals_the_one_pose_closed_form(make):
     """The exact arm's closed form of one pose, compiled (module._exact_one_pose), is the
@@ -221,12 +232,7 @@ def test_compiled_closed_form_equals_the_one_pose_closed_form(make):
     robot = make(51)
     nominal = module._nominal(robot)
     assert any(nominal.exact[6:])                       # offsets to subtract
-    rng = np.random.default_rng(52)
-    q = np.concatenate([rng.uniform(-np.pi, np.pi, (150, 6))]
-                       + [singular_poses(robot, kind, distance, 15, 53)
-                          for kind in ("wrist", "elbow", "shoulder")
-                          for distance in (1e-2, 1e-4)])
-    X = robot.fk(q)
+    X = poses_of_every_kind(robot, 52, 150, 15)
     X[:10, :3, 3] *= 3.0                                 # out of reach
     prm = ur_parameters(nominal.robot)
     wide = 2 * nominal.position_gap
@@ -258,12 +264,7 @@ def test_compiled_closed_forms_equal_the_batch_closed_form(make):
     assert compiled.ready()
     robot = make(54)
     nominal = module._nominal(robot)
-    rng = np.random.default_rng(55)
-    q = np.concatenate([rng.uniform(-np.pi, np.pi, (1500, 6))]
-                       + [singular_poses(robot, kind, distance, 50, 56)
-                          for kind in ("wrist", "elbow", "shoulder")
-                          for distance in (1e-2, 1e-4)])
-    X = robot.fk(q)
+    X = poses_of_every_kind(robot, 55, 1500, 50)
     X[:20, :3, 3] *= 5.0                                 # out of reach
     X[20:30, :3, 3] = [0.0, 0.0, 0.3]                    # wrist centre near the axis
     handed_over = []
