@@ -56,6 +56,7 @@ from . import rtde
 from ._args import positive_number
 from .calibration import (
     CalibrationConf,
+    check_identifiers,
     kinematics_info_from_robot,
     message_from_kinematics_info,
     robot_from_corrections,
@@ -521,9 +522,11 @@ def _served_calibration(calibration):
     if checksum is None:
         checksum = [zlib.crc32(struct.pack(">4d", *(served[k][i] for k in served)))
                     for i in range(6)]
-    status = calibration.calibration_status
-    served["joint_checksum"] = [int(c) for c in checksum]
-    served["calibration_status"] = 2 if status is None else int(status)
+    status = 2 if calibration.calibration_status is None else calibration.calibration_status
+    checksum, status = check_identifiers(checksum, status, names=(
+        "calibration.joint_checksum", "calibration.calibration_status"))
+    served["joint_checksum"] = list(checksum)
+    served["calibration_status"] = status
     return served
 
 
