@@ -56,9 +56,9 @@ import numpy as np
 
 from . import script
 from .calibration import CalibrationError, KinematicsInfo, kinematics_info_from_message
+from .client import robot_and_limits
 from .motion import GAIN, LOOKAHEAD_TIME, MOVEJ_A, MOVEJ_V, MOVEL_A, MOVEL_V, SERVOJ_T, STOPJ_A
-from .rtde import STATE_VARIABLES, RTDEReader
-from .script import as_safety_limits
+from .rtde import STATE_VARIABLES, FrameBuffer, RTDEReader
 from .state import URState
 
 __all__ = ["SecondaryInterfaceBackend", "MessageBuffer", "SecondaryError", "pack_message",
@@ -339,8 +339,9 @@ def version_from_message(message, *, source="message"):
                           bugfix, build, rest[10:].decode("latin-1"))
 
 
-class MessageBuffer:
-    """Split a byte stream from the secondary interface into ``(type, payload)`` messages.
+class MessageBuffer(FrameBuffer):
+    """Split a byte stream from the primary or secondary interface into ``(type, payload)``
+    messages (a :class:`~dqlab.ur.rtde.FrameBuffer`).
 
     Raises :class:`SecondaryError` for a size below the header's or above
     :data:`MAX_MESSAGE_SIZE` (the stream is then out of step and cannot be trusted).
@@ -354,21 +355,8 @@ class MessageBuffer:
     """
 
     def __init__(self):
-        self._data = bytearray()
-
-    def feed(self, data):
-        """Add bytes; return the complete messages."""
-        self._data += data
-        out = []
-        while len(self._data) >= _HEADER.size:
-            size, mtype = _HEADER.unpack_from(self._data)
-            if not _HEADER.size <= size <= MAX_MESSAGE_SIZE:
-                raise SecondaryError(f"secondary-interface message of impossible size {size}")
-            if len(self._data) < size:
-                break
-            out.append((mtype, bytes(self._data[_HEADER.size:size])))
-            del self._data[:size]
-        return out
+        super().__init__(_HEADER, MAX_MESSAGE_SIZE, SecondaryError,
+                         "secondary-interface message")
 
 
 class SecondaryInterfaceBackend:
@@ -410,8 +398,7 @@ class SecondaryInterfaceBackend:
                             f"{host!r}")
         self.host, self.port, self.rtde_port = host, _port(port, "port"), \
             _port(rtde_port, "rtde_port")
-        self.limits = as_safety_limits(limits, robot)
-        self.robot = robot if robot is not None else self.limits.robot
+        self.robot, self.limits = robot_and_limits(robot, limits)
         self._reader = RTDEReader(host, self.rtde_port, STATE_VARIABLES, frequency)
         self._sock = None
         self._t0 = None
