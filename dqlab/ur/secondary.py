@@ -230,6 +230,14 @@ def pack_cartesian_info(data):
     return pack_package(CARTESIAN_INFO, _CARTESIAN.pack(*data.tcp_pose, *data.tcp_offset))
 
 
+def _message_bytes(message):
+    """``message`` as bytes, or ``TypeError`` naming it."""
+    if not isinstance(message, (bytes, bytearray, memoryview)):
+        raise TypeError(f"message must be bytes (one whole message), got "
+                        f"{type(message).__name__}")
+    return bytes(message)
+
+
 def _sub_packages(message, source):
     """(type, data) of each sub-package of a robot-state message, as the Client Library's
     PrimaryParser walks them; SecondaryError for a size that does not fit."""
@@ -280,7 +288,7 @@ def robot_state_from_message(message, *, source="message"):
     >>> state.robot_mode.robot_mode, state.joints, state.package_types
     (7, None, (0,))
     """
-    message = bytes(message)
+    message = _message_bytes(message)
     found = {}
     packages = _sub_packages(message, source)
     for ptype, package in packages:
@@ -321,7 +329,7 @@ def version_from_message(message, *, source="message"):
     >>> version_from_message(version_message((5, 11, 0, 0))).minor
     11
     """
-    message = bytes(message)
+    message = _message_bytes(message)
     head = _HEADER.size + _ROBOT_MESSAGE_HEAD.size
     if len(message) < head + 1:
         raise SecondaryError(f"{source}: {len(message)} bytes, too short for a version message")
