@@ -20,7 +20,7 @@ from test_bad_input_sweep import BAD_KINDS, _bad_value
 import dqlab
 from dqlab import ur
 from dqlab.models import ur3
-from dqlab.ur import rtde, script
+from dqlab.ur import calibration, rtde, script
 from dqlab.ur.calibration import CalibrationConf
 
 UR3 = ur3()
@@ -244,6 +244,17 @@ CASES = [
      ("controller_version",), {}),
     ("ControllerStandIn.start_timeout", lambda v, tmp: ur.ControllerStandIn(start_timeout=v),
      30.0, ("start_timeout",), {}),
+    ("ControllerStandIn.primary_port", lambda v, tmp: ur.ControllerStandIn(primary_port=v), 0,
+     ("primary_port",), {}),
+    ("read_kinematics_info.port",
+     lambda v, tmp: calibration.read_kinematics_info("127.0.0.1", v, timeout=0.01), 30002,
+     ("port",), {}),
+    ("kinematics_info_from_robot.checksum",
+     lambda v, tmp: calibration.kinematics_info_from_robot(UR3, checksum=v), (7,) * 6,
+     ("checksum",), {}),
+    ("kinematics_info_from_robot.calibration_status",
+     lambda v, tmp: calibration.kinematics_info_from_robot(UR3, calibration_status=v), 2,
+     ("calibration_status",), {}),
     ("ControllerStandIn.calibration",
      lambda v, tmp: ur.ControllerStandIn(calibration=CalibrationConf(v, v, v, v)), (0.0,) * 6,
      ("delta_theta", "calibration"), {}),
@@ -289,6 +300,8 @@ def _finite(result):
                                              ur.StepClock, ur.SafetyLimits,
                                              ur.SecondaryInterfaceBackend, rtde.RTDEReader,
                                              ur.ControllerStandIn)):
+        return True, False
+    if isinstance(result, calibration.KinematicsInfo):
         return True, False
     if isinstance(result, ur.URState):
         return all(np.all(np.isfinite(x)) for x in (result.q, result.qd, result.tcp_pose)), \

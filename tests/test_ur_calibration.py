@@ -5,6 +5,7 @@ import math
 import socket
 import struct
 import threading
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,19 +13,24 @@ import pytest
 from dqlab.identify import dh_parameter_names, dh_parameters, robot_from_dh_parameters
 from dqlab.ik import pose_errors
 from dqlab.models import UR_MODELS, ur3, ur5, ur5e, ur10, ur10e
-from dqlab.rotations import rot_x, rot_z
+from dqlab.rotations import rot_x, rot_y, rot_z
 from dqlab.ur import ControllerStandIn
 from dqlab.ur.calibration import (
     MODEL_TOLERANCE,
     ROS_LINKS,
+    UNCALIBRATED,
+    CalibrationConf,
     CalibrationError,
     KinematicsInfo,
+    _std_hash,
+    _std_hash_many,
     kinematics_info_from_message,
     kinematics_info_from_robot,
     message_from_kinematics_info,
     read_calibration_conf,
     read_kinematics_info,
     robot_from_calibration_conf,
+    robot_from_corrections,
     robot_from_joint_origins,
     robot_from_kinematics_info,
     robot_from_ros_calibration,
@@ -175,10 +181,16 @@ def _with_other_packages(info, status_bytes=4):
     return struct.pack(">iB", 5 + len(payload), 16) + payload
 
 
-@pytest.mark.parametrize("status_bytes", [4, 1])
-def test_decoder_skips_other_sub_packages_and_reads_both_status_widths(status_bytes):
+def test_decoder_skips_other_sub_packages():
     info = kinematics_info_from_robot(ur10e(), calibration_status=1)
-    assert kinematics_info_from_message(_with_other_packages(info, status_bytes)) == info
+    assert kinematics_info_from_message(_with_other_packages(info)) == info
+
+
+def test_a_one_byte_status_is_refused_as_the_client_library_refuses_it():
+    """217 bytes of data (UR's table's uint8 status): the Client Library's parser throws."""
+    info = kinematics_info_from_robot(ur10e(), calibration_status=1)
+    with pytest.raises(CalibrationError, match="217 bytes .* one-byte calibration status"):
+        kinematics_info_from_message(_with_other_packages(info, status_bytes=1))
 
 
 def test_corrupt_messages_are_refused_naming_the_field():
@@ -462,3 +474,296 @@ def test_model_names_are_read_loosely():
         robot_from_kinematics_info(info, model=spelling)
     robot_from_kinematics_info(kinematics_info_from_robot(UR_MODELS["UR8 Long"]()),
                                model="ur8_long")
+
+
+# --------------------------------------------------------------------------------------
+# Golden data: genuine files no one here wrote (tests/data/ur_calibration/ORIGIN.md)
+
+DATA = Path(__file__).parent / "data" / "ur_calibration"
+#: The genuine ur_calibration files and the model of each robot.
+GENUINE_YAML = {"liu_jinxin_ur5e.yaml": "UR5e", "kiminyeop_ur5e.yaml": "UR5e",
+                "kevinhpham_ur3e_1.yaml": "UR3e", "kevinhpham_ur3e_4.yaml": "UR3e",
+                "kevinhpham_ursim_ur3e.yaml": "UR3e", "jinxiao_ur10.yaml": "UR10"}
+
+
+def _file_origins(path, fixed_axes=False):
+    """The joint origins of a ur_calibration file, computed here from its numbers with
+    R = Rx(roll) Ry(pitch) Rz(yaw) (Eigen's eulerAngles(0, 1, 2), which wrote them), or
+    with ``fixed_axes`` as a URDF reads them, R = Rz(yaw) Ry(pitch) Rx(roll)."""
+    import yaml
+
+    kinematics = yaml.safe_load(path.read_text())["kinematics"]
+    S = np.tile(np.eye(4), (6, 1, 1))
+    for i, link in enumerate(ROS_LINKS):
+        v = kinematics[link]
+        rx, ry, rz = rot_x(v["roll"]), rot_y(v["pitch"]), rot_z(v["yaw"])
+        S[i, :3, :3] = rz @ ry @ rx if fixed_axes else rx @ ry @ rz
+        S[i, :3, 3] = v["x"], v["y"], v["z"]
+    return S, kinematics["hash"]
+
+
+def _logged_kinematics_info(path):
+    """The Client Library's KinematicsInfo::toString() as ur_calibration logged it."""
+    fields = {}
+    for line in path.read_text().splitlines():
+        key, _, rest = line.partition(":")
+        fields[key] = rest.strip().strip("[]").split()
+    return KinematicsInfo(tuple(int(c) for c in fields["checksum"]),
+                          *(tuple(float(v) for v in fields[k])
+                            for k in ("dh_theta", "dh_a", "dh_d", "dh_alpha")),
+                          int(fields["calibration_status"][0]))
+
+
+@pytest.mark.parametrize("name", sorted(GENUINE_YAML))
+def test_every_genuine_ur_calibration_file_is_read_with_its_controllers_values(name):
+    """Each published file is accepted: the DH parameters found hash to the file's hash (the
+    controller's own values, theta_3 = 6.1968 on one UR5e), and the arm is the file's chain
+    (forward kinematics of its origins, computed here) to 1e-9 m, of the right model."""
+    path = DATA / name
+    origins, digest = _file_origins(path)
+    robot = robot_from_ros_calibration(path, model=GENUINE_YAML[name], expected_hash=digest)
+    assert kinematics_info_from_robot(robot).hash == digest
+    position, rotation = pose_errors(robot.fk(Q), chain_fk(origins, Q))
+    assert position.max() < 1e-9 and rotation.max() < 1e-9
+    assert all(abs(lk.theta_offset) <= 3 * np.pi for lk in robot.links)
+
+
+def test_the_controllers_logged_values_hash_to_the_file_it_wrote_and_are_read_back():
+    """One robot, two published records: the kinematics info ur_calibration logged and the
+    file it wrote. The values hash to the file's hash; the file reads back those values."""
+    info = _logged_kinematics_info(DATA / "liu_jinxin_ur5e_kinematics_info.log")
+    assert info.hash == "calib_3992041561913322003" and info.calibration_status == 2
+    robot = robot_from_ros_calibration(DATA / "liu_jinxin_ur5e.yaml", model="UR5e")
+    read = kinematics_info_from_robot(robot)
+    for mine, logged in zip((read.theta, read.a, read.d, read.alpha),
+                            (info.theta, info.a, info.d, info.alpha), strict=True):
+        np.testing.assert_allclose(mine, logged, rtol=1e-12, atol=1e-12)
+    assert max(abs(d) for d in info.d) > 300                  # hundreds of metres in d
+    controller = robot_from_kinematics_info(info, model="UR5e")
+    assert pose_errors(robot.fk(Q), controller.fk(Q))[0].max() < 1e-9
+
+
+def test_roll_pitch_yaw_are_read_in_the_order_ur_calibration_writes_them():
+    """Eigen's eulerAngles(0, 1, 2): R = Rx Ry Rz. Read so, the file gives the controller's
+    arm to 1e-9 m; read as URDF's fixed axes (Rz Ry Rx) it is 2 micrometres off here (30 on
+    the UR10's file): a thousand times more."""
+    info = _logged_kinematics_info(DATA / "liu_jinxin_ur5e_kinematics_info.log")
+    controller = robot_from_kinematics_info(info).fk(Q)
+    origins, _ = _file_origins(DATA / "liu_jinxin_ur5e.yaml")
+    assert pose_errors(chain_fk(origins, Q), controller)[0].max() < 1e-9
+    fixed, _ = _file_origins(DATA / "liu_jinxin_ur5e.yaml", fixed_axes=True)
+    assert pose_errors(chain_fk(fixed, Q), controller)[0].max() > 1e-6
+
+
+def test_the_client_librarys_ursim_capture_gives_what_its_own_test_expects():
+    """URSim 5.8's first robot state of a UR5e (1386 bytes, 13 sub-packages): the kinematics
+    info the Client Library's test_primary_parser.cpp expects, and UR's ROS hash."""
+    message = (DATA / "ursim_5_8_ur5e_robot_state.bin").read_bytes()
+    assert len(message) == 1386
+    info = kinematics_info_from_message(message)
+    assert info.checksum == (UNCALIBRATED,) * 6 and info.theta == (0.0,) * 6
+    assert info.a == (0, -0.425, -0.3922, 0, 0, 0)
+    assert info.d == (0.1625, 0, 0, 0.1333, 0.0997, 0.0996)
+    assert info.alpha == (1.570796327, 0, 0, 1.570796327, -1.570796327, 0)
+    assert info.hash == ROS_HASHES["UR5e"]
+
+
+def _controller_values():
+    import json
+
+    return json.loads((DATA / "ur_calibration_controller_values.json").read_text())
+
+
+def test_real_corrections_of_ur_calibrations_tests_make_arms_of_their_model():
+    """Three controllers' corrections (metres of d on joints 2-4, theta_3 = 7.129 rad): each
+    gives an arm millimetres from its model; the UR10e's is the one its documentation
+    prints as the controller's DH parameters, digit for digit, and hashes the same."""
+    values = list(_controller_values().values())
+    for entry in values[:3]:
+        conf = CalibrationConf(*(tuple(entry[k]) for k in
+                                 ("delta_theta", "delta_a", "delta_d", "delta_alpha")))
+        robot = robot_from_corrections(conf, entry["model"])
+        gap = pose_errors(robot.fk(Q), UR_MODELS[entry["model"]]().fk(Q))[0].max()
+        assert 1e-4 < gap < 1e-2
+    documented = values[3]
+    info = kinematics_info_from_robot(robot)
+    np.testing.assert_allclose(info.d, documented["dh_d"], rtol=1e-14)
+    np.testing.assert_allclose(info.theta, documented["dh_theta"], rtol=1e-13)
+    np.testing.assert_allclose(info.a, documented["dh_a"], rtol=1e-13)
+    # (the controller adds the corrections to its alpha = 1.570796327, dqlab's is pi / 2)
+    np.testing.assert_allclose(info.alpha, documented["dh_alpha"], rtol=0, atol=3e-10)
+    assert info.hash == KinematicsInfo(info.checksum, *(tuple(documented[k]) for k in (
+        "dh_theta", "dh_a", "dh_d", "dh_alpha"))).hash
+
+
+def test_a_genuine_calibration_conf_reads_into_an_arm_of_its_model():
+    """A UR5's file as quoted (header with trailing spaces, four deltas of hundreds of
+    metres): an arm millimetres from the nominal UR5."""
+    path = DATA / "ur_modern_driver_179_ur5.conf"
+    conf = read_calibration_conf(path)
+    assert conf.delta_d[1] == 278.244144925623573 and conf.joint_checksum is None
+    robot = robot_from_calibration_conf(path, "UR5")
+    assert 1e-4 < pose_errors(robot.fk(Q), ur5().fk(Q))[0].max() < 1e-2
+    with pytest.raises(CalibrationError, match="not a UR10"):
+        robot_from_calibration_conf(path, "UR10e")
+
+
+def test_a_calibration_conf_quoted_without_its_header_gets_a_precise_message(tmp_path):
+    """The UR3 file of an issue, as quoted (no [mounting] line, extra keys): refused naming
+    the line and the header; with the header the controller writes, read whole."""
+    path = DATA / "myrobotlab_145_ur3.conf"
+    with pytest.raises(CalibrationError, match=r"line 1: no section header .*'\[mounting\]'"):
+        read_calibration_conf(path)
+    whole = tmp_path / "calibration.conf"
+    whole.write_text("[mounting]\n" + path.read_text())
+    conf = read_calibration_conf(whole)
+    assert conf.joint_checksum == (0xB3241580, 0xB10112F1, 0x290CAC88, 0xA8D3F155, 0xA8B7E9EB,
+                                   0xA8DBBFA3)
+    assert conf.calibration_status == 2 and conf.delta_theta[2] == 6.68283349819805572
+    robot = robot_from_calibration_conf(whole, "UR3", checksum=conf.joint_checksum)
+    assert 1e-4 < pose_errors(robot.fk(Q), ur3().fk(Q))[0].max() < 1e-2
+    bom = tmp_path / "bom.conf"
+    bom.write_bytes(b"\xef\xbb\xbf" + whole.read_bytes())
+    with pytest.raises(CalibrationError, match="byte-order mark"):
+        read_calibration_conf(bom)
+
+
+# --------------------------------------------------------------------------------------
+# The Client Library's edge cases
+
+
+def test_the_hash_text_is_cs_printf_g_without_rounding_to_zero():
+    """C++ streams a double as printf's %g (libc's snprintf, called here, is the oracle):
+    -0.0 prints "-0" and 1e-17 "1e-17", as toHash() streams them; nothing is zeroed."""
+    import ctypes
+    import ctypes.util
+
+    libc = ctypes.CDLL(ctypes.util.find_library("c"))
+    buf = ctypes.create_string_buffer(64)
+
+    def printf_g(x):
+        libc.snprintf(buf, 64, b"%g", ctypes.c_double(x))
+        return buf.value.decode()
+
+    rng = np.random.default_rng(7)
+    values = np.concatenate([[0.0, -0.0, 1e-17, -3e-13, 1e300, 439.140974079901, 0.1625],
+                             rng.normal(0, 1, 200) * 10.0 ** rng.integers(-20, 5, 200)])
+    for x in values:
+        assert "%g" % x == printf_g(x)
+    base = kinematics_info_from_robot(ur5e())
+    theta = (-0.0, *base.theta[1:])
+    tiny = (1e-17, *base.theta[1:])
+    assert len({base.hash, KinematicsInfo(base.checksum, theta, base.a, base.d, base.alpha).hash,
+                KinematicsInfo(base.checksum, tiny, base.a, base.d, base.alpha).hash}) == 3
+
+
+def test_the_batch_hash_equals_the_readable_one():
+    rng = np.random.default_rng(8)
+    texts = [bytes(rng.integers(32, 127, n).astype(np.uint8)) for n in range(0, 60)]
+    fast = _std_hash_many(texts)
+    assert [int(h) for h in fast] == [_std_hash(t) for t in texts]
+
+
+def test_trailing_bytes_after_the_kinematics_info_warn_and_are_ignored():
+    """The Client Library's own case: 10 bytes 0xAA after the 220, then another sub-package
+    (its parser warns outside strict mode and carries on)."""
+    info = kinematics_info_from_robot(ur10e(), checksum=(1, 2, 3, 4, 5, 6))
+    body = message_from_kinematics_info(info)[10:] + b"\xaa" * 10
+    kin = struct.pack(">IB", 5 + len(body), 5) + body
+    other = struct.pack(">IB", 6, 8) + b"\x42"
+    message = struct.pack(">iB", 5 + len(kin) + len(other), 16) + kin + other
+    with pytest.warns(UserWarning, match="10 trailing bytes are ignored"):
+        assert kinematics_info_from_message(message) == info
+
+
+# --------------------------------------------------------------------------------------
+# Bounded readers and argument checks
+
+
+def _one_line_naming(exc, *words):
+    message = str(exc.value)
+    return "\n" not in message and len(message) < 400 and all(w in message for w in words)
+
+
+@pytest.mark.parametrize("case", ["billion laughs", "50 MB", "nesting", "400 digits"])
+def test_a_hostile_ros_calibration_file_is_refused_quickly_in_one_line(tmp_path, case):
+    import time
+
+    path = tmp_path / "calibration.yaml"
+    if case == "billion laughs":
+        lines = ["a: &a [lol, lol, lol, lol, lol, lol, lol, lol, lol]"]
+        lines += [f"{chr(98 + k)}: &{chr(98 + k)} [{', '.join(['*' + chr(97 + k)] * 9)}]"
+                  for k in range(8)]
+        path.write_text("\n".join(lines) + "\nkinematics: *i\n")
+        field = "file"
+    elif case == "50 MB":
+        with open(path, "wb") as f:
+            f.truncate(50 * 1024 * 1024)
+        field = "file"
+    elif case == "nesting":
+        path.write_text("kinematics: " + "[" * 3000 + "]" * 3000 + "\n")
+        field = "file"
+    else:
+        text = ros_yaml(dh_origins(ur5e()), ROS_HASHES["UR5e"])
+        path.write_text(text.replace("    z: 0.1625", "    z: " + "9" * 400, 1))
+        field = "kinematics.shoulder.z"
+    start = time.monotonic()
+    with pytest.raises(CalibrationError) as caught:
+        robot_from_ros_calibration(path)
+    assert time.monotonic() - start < 1.0
+    assert caught.value.field == field and _one_line_naming(caught, str(path), field)
+
+
+def test_a_huge_calibration_conf_or_value_is_refused_in_one_line(tmp_path):
+    path = tmp_path / "calibration.conf"
+    with open(path, "wb") as f:
+        f.truncate(50 * 1024 * 1024)
+    with pytest.raises(CalibrationError, match="more than 65536 bytes") as caught:
+        read_calibration_conf(path)
+    assert _one_line_naming(caught, str(path))
+    path.write_text("[mounting]\ndelta_theta = [0,0,0,0,0,0]\ndelta_a = [0,0,0,0,0,0]\n"
+                    "delta_d = [0,0,0,0,0,0]\ndelta_alpha = [0,0,0,0,0,0]\n"
+                    f"joint_checksum = [{'9' * 400},0,0,0,0,0]\n")
+    with pytest.raises(CalibrationError) as caught:
+        read_calibration_conf(path)
+    assert caught.value.field == "joint_checksum" and _one_line_naming(caught, str(path))
+
+
+@pytest.mark.parametrize("model", [None, 123, 5, 2.5, ["UR5e"]])
+def test_a_model_that_is_not_a_model_names_model(model, tmp_path):
+    conf = CalibrationConf((0.0,) * 6, (0.0,) * 6, (0.0,) * 6, (0.0,) * 6)
+    path = tmp_path / "calibration.conf"
+    path.write_text("[mounting]\ndelta_theta = [0,0,0,0,0,0]\ndelta_a = [0,0,0,0,0,0]\n"
+                    "delta_d = [0,0,0,0,0,0]\ndelta_alpha = [0,0,0,0,0,0]\n")
+    calls = [lambda: robot_from_corrections(conf, model),
+             lambda: robot_from_calibration_conf(path, model)]
+    if model is not None:                       # optional there: None is "no model"
+        info = kinematics_info_from_robot(ur5e())
+        calls += [lambda: robot_from_kinematics_info(info, model=model),
+                  lambda: robot_from_ros_calibration(DATA / "kiminyeop_ur5e.yaml",
+                                                     model=model)]
+    for call in calls:
+        with pytest.raises(ValueError, match=r"^model must be one of .* or a Robot"):
+            call()
+
+
+@pytest.mark.parametrize("checksum, status, name", [
+    ((1, 2, 3, 4, 5, 2 ** 32), 2, r"checksum\[5\]"), ((1,) * 6, 2 ** 32, "calibration_status"),
+    ((1,) * 6, 2.7, "calibration_status"), ((1,) * 6, True, "calibration_status"),
+    ((1.5,) * 6, 2, r"checksum\[0\]"), ((-1,) * 6, 2, r"checksum\[0\]"),
+    ((1,) * 5, 2, "checksum"), ("123456", 2, "checksum")])
+def test_checksums_and_status_are_unsigned_32_bit_integers(checksum, status, name):
+    with pytest.raises(ValueError, match=f"^{name} must be"):
+        kinematics_info_from_robot(ur5e(), checksum=checksum, calibration_status=status)
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    (dict(host=None), "host"), (dict(host=""), "host"), (dict(host=123), "host"),
+    (dict(port=30002 + 65536), "port"), (dict(port=0), "port"), (dict(port="30002"), "port"),
+    (dict(port=30002.0), "port"), (dict(timeout=0), "timeout"),
+    (dict(timeout=float("nan")), "timeout"), (dict(timeout="1"), "timeout"),
+    (dict(timeout=float("inf")), "timeout"), (dict(timeout=-1), "timeout")])
+def test_read_kinematics_info_refuses_bad_arguments_by_name(kwargs, name):
+    args = {"host": "127.0.0.1", "port": 30002, "timeout": 1.0, **kwargs}
+    with pytest.raises((TypeError, ValueError), match=f"^{name} must be"):
+        read_kinematics_info(args.pop("host"), **args)

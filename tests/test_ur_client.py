@@ -309,3 +309,40 @@ def test_nan_and_negative_values_never_switch_a_check_off():
             dqlab.ur.rotation_vector_from_quaternion([1.0, 0, 0, 0], tol=tol)
     with pytest.raises(TypeError, match="must hold real numbers, got complex"):
         dqlab.ur.movej(np.add(HOME, 1j))
+
+
+def test_the_client_takes_the_robot_and_limits_of_its_back_end():
+    """URClient(standin.backend()) drives the stand-in's arm -- a UR5e, calibrated here --
+    not a UR3: the robot, the limits and the poses it checks are that arm's."""
+    from dqlab.ur import ControllerStandIn, pose_from_transform
+    from dqlab.ur.calibration import CalibrationConf
+
+    factory = CalibrationConf((0, 1e-3, 0, 0, 0, 0), (0, -5e-4, 0, 0, 0, 0), (0.0,) * 6,
+                              (0.0,) * 6)
+    q = np.array([0.4, -1.3, 1.1, -1.2, -1.4, 0.6])
+    with ControllerStandIn("ur5e", q0=q, speedup=25, calibration=factory) as standin:
+        with URClient(standin.backend(), poll_interval=0.001) as ur:
+            assert ur.robot.name == "UR5e (calibrated)" and ur.limits.robot is ur.robot
+            assert ur.robot.links[1].theta_offset == 1e-3
+            np.testing.assert_allclose(ur.actual_tcp_pose(),
+                                       pose_from_transform(ur.robot.fk(q)), atol=1e-12)
+            goal = ur.actual_tcp_pose() + [0.02, 0.0, -0.02, 0.0, 0.0, 0.0]
+            np.testing.assert_allclose(ur.movel(goal).tcp_pose, goal, atol=1e-9)
+    arm = KinematicBackend(dqlab.models.ur10e(), clock=StepClock(0.01))
+    assert URClient(arm).robot.name == "UR10e"
+    assert URClient(arm, dqlab.models.ur3()).robot.name == "UR3"      # given: it wins
+
+
+@pytest.mark.parametrize("call, hint", [
+    (lambda ur: ur.movej(np.degrees([0.4, -1.3, 1.1, -1.2, -1.4, 0.6])), "degrees? "),
+    (lambda ur: ur.movel([200.0, -150.0, 300.0, 0.0, 3.14, 0.0]), "millimetres? "),
+    (lambda ur: ur.movel([0.2, -0.15, 0.3, 0.0, 180.0, 0.0]), "degrees? "),
+    (lambda ur: ur.closest_joints([200.0, -150.0, 300.0, 0.0, 3.14, 0.0]), "millimetres? "),
+])
+def test_a_target_in_degrees_or_millimetres_gets_a_hint(call, hint):
+    with _client() as ur:
+        with pytest.raises(UnsafeTargetError, match=hint.replace("?", r"\?")):
+            call(ur)
+        with pytest.raises(UnsafeTargetError) as plain:
+            ur.movej([0.0, -1.5, 0.0, -1.5, 0.0, 5.0])          # radians: a jump of wrist 3
+        assert "degrees?" not in str(plain.value)

@@ -142,7 +142,8 @@ def test_rtde_pause_stops_the_data_packages(standin):
 def test_standin_listens_on_loopback_only(standin):
     conns = psutil.Process(standin.pid).net_connections(kind="inet")
     listening = [c for c in conns if c.status == psutil.CONN_LISTEN]
-    assert {c.laddr.port for c in listening} == {standin.secondary_port, standin.rtde_port}
+    assert {c.laddr.port for c in listening} == {standin.primary_port, standin.secondary_port,
+                                                 standin.rtde_port}
     assert all(c.laddr.ip == "127.0.0.1" for c in conns)
 
 

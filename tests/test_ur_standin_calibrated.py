@@ -81,6 +81,13 @@ def test_a_bad_calibration_is_refused_before_the_stand_in_starts():
         ControllerStandIn(calibration=replace(FACTORY, delta_d=(np.inf,) * 6))
     with pytest.raises(CalibrationError, match="not a UR5e|not a ur5e|the calibrated arm is"):
         ControllerStandIn("ur5e", calibration=replace(FACTORY, delta_a=(0, 0.2, 0, 0, 0, 0)))
+    for bad, name in [(dict(calibration_status=2.7), "calibration.calibration_status"),
+                      (dict(calibration_status=2 ** 32), "calibration.calibration_status"),
+                      (dict(joint_checksum=(2 ** 40,) * 6), r"calibration.joint_checksum\[0\]"),
+                      (dict(joint_checksum=(1,) * 5), "calibration.joint_checksum")]:
+        with pytest.raises(ValueError, match=f"^{name} must be"):          # no process
+            ControllerStandIn("ur5e", calibration=replace(FACTORY, **bad))
+    assert psutil.Process().children(recursive=True) == []
 
 
 def test_calibrated_stand_in_serves_its_calibration_and_moves_its_calibrated_arm():

@@ -24,6 +24,12 @@ millimetre, without them the tool is off by millimetres. They can be read in thr
                              send four bytes: the sub-package is 225 bytes long)
    ========================  ==========================================================
 
+   On the edge cases the reader does what UR's Client Library does (its primary parser,
+   ``KinematicsInfo::parseWith``): a sub-package longer than 225 bytes is read and its
+   trailing bytes ignored, with a warning (a newer controller may add fields); a shorter one
+   -- such as a 217-byte variant with a one-byte status -- is refused (the library throws).
+   Unlike the library, dqlab also refuses NaN or infinity in the parameters.
+
    The parameters are the calibrated ones (the published values plus the corrections):
    standard DH, the conventions of :func:`dqlab.models.ur3`. Nearly parallel axes (joints 2,
    3, 4) have their common normals far away, so :math:`d_2, d_3, d_4` may read hundreds of
@@ -41,27 +47,31 @@ millimetre, without them the tool is off by millimetres. They can be read in thr
    each joint (``x, y, z`` and ``roll, pitch, yaw``) and a ``hash`` of the controller's
    parameters (:func:`robot_from_ros_calibration`). The tool moves the far common normals
    back onto the arm, which changes the numbers but not the arm; the DH parameters are read
-   back from the joint axes (:func:`robot_from_joint_origins`), and their hash must equal
-   the file's.
+   back from the joint axes (:func:`robot_from_joint_origins`), and the file's hash must be
+   the hash of *the controller's own* values among the sets that describe the same arm (see
+   :func:`robot_from_ros_calibration`).
 
 Every reader refuses a corrupt or mismatched source with a :class:`CalibrationError` that
 names the source and the field: a missing or malformed field, a wrong length, NaN or
 infinity, a checksum or hash that does not match the one given, or a calibration that does
 not belong to the model given (a calibrated arm is millimetres from its model's nominal one;
-:data:`MODEL_TOLERANCE` is allowed).
+:data:`MODEL_TOLERANCE` is allowed). Every file reader is bounded: at most
+:data:`MAX_FILE_SIZE` bytes, no YAML aliases, at most 16 levels of nesting; an error quotes
+at most a line of what it refuses.
 """
 
 import configparser
+import itertools
 import math
 import socket
 import struct
 import time
+import warnings
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-from .._checks import real_array
+from .._checks import check_path, check_scalar, real_array
 from ..ik import pose_errors
 from ..models import UR_MODELS
 from ..robot import Link, Robot
@@ -74,7 +84,8 @@ __all__ = ["CalibrationError", "KinematicsInfo", "CalibrationConf", "MODEL_TOLER
            "read_kinematics_info", "robot_from_kinematics_info", "read_calibration_conf",
            "robot_from_calibration_conf", "robot_from_corrections",
            "robot_from_joint_origins",
-           "read_ros_calibration", "robot_from_ros_calibration", "ROS_LINKS"]
+           "read_ros_calibration", "robot_from_ros_calibration", "ROS_LINKS", "MAX_FILE_SIZE",
+           "check_identifiers"]
 
 #: Message type of a robot-state message, and sub-package type of the kinematics info.
 ROBOT_STATE, KINEMATICS_INFO = 16, 5
@@ -85,9 +96,10 @@ UNCALIBRATED = 0xFFFFFFFF
 MODEL_TOLERANCE = 0.02
 #: The link names of ``ur_calibration``'s YAML, joints 1 to 6.
 ROS_LINKS = ("shoulder", "upper_arm", "forearm", "wrist_1", "wrist_2", "wrist_3")
+#: The largest calibration file read, bytes (a controller's or ``ur_calibration``'s is about 1 kB).
+MAX_FILE_SIZE = 1 << 16
 
 _BODY = struct.Struct(">6I24dI")                  # 220 bytes: the four-byte status
-_BODY_UINT8 = struct.Struct(">6I24dB")            # 217 bytes: the status as UR's table has it
 _HEADER = struct.Struct(">IB")                    # a sub-package's size and type
 _MESSAGE_HEADER = struct.Struct(">iB")            # a message's size and type
 _MAX_MESSAGE = 1 << 20
@@ -96,6 +108,22 @@ _LIMITS = (-2 * math.pi, 2 * math.pi)
 #: What reading DH parameters back from joint axes may leave (metres and radians): common
 #: normals of nearly parallel axes lie far away, and their feet carry the rounding there.
 _ROUNDING = 1e-9
+#: A value read back from joint axes within this of zero was a zero of the controller's.
+_NEAR_ZERO = 1e-12
+#: How many rewritings of a ur_calibration file's parameters are hashed before giving up.
+_MAX_REWRITINGS = 60_000
+_MAX_DEPTH = 16
+
+
+def _quote(value, limit=60):
+    """``repr(value)`` on one line of at most ``limit`` characters, for error messages."""
+    return _one_line(repr(value), limit)
+
+
+def _one_line(text, limit=200):
+    """``text`` on one line of at most ``limit`` characters, for error messages."""
+    text = " ".join(str(text).split())
+    return text if len(text) <= limit else text[:limit] + " ..."
 
 
 class CalibrationError(ValueError):
@@ -131,9 +159,12 @@ class KinematicsInfo:
     def hash(self) -> str:
         r"""The ``calib_...`` identifier ROS's UR driver gives these parameters.
 
-        :math:`\theta_i, d_i, a_i, \alpha_i` of each joint in turn, printed as C++ prints
-        a double (six significant digits, ``%g``), hashed by the GNU C++ library's
-        ``std::hash<std::string>`` (64-bit MurmurHash2 variant, seed ``0xc70f6907``).
+        UR's Client Library (``KinematicsInfo::toHash``): :math:`\theta_i, d_i, a_i,
+        \alpha_i` of each joint in turn, streamed into a ``std::stringstream`` as C++ prints
+        a double by default (``%g``: six significant digits; ``-0`` for minus zero,
+        ``1e-17`` for a tiny value -- nothing is rounded to zero), hashed by the GNU C++
+        library's ``std::hash<std::string>`` (64-bit MurmurHash2 variant, seed
+        ``0xc70f6907``).
 
         Examples
         --------
@@ -143,15 +174,16 @@ class KinematicsInfo:
         >>> kinematics_info_from_robot(ur5e()).hash
         'calib_12788084448423163542'
         """
-        text = "".join("%g%g%g%g" % (_zero(t), _zero(d), _zero(a), _zero(al))
-                       for t, d, a, al in zip(self.theta, self.d, self.a, self.alpha,
-                                              strict=True))
-        return f"calib_{_std_hash(text.encode())}"
+        return _hash(_hash_text(self.theta, self.d, self.a, self.alpha))
 
 
-def _zero(x):
-    """A value for the hash: within 1e-12 of zero it is zero (C++ prints 0, not 1e-17)."""
-    return 0.0 if abs(x) < 1e-12 else x
+def _hash_text(theta, d, a, alpha):
+    """What ``toHash`` streams: each joint's theta, d, a, alpha as C++ prints a double."""
+    return "".join("%g%g%g%g" % row for row in zip(theta, d, a, alpha, strict=True))
+
+
+def _hash(text):
+    return f"calib_{_std_hash(text.encode())}"
 
 
 def _std_hash(data, seed=0xC70F6907):
@@ -205,12 +237,34 @@ def kinematics_info_from_robot(robot: Robot, *, checksum=(UNCALIBRATED,) * 6,
     if (links is None or robot.convention != "dh" or len(links) != 6
             or not all(lk.is_revolute for lk in links)):
         raise ValueError(f"robot must be six revolute joints in standard DH, got {robot!r}")
-    checksum = tuple(int(c) for c in checksum)
-    if len(checksum) != 6 or not all(0 <= c <= 0xFFFFFFFF for c in checksum):
-        raise ValueError(f"checksum must be six unsigned 32-bit integers, got {checksum}")
+    checksum, calibration_status = check_identifiers(checksum, calibration_status)
     return KinematicsInfo(checksum, *(tuple(getattr(lk, k) for lk in links)
                                       for k in ("theta_offset", "a", "d", "alpha")),
-                          int(calibration_status))
+                          calibration_status)
+
+
+def check_identifiers(checksum, calibration_status, *,
+                      names=("checksum", "calibration_status")):
+    """The joints' checksums (six unsigned 32-bit integers) and the calibration status (one),
+    checked, as a controller sends them: ``ValueError`` naming them (by ``names``) for
+    anything else -- 2.7, a bool, text, a number beyond 32 bits.
+
+    >>> check_identifiers([1, 2, 3, 4, 5, 6], 2)
+    ((1, 2, 3, 4, 5, 6), 2)
+    >>> check_identifiers([1, 2, 3, 4, 5, 6], 2.7)
+    Traceback (most recent call last):
+    ...
+    ValueError: calibration_status must be an integer >= 0 and <= 4.29497e+09, got 2.7
+    """
+    if isinstance(checksum, (str, bytes)) or not hasattr(checksum, "__len__") \
+            or len(checksum) != 6:
+        raise ValueError(f"{names[0]} must be six unsigned 32-bit integers, got "
+                         f"{_quote(checksum)}")
+    checksum = tuple(check_scalar(c, f"{names[0]}[{k}]", minimum=0, maximum=0xFFFFFFFF,
+                                  integer=True) for k, c in enumerate(checksum))
+    status = check_scalar(calibration_status, names[1], minimum=0, maximum=0xFFFFFFFF,
+                          integer=True)
+    return checksum, status
 
 
 def message_from_kinematics_info(info: KinematicsInfo) -> bytes:
@@ -288,16 +342,24 @@ def kinematics_info_from_message(message: bytes, *, source: str = "message"
 
 
 def _decode_body(body, source):
-    layouts = {_BODY.size: _BODY, _BODY_UINT8.size: _BODY_UINT8}
-    if len(body) not in layouts:
-        raise CalibrationError(source, "kinematics info", f"{len(body)} bytes of data, not "
-                               f"{_BODY.size} (or {_BODY_UINT8.size})")
-    values = layouts[len(body)].unpack(body)
+    """The kinematics info's fields, read as UR's Client Library reads them: the 220 bytes of
+    its layout; trailing bytes are ignored with a warning, a shorter body is refused."""
+    if len(body) < _BODY.size:
+        hint = (" (a one-byte calibration status, as UR's table has it: controllers send "
+                "four bytes, and UR's Client Library refuses this too)"
+                if len(body) == _BODY.size - 3 else "")
+        raise CalibrationError(source, "kinematics info", f"{len(body)} bytes of data, fewer "
+                               f"than the {_BODY.size} of its layout{hint}")
+    if len(body) > _BODY.size:
+        warnings.warn(f"{source}: kinematics info: {len(body)} bytes of data, {_BODY.size} "
+                      f"read; the {len(body) - _BODY.size} trailing bytes are ignored (as UR's "
+                      "Client Library does)", stacklevel=3)
+    values = _BODY.unpack_from(body)
     groups = {"dh_theta": values[6:12], "dh_a": values[12:18], "dh_d": values[18:24],
               "dh_alpha": values[24:30]}
     for field, numbers in groups.items():
         if not all(math.isfinite(v) for v in numbers):
-            raise CalibrationError(source, field, f"not finite: {numbers}")
+            raise CalibrationError(source, field, f"not finite: {_quote(numbers)}")
     return KinematicsInfo(tuple(values[:6]), *groups.values(), values[30])
 
 
@@ -323,14 +385,22 @@ def read_kinematics_info(host: str, port: int = 30002, *, timeout: float = 5.0
 
     Raises
     ------
+    TypeError, ValueError
+        Naming ``host``, ``port`` (an int in 1..65535) or ``timeout`` (a finite number of
+        seconds > 0).
     TimeoutError
         If no kinematics info arrives in time.
     CalibrationError
         If a message is malformed.
     """
+    if not isinstance(host, str) or not host.strip():
+        raise TypeError(f"host must be a host name or address (a non-empty str), got "
+                        f"{_quote(host)}")
+    port = check_scalar(port, "port", minimum=1, maximum=65535, integer=True)
+    timeout = check_scalar(timeout, "timeout", minimum=0, strict=True)
     source = f"{host}:{port}"
-    deadline = time.monotonic() + float(timeout)
-    with socket.create_connection((host, int(port)), timeout=timeout) as sock:
+    deadline = time.monotonic() + timeout
+    with socket.create_connection((host, port), timeout=timeout) as sock:
         buffer = b""
         while True:
             while len(buffer) >= _MESSAGE_HEADER.size:
@@ -397,6 +467,9 @@ def robot_from_kinematics_info(info: KinematicsInfo, *, model=None, name: str = 
     ...
     dqlab.ur.calibration.CalibrationError: message: dh_a, dh_d: the calibrated arm is 0.39 m ...
     """
+    _nominal(model, required=False)
+    if not isinstance(info, KinematicsInfo):
+        raise TypeError(f"info must be a KinematicsInfo, got {type(info).__name__}")
     robot = _robot(info.theta, info.a, info.d, info.alpha, model, name)
     _check_model(robot, model, source, "dh_a, dh_d")
     return robot
@@ -405,13 +478,12 @@ def robot_from_kinematics_info(info: KinematicsInfo, *, model=None, name: str = 
 def _robot(theta, a, d, alpha, model, name):
     """The calibrated arm: these DH parameters, and the model's joint limits, rated speeds,
     inertias and joint names (without a model: limits of +-2 pi and nothing else)."""
+    nominal = _nominal(model, required=False)
     label = name or f"{_model_name(model) or 'UR'} (calibrated)"
     ratings = [{"limits": _LIMITS}] * 6
-    if model is not None:
-        nominal = _nominal(model)
-        if len(nominal.links) == 6:
-            ratings = [{"limits": lk.limits, "name": lk.name, "inertia": lk.inertia,
-                        "max_speed": lk.max_speed} for lk in nominal.links]
+    if nominal is not None:
+        ratings = [{"limits": lk.limits, "name": lk.name, "inertia": lk.inertia,
+                    "max_speed": lk.max_speed} for lk in nominal.links]
     return Robot([Link(a=ai, alpha=al, d=di, theta_offset=t, **rating)
                   for t, ai, di, al, rating in zip(theta, a, d, alpha, ratings, strict=True)],
                  convention="dh", name=label)
@@ -431,18 +503,30 @@ def _model_key(name):
     for key in UR_MODELS:
         if key.replace(" ", "").lower() == wanted:
             return key
-    raise ValueError(f"model must be one of {', '.join(UR_MODELS)} or a Robot, got {name!r}")
+    raise ValueError(f"model must be one of {', '.join(UR_MODELS)} or a Robot, got "
+                     f"{_quote(name)}")
 
 
-def _nominal(model):
-    return UR_MODELS[_model_key(model)]() if isinstance(model, str) else model
+def _nominal(model, required=True):
+    """The nominal robot of ``model`` (a name of UR_MODELS or a six-joint standard-DH Robot;
+    None when not ``required``), or ``ValueError`` naming ``model``."""
+    if model is None and not required:
+        return None
+    if isinstance(model, str):
+        return UR_MODELS[_model_key(model)]()
+    if not isinstance(model, Robot):
+        raise ValueError(f"model must be one of {', '.join(UR_MODELS)} or a Robot, got "
+                         f"{_quote(model)}")
+    if model.convention != "dh" or len(model.links) != 6:
+        raise ValueError(f"model must be a six-joint standard-DH robot, got {model!r}")
+    return model
 
 
 def _check_model(robot, model, source, field):
     """Refuse a calibrated arm farther than MODEL_TOLERANCE from the model's nominal one."""
-    if model is None:
+    nominal = _nominal(model, required=False)
+    if nominal is None:
         return
-    nominal = _nominal(model)
     bare = Robot(nominal.links, convention=nominal.convention)
     gap, _ = pose_errors(robot.fk(_SAMPLES), bare.fk(_SAMPLES))
     gap = float(gap.max())
@@ -504,19 +588,24 @@ def read_calibration_conf(path) -> CalibrationConf:
     >>> conf.delta_a[1], conf.joint_checksum, conf.calibration_status
     (0.0005, (1, 2, 3, 4, 5, 6), 2)
     """
-    path = Path(path)
+    path = check_path(path)
+    text = _read_text(path)
+    if text.startswith("\ufeff"):
+        raise CalibrationError(path, "file", "starts with a byte-order mark (U+FEFF), as some "
+                               "editors save UTF-8; a controller writes none: save the file "
+                               "as UTF-8 without BOM")
+    first = next((k for k, line in enumerate(text.splitlines(), 1)
+                  if line.strip() and line.lstrip()[0] not in "#;"), None)
+    if first is not None and not text.splitlines()[first - 1].lstrip().startswith("["):
+        raise CalibrationError(path, "file", f"line {first}: no section header before the "
+                               "first key; a controller's calibration.conf starts with "
+                               "'[mounting]' (was the file copied in part?)")
     parser = configparser.ConfigParser(inline_comment_prefixes=("#", ";"), strict=True,
                                        interpolation=None)
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise CalibrationError(path, "file", str(exc)) from None
-    if not text.lstrip().startswith("["):
-        text = "[mounting]\n" + text
-    try:
         parser.read_string(text, source=str(path))
     except configparser.Error as exc:
-        raise CalibrationError(path, "file", str(exc).splitlines()[0]) from None
+        raise CalibrationError(path, "file", _one_line(str(exc).splitlines()[0])) from None
     section = next((s for s in parser.sections() if parser.has_option(s, "delta_theta")), None)
     if section is None:
         raise CalibrationError(path, "delta_theta", "missing")
@@ -535,10 +624,26 @@ def read_calibration_conf(path) -> CalibrationConf:
     return CalibrationConf(**values, joint_checksum=checksum, calibration_status=status)
 
 
+def _read_text(path):
+    """The text of a calibration file: UTF-8, at most MAX_FILE_SIZE bytes (read no further)."""
+    try:
+        with open(path, "rb") as f:
+            data = f.read(MAX_FILE_SIZE + 1)
+    except OSError as exc:
+        raise CalibrationError(path, "file", _one_line(exc)) from None
+    if len(data) > MAX_FILE_SIZE:
+        raise CalibrationError(path, "file", f"more than {MAX_FILE_SIZE} bytes: not a "
+                               "calibration file (a controller's is about 1 kB)")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise CalibrationError(path, "file", f"not UTF-8 text (byte {exc.start})") from None
+
+
 def _list(text, path, field, convert):
     text = text.strip()
     if not (text.startswith("[") and text.endswith("]")):
-        raise CalibrationError(path, field, f"not a list [ ... ]: {text!r}")
+        raise CalibrationError(path, field, f"not a list [ ... ]: {_quote(text)}")
     items = [item.strip() for item in text[1:-1].split(",")]
     if len(items) != 6:
         raise CalibrationError(path, field, f"{len(items)} values, not 6")
@@ -550,9 +655,9 @@ def _number(text, path, field):
     try:
         value = float(text)
     except ValueError:
-        raise CalibrationError(path, field, f"not a number: {text!r}") from None
+        raise CalibrationError(path, field, f"not a number: {_quote(text)}") from None
     if not math.isfinite(value):
-        raise CalibrationError(path, field, f"not finite: {text!r}")
+        raise CalibrationError(path, field, f"not finite: {_quote(text)}")
     return value
 
 
@@ -560,9 +665,9 @@ def _unsigned(text, path=None, field=None):
     try:
         value = int(text.strip(), 0)
     except ValueError:
-        raise CalibrationError(path, field, f"not an integer: {text!r}") from None
+        raise CalibrationError(path, field, f"not an integer: {_quote(text)}") from None
     if not 0 <= value <= 0xFFFFFFFF:
-        raise CalibrationError(path, field, f"not an unsigned 32-bit integer: {text!r}")
+        raise CalibrationError(path, field, f"not an unsigned 32-bit integer: {_quote(text)}")
     return value
 
 
@@ -607,9 +712,11 @@ def robot_from_calibration_conf(path, model, *, checksum=None, name: str = "") -
     >>> robot_from_calibration_conf(path, "UR5e").links[1].a
     -0.426
     """
+    _nominal(model)
+    if checksum is not None:
+        wanted, _ = check_identifiers(checksum, 0)
     conf = read_calibration_conf(path)
     if checksum is not None:
-        wanted = tuple(int(c) for c in checksum)
         if conf.joint_checksum != wanted:
             raise CalibrationError(path, "joint_checksum", f"{conf.joint_checksum} in the "
                                    f"file, {wanted} expected: another robot's calibration")
@@ -663,6 +770,7 @@ def robot_from_corrections(corrections: CalibrationConf, model, *, name: str = "
     if not isinstance(corrections, CalibrationConf):
         raise TypeError(f"corrections must be a CalibrationConf, got "
                         f"{type(corrections).__name__}")
+    _nominal(model)
     deltas = {}
     for field in _DELTAS:
         try:
@@ -674,10 +782,7 @@ def robot_from_corrections(corrections: CalibrationConf, model, *, name: str = "
             raise CalibrationError(source, field, f"must be 6 finite numbers, got "
                                    f"{values.tolist()}")
         deltas[field] = values.tolist()
-    nominal = _nominal(model)
-    links = nominal.links
-    if len(links) != 6 or nominal.convention != "dh":
-        raise ValueError(f"model must be a six-joint standard-DH robot, got {nominal!r}")
+    links = _nominal(model).links
     theta = [lk.theta_offset + dt for lk, dt in zip(links, deltas["delta_theta"], strict=True)]
     a = [lk.a + da for lk, da in zip(links, deltas["delta_a"], strict=True)]
     d = [lk.d + dd for lk, dd in zip(links, deltas["delta_d"], strict=True)]
@@ -818,6 +923,32 @@ class _RosCalibration:
     hash: str
 
 
+def _bounded_loader(yaml):
+    """PyYAML's safe loader without aliases and nested at most _MAX_DEPTH levels: a
+    ur_calibration file is a flat mapping, and an alias lets a few bytes expand into
+    billions of values (the "billion laughs")."""
+
+    class BoundedLoader(yaml.SafeLoader):
+        depth = 0
+
+        def compose_node(self, parent, index):
+            if self.check_event(yaml.AliasEvent):
+                raise yaml.composer.ComposerError(
+                    None, None, "YAML aliases (*name) are not allowed in a calibration file",
+                    self.peek_event().start_mark)
+            self.depth += 1
+            try:
+                if self.depth > _MAX_DEPTH:
+                    raise yaml.composer.ComposerError(
+                        None, None, f"nested deeper than {_MAX_DEPTH} levels",
+                        self.peek_event().start_mark)
+                return super().compose_node(parent, index)
+            finally:
+                self.depth -= 1
+
+    return BoundedLoader
+
+
 def read_ros_calibration(path):
     """The joint origins (6, 4, 4) and the hash of a ``ur_calibration`` YAML file.
 
@@ -844,11 +975,13 @@ def read_ros_calibration(path):
     except ImportError:  # pragma: no cover -- PyYAML comes with the test and book extras
         raise ImportError("reading a ur_calibration file needs PyYAML: pip install pyyaml"
                           ) from None
-    path = Path(path)
+    path = check_path(path)
+    text = _read_text(path)
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
-        raise CalibrationError(path, "file", str(exc).splitlines()[0]) from None
+        data = yaml.load(text, Loader=_bounded_loader(yaml))
+    except (yaml.YAMLError, RecursionError) as exc:
+        message = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise CalibrationError(path, "file", _one_line(message)) from None
     kinematics = data.get("kinematics") if isinstance(data, dict) else None
     if not isinstance(kinematics, dict):
         raise CalibrationError(path, "kinematics", "missing (not a ur_calibration file)")
@@ -862,26 +995,37 @@ def read_ros_calibration(path):
             value = entry.get(key)
             if isinstance(value, bool) or not isinstance(value, (int, float)):
                 raise CalibrationError(path, f"kinematics.{link}.{key}",
-                                       f"not a number: {value!r}")
-            if not math.isfinite(value):
-                raise CalibrationError(path, f"kinematics.{link}.{key}", f"not finite: {value}")
+                                       f"not a number: {_quote(value)}")
+            if isinstance(value, int) and abs(value) > 1e300 or not math.isfinite(value):
+                raise CalibrationError(path, f"kinematics.{link}.{key}",
+                                       f"not a finite number: {_quote(value)}")
             v[key] = float(value)
         origins[i] = np.eye(4)
         origins[i, :3, :3] = rot_x(v["roll"]) @ rot_y(v["pitch"]) @ rot_z(v["yaw"])
         origins[i, :3, 3] = v["x"], v["y"], v["z"]
     digest = kinematics.get("hash")
     if not isinstance(digest, str) or not digest.startswith("calib_"):
-        raise CalibrationError(path, "kinematics.hash", f"not a calib_... hash: {digest!r}")
+        raise CalibrationError(path, "kinematics.hash",
+                               f"not a calib_... hash: {_quote(digest)}")
     return _RosCalibration(origins, digest)
 
 
 def robot_from_ros_calibration(path, *, model=None, expected_hash: str | None = None,
                                name: str = "") -> Robot:
-    """The calibrated arm of a ``ur_calibration`` YAML file.
+    r"""The calibrated arm of a ``ur_calibration`` YAML file, with the controller's own DH
+    parameters.
 
-    The DH parameters are read back from the joint origins (:func:`robot_from_joint_origins`)
-    and checked against the file's hash: the hash of the controller's parameters, which those
-    read back must reproduce (else the file was edited or damaged).
+    The DH parameters are read back from the joint origins (:func:`robot_from_joint_origins`,
+    which chooses :math:`|\theta_i| \le \pi/2`). Other sets describe the same arm: each
+    common normal :math:`x_i` (:math:`i < 6`) may point the other way
+    (:math:`\theta_i + \pi`, :math:`a_i \to -a_i`, :math:`\alpha_i \to -\alpha_i`,
+    :math:`\theta_{i+1} + \pi`), each :math:`\theta_i` may hold whole turns, and a zero
+    may be :math:`-0`. The controller keeps one of them -- real ones hold
+    :math:`\theta_3 = 6.1968` or :math:`7.129` -- and the file's ``hash`` is the hash of
+    *that* set (:attr:`KinematicsInfo.hash`, as UR's Client Library computes it, no
+    normalisation). The rewritings are searched, the plainest first (fewest flips, smallest
+    :math:`|\theta_i|`, at most :math:`3\pi`), for the one whose hash is the file's: the
+    robot gets those values. None matching means the file was edited or damaged.
 
     Parameters
     ----------
@@ -896,27 +1040,109 @@ def robot_from_ros_calibration(path, *, model=None, expected_hash: str | None = 
     Returns
     -------
     Robot
+        Standard DH with the controller's parameters (its kinematics info, to the digits
+        the file keeps): ``kinematics_info_from_robot(robot).hash`` is the file's hash.
 
     Raises
     ------
     CalibrationError
-        As :func:`read_ros_calibration`; ``kinematics.hash`` when the file's hash does not
-        match its kinematics or ``expected_hash``; the kinematics when they do not fit
-        ``model``.
+        As :func:`read_ros_calibration`; ``kinematics.hash`` when no rewriting of its
+        kinematics has the file's hash, or the hash is not ``expected_hash``; the kinematics
+        when they do not fit ``model``.
     """
+    _nominal(model, required=False)
+    if expected_hash is not None and not isinstance(expected_hash, str):
+        raise TypeError(f"expected_hash must be a str (calib_...), got {_quote(expected_hash)}")
     calibration = read_ros_calibration(path)
     if expected_hash is not None and calibration.hash != expected_hash:
         raise CalibrationError(path, "kinematics.hash", f"{calibration.hash} in the file, "
-                               f"{expected_hash} expected: another robot's calibration")
+                               f"{_quote(expected_hash)} expected: another robot's calibration")
     chain = robot_from_joint_origins(calibration.origins)
     if not chain.bare:
         raise CalibrationError(path, "kinematics.shoulder", "joint 1 does not turn about the "
                                "z axis of the base, as a UR's does")
-    info = kinematics_info_from_robot(chain)
-    if info.hash != calibration.hash:
+    rows = [(lk.theta_offset, lk.d, lk.a, lk.alpha) for lk in chain.links]
+    found = _controller_parameters(rows, calibration.hash)
+    if found is None:
+        read = _hash_text(*zip(*rows, strict=True))
         raise CalibrationError(path, "kinematics.hash", f"{calibration.hash} in the file, but "
-                               f"its kinematics hash to {info.hash}: edited or damaged")
-    robot = _robot(info.theta, info.a, info.d, info.alpha, model, name)
+                               f"no equivalent set of its DH parameters hashes to it (as read: "
+                               f"{_hash(read)}): edited or damaged")
+    theta, d, a, alpha = found
+    robot = _robot(theta, a, d, alpha, model, name)
     _check_model(robot, model, path, "kinematics")
     return robot
 
+
+def _controller_parameters(rows, digest):
+    """The controller's (theta, d, a, alpha), 6 each, among the rewritings of ``rows`` (the
+    parameters read back) that describe the same arm, found by the hash ``digest``; None if
+    no rewriting has it (see :func:`robot_from_ros_calibration`). The rewritings of one set
+    of flips are hashed together (:func:`_std_hash_many`), the plainest set first."""
+    try:
+        wanted = int(digest[len("calib_"):])
+    except ValueError:
+        return None
+    n, tried = len(rows), 0
+    for flips in sorted(itertools.product((0, 1), repeat=n - 1), key=sum):
+        f = (0, *flips, 0)                       # x_0 (the base) and x_n (the flange) stay
+        joints = []
+        for i, (theta, d, a, alpha) in enumerate(rows):
+            sign = -1.0 if f[i + 1] else 1.0
+            thetas = sorted((theta + math.pi * (f[i] + f[i + 1]) + 2 * math.pi * k
+                             for k in range(-2, 3)), key=abs)
+            joints.append([row for t in thetas if abs(t) <= 3 * math.pi + 1e-9
+                           for row in itertools.product(_printed(t), _printed(d),
+                                                        _printed(sign * a),
+                                                        _printed(sign * alpha))])
+        choices = list(itertools.islice(itertools.product(*joints), _MAX_REWRITINGS - tried))
+        texts = ["".join(text for row in choice for text, _ in row).encode()
+                 for choice in choices]
+        hits = np.flatnonzero(_std_hash_many(texts) == np.uint64(wanted))
+        if hits.size:
+            choice = choices[hits[0]]
+            return tuple(tuple(row[k][1] for row in choice) for k in range(4))
+        tried += len(choices)
+        if tried >= _MAX_REWRITINGS:
+            break
+    return None
+
+
+def _printed(value):
+    """How the controller's value may print, as ((text, value), ...), the likeliest first:
+    a value read back within _NEAR_ZERO of zero was a zero (+0: controllers store their zeros
+    so); one next to a rounding boundary of the sixth digit may print either way."""
+    if abs(value) < _NEAR_ZERO:
+        return (("0", 0.0),)
+    out = [("%g" % value, value)]
+    for nearby in (value * (1 - 1e-10), value * (1 + 1e-10)):
+        if all("%g" % nearby != text for text, _ in out):
+            out.append(("%g" % nearby, nearby))
+    return tuple(out)
+
+
+def _std_hash_many(texts, seed=0xC70F6907):
+    """:func:`_std_hash` of many byte strings at once, with numpy's wrapping uint64
+    arithmetic (texts of one length at a time); equal to it, tested."""
+    out = np.zeros(len(texts), dtype=np.uint64)
+    by_length = {}
+    for k, text in enumerate(texts):
+        by_length.setdefault(len(text), []).append(k)
+    mul, r = np.uint64((0xC6A4A793 << 32) + 0x5BD1E995), np.uint64(47)
+    for length, index in by_length.items():
+        data = np.frombuffer(b"".join(texts[k] for k in index), dtype=np.uint8)
+        data = data.reshape(len(index), length)
+        aligned = length & ~7
+        h = np.full(len(index), (seed ^ (length * int(mul))) & ((1 << 64) - 1), np.uint64)
+        words = np.ascontiguousarray(data[:, :aligned]).view("<u8")
+        for j in range(words.shape[1]):
+            v = words[:, j] * mul
+            h = (h ^ ((v ^ (v >> r)) * mul)) * mul
+        if length & 7:
+            tail = np.zeros(len(index), dtype=np.uint64)
+            for b in range(length - aligned):
+                tail |= data[:, aligned + b].astype(np.uint64) << np.uint64(8 * b)
+            h = (h ^ tail) * mul
+        h = (h ^ (h >> r)) * mul
+        out[index] = h ^ (h >> r)
+    return out

@@ -29,7 +29,7 @@ from .poses import check_pose, quaternion_from_rotation_vector
 from .script import UnsafeTargetError, as_safety_limits, check_joint_targets
 from .state import ROBOT_MODE_RUNNING, URState, check_state
 
-__all__ = ["Backend", "URClient"]
+__all__ = ["Backend", "URClient", "robot_and_limits"]
 
 
 class Backend(typing.Protocol):
@@ -66,6 +66,56 @@ def _duration(value, name):
     return value
 
 
+def robot_and_limits(robot, limits):
+    """The arm and the :class:`~dqlab.ur.script.SafetyLimits` of a client or a back end:
+    ``limits`` by :func:`~dqlab.ur.script.as_safety_limits`; ``robot`` as given, else the
+    limits' robot, else :func:`dqlab.models.ur3`. ``TypeError`` naming ``robot`` unless it
+    is a six-joint robot.
+
+    Examples
+    --------
+    >>> from dqlab.models import ur5e
+    >>> robot, limits = robot_and_limits(ur5e(), None)
+    >>> limits.robot.name
+    'UR5e'
+    """
+    limits = as_safety_limits(limits, robot)
+    if robot is None:
+        from ..models import ur3
+
+        robot = limits.robot if limits.robot is not None else ur3()
+    if not hasattr(robot, "fk") or getattr(robot, "n", None) != 6:
+        raise TypeError(f"robot must be a dqlab.robot.Robot with 6 joints, got "
+                        f"{type(robot).__name__}")
+    return robot, limits
+
+
+def _units_hint(target, kind):
+    """What to add to a refusal when the target looks like degrees or millimetres."""
+    try:
+        a = np.asarray(target, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        return ""
+    if a.size != 6 or not np.all(np.isfinite(a)):
+        return ""
+    if kind == "pose":
+        if np.linalg.norm(a[:3]) > 5.0:
+            return " (millimetres? poses are in metres: divide by 1000)"
+        if np.linalg.norm(a[3:]) > 2 * np.pi:
+            return " (degrees? the rotation vector is in radians: np.radians(...))"
+    elif np.max(np.abs(a)) > 2 * np.pi:
+        return " (degrees? joint targets are in radians: np.radians(...))"
+    return ""
+
+
+def _checked(check, target, kind):
+    """Run a script check; a refusal gets the degrees or millimetres hint it deserves."""
+    try:
+        return check()
+    except UnsafeTargetError as exc:
+        raise UnsafeTargetError(f"{exc}{_units_hint(target, kind)}") from None
+
+
 _BACKEND_METHODS = ("connect", "close", "read_state", "movej", "movel", "servoj", "stop")
 
 
@@ -77,9 +127,10 @@ class URClient:
     jump, poses within the robot's reach, and the peaks of the planned motion's joint and TCP
     speeds and accelerations within :class:`~dqlab.ur.script.SafetyLimits`) *before* the back
     end sees it; a refused target raises :class:`~dqlab.ur.script.UnsafeTargetError` and
-    nothing moves. Every state the controller reports is checked too: a NaN, a wrong shape
-    or type raises :class:`~dqlab.ur.state.ControllerError` (it would switch the checks
-    off).
+    nothing moves (with a hint when it looks like degrees or millimetres: joints beyond
+    :math:`2\pi`, a position beyond 5 m). Every state the controller reports is checked
+    too: a NaN, a wrong shape or type raises :class:`~dqlab.ur.state.ControllerError` (it
+    would switch the checks off).
 
     Parameters
     ----------
@@ -88,12 +139,13 @@ class URClient:
         :class:`~dqlab.ur.secondary.SecondaryInterfaceBackend`,
         :class:`~dqlab.ur.rtde_backend.RTDEBackend`, or the MuJoCo back end of ``dqlab.sim``.
     robot : dqlab.robot.Robot, optional
-        The arm's model, for inverse kinematics, reach and the limits (default
-        :func:`dqlab.models.ur3`). Poses are in its base frame (DH frame 0), not in the world
-        frame of ``robot.base``.
+        The arm's model, for inverse kinematics, reach and the limits. Default: the back
+        end's (``backend.robot`` and ``backend.limits``: the stand-in's arm, a calibrated one
+        included), else :func:`dqlab.models.ur3`. Poses are in its base frame (DH frame 0),
+        not in the world frame of ``robot.base``.
     limits : SafetyLimits or array_like of shape (6, 2), optional
-        Default: ``robot``'s (:meth:`~dqlab.ur.script.SafetyLimits.for_robot`), or without a
-        robot the UR3's (see :func:`~dqlab.ur.script.as_safety_limits`).
+        Default: the back end's, or ``robot``'s (:meth:`~dqlab.ur.script.SafetyLimits.for_robot`),
+        or without a robot the UR3's (see :func:`~dqlab.ur.script.as_safety_limits`).
     tol : float
         A joint target is reached when every joint is within ``tol`` rad of it and every
         joint speed below ``tol`` rad/s (a pose: ``tol`` m and rad); >= 0.
@@ -120,15 +172,9 @@ class URClient:
             raise TypeError(f"backend must implement the Backend protocol; "
                             f"{type(backend).__name__} lacks {missing}")
         self.backend = backend
-        self.limits = as_safety_limits(limits, robot)
-        if robot is None:
-            from ..models import ur3
-
-            robot = self.limits.robot if self.limits.robot is not None else ur3()
-        if not hasattr(robot, "fk") or getattr(robot, "n", None) != 6:
-            raise TypeError(f"robot must be a dqlab.robot.Robot with 6 joints, got "
-                            f"{type(robot).__name__}")
-        self.robot = robot
+        if robot is None and limits is None:          # the back end's arm and limits
+            robot, limits = getattr(backend, "robot", None), getattr(backend, "limits", None)
+        self.robot, self.limits = robot_and_limits(robot, limits)
         self.tol = check_tolerance(tol, "tol")
         self.poll_interval = _duration(poll_interval, "poll_interval")
         self.connect_timeout = _duration(connect_timeout, "connect_timeout")
@@ -217,7 +263,8 @@ class URClient:
             If the arm did not reach the target in time (says by how much it missed).
         """
         state = self._running_state("movej")
-        script.movej(q, a=a, v=v, t=t, r=r, limits=self.limits, q_from=state.q)
+        _checked(lambda: script.movej(q, a=a, v=v, t=t, r=r, limits=self.limits,
+                                      q_from=state.q), q, "joints")
         q = check_joint_targets(q, limits=self.limits)
         planned = motion.plan_movej(state.q, q, a, v, t)
         timeout = self._timeout(timeout, planned.duration)
@@ -248,8 +295,8 @@ class URClient:
         URState
         """
         state = self._running_state("movel")
-        script.movel(pose, a=a, v=v, t=t, r=r, limits=self.limits, robot=self.robot,
-                     q_from=state.q)
+        _checked(lambda: script.movel(pose, a=a, v=v, t=t, r=r, limits=self.limits,
+                                      robot=self.robot, q_from=state.q), pose, "pose")
         pose = check_pose(pose)
         planned = motion.plan_movel(self.robot, state.q, pose, a, v, t)
         timeout = self._timeout(timeout, planned.duration)
@@ -273,12 +320,13 @@ class URClient:
         try:
             X = motion.world_transform(self.robot, check_pose(pose, "pose"))
         except ValueError as exc:
-            raise UnsafeTargetError(f"pose: {exc}") from None
+            raise UnsafeTargetError(f"pose: {exc}{_units_hint(pose, 'pose')}") from None
         result = ik.ur(self.robot, X)
         try:
             return ik.closest_solution(result, q_ref, self.limits.joint_limits)
         except ValueError as exc:
-            raise UnsafeTargetError(f"pose {script.urscript_pose(pose)}: {exc}") from None
+            raise UnsafeTargetError(f"pose {script.urscript_pose(pose)}: {exc}"
+                                    f"{_units_hint(pose, 'pose')}") from None
 
     def servoj_stream(self, trajectory, *, lookahead_time=LOOKAHEAD_TIME, gain=GAIN,
                       start_tol=1e-3, timeout=None):

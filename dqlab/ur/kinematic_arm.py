@@ -12,6 +12,7 @@ import math
 import time
 
 from ._args import positive_number
+from .client import robot_and_limits
 from .motion import (
     GAIN,
     LOOKAHEAD_TIME,
@@ -24,7 +25,7 @@ from .motion import (
     Timeline,
     controller_pose,
 )
-from .script import as_safety_limits, check_joint_targets, plan_program
+from .script import check_joint_targets, plan_program
 from .state import HOME, ROBOT_MODE_RUNNING, URState
 
 __all__ = ["StepClock", "KinematicBackend"]
@@ -96,15 +97,7 @@ class KinematicBackend:
     name = "kinematic"
 
     def __init__(self, robot=None, q0=None, *, speedup=1.0, clock=None, limits=None):
-        self.limits = as_safety_limits(limits, robot)
-        if robot is None:
-            from ..models import ur3
-
-            robot = self.limits.robot if self.limits.robot is not None else ur3()
-        if not hasattr(robot, "fk") or getattr(robot, "n", None) != 6:
-            raise TypeError(f"robot must be a dqlab.robot.Robot with 6 joints, got "
-                            f"{type(robot).__name__}")
-        self.robot = robot
+        self.robot, self.limits = robot_and_limits(robot, limits)
         q0 = HOME if q0 is None else q0
         self._q0 = check_joint_targets(q0, limits=self.limits, command="q0")
         self.speedup = positive_number(speedup, "speedup")

@@ -43,7 +43,7 @@ __all__ = ["RTDEError", "RTDEReader", "PROTOCOL_VERSION", "TYPES", "pack", "Pack
            "REQUEST_PROTOCOL_VERSION", "GET_URCONTROL_VERSION", "TEXT_MESSAGE", "DATA_PACKAGE",
            "CONTROL_PACKAGE_SETUP_OUTPUTS", "CONTROL_PACKAGE_SETUP_INPUTS",
            "CONTROL_PACKAGE_START", "CONTROL_PACKAGE_PAUSE", "STATE_VARIABLES",
-           "MAX_PACKAGE_SIZE"]
+           "MAX_PACKAGE_SIZE", "FrameBuffer"]
 
 PROTOCOL_VERSION = 2
 REQUEST_PROTOCOL_VERSION = ord("V")
@@ -99,8 +99,44 @@ def recipe_struct(types):
         raise RTDEError(f"unknown RTDE type {exc.args[0]!r}") from None
 
 
-class PacketBuffer:
-    """Split a byte stream into RTDE packages.
+class FrameBuffer:
+    """Split a byte stream into ``(type, payload)`` frames, each a header -- its size (header
+    included) and its type, packed by ``header`` -- then the payload: the framing of RTDE
+    (:class:`PacketBuffer`) and of the primary and secondary interfaces
+    (:class:`dqlab.ur.secondary.MessageBuffer`).
+
+    A size below the header's or above ``max_size`` raises ``error`` (the stream is then out
+    of step and cannot be trusted).
+
+    Examples
+    --------
+    >>> buf = FrameBuffer(struct.Struct(">HB"), 0xFFFF, RTDEError, "package")
+    >>> buf.feed(b"\\x00\\x04S"), buf.feed(b"\\x01")
+    ([], [(83, b'\\x01')])
+    """
+
+    def __init__(self, header, max_size, error, what):
+        self._header, self._max, self._error, self._what = header, max_size, error, what
+        self._data = bytearray()
+
+    def feed(self, data):
+        """Add bytes; return the complete frames as ``(type, payload)`` pairs."""
+        self._data += data
+        out = []
+        header = self._header
+        while len(self._data) >= header.size:
+            size, ftype = header.unpack_from(self._data)
+            if not header.size <= size <= self._max:
+                raise self._error(f"{self._what} of impossible size {size}")
+            if len(self._data) < size:
+                break
+            out.append((ftype, bytes(self._data[header.size:size])))
+            del self._data[:size]
+        return out
+
+
+class PacketBuffer(FrameBuffer):
+    """Split a byte stream into RTDE packages (a :class:`FrameBuffer`).
 
     Examples
     --------
@@ -111,21 +147,7 @@ class PacketBuffer:
     """
 
     def __init__(self):
-        self._data = bytearray()
-
-    def feed(self, data):
-        """Add bytes; return the complete packages as ``(type, payload)`` pairs."""
-        self._data += data
-        out = []
-        while len(self._data) >= _HEADER.size:
-            size, ptype = _HEADER.unpack_from(self._data)
-            if size < _HEADER.size:
-                raise RTDEError(f"package of impossible size {size}")
-            if len(self._data) < size:
-                break
-            out.append((ptype, bytes(self._data[_HEADER.size:size])))
-            del self._data[:size]
-        return out
+        super().__init__(_HEADER, MAX_PACKAGE_SIZE, RTDEError, "package")
 
 
 class RTDEReader:

@@ -12,13 +12,16 @@ controller's protocols for the client code of :mod:`dqlab.ur.client` to run unch
   the running one, as on a controller). The whole program is planned and checked first
   (:func:`dqlab.ur.script.plan_program`); a program with anything else in it, or with any
   line the checks refuse, is refused as a whole (a message in
-  :meth:`ControllerStandIn.log`) and nothing moves. On connection it sends what a controller
-  sends: the version message (:mod:`dqlab.ur.secondary`, where its messages are encoded)
-  and a robot state with the arm's kinematics info (:mod:`dqlab.ur.calibration`); the
-  client reads and discards them; :mod:`dqlab.ur.calibration` reads the second. The arm is
-  the model's nominal one (joint checksums ``0xFFFFFFFF``, as the simulator reports), or,
-  with ``calibration=``, the model with a calibration's corrections: then the arm moves,
-  reports its TCP and sends its kinematics info as a calibrated controller does.
+  :meth:`ControllerStandIn.log`) and nothing moves. The **primary interface** (port 30001 on
+  a robot) does the same. On both, as a controller, it sends the version message when a
+  client connects, then a robot state at 10 Hz: robot mode data, joint data, cartesian info
+  and the arm's kinematics info, in the layout of UR's Client Library (URSim 5.8, e-Series;
+  :mod:`dqlab.ur.secondary`, where they are encoded, and :mod:`dqlab.ur.calibration`). A
+  client that does not read misses states (none is queued behind an unsent one) and is never
+  blocked on. The arm is the model's nominal one (joint checksums ``0xFFFFFFFF``, as the
+  simulator reports), or, with ``calibration=``, the model with a calibration's corrections:
+  then the arm moves, reports its TCP and sends its kinematics info as a calibrated
+  controller does.
 - **RTDE output** (port 30004 on a robot; see :mod:`dqlab.ur.rtde`): protocol version
   negotiation (versions 1 and 2), the controller version (reported as 5.11.0.0 by default),
   output recipe set-up, start and pause, and data packages at the requested frequency (at
@@ -55,23 +58,39 @@ from .._checks import real_array
 from . import rtde
 from ._args import positive_number
 from .calibration import (
+    ROBOT_STATE,
     CalibrationConf,
+    check_identifiers,
     kinematics_info_from_robot,
     message_from_kinematics_info,
     robot_from_corrections,
 )
 from .kinematic_arm import KinematicBackend
-from .secondary import SecondaryInterfaceBackend, version_message
+from .poses import pose_from_transform
+from .secondary import (
+    CartesianInfo,
+    JointData,
+    RobotModeData,
+    SecondaryInterfaceBackend,
+    pack_cartesian_info,
+    pack_joint_data,
+    pack_message,
+    pack_robot_mode_data,
+    version_message,
+)
 from .state import HOME
 
 __all__ = ["ControllerStandIn", "SERVED_VARIABLES", "ZERO_VARIABLES", "parse_urscript",
-           "MAX_PROGRAM_SIZE"]
+           "MAX_PROGRAM_SIZE", "STATE_PERIOD"]
 
 LOOPBACK = "127.0.0.1"
 
 #: Longest URScript text the stand-in holds for one client, bytes; a client that sends more
 #: without completing a program is dropped (with a message in the log).
 MAX_PROGRAM_SIZE = 1 << 20
+
+#: Period of the robot-state stream of the primary and secondary interfaces, s (10 Hz).
+STATE_PERIOD = 0.1
 
 #: RTDE outputs the stand-in serves with the arm's state: name -> (RTDE type, value from the
 #: arm's URState)
@@ -215,7 +234,7 @@ def parse_urscript(text):
 
 
 class ControllerStandIn:
-    """Start and stop a local stand-in for a UR controller (see the module docstring).
+    r"""Start and stop a local stand-in for a UR controller (see the module docstring).
 
     Use it as a context manager; inside, :meth:`backend` gives a
     :class:`~dqlab.ur.secondary.SecondaryInterfaceBackend` connected to it.
@@ -228,7 +247,7 @@ class ControllerStandIn:
         Initial joints, rad (default :data:`dqlab.ur.state.HOME`).
     speedup : float
         Simulated seconds per real second.
-    secondary_port, rtde_port : int
+    primary_port, secondary_port, rtde_port : int
         0 (default): an ephemeral port chosen by the system.
     controller_version : tuple of 4 int
         Reported over RTDE.
@@ -248,7 +267,7 @@ class ControllerStandIn:
     ----------
     host : str
         Always ``"127.0.0.1"``.
-    secondary_port, rtde_port : int
+    primary_port, secondary_port, rtde_port : int
         The ports it listens on (once started).
 
     Examples
@@ -276,6 +295,7 @@ class ControllerStandIn:
     host = LOOPBACK
 
     def __init__(self, model="ur3", q0=None, *, speedup=1.0, secondary_port=0, rtde_port=0,
+                 primary_port=0,
                  controller_version=(5, 11, 0, 0), start_timeout=30.0, calibration=None):
         from .. import models
 
@@ -303,11 +323,12 @@ class ControllerStandIn:
             calibration = _served_calibration(calibration)
         self._config = {"model": model, "q0": q0.tolist(), "calibration": calibration,
                         "speedup": positive_number(speedup, "speedup"),
+                        "primary_port": _port(primary_port, "primary_port"),
                         "secondary_port": _port(secondary_port, "secondary_port"),
                         "rtde_port": _port(rtde_port, "rtde_port"),
                         "controller_version": [int(v) for v in version]}
         self.start_timeout = positive_number(start_timeout, "start_timeout")
-        self.secondary_port = self.rtde_port = None
+        self.primary_port = self.secondary_port = self.rtde_port = None
         self._proc = None
         self._log_file = None
         self._log_text = ""
@@ -339,8 +360,9 @@ class ControllerStandIn:
             stdout=subprocess.PIPE, stderr=self._log_file, env=env)
         try:
             line = self._read_ready()
-            _, sec, rt = line.split()
-            self.secondary_port, self.rtde_port = int(sec), int(rt)
+            _, primary, secondary, rt = line.split()
+            self.primary_port, self.secondary_port, self.rtde_port = (
+                int(primary), int(secondary), int(rt))
         except Exception as exc:
             self.stop()
             raise RuntimeError(f"the stand-in did not start ({exc}); its log:\n"
@@ -411,16 +433,21 @@ class ControllerStandIn:
         self.stop()
 
     def backend(self, **kwargs):
-        """A :class:`~dqlab.ur.secondary.SecondaryInterfaceBackend` for this stand-in (for its arm:
-        ``robot`` defaults to the stand-in's model; other arguments are passed on)."""
+        """A :class:`~dqlab.ur.secondary.SecondaryInterfaceBackend` for this stand-in, for its
+        arm: ``robot`` defaults to the stand-in's (the model, with its calibration if it has
+        one), which :class:`~dqlab.ur.client.URClient` then takes; other arguments are passed
+        on."""
         if not self.running:
             raise RuntimeError("the stand-in is not running")
         if "robot" not in kwargs:
-            from .. import models
-
-            kwargs["robot"] = getattr(models, self._config["model"])()
+            kwargs["robot"] = self.robot
         return SecondaryInterfaceBackend(self.host, self.secondary_port,
                                          rtde_port=self.rtde_port, **kwargs)
+
+    @property
+    def robot(self):
+        """The stand-in's arm, as a :class:`~dqlab.robot.Robot` (built on each call)."""
+        return _arm_robot(self._config)
 
 
 # --------------------------------------------------------------------------------------
@@ -521,9 +548,11 @@ def _served_calibration(calibration):
     if checksum is None:
         checksum = [zlib.crc32(struct.pack(">4d", *(served[k][i] for k in served)))
                     for i in range(6)]
-    status = calibration.calibration_status
-    served["joint_checksum"] = [int(c) for c in checksum]
-    served["calibration_status"] = 2 if status is None else int(status)
+    status = 2 if calibration.calibration_status is None else calibration.calibration_status
+    checksum, status = check_identifiers(checksum, status, names=(
+        "calibration.joint_checksum", "calibration.calibration_status"))
+    served["joint_checksum"] = list(checksum)
+    served["calibration_status"] = status
     return served
 
 
@@ -544,18 +573,35 @@ def _arm_robot(config):
                  name=f"{nominal.name} (calibrated)")
 
 
-def _greeting(config, robot):
-    """What the stand-in sends a new client of its secondary interface, as a real controller
-    does: the version message, then a robot state with the arm's kinematics info. (The one
-    place where it encodes that stream's messages, with :mod:`dqlab.ur.secondary` and
-    :mod:`dqlab.ur.calibration`.)"""
+def _kinematics_package(config, robot):
+    """The arm's kinematics-info sub-package (header included): the calibrated parameters,
+    checksums and status with a calibration, else the nominal ones, uncalibrated."""
     calibration = config.get("calibration")
     if calibration is None:
         info = kinematics_info_from_robot(robot)
     else:
         info = kinematics_info_from_robot(robot, checksum=calibration["joint_checksum"],
                                           calibration_status=calibration["calibration_status"])
-    return version_message(config["controller_version"]) + message_from_kinematics_info(info)
+    return message_from_kinematics_info(info)[5:]
+
+
+def _state_message(state, tcp_offset, kinematics, moving):
+    """A robot-state message of the arm's state (a URState): robot mode data, joint data,
+    cartesian info and the kinematics info, as a controller sends them at 10 Hz. (The one
+    place where the stand-in encodes that stream, with :mod:`dqlab.ur.secondary`.)"""
+    mode = RobotModeData(timestamp=int(state.time * 1e6), is_real_robot_connected=True,
+                         is_real_robot_enabled=True, is_robot_power_on=True,
+                         is_emergency_stopped=False, is_protective_stopped=False,
+                         is_program_running=moving, is_program_paused=False,
+                         robot_mode=state.robot_mode, control_mode=0,
+                         target_speed_fraction=1.0, speed_scaling=1.0,
+                         target_speed_fraction_limit=1.0)
+    joints = JointData(q_actual=tuple(state.q), q_target=tuple(state.q),
+                       qd_actual=tuple(state.qd), i_actual=(0.0,) * 6, v_actual=(48.0,) * 6,
+                       t_motor=(30.0,) * 6, t_micro=(30.0,) * 6, joint_mode=(253,) * 6)
+    cartesian = CartesianInfo(tcp_pose=tuple(state.tcp_pose), tcp_offset=tcp_offset)
+    return pack_message(ROBOT_STATE, pack_robot_mode_data(mode) + pack_joint_data(joints)
+                        + pack_cartesian_info(cartesian) + kinematics)
 
 
 def _log(message):
@@ -573,11 +619,13 @@ def _serve(config_json):
     robot = _arm_robot(config)
     arm = KinematicBackend(robot, config["q0"], speedup=config["speedup"])
     arm.connect()
-    greeting = _greeting(config, robot)
+    greeting = version_message(config["controller_version"])
+    kinematics = _kinematics_package(config, robot)
+    tcp_offset = (0.0,) * 6 if robot.tool is None else tuple(pose_from_transform(robot.tool))
     version = tuple(config["controller_version"])
     sel = selectors.DefaultSelector()
     listeners = []
-    for kind in ("secondary", "rtde"):
+    for kind in ("primary", "secondary", "rtde"):
         srv = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         srv.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         srv.bind((LOOPBACK, config[f"{kind}_port"]))
@@ -587,10 +635,13 @@ def _serve(config_json):
         listeners.append(srv)
     control = sys.stdin.buffer.fileno()
     sel.register(control, selectors.EVENT_READ, ("control", None))
-    sys.stdout.write(f"READY {listeners[0].getsockname()[1]} {listeners[1].getsockname()[1]}\n")
+    ports = " ".join(str(srv.getsockname()[1]) for srv in listeners)
+    sys.stdout.write(f"READY {ports}\n")
     sys.stdout.flush()
-    texts = {}      # secondary-interface socket -> text received so far
+    texts = {}      # primary/secondary-interface socket -> text received so far
+    outgoing = {}   # primary/secondary-interface socket -> bytes not yet sent
     streams = {}    # RTDE socket -> _RTDEConnection
+    next_state = time.monotonic()
 
     def drop(sock, why=None):
         if why:
@@ -600,6 +651,7 @@ def _serve(config_json):
         except (KeyError, ValueError):
             pass
         texts.pop(sock, None)
+        outgoing.pop(sock, None)
         streams.pop(sock, None)
         sock.close()
 
@@ -628,33 +680,48 @@ def _serve(config_json):
         if len(buf) > MAX_PROGRAM_SIZE:
             drop(sock, f"script client dropped: {len(buf)} bytes without a complete program")
 
+    def flush(sock):
+        """Send what the socket takes now; listen for writability while bytes are left."""
+        pending = outgoing[sock]
+        try:
+            sent = sock.send(pending) if pending else 0
+        except (BlockingIOError, InterruptedError):
+            sent = 0
+        except OSError:
+            drop(sock)
+            return
+        del pending[:sent]
+        events = selectors.EVENT_READ | (selectors.EVENT_WRITE if pending else 0)
+        sel.modify(sock, events, ("client", "script"))
+
     def accept(listener, kind):
         try:
             conn, _ = listener.accept()
         except (BlockingIOError, InterruptedError):
             return
-        conn.settimeout(2.0)      # a client that stops reading is dropped
         conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        if kind == "secondary":
-            texts[conn] = ""
-            try:
-                conn.sendall(greeting)
-            except OSError:
-                conn.close()
-                texts.pop(conn, None)
-                return
-        else:
+        if kind == "rtde":
+            conn.settimeout(2.0)      # a client that stops reading is dropped
             streams[conn] = _RTDEConnection(conn)
-        sel.register(conn, selectors.EVENT_READ, ("client", kind))
+            sel.register(conn, selectors.EVENT_READ, ("client", kind))
+            return
+        conn.setblocking(False)
+        texts[conn] = ""
+        state = _state_message(arm.read_state(), tcp_offset, kinematics, arm.is_moving)
+        outgoing[conn] = bytearray(greeting + state)
+        sel.register(conn, selectors.EVENT_READ, ("client", "script"))
+        flush(conn)
 
     def receive(sock, kind):
         try:
             data = sock.recv(65536)
+        except (BlockingIOError, InterruptedError):
+            return
         except OSError:
             data = b""
         if not data:
             drop(sock)
-        elif kind == "secondary":
+        elif kind == "script":
             texts[sock] += data.decode("utf-8", errors="replace")
             run_text(sock)
         else:
@@ -669,9 +736,9 @@ def _serve(config_json):
     try:
         while running:
             now = time.monotonic()
-            due = [c.next_due for c in streams.values() if c.started]
-            timeout = max(min(due) - now, 0.0) if due else 0.05
-            for key, _ in sel.select(min(timeout, 0.05)):
+            due = [c.next_due for c in streams.values() if c.started] + [next_state]
+            timeout = min(max(min(due) - now, 0.0), 0.05)
+            for key, events in sel.select(timeout):
                 role, kind = key.data
                 if role == "control":
                     data = os.read(control, 1024)
@@ -679,9 +746,22 @@ def _serve(config_json):
                         running = False
                 elif role == "listen":
                     accept(key.fileobj, kind)
-                elif key.fileobj in texts or key.fileobj in streams:
-                    receive(key.fileobj, kind)
+                else:
+                    if events & selectors.EVENT_WRITE and key.fileobj in outgoing:
+                        flush(key.fileobj)
+                    if events & selectors.EVENT_READ and (key.fileobj in texts
+                                                          or key.fileobj in streams):
+                        receive(key.fileobj, kind)
             now = time.monotonic()
+            if now >= next_state:                 # the 10 Hz robot state, to who can take it
+                next_state = max(next_state + STATE_PERIOD, now)
+                if outgoing:
+                    state = _state_message(arm.read_state(), tcp_offset, kinematics,
+                                           arm.is_moving)
+                    for sock in list(outgoing):
+                        if sock in outgoing and not outgoing[sock]:
+                            outgoing[sock] += state
+                            flush(sock)
             ready = [c for c in streams.values() if c.started and now >= c.next_due]
             if ready:
                 state = arm.read_state()
