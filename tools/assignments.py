@@ -451,11 +451,12 @@ def grade_folder(submissions, set_dir=DEFAULT_OUT, out=None):
         try:
             nb = json.loads(path.read_text(encoding="utf-8"))
         except (OSError, ValueError) as error:
-            graded.append(Graded(student, "?", path, {}, [], f"not a notebook ({error})"))
+            graded.append(Graded(student, "unknown", path, {}, [], f"not a notebook ({error})"))
             continue
         name = _assignment_of(nb, path, list(bundles))
         if name is None:
-            graded.append(Graded(student, "?", path, {}, [], "no assignment of this set"))
+            graded.append(Graded(student, "unknown", path, {}, [],
+                                  "no assignment of this set"))
             continue
         print(f"grading {relative} ({name})", flush=True)
         try:

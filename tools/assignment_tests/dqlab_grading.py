@@ -28,8 +28,8 @@ import numpy as np
 #: Longest a single test may run, in seconds (a student's endless loop must not stop grading).
 TIME_LIMIT = 120
 
-#: Longest message quoted from a failure, in characters.
-MESSAGE_LENGTH = 400
+#: Longest message quoted from a failure, in characters (its first line only).
+MESSAGE_LENGTH = 240
 
 
 def hidden(label, points=1):
@@ -45,7 +45,7 @@ def hidden(label, points=1):
 
 
 def _shorten(text):
-    text = " ".join(str(text).split())
+    text = " ".join(str(text).strip().split("\n")[0].split())
     return text if len(text) <= MESSAGE_LENGTH else text[:MESSAGE_LENGTH - 3] + "..."
 
 
