@@ -253,8 +253,13 @@ def test_grading_a_folder_end_to_end(built, tmp_path, monkeypatch):
     assert rows["carol"]["score"] == "0"
     bob = (folder / "grades" / "feedback" / f"bob-04-{a.name}.md").read_text()
     assert "## ch4-ex1, Inverting without a general inverse: 0 / 3" in bob
-    assert "failed (1 point): automatic check. ch4-ex1: the automatic check fails" in bob
-    assert "ch4-ex2: compose_blocks multiplies the blocks itself" in bob
+    assert "- failed (1 point): ch4-ex1: the automatic check fails at `worst = " in bob
+    assert "- passed (1 point): automatic check\n" in bob
+    copied = ("ch4-ex2: compose_blocks multiplies the blocks itself, not with dqlab.compose: "
+              "no. it calls dqlab.transforms.compose; the exercise asks for your own code")
+    assert f"- failed (1 point): {copied}\n" in bob
+    guide = " ".join((ROOT / "book" / "teaching-guide.md").read_text().split())
+    assert f"`{copied}`" in guide                # the guide quotes this feedback
     assert "not a notebook" in (folder / "grades" / "feedback" / "carol-unknown.md").read_text()
     assert len(graded) == 3
 

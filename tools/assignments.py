@@ -43,7 +43,6 @@ import re
 import shutil
 import sys
 import tempfile
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -157,7 +156,7 @@ def assignment(chapter, hidden=None):
                                                        else ""), 1, False,
                 f"run_check(env, {exercise.label!r}, {check.waiting!r}, CHECK_{k})"))
         tests = hidden.get(exercise.label, [])
-        for test, path in tests:
+        for test, _ in tests:
             what = (test.__doc__ or test.__name__).strip().split("\n")[0]
             graded.tests.append(Test(f"{exercise.label} hidden: {what}",
                                      test.hidden_test["points"], True,
@@ -238,18 +237,33 @@ def test_file(assignment, exercise):
     return "\n".join(parts).rstrip() + "\n"
 
 
-def requirements(pyproject=ROOT / "pyproject.toml"):
-    """What the chapters need installed: the core and CHAPTER_EXTRAS of pyproject.toml."""
+def _declared(pyproject):
+    """``(core, {extra: [requirements]})`` of pyproject.toml, or of the installed dqlab."""
+    try:
+        import tomllib
+    except ModuleNotFoundError:         # Python 3.10: the installed package's metadata
+        from importlib.metadata import requires
+
+        core, extras = [], {}
+        for line in requires("dqlab") or []:
+            requirement, _, marker = (x.strip() for x in line.partition(";"))
+            extra = re.search(r"extra\s*==\s*['\"]([^'\"]+)['\"]", marker)
+            (extras.setdefault(extra[1], []) if extra else core).append(requirement)
+        return core, extras
     project = tomllib.loads(Path(pyproject).read_text(encoding="utf-8"))["project"]
-    wanted, seen, extras = list(project["dependencies"]), set(), list(CHAPTER_EXTRAS)
+    return project["dependencies"], project["optional-dependencies"]
+
+
+def requirements(pyproject=ROOT / "pyproject.toml"):
+    """What the chapters need installed: the core and CHAPTER_EXTRAS of dqlab."""
+    core, declared = _declared(pyproject)
+    wanted, extras = list(core), list(CHAPTER_EXTRAS)
     while extras:
-        extra = extras.pop(0)
-        for requirement in project["optional-dependencies"][extra]:
-            inner = re.fullmatch(r"dqlab\[(.+)\]", requirement)
+        for requirement in declared[extras.pop(0)]:
+            inner = re.fullmatch(r"dqlab\[(.+)\]", requirement.replace(" ", ""))
             if inner:
-                extras += [x.strip() for x in inner[1].split(",")]
-            elif requirement not in seen:
-                seen.add(requirement)
+                extras += inner[1].split(",")
+            else:
                 wanted.append(requirement)
     return list(dict.fromkeys(wanted))
 
@@ -417,13 +431,13 @@ def feedback(graded, exercises=None):
         score, possible = graded.scores[label]
         title = f", {titles[label]}" if label in titles else ""
         lines += [f"## {label}{title}: {score:g} / {possible:g}", ""]
-        for case_label, name, hidden, points, passed, message in graded.cases:
+        for case_label, name, _, points, passed, message in graded.cases:
             if case_label != label:
                 continue
             what = name.split(f"{label} ", 1)[-1]
-            mark = "passed" if passed else "failed"
-            lines.append(f"- {mark} ({points:g} point{'s' if points != 1 else ''}): {what}"
-                         + (f". {message}" if message else ""))
+            worth = f"({points:g} point{'s' if points != 1 else ''})"
+            lines.append(f"- passed {worth}: {what}" if passed else
+                         f"- failed {worth}: {message or what}")
         lines.append("")
     return "\n".join(lines)
 

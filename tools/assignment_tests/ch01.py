@@ -1,7 +1,6 @@
 """Hidden tests of chapter 1, complex numbers and rotations in the plane."""
 
 import numpy as np
-
 from dqlab_grading import agrees, hidden
 
 

@@ -1,9 +1,9 @@
 """Hidden tests of chapter 2, rotations in space."""
 
 import numpy as np
+from dqlab_grading import agrees, hidden
 
 import dqlab
-from dqlab_grading import agrees, hidden
 
 
 @hidden("ch2-ex1")

@@ -1,9 +1,9 @@
 """Hidden tests of chapter 3, quaternions."""
 
 import numpy as np
+from dqlab_grading import agrees, hidden
 
 import dqlab
-from dqlab_grading import agrees, hidden
 
 
 @hidden("ch3-ex1")

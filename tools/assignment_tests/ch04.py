@@ -1,9 +1,9 @@
 """Hidden tests of chapter 4, rigid transformations."""
 
 import numpy as np
+from dqlab_grading import agrees, hidden
 
 import dqlab
-from dqlab_grading import agrees, hidden
 
 
 def _transform(rng):

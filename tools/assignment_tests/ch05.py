@@ -1,9 +1,9 @@
 """Hidden tests of chapter 5, dual quaternions."""
 
 import numpy as np
+from dqlab_grading import agrees, hidden
 
 import dqlab
-from dqlab_grading import agrees, hidden, own_work
 
 
 def _motion(rng):

@@ -1,9 +1,9 @@
 """Hidden tests of chapter 6, describing a manipulator."""
 
 import numpy as np
+from dqlab_grading import agrees, hidden
 
 import dqlab
-from dqlab_grading import agrees, hidden
 
 
 def _elementary(alpha, a, theta, r):

@@ -1,9 +1,9 @@
 """Hidden tests of chapter 7, forward kinematics."""
 
 import numpy as np
+from dqlab_grading import agrees, hidden
 
 import dqlab
-from dqlab_grading import agrees, hidden
 
 #: What computes a pose of the chain for the student: the forward kinematics of dqlab.
 _FK = ("dqlab.robot.Robot.fk", "dqlab.robot.Robot.fk_dq", "dqlab.robot.Robot.fk_dq_screw",

@@ -1,9 +1,9 @@
 """Hidden tests of chapter 8, inverse kinematics."""
 
 import numpy as np
+from dqlab_grading import agrees, hidden
 
 import dqlab
-from dqlab_grading import agrees, hidden
 
 
 def _row0(p):

@@ -1,9 +1,9 @@
 """Hidden tests of chapter 9, differential kinematics."""
 
 import numpy as np
+from dqlab_grading import agrees, hidden
 
 import dqlab
-from dqlab_grading import agrees, hidden
 
 #: Solvers that dls_by_svd must not use (the exercise allows np.linalg.svd only).
 _SOLVERS = ("numpy.linalg.solve", "numpy.linalg.inv", "numpy.linalg.pinv", "numpy.linalg.lstsq",

@@ -1,9 +1,9 @@
 """Hidden tests of chapter 10, trajectories in joint space."""
 
 import numpy as np
+from dqlab_grading import agrees, hidden
 
 from dqlab import trajectory as tr
-from dqlab_grading import agrees, hidden
 
 
 def _quintic_sample(rng):

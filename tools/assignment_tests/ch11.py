@@ -1,7 +1,6 @@
 """Hidden tests of chapter 11, Cartesian paths."""
 
 import numpy as np
-
 from dqlab_grading import agrees, hidden
 
 

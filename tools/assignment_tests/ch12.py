@@ -1,9 +1,9 @@
 """Hidden tests of chapter 12, identification and pick-and-place."""
 
 import numpy as np
+from dqlab_grading import agrees, hidden
 
 from dqlab import identify
-from dqlab_grading import agrees, hidden
 
 
 def _lab_fit(q_lab, p):

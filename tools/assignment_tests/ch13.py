@@ -1,9 +1,9 @@
 """Hidden tests of chapter 13, programming a UR3."""
 
 import numpy as np
+from dqlab_grading import agrees, hidden
 
 from dqlab import ur
-from dqlab_grading import agrees, hidden
 
 
 def _rotation(rng, largest=np.pi - 0.01):

@@ -1,10 +1,10 @@
 """Hidden tests of chapter 14, dynamics with dual quaternions."""
 
-import numpy as np
+
+from dqlab_grading import agrees, hidden
 
 import dqlab
 from dqlab import dynamics
-from dqlab_grading import agrees, hidden
 
 
 def _joints(rng):

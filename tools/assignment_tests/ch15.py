@@ -1,9 +1,9 @@
 """Hidden tests of chapter 15, simulating the arm."""
 
-import numpy as np
+
+from dqlab_grading import agrees, hidden
 
 import dqlab
-from dqlab_grading import agrees, hidden
 
 
 @hidden("ch15-ex1")
