@@ -184,7 +184,7 @@ def test_the_bundle_holds_what_the_platform_runs(built):
     text = json.dumps(a.notebook)
     assert "def fk_dual(" not in text and "{solution" not in text
     assert a.notebook["metadata"]["otter"] == {"assignment_name": a.name}
-    assert f"{a.points:g} points are graded automatically" in text
+    assert f"{a.points:g} points are graded automatically;" in text
 
 
 def test_correct_blank_and_wrong_submissions(built, monkeypatch, capsys):

@@ -206,7 +206,8 @@ def _hand_out(student, name, title, exercises):
         "autograder runs the notebook, then the automatic checks and hidden tests: the hidden",
         "tests try your functions on other inputs and check that they compute the answer the",
         "way the exercise asks (with your own code, where it asks for it, not by calling",
-        f"`dqlab` for the answer). {total:g} points are graded automatically:",
+        f"`dqlab` for the answer). {total:g} points are graded automatically; your",
+        "instructor grades the proofs and explanations that the exercises ask for.",
         "", *rows])
     cell = {"cell_type": "markdown", "id": "assignment", "metadata": {}, "source": []}
     editions._set_source(cell, text)

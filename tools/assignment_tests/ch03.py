@@ -6,6 +6,11 @@ from dqlab_grading import agrees, hidden
 import dqlab
 
 
+def _axis_angle(q):
+    axis, angle = dqlab.axis_angle_from_quaternion(q)
+    return np.r_[axis, angle]
+
+
 @hidden("ch3-ex1")
 def hamilton_product_on_new_pairs(hamilton_product):
     """hamilton_product multiplies new pairs, large and small, pure and real"""
@@ -46,18 +51,14 @@ def rotate_is_own_code(rotate):
 
 @hidden("ch3-ex4")
 def axis_angle_near_the_identity_and_the_half_turn(axis_angle):
-    """axis_angle is right for tiny angles, half turns, the identity and negative w"""
-    def reference(q):
-        axis, angle = dqlab.axis_angle_from_quaternion(q)
-        return np.r_[axis, angle]
-
+    """axis_angle is right for tiny angles, nearly half turns, the identity and negative w"""
     def sample(rng):
         n = rng.normal(size=3)
         n /= np.linalg.norm(n)
-        angle = rng.choice([1e-9, 1e-4, np.pi - 1e-6, np.pi, rng.uniform(0, np.pi)])
+        angle = rng.choice([1e-9, 1e-4, np.pi - 1e-6, rng.uniform(0, np.pi)])
         q = np.r_[np.cos(angle / 2), np.sin(angle / 2) * n]
         return (q * rng.choice([-1.0, 1.0]),)
-    agrees(axis_angle, reference, sample, n=100, seed=305, atol=1e-8)
+    agrees(axis_angle, _axis_angle, sample, n=100, seed=305, atol=1e-8)
     for identity in ([1.0, 0, 0, 0], [-1.0, 0, 0, 0]):
         assert np.allclose(axis_angle(np.array(identity)), [1.0, 0, 0, 0]), "at the identity"
 
@@ -65,11 +66,7 @@ def axis_angle_near_the_identity_and_the_half_turn(axis_angle):
 @hidden("ch3-ex4")
 def axis_angle_is_own_code(axis_angle):
     """axis_angle computes the axis and angle itself, not with dqlab"""
-    def reference(q):
-        axis, angle = dqlab.axis_angle_from_quaternion(q)
-        return np.r_[axis, angle]
-
     def sample(rng):
         q = rng.normal(size=4)
         return (q / np.linalg.norm(q),)
-    agrees(axis_angle, reference, sample, n=5, seed=306, forbid=("dqlab",))
+    agrees(axis_angle, _axis_angle, sample, n=5, seed=306, forbid=("dqlab",))
