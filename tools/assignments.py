@@ -161,8 +161,10 @@ def assignment(chapter, hidden=None):
             graded.tests.append(Test(f"{exercise.label} hidden: {what}",
                                      test.hidden_test["points"], True,
                                      f"run_hidden(env, {exercise.label!r}, {test.__name__})"))
-        if tests:
-            graded.source = _module_for(exercise.label, tests, tests[0][1])
+        paths = list(dict.fromkeys(path for _, path in tests))     # usually one file
+        graded.source = "\n\n".join(
+            _module_for(exercise.label, [t for t in tests if t[1] == path], path)
+            for path in paths)
         exercises.append(graded)
     title = editions._title(nb, Path(chapter))
     return Assignment(name, title, Path(chapter), _hand_out(student, name, title, exercises),

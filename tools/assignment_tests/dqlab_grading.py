@@ -64,7 +64,7 @@ def _time_limit(seconds):
     finally:
         if usable:
             signal.setitimer(signal.ITIMER_REAL, 0)
-            signal.signal(signal.SIGALRM, previous)
+            signal.signal(signal.SIGALRM, signal.SIG_DFL if previous is None else previous)
 
 
 def _timeout(signum, frame):
