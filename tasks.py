@@ -16,6 +16,9 @@
                              http://127.0.0.1:8000
     python3 tasks.py clean   remove the build directory
     python3 tasks.py student write solution-free student notebooks and an answer key
+    python3 tasks.py assignments  the autograded assignment set: student notebooks, the
+                             Gradescope autograder zips, tests (grade locally with
+                             'python3 tools/assignments.py grade SUBMISSIONS')
     python3 tasks.py pdf     print the whole book to a PDF (after 'book')
 
 Each task creates the virtual environment ``.venv`` on first use and installs the package
@@ -147,6 +150,12 @@ def task_student():
     run(sys.executable, ROOT / "tools" / "editions.py")
 
 
+def task_assignments():
+    """Build the assignment set (otter-grader) into _build/assignments."""
+    ensure_environment()                     # the test extra brings otter-grader
+    run(PYTHON, ROOT / "tools" / "assignments.py")
+
+
 def task_pdf():
     """Print the single-page build to a PDF with headless Chromium."""
     ensure_environment()
@@ -155,7 +164,7 @@ def task_pdf():
 
 TASKS = {"book": task_book, "test": task_test, "fast": task_fast, "lint": task_lint,
          "lab": task_lab, "serve": task_serve, "clean": task_clean,
-         "student": task_student, "pdf": task_pdf}
+         "student": task_student, "assignments": task_assignments, "pdf": task_pdf}
 
 if __name__ == "__main__":
     if len(sys.argv) != 2 or sys.argv[1] not in TASKS:

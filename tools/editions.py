@@ -25,6 +25,7 @@ import copy
 import json
 import re
 import sys
+from dataclasses import dataclass, field
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -36,6 +37,9 @@ _DIRECTIVE = re.compile(r"^(?P<fence>`{3,}|:{3,})\{(?P<name>[a-z-]+)\}\s*(?P<arg
 
 #: The tag of a solution's code cell that is the exercise's automatic check.
 CHECK_TAG = "student-check"
+
+#: The empty cell of the student edition where an exercise's answer goes.
+ANSWER_CELL = "# Exercise {label}: your answer here\n"
 
 
 def chapters(book=BOOK):
@@ -70,6 +74,44 @@ class _Exercise:
     def __init__(self, label, title, statement):
         self.label, self.title, self.statement = label, title, statement
         self.solution = []           # ("markdown" | "code", text)
+        self.checks = []             # the automatic checks (Check), in the order of the notebook
+        self.answer = []             # the solution's code cells that are not checks
+
+    @property
+    def reference_answer(self):
+        """The solution's code (its check cells left out): what a correct answer cell holds."""
+        return "\n\n".join(code.strip() for code in self.answer if code.strip())
+
+
+@dataclass
+class Check:
+    """One automatic check of an exercise.
+
+    ``waiting`` are the student's names it tests, ``setup`` the lines it runs first (imports,
+    samplers, references) and ``body`` the check itself. :meth:`cell` is the cell of the student
+    edition, which runs the body only once the names are defined; :meth:`code` is the same check
+    without that guard, as a grader runs it.
+    """
+
+    label: str
+    waiting: list = field(default_factory=list)
+    setup: list = field(default_factory=list)
+    body: str = ""
+
+    def cell(self):
+        lines = [f"# Automatic check of exercise {self.label}: run it once you have defined "
+                 + ", ".join(f"`{n}`" for n in self.waiting) + " above."]
+        lines += self.setup
+        condition = " and ".join(f'"{n}" in globals()' for n in self.waiting) or "True"
+        lines.append(f"if {condition}:")
+        lines += ["    " + x if x.strip() else x for x in self.body.split("\n")]
+        lines.append("else:")
+        lines.append(f'    print("exercise {self.label}: define '
+                     + ", ".join(self.waiting) + ' above, then run this cell again")')
+        return "\n".join(lines)
+
+    def code(self):
+        return "\n".join(self.setup + [self.body])
 
 
 def _split_markdown(text, state, exercises):
@@ -141,7 +183,7 @@ def _is_check(statement):
 
 
 def auto_check(code, label, asked):
-    """The student's automatic check, built from a solution cell (None if it has none).
+    """The automatic check (a :class:`Check`) built from a solution cell, None if it has none.
 
     The check keeps the solution's imports, the ``check_function`` calls, the helpers they
     use (samplers, references) and the asserts on their results; it leaves out every
@@ -184,17 +226,11 @@ def auto_check(code, label, asked):
     after = [s for s in body[checks[-1] + 1:]
              if isinstance(s, ast.Assert) and _names(s) <= results | {"np", "abs", "len"}]
     waiting_for = [n for n in student if any(n in _names(body[k].value) for k in checks)]
-    lines = [f"# Automatic check of exercise {label}: run it once you have defined "
-             + ", ".join(f"`{n}`" for n in waiting_for) + " above."]
-    lines += [ast.unparse(s) for s in setup]
-    condition = " and ".join(f'"{n}" in globals()' for n in waiting_for) or "True"
-    lines.append(f"if {condition}:")
+    lines = []
     for statement in [body[k] for k in checks] + after:
-        lines += ["    " + x for x in ast.unparse(statement).split("\n")]
-    lines.append("else:")
-    lines.append(f'    print("exercise {label}: define '
-                 + ", ".join(waiting_for) + ' above, then run this cell again")')
-    return "\n".join(lines)
+        lines += ast.unparse(statement).split("\n")
+    return Check(label, waiting_for, [ast.unparse(s) for s in setup], "\n".join(lines))
+
 
 
 def _assigned(tree):
@@ -223,7 +259,7 @@ def is_check_cell(cell):
 
 
 def student_check(code, label, answers):
-    """The student's version of a ``student-check`` cell.
+    """The :class:`Check` of a ``student-check`` cell.
 
     ``answers`` are the names the exercise's removed solution cells bound; the check waits
     for those it reads and never binds itself (the student's answer: a check cell reads the
@@ -231,15 +267,8 @@ def student_check(code, label, answers):
     """
     tree = ast.parse(code)
     waiting = sorted((_loaded(tree) & answers) - _assigned(tree))
-    lines = [f"# Automatic check of exercise {label}: run it once you have defined "
-             + ", ".join(f"`{n}`" for n in waiting) + " above."]
-    condition = " and ".join(f'"{n}" in globals()' for n in waiting) or "True"
-    lines.append(f"if {condition}:")
-    lines += ["    " + x if x.strip() else x for x in code.rstrip().split("\n")]
-    lines.append("else:")
-    lines.append(f'    print("exercise {label}: define ' + ", ".join(waiting)
-                 + ' above, then run this cell again")')
-    return "\n".join(lines)
+    return Check(label, waiting, [], code.rstrip())
+
 
 
 def split_notebook(nb):
@@ -263,23 +292,44 @@ def split_notebook(nb):
         if exercise is not None:
             exercise.solution.append(("code", code))
         if is_check_cell(cell):
-            cells.append(_code_cell(student_check(code, label, answers.get(label, set()))))
+            check = student_check(code, label, answers.get(label, set()))
+            if exercise is not None:
+                exercise.checks.append(check)
+            cells.append(_code_cell(check.cell()))
             continue
+        if exercise is not None:
+            exercise.answer.append(code)
         try:
             answers.setdefault(label, set()).update(_assigned(ast.parse(code)))
         except SyntaxError:
             pass
         asked = set(re.findall(r"`([A-Za-z_][A-Za-z0-9_]*)\(", exercise.statement)) if (
             exercise) else set()
-        if not (cells and _source(cells[-1]) == f"# Exercise {label}: your answer here\n"):
-            cells.append(_code_cell(f"# Exercise {label}: your answer here\n"))
+        if not (cells and _source(cells[-1]) == ANSWER_CELL.format(label=label)):
+            cells.append(_code_cell(ANSWER_CELL.format(label=label)))
         check = auto_check(code, label, asked)
         if check:
-            cells.append(_code_cell(check))
+            if exercise is not None:
+                exercise.checks.append(check)
+            cells.append(_code_cell(check.cell()))
     for k, cell in enumerate(cells):           # cell ids stay unique (nbformat >= 4.5)
         cell["id"] = f"student-{k:03d}"
     student["cells"] = cells
     return student, list(exercises.values())
+
+
+def fill_answers(student, answers):
+    """A copy of a student notebook with ``answers`` (``{label: code}``) in the answer cells.
+
+    The cells of the exercises not in ``answers`` stay empty, as handed out.
+    """
+    filled = copy.deepcopy(student)
+    for cell in filled["cells"]:
+        match = re.fullmatch(re.escape(ANSWER_CELL).replace(r"\{label\}", r"(\S+)"),
+                             _source(cell))
+        if cell["cell_type"] == "code" and match and match[1] in answers:
+            _set_source(cell, answers[match[1]])
+    return filled
 
 
 def parts(book=BOOK):
