@@ -1,5 +1,7 @@
-"""The UR models' inertial parameters and rated joint speeds: one table each
-(models.UR_DYNAMICS, models.UR_MAX_JOINT_SPEED_DEG), carried by every model's links."""
+"""The UR models' inertial parameters, rated joint speeds and torques: one table each
+(models.UR_DYNAMICS, derived from the published models.UR_PHYSICAL_PARAMETERS;
+models.UR_MAX_JOINT_SPEED_DEG; models.UR_MAX_JOINT_TORQUE), carried by every model's links.
+The tables against the published files themselves: tests/test_models_ur_published.py."""
 
 import math
 
@@ -7,14 +9,19 @@ import numpy as np
 import pytest
 
 from dqlab import dynamics, models
-from dqlab.models import UR_DYNAMICS, UR_MAX_JOINT_SPEED_DEG, UR_MODELS
+from dqlab.models import (
+    UR_DYNAMICS,
+    UR_MAX_JOINT_SPEED_DEG,
+    UR_MAX_JOINT_TORQUE,
+    UR_MODELS,
+    UR_PHYSICAL_PARAMETERS,
+)
 from dqlab.ur.script import SafetyLimits
 
-#: What the sources leave out (see the comment above UR_DYNAMICS.update in dqlab.models).
-NO_DYNAMICS = {"UR15", "UR18", "UR8 Long"}
-NO_SPEEDS = {"UR15", "UR8 Long"}
-#: Tensors published for these; the others get the stated cylinders.
-FULL_TENSORS = {"UR10", "UR3", "UR5", "UR10e", "UR12e", "UR16e", "UR20"}
+#: What the sources leave out (see the module docstring of dqlab.models).
+NO_RATINGS = {"UR8 Long"}
+#: Published tensors not taken (the UR30's): those links carry the stated cylinders.
+CYLINDERS = {"UR30"}
 
 #: The UR20's inertia matrices as Universal Robots' page prints them (four decimals, row
 #: major), the independent check of the five-decimal tensors of the table.
@@ -29,37 +36,44 @@ UR20_PAGE = (
 
 
 def test_the_tables_cover_every_model_but_the_unpublished():
-    assert set(UR_DYNAMICS) == set(UR_MODELS) - NO_DYNAMICS
-    assert set(UR_MAX_JOINT_SPEED_DEG) == set(UR_MODELS) - NO_SPEEDS
+    assert set(UR_PHYSICAL_PARAMETERS) == set(UR_DYNAMICS) == set(UR_MODELS)
+    assert set(UR_MAX_JOINT_SPEED_DEG) == set(UR_MAX_JOINT_TORQUE) == set(UR_MODELS) - NO_RATINGS
     assert not hasattr(models, "UR_PUBLISHED_MASSES")           # one table, not two
+    for name, p in UR_PHYSICAL_PARAMETERS.items():
+        assert p["source"].endswith(")") and " @ " in p["source"]        # file @ commit (date)
+        assert name.lower().replace(" ", "") in p["source"]
 
 
 @pytest.mark.parametrize("name", sorted(UR_MODELS))
 def test_every_model_carries_its_table(name):
     robot = UR_MODELS[name]()
-    if name in NO_DYNAMICS:
-        assert all(link.inertia is None for link in robot.links)
-    else:
-        table = UR_DYNAMICS[name]
-        assert [link.inertia.mass for link in robot.links] == list(table["mass"])
-        np.testing.assert_allclose([link.inertia.com for link in robot.links], table["com"],
-                                   rtol=0, atol=1e-15)      # a cylinder's: its ends' midpoint
-        assert ("tensor" in table) == (name in FULL_TENSORS)
-        if "tensor" in table:
-            for link, (ixx, iyy, izz, ixy, ixz, iyz) in zip(robot.links, table["tensor"],
-                                                               strict=True):
-                np.testing.assert_array_equal(
-                    link.inertia.tensor, [[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
-        for link in robot.links:            # a rigid body's tensor, whatever its source
-            moments = np.linalg.eigvalsh(link.inertia.tensor)
-            assert moments.min() > 0 and moments[0] + moments[1] >= moments[2]
-    if name in NO_SPEEDS:
-        assert all(link.max_speed is None for link in robot.links)
+    table = UR_DYNAMICS[name]
+    assert [link.inertia.mass for link in robot.links] == list(table["mass"])
+    np.testing.assert_allclose([link.inertia.com for link in robot.links], table["com"],
+                               rtol=0, atol=1e-15)      # a cylinder's: its ends' midpoint
+    assert ("tensor" in table) == (name not in CYLINDERS)
+    if "tensor" in table:
+        for link, (ixx, iyy, izz, ixy, ixz, iyz) in zip(robot.links, table["tensor"],
+                                                           strict=True):
+            np.testing.assert_array_equal(
+                link.inertia.tensor, [[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+    for link in robot.links:            # a rigid body's tensor, whatever its source
+        moments = np.linalg.eigvalsh(link.inertia.tensor)
+        assert moments.min() > 0 and moments[0] + moments[1] >= moments[2]
+    if name in NO_RATINGS:
+        assert all(link.max_speed is None and link.max_torque is None for link in robot.links)
     else:
         assert [link.max_speed for link in robot.links] == [
             math.radians(v) for v in UR_MAX_JOINT_SPEED_DEG[name]]
+        assert [link.max_torque for link in robot.links] == list(UR_MAX_JOINT_TORQUE[name])
 
 
+def test_the_dh_axes_tensors_are_the_files_numbers():
+    # the e-series and the UR10 state their tensors in the DH axes: the models carry the
+    # files' numbers unchanged (the quarter turns exact)
+    for name, p in UR_PHYSICAL_PARAMETERS.items():
+        if p["rpy"] is models._RPY_DH_AXES and name not in CYLINDERS:
+            assert UR_DYNAMICS[name]["tensor"] == p["tensor"], name
 def test_ur20_tensors_round_to_the_page():
     for row, page in zip(UR_DYNAMICS["UR20"]["tensor"], UR20_PAGE, strict=True):
         ixx, iyy, izz, ixy, ixz, iyz = row
@@ -67,9 +81,11 @@ def test_ur20_tensors_round_to_the_page():
         np.testing.assert_allclose(matrix, page, atol=0.5e-4 + 1e-12)
 
 
-def test_renamed_models_share_their_tables():
-    assert UR_DYNAMICS["UR7e"] is UR_DYNAMICS["UR5e"]
-    assert UR_DYNAMICS["UR12e"] is UR_DYNAMICS["UR10e"]
+def test_renamed_models_share_their_numbers():
+    for new, old in (("UR7e", "UR5e"), ("UR12e", "UR10e")):
+        assert UR_DYNAMICS[new] == UR_DYNAMICS[old]
+        assert UR_MAX_JOINT_SPEED_DEG[new] == UR_MAX_JOINT_SPEED_DEG[old]
+        assert UR_MAX_JOINT_TORQUE[new] == UR_MAX_JOINT_TORQUE[old]
 
 
 def test_safety_limits_of_a_model_are_its_rated_speeds():
@@ -78,9 +94,10 @@ def test_safety_limits_of_a_model_are_its_rated_speeds():
     np.testing.assert_array_equal(limits.joint_limits, models.ur5e().limits)
     np.testing.assert_allclose(SafetyLimits.for_robot(models.ur20()).max_joint_speed,
                                np.radians([120, 120, 150, 210, 210, 210]), rtol=1e-15)
-    with pytest.raises(ValueError, match=r"UR15 has no rated speed for joints \[1, 2, 3, 4, 5, "
-                                         r"6\]"):
-        SafetyLimits.for_robot(models.ur15())
+    np.testing.assert_array_equal(limits.max_joint_torque, [150, 150, 150, 28, 28, 28])
+    with pytest.raises(ValueError, match=r"UR8 Long has no rated speed for joints \[1, 2, 3, 4, "
+                                         r"5, 6\]"):
+        SafetyLimits.for_robot(models.ur8_long())
 
 
 def test_heavier_model_needs_more_shoulder_torque_to_hold_the_arm_out():
@@ -88,9 +105,13 @@ def test_heavier_model_needs_more_shoulder_torque_to_hold_the_arm_out():
     the arm stretched out horizontally is the arm's moment about the shoulder axis."""
     q = np.array([0.0, 0.0, 0.0, -np.pi / 2, 0.0, 0.0])
     torque = {name: abs(dynamics.gravity_torques(UR_MODELS[name](), q)[1])
-              for name in ("UR3e", "UR5e", "UR10e", "UR16e", "UR20", "UR30")}
+              for name in ("UR3e", "UR5e", "UR10e", "UR16e", "UR20", "UR30", "UR15", "UR18",
+                           "UR8 Long")}
     assert torque["UR3e"] < torque["UR5e"] < torque["UR16e"] < torque["UR10e"] < torque["UR20"]
     assert torque["UR30"] < torque["UR20"]          # the same shoulder, shorter tubes
+    assert torque["UR18"] < torque["UR15"] < torque["UR8 Long"]     # one shoulder, three reaches
+    for name, tau in torque.items():                # and each holds itself within its rating
+        assert tau < UR_MAX_JOINT_TORQUE.get(name, (np.inf,) * 6)[1], name
     # the UR5e by hand: sum of m_i g times the horizontal distance of each centre of mass
     robot = models.ur5e()
     frames = robot.fk(q, all_frames=True)

@@ -411,7 +411,8 @@ def _robot(theta, a, d, alpha, model, name):
         nominal = _nominal(model)
         if len(nominal.links) == 6:
             ratings = [{"limits": lk.limits, "name": lk.name, "inertia": lk.inertia,
-                        "max_speed": lk.max_speed} for lk in nominal.links]
+                        "max_speed": lk.max_speed, "max_torque": lk.max_torque}
+                       for lk in nominal.links]
     return Robot([Link(a=ai, alpha=al, d=di, theta_offset=t, **rating)
                   for t, ai, di, al, rating in zip(theta, a, d, alpha, ratings, strict=True)],
                  convention="dh", name=label)
