@@ -77,11 +77,14 @@ def test_movej_refuses_bad_targets(q, words):
 
 def test_wrist_3_is_unlimited_on_the_ur3_but_not_for_a_model_with_limits():
     assert S.movej([0, 0, 0, 0, 0, 20.0]).startswith("movej(")
-    limits = S.SafetyLimits.for_robot(dqlab.models.ur3())
+    for model in (dqlab.models.ur3, dqlab.models.ur3e):      # the data sheets' "infinite"
+        limits = S.SafetyLimits.for_robot(model())
+        assert S.movej([0, 0, 0, 0, 0, 20.0], limits=limits).startswith("movej(")
+    limits = S.SafetyLimits.for_robot(dqlab.models.ur5())
     with pytest.raises(UnsafeTargetError, match="joint 6 = 20 rad is outside"):
         S.movej([0, 0, 0, 0, 0, 20.0], limits=limits)
     with pytest.raises(ValueError, match="joint 6 = 20 rad is outside"):       # robot.limits
-        S.movej([0, 0, 0, 0, 0, 20.0], limits=dqlab.models.ur3().limits)
+        S.movej([0, 0, 0, 0, 0, 20.0], limits=dqlab.models.ur5().limits)
 
 
 @pytest.mark.parametrize("kwargs, words", [

@@ -24,9 +24,12 @@ frames).
 **Safety.** No text is produced for a target that is NaN, infinite or complex, a joint
 outside the robot's limits, a pose out of the arm's reach, a joint jump between successive
 targets larger than ``max_joint_step``, or a motion whose speeds or accelerations exceed the
-stated limits (:class:`SafetyLimits`). Speeds and accelerations are checked on the motion
-the controller executes, planned by :mod:`dqlab.ur.motion` -- its peaks, not its averages:
-``movej(t=1)`` over 3 rad peaks at 6 rad/s, not 3. Each refusal is an
+stated limits (:class:`SafetyLimits`), or whose joint torques -- the inverse dynamics of the
+arm with its stated payload along the motion -- exceed the joints' rated torques. Speeds and
+accelerations are checked on the motion the controller executes, planned by
+:mod:`dqlab.ur.motion` -- its peaks, not its averages: ``movej(t=1)`` over 3 rad peaks at
+6 rad/s, not 3; torques on the same motion sampled every servo period and on either side of
+every change of acceleration (:meth:`dqlab.ur.motion.Motion.samples`). Each refusal is an
 :class:`UnsafeTargetError` (a ``ValueError``) that names the command, the target and the
 reason; an argument of the wrong type is a ``TypeError`` that names it. These checks are the
 client's first line of defence; the controller's own safety system (joint and TCP limits set
@@ -43,18 +46,21 @@ receives exactly the float that was checked.
 import keyword
 import math
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 
-from .._checks import real_array
-from ..models import UR_MAX_JOINT_SPEED_DEG
+from .._checks import as_float_array, real_array
+from ..dynamics import NewtonEuler, inverse_dynamics, with_payload
+from ..models import UR_MAX_JOINT_SPEED_DEG, UR_MAX_JOINT_TORQUE
 from . import motion
 from ._args import real_number
 from .motion import GAIN, LOOKAHEAD_TIME, MOVEJ_A, MOVEJ_V, MOVEL_A, MOVEL_V, SERVOJ_T, STOPJ_A
 from .poses import check_pose, transform_from_pose
 
 __all__ = [
-    "UR3_JOINT_LIMITS", "UR3_MAX_JOINT_SPEED", "SafetyLimits", "UnsafeTargetError",
+    "UR3_JOINT_LIMITS", "UR3_MAX_JOINT_SPEED", "UR3_MAX_JOINT_TORQUE", "SafetyLimits",
+    "UnsafeTargetError",
     "as_safety_limits", "check_joint_targets", "check_motion", "movej", "movel", "servoj",
     "stopj", "program_from_trajectory", "check_trajectory", "plan_command", "plan_program",
     "urscript_list", "urscript_pose", "URSCRIPT_KEYWORDS",
@@ -66,6 +72,19 @@ UR3_JOINT_LIMITS = np.array([[-2 * np.pi, 2 * np.pi]] * 5 + [[-np.inf, np.inf]])
 #: UR3 maximum joint speeds, rad/s: 180 deg/s (base, shoulder, elbow), 360 deg/s (wrists),
 #: :data:`dqlab.models.UR_MAX_JOINT_SPEED_DEG`.
 UR3_MAX_JOINT_SPEED = np.radians(UR_MAX_JOINT_SPEED_DEG["UR3"])
+
+#: UR3 rated joint torques, N m: 56 (base, shoulder), 28 (elbow), 12 (wrists),
+#: :data:`dqlab.models.UR_MAX_JOINT_TORQUE`.
+UR3_MAX_JOINT_TORQUE = np.array(UR_MAX_JOINT_TORQUE["UR3"])
+
+#: Longest step between two samples of a planned motion whose torques are checked, s: the
+#: servo period (:meth:`dqlab.ur.motion.Motion.samples`).
+TORQUE_SAMPLE_PERIOD = SERVOJ_T
+
+#: Fewer samples than this are checked one state at a time (:class:`dqlab.dynamics.NewtonEuler`),
+#: more in one batch (:func:`dqlab.dynamics.inverse_dynamics`): the batch costs a fixed few
+#: milliseconds, one state some 35 microseconds (the tests check that both give the same).
+_BATCH_FROM = 256
 
 #: Relative allowance for rounding when a speed or acceleration is compared with its limit
 #: (a motion planned exactly at a limit is not refused for a rounding of its last digit).
@@ -110,6 +129,23 @@ class SafetyLimits:
     robot : dqlab.robot.Robot, optional
         The arm these limits are for: poses are checked for reach and TCP speeds computed
         with it (:meth:`for_robot` sets it).
+    max_joint_torque : ndarray, shape (6,), optional
+        The joints' rated torques, N m (:meth:`for_robot` sets those of the model,
+        :data:`dqlab.models.UR_MAX_JOINT_TORQUE`). With them, every motion's joint torques
+        -- :func:`dqlab.dynamics.inverse_dynamics` of ``robot`` carrying ``payload`` along
+        the motion -- must stay within them at every sample; ``robot`` must then be given and
+        carry inertias. None (the default of a bare ``SafetyLimits()``): torques are not
+        checked.
+    payload : float
+        The payload the arm carries, kg (default 0), as URScript's ``set_payload``.
+    payload_cog : array_like, shape (3,)
+        Its centre of gravity in the flange frame, m (default the flange's centre;
+        :func:`dqlab.dynamics.with_payload`).
+
+    Notes
+    -----
+    The torques are those of ``robot`` as it is when the limits are made (its base sets the
+    direction of gravity); a later change to its base is not seen.
     """
 
     joint_limits: np.ndarray = field(default_factory=lambda: UR3_JOINT_LIMITS.copy())
@@ -119,19 +155,15 @@ class SafetyLimits:
     max_tcp_speed: float = 1.0
     max_tcp_acceleration: float = 5.0
     robot: object = None
+    max_joint_torque: np.ndarray = None
+    payload: float = 0.0
+    payload_cog: tuple = (0.0, 0.0, 0.0)
 
     def __post_init__(self):
         lim = real_array(self.joint_limits, "joint_limits")
         if lim.ndim != 2 or lim.shape[1] != 2 or not np.all(lim[:, 0] <= lim[:, 1]):
             raise ValueError(f"joint_limits must be (n, 2) rows lo <= hi, got {lim!r}")
-        speed = real_array(self.max_joint_speed, "max_joint_speed")
-        try:
-            speed = np.broadcast_to(speed, (len(lim),))
-        except ValueError:
-            raise ValueError(f"max_joint_speed must have {len(lim)} values (one per joint), "
-                             f"got shape {speed.shape}") from None
-        if not np.all((speed > 0) & np.isfinite(speed)):
-            raise ValueError(f"max_joint_speed must be positive and finite, got {speed!r}")
+        speed = _per_joint(self.max_joint_speed, "max_joint_speed", len(lim))
         for key in ("max_joint_acceleration", "max_joint_step", "max_tcp_speed",
                     "max_tcp_acceleration"):
             value = _number(getattr(self, key), key, "SafetyLimits")
@@ -141,27 +173,63 @@ class SafetyLimits:
         if self.robot is not None and getattr(self.robot, "n", None) != len(lim):
             raise ValueError(f"robot must be a Robot with {len(lim)} joints, got "
                              f"{type(self.robot).__name__}")
+        payload = _number(self.payload, "payload", "SafetyLimits")
+        if not (payload >= 0 and math.isfinite(payload)):
+            raise ValueError(f"payload must be a finite number of kg >= 0, got {payload!r}")
+        cog = as_float_array(self.payload_cog, "payload_cog", (3,))
+        if cog.shape != (3,):
+            raise ValueError(f"payload_cog must be one point (3,), got shape {cog.shape}")
+        torque, loaded = self.max_joint_torque, None
+        if torque is not None:
+            torque = _per_joint(torque, "max_joint_torque", len(lim))
+            if self.robot is None:
+                raise ValueError("max_joint_torque needs robot=: the torques are the robot's "
+                                 "inverse dynamics (SafetyLimits.for_robot(robot) gives both)")
+            try:
+                loaded = with_payload(self.robot, payload, cog)
+            except ValueError as exc:
+                raise ValueError(f"max_joint_torque: the torque check needs the robot's "
+                                 f"inertias: {exc}") from None
+        elif payload or cog.any():
+            raise ValueError("payload and payload_cog are only used by the torque check: "
+                             "give max_joint_torque too (SafetyLimits.for_robot fills it)")
         object.__setattr__(self, "joint_limits", lim.copy())
-        object.__setattr__(self, "max_joint_speed", speed.copy())
+        object.__setattr__(self, "max_joint_speed", speed)
+        object.__setattr__(self, "max_joint_torque", torque)
+        object.__setattr__(self, "payload", payload)
+        object.__setattr__(self, "payload_cog", cog.copy())
+        object.__setattr__(self, "_loaded", loaded)      # the robot carrying the payload
+
+    @property
+    def checks_torques(self):
+        """Whether motions are checked against ``max_joint_torque``."""
+        return self.max_joint_torque is not None
+
+    @cached_property
+    def _newton_euler(self):
+        return NewtonEuler(self._loaded)
 
     @classmethod
     def for_robot(cls, robot, **overrides):
-        """The limits of ``robot``: its joint limits and rated joint speeds (the links'
-        ``max_speed``), other values default or given.
+        """The limits of ``robot``: its joint limits, rated joint speeds and torques (the
+        links' ``max_speed`` and ``max_torque``), other values default or given
+        (``payload=``, ``payload_cog=``, ...).
 
         Raises
         ------
         ValueError
-            If a joint of the robot has no rated speed and ``max_joint_speed`` is not given.
+            If a joint of the robot has no rated speed and ``max_joint_speed`` is not given,
+            or only some joints have a rated torque and ``max_joint_torque`` is not given
+            (when none has one, torques are not checked).
 
         Examples
         --------
         >>> from dqlab.models import ur5
-        >>> SafetyLimits.for_robot(ur5()).max_joint_speed.round(4)
+        >>> limits = SafetyLimits.for_robot(ur5(), payload=2.0)
+        >>> limits.max_joint_speed.round(4)
         array([3.1416, 3.1416, 3.1416, 3.1416, 3.1416, 3.1416])
-
-        The UR3 of :func:`dqlab.models.ur3` is modelled with +-2 pi on every joint; the real
-        UR3's wrist 3 turns without limit (the default :class:`SafetyLimits`).
+        >>> limits.max_joint_torque, limits.payload
+        (array([150., 150., 150.,  28.,  28.,  28.]), 2.0)
         """
         links = getattr(robot, "links", None)
         if links is None:
@@ -174,23 +242,45 @@ class SafetyLimits:
                     f"the {robot.name or 'robot'} has no rated speed for joints {missing} "
                     "(Link.max_speed): give max_joint_speed= explicitly")
             overrides["max_joint_speed"] = np.array(speeds)
+        if "max_joint_torque" not in overrides:
+            torques = [getattr(link, "max_torque", None) for link in links]
+            missing = [i + 1 for i, t in enumerate(torques) if t is None]
+            if missing and len(missing) < len(torques):
+                raise ValueError(
+                    f"the {robot.name or 'robot'} has no rated torque for joints {missing} "
+                    "(Link.max_torque): give max_joint_torque= explicitly")
+            overrides["max_joint_torque"] = None if missing else np.array(torques)
         overrides.setdefault("joint_limits", robot.limits)
         return cls(robot=robot, **overrides)
+
+
+def _per_joint(value, name, n):
+    """One positive finite number per joint (a scalar is broadcast), a new array."""
+    a = real_array(value, name)
+    try:
+        a = np.broadcast_to(a, (n,))
+    except ValueError:
+        raise ValueError(f"{name} must have {n} values (one per joint), got shape "
+                         f"{a.shape}") from None
+    if not np.all((a > 0) & np.isfinite(a)):
+        raise ValueError(f"{name} must be positive and finite, got {a!r}")
+    return a.copy()
 
 
 def as_safety_limits(limits, robot=None):
     """``limits`` as :class:`SafetyLimits`.
 
     ``None``: the limits of ``robot`` (:meth:`SafetyLimits.for_robot`), or without a robot the
-    UR3's (:class:`SafetyLimits` with :func:`dqlab.models.ur3` as its robot); a
+    UR3's (:class:`SafetyLimits` with :func:`dqlab.models.ur3` as its robot and its rated
+    torques, :data:`UR3_MAX_JOINT_TORQUE`); a
     ``SafetyLimits`` as it is (with ``robot`` if it has none); joint limits of shape (n, 2)
     such as ``robot.limits``: those, with the other limits of ``robot`` (or the UR3's
     defaults).
 
     Examples
     --------
-    >>> from dqlab.models import ur3
-    >>> as_safety_limits(ur3().limits).joint_limits[5]
+    >>> from dqlab.models import ur5
+    >>> as_safety_limits(ur5().limits).joint_limits[5]
     array([-6.28318531,  6.28318531])
     """
     if isinstance(limits, SafetyLimits):
@@ -200,7 +290,7 @@ def as_safety_limits(limits, robot=None):
         if robot is None:
             from ..models import ur3
 
-            return SafetyLimits(robot=ur3())
+            return SafetyLimits(robot=ur3(), max_joint_torque=UR3_MAX_JOINT_TORQUE)
         return SafetyLimits.for_robot(robot)
     if robot is None:
         return SafetyLimits(joint_limits=limits)
@@ -214,12 +304,28 @@ def _fmt(x):
 def urscript_list(q):
     """A joint vector as URScript writes it: ``[q1, q2, ...]``.
 
+    Raises
+    ------
+    UnsafeTargetError
+        For NaN or infinity (URScript has no such number: it would not reach a controller
+        as the number meant).
+
     Examples
     --------
     >>> urscript_list([0, -1.5707963267948966, 0.5])
     '[0.0, -1.5707963267948966, 0.5]'
+    >>> urscript_list([float("nan")] * 6)
+    Traceback (most recent call last):
+    ...
+    dqlab.ur.script.UnsafeTargetError: q holds nan at index 0: URScript has no such number
     """
-    return "[" + ", ".join(_fmt(x) for x in real_array(q, "q").ravel()) + "]"
+    values = real_array(q, "q").ravel()
+    bad = ~np.isfinite(values)
+    if bad.any():
+        k = int(np.argmax(bad))
+        raise UnsafeTargetError(f"q holds {float(values[k])!r} at index {k}: URScript has no such "
+                                "number")
+    return "[" + ", ".join(_fmt(x) for x in values) + "]"
 
 
 def urscript_pose(p):
@@ -411,12 +517,17 @@ def _robot_for(robot, limits, command):
 def check_motion(m, limits, command="movej", t=0.0):
     r"""Check a planned :class:`~dqlab.ur.motion.Motion` against ``limits``: the joints stay
     within their limits all along, and the peaks of its joint speeds and accelerations
-    (and, for ``movel``, of the TCP's speed and acceleration) stay within the limits.
+    (and, for ``movel``, of the TCP's speed and acceleration) stay within the limits; with
+    rated torques (``limits.max_joint_torque``), the joint torques
+    :math:`\tau = M(q)\ddot q + c(q, \dot q) + g(q)` of ``limits.robot`` carrying
+    ``limits.payload``, at every sample of :meth:`~dqlab.ur.motion.Motion.samples` (every
+    servo period, :data:`TORQUE_SAMPLE_PERIOD`, and either side of every change of
+    acceleration), stay within them.
 
     Raises
     ------
     UnsafeTargetError
-        Naming the command, the joint and the peak.
+        Naming the command, the joint and the peak (for a torque, when it comes).
 
     Examples
     --------
@@ -457,6 +568,42 @@ def check_motion(m, limits, command="movej", t=0.0):
         raise UnsafeTargetError(
             f"{command}: TCP acceleration {m.tcp_peak_acceleration:.6g} m/s^2 exceeds "
             f"max_tcp_acceleration = {limits.max_tcp_acceleration:.6g} m/s^2{why}")
+    if limits.checks_torques:
+        t_s, q, qd, qdd = m.samples(TORQUE_SAMPLE_PERIOD)
+        _check_torques(limits, q, qd, qdd,
+                       lambda k: f"{command} ({t_s[k]:.6g} s into the motion)")
+
+
+def _joint_torques(limits, q, qd, qdd):
+    """The joint torques of ``limits``' robot with its payload at the states (N, n): in one
+    batch from :data:`_BATCH_FROM` states on, below one state at a time (faster for few; the
+    same numbers, tested)."""
+    if len(q) >= _BATCH_FROM:
+        return inverse_dynamics(limits._loaded, q, qd, qdd)
+    rnea = limits._newton_euler
+    return np.array([rnea(q[k], qd[k], qdd[k]) for k in range(len(q))]).reshape(q.shape)
+
+
+def _check_torques(limits, q, qd, qdd, describe):
+    """Refuse the states (N, n) if a joint torque exceeds its rating anywhere (NaN fails):
+    the message names the worst joint, its peak torque, the rating and, by ``describe(k)``,
+    the command and when its peak comes."""
+    q, qd, qdd = (np.ascontiguousarray(x, dtype=float) for x in (q, qd, qdd))
+    try:
+        tau = _joint_torques(limits, q, qd, qdd)
+    except ValueError as exc:
+        raise UnsafeTargetError(f"{describe(0)}: the joint torques cannot be computed "
+                                f"({exc})") from None
+    ratio = np.abs(tau) / limits.max_joint_torque
+    bad = ~(ratio <= 1.0 + ROUNDING)
+    if bad.any():
+        k, j = np.unravel_index(int(np.argmax(np.where(bad, np.nan_to_num(ratio, nan=np.inf),
+                                                       -1.0))), ratio.shape)
+        load = (f" with a payload of {limits.payload:g} kg" if limits.payload
+                else " without payload")
+        raise UnsafeTargetError(
+            f"{describe(k)}: joint {j + 1} torque {abs(tau[k, j]):.4g} N m exceeds its rated "
+            f"{limits.max_joint_torque[j]:.4g} N m (the peak of the joint torques{load})")
 
 
 def _movej_args(a, v, t, r, limits):
@@ -705,8 +852,9 @@ def program_from_trajectory(trajectory, *, name="dqlab_trajectory", a=MOVEJ_A, v
     ``max_joint_step``; joint speeds and accelerations (finite differences) within the
     limits, **from the rest where the approach ``movej`` leaves the arm and to the rest at
     the end** (:func:`check_joint_targets` with ``at_rest``); the TCP's speed between
-    samples (of the ``robot``'s forward kinematics) within ``max_tcp_speed``; and, with
-    ``q_from``, the approach ``movej``'s motion. The whole program is refused if one
+    samples (of the ``robot``'s forward kinematics) within ``max_tcp_speed``; the joint
+    torques with the stated payload within the rated ones (:func:`check_trajectory`); and,
+    with ``q_from``, the approach ``movej``'s motion. The whole program is refused if one
     sample fails.
 
     Parameters
@@ -773,9 +921,13 @@ def check_trajectory(trajectory, *, limits=None, robot=None, command="trajectory
     r"""Check a joint trajectory played by ``servoj`` from rest to rest; its times and joints.
 
     The checks of :func:`program_from_trajectory`: :func:`check_joint_targets` with the
-    times and ``at_rest``, and the TCP's speed between samples,
+    times and ``at_rest``, the TCP's speed between samples,
     :math:`\lVert p_{k+1} - p_k \rVert / (t_{k+1} - t_k)` with :math:`p` the TCP position of
-    the ``robot``'s forward kinematics, within ``max_tcp_speed``.
+    the ``robot``'s forward kinematics, within ``max_tcp_speed``, and, with rated torques
+    (``limits.max_joint_torque``), the joint torques of ``limits.robot`` carrying
+    ``limits.payload`` at every sample, with the acceleration the speed check measures there
+    and the speed on either side of it, within them (in one batch of
+    :func:`dqlab.dynamics.inverse_dynamics`).
 
     Parameters
     ----------
@@ -822,7 +974,32 @@ def check_trajectory(trajectory, *, limits=None, robot=None, command="trajectory
             raise UnsafeTargetError(
                 f"{command} target {k + 1} (t = {t[k + 1]:.6g} s): TCP speed {speed[k]:.6g} "
                 f"m/s exceeds max_tcp_speed = {limits.max_tcp_speed:.6g} m/s")
+    if limits.checks_torques:
+        _check_sample_torques(t, q, limits, command)
     return t, q
+
+
+def _check_sample_torques(t, q, limits, command):
+    r"""The joint torques of a trajectory played by ``servoj`` from rest to rest, sampled as
+    its speeds and accelerations are checked and as :func:`plan_program` checks the program
+    that plays it: at each sample :math:`k`, the acceleration
+    :math:`a_k = (v_{k+1} - v_k) / \tfrac12(\Delta t_{k-1} + \Delta t_k)` with the speed
+    before it and the speed after it (:math:`v_{k+1} = (q_{k+1} - q_k) / \Delta t_k`, 0 before
+    the first sample and after the last); between samples, the constant speed without
+    acceleration at both ends of the step."""
+    n, zero = len(q), np.zeros((1, q.shape[1]))
+    if n == 1:
+        _check_torques(limits, q, zero, zero, lambda k: f"{command} target 0 (at rest)")
+        return
+    dt = np.diff(t)
+    v = np.diff(q, axis=0) / dt[:, None]
+    v_before, v_after = np.concatenate([zero, v]), np.concatenate([v, zero])
+    spans = np.concatenate([dt[:1], dt, dt[-1:]])
+    a = (v_after - v_before) / (0.5 * (spans[:-1] + spans[1:]))[:, None]
+    knot = np.concatenate([np.arange(n), np.arange(n), np.arange(n - 1), np.arange(1, n)])
+    _check_torques(limits, q[knot], np.concatenate([v_before, v_after, v, v]),
+                   np.concatenate([a, a, np.zeros_like(v), np.zeros_like(v)]),
+                   lambda k: f"{command} target {knot[k]} (t = {t[knot[k]]:.6g} s)")
 
 
 # --------------------------------------------------------------------------------------
@@ -913,7 +1090,9 @@ def plan_program(commands, *, q_now, qd_now=None, limits=None, robot=None, strea
     servo period: :math:`|\dot q_{next} - \dot q_{prev}| / T` with :math:`T` the mean period
     of the ``servoj`` on either side (the acceleration of a ``servoj`` stream, as
     :func:`check_joint_targets` measures it), from the arm's speed before the first and to
-    rest after the last.
+    rest after the last. With rated torques, the joint torques of every motion
+    (:func:`check_motion`) and of every such change of speed (its acceleration with the
+    speed before and after it) must stay within them.
 
     Any failure refuses the whole program; nothing is returned to run.
 
@@ -1010,3 +1189,11 @@ def _check_junction(v0, before, after, limits):
             f"the joint speeds jump {where}: joint {j + 1} changes by {jump[j]:.6g} rad/s in "
             f"{period:.6g} s, an acceleration of {acc[j]:.6g} rad/s^2 above "
             f"{limits.max_joint_acceleration:.6g} rad/s^2")
+    if limits.checks_torques and period > 0.0:
+        # the acceleration of the change, with the speed before and the speed after it
+        q = after.q_start if after is not None else before.q_end
+        signed = (v1 - v0) / period
+        where = "at the change of speed to rest" if after is None else \
+            "at the change of speed from the previous motion"
+        _check_torques(limits, np.stack([q, q]), np.stack([v0, v1]), np.stack([signed, signed]),
+                       lambda k: where)
