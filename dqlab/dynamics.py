@@ -648,7 +648,17 @@ def with_payload(robot: Robot, mass: float, cog: ArrayLike = (0.0, 0.0, 0.0), *,
     cog = as_float_array(cog, "cog", (3,))
     if cog.shape != (3,):
         raise ValueError(f"cog must be one point of shape (3,), got shape {cog.shape}")
-    sphere = LinkInertia.sphere(mass, cog, radius)
+    sphere = LinkInertia.sphere(mass, np.zeros(3), radius)        # (checks mass and radius)
+    with np.errstate(over="ignore"):
+        moment = sphere.mass * float(cog @ cog)
+    if not math.isfinite(moment):
+        raise ValueError("mass and cog: the payload's moment about the flange, m |cog|^2, "
+                         "overflows")
+    sphere = LinkInertia(sphere.mass, cog, sphere.tensor)
     inertias = list(link_inertias(robot))
-    inertias[-1] = inertias[-1] + sphere
+    try:
+        inertias[-1] = inertias[-1] + sphere
+    except ValueError as exc:
+        raise ValueError(f"mass and cog: the last link with the payload overflows ({exc})"
+                         ) from None
     return with_inertias(robot, inertias)

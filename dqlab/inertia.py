@@ -159,6 +159,9 @@ class LinkInertia:
         """
         mass = _mass(mass)
         radius = _mass(radius, "radius")
+        centre = as_float_array(centre, "centre", (3,))
+        if centre.shape != (3,):
+            raise ValueError(f"centre must be one point of shape (3,), got shape {centre.shape}")
         with np.errstate(over="ignore", invalid="ignore"):
             tensor = 0.4 * mass * (radius * radius) * np.eye(3)
         return cls(mass, centre, _finite_tensor(
@@ -296,12 +299,16 @@ class LinkInertia:
         mass = self.mass + other.mass
         if mass == 0.0:
             return LinkInertia(0.0, self.com)
-        com = (self.mass * self.com + other.mass * other.com) / mass
-        tensor = np.zeros((3, 3))
-        for part in (self, other):
-            d = part.com - com
-            tensor += part.tensor + part.mass * (np.dot(d, d) * np.eye(3) - np.outer(d, d))
-        return LinkInertia(mass, com, tensor)
+        with np.errstate(over="ignore", invalid="ignore"):
+            com = (self.mass * self.com + other.mass * other.com) / mass
+            tensor = np.zeros((3, 3))
+            for part in (self, other):
+                d = part.com - com
+                tensor += part.tensor + part.mass * (np.dot(d, d) * np.eye(3) - np.outer(d, d))
+        if not (math.isfinite(mass) and np.all(np.isfinite(com))):
+            raise ValueError("the welded body's mass or centre of mass overflows")
+        return LinkInertia(mass, com, _finite_tensor(
+            tensor, "the welded body (the parts are too heavy or too far apart)"))
 
     def moved(self, X_AB: ArrayLike) -> "LinkInertia":
         r"""The same body described in frame A, when ``self`` describes it in frame B and

@@ -19,10 +19,7 @@ function               convention  source
 Every model is built fresh on each call, so changing its base or tool does not affect
 other users. Units are metres and radians.
 
-.. _ur-model-sources:
-
-The UR models and their sources
--------------------------------
+.. rubric:: The UR models and their sources
 
 Every number a UR model carries is Universal Robots' own, from these publications:
 

@@ -118,3 +118,81 @@ def test_heavier_model_needs_more_shoulder_torque_to_hold_the_arm_out():
     moment = sum(link.inertia.mass * 9.81 * (X[:3, :3] @ link.inertia.com + X[:3, 3])[0]
                  for link, X in zip(robot.links, frames[1:], strict=True))
     assert torque["UR5e"] == pytest.approx(abs(moment), rel=1e-12)
+
+
+# --------------------------------------------------------------------------------------
+# Inertias and payloads: numbers through check_scalar, degenerate bodies refused by name
+
+def test_numbers_are_numbers_not_text_or_booleans():
+    from dqlab.inertia import LinkInertia
+
+    c = [0.1, 0.0, 0.0]
+    robot = models.ur3()
+    for call, name in [(lambda: dynamics.with_payload(robot, "3"), "mass"),
+                       (lambda: dynamics.with_payload(robot, True), "mass"),
+                       (lambda: dynamics.with_payload(robot, 1.0, radius="0.1"), "radius"),
+                       (lambda: LinkInertia("2", c), "mass"),
+                       (lambda: LinkInertia(True, c), "mass"),
+                       (lambda: LinkInertia.sphere(1.0, c).scaled("2"), "factor"),
+                       (lambda: LinkInertia.rod(1.0, [0, 0, 0], c, radius=False), "radius"),
+                       (lambda: models.rod_link_inertias(robot, base_mass="1"), "base_mass"),
+                       (lambda: models.rod_link_inertias(robot, radius=True), "radius")]:
+        with pytest.raises(ValueError, match=rf"^{name} must be a finite number >= 0, got "):
+            call()
+
+
+def test_degenerate_bodies_are_refused_by_name():
+    from dqlab.inertia import LinkInertia
+
+    c = [0.1, 0.0, 0.0]
+    with pytest.raises(ValueError, match=r"a rod of mass 1 kg, length 1e\+200 m .* overflows"):
+        LinkInertia.rod(1.0, [0, 0, 0], [1e200, 0, 0], radius=0.01)
+    with pytest.raises(ValueError, match="start and end are too far apart"):
+        LinkInertia.rod(1.0, [-1e308, 0, 0], [1e308, 0, 0], radius=0.01)
+    with pytest.raises(ValueError, match=r"a sphere of mass 1 kg and radius 1e\+200 m"):
+        LinkInertia.sphere(1.0, c, 1e200)
+    # a tensor of 1e308 is a tensor: checked without overflow (no LinAlgError), and a wrong
+    # one is refused for what it is
+    huge = LinkInertia(1.0, c, np.diag([1e308, 1e308, 1e308]))
+    assert np.isfinite(dynamics.inverse_dynamics(
+        dynamics.with_inertias(models.ur3(), [huge] + [lk.inertia for lk in
+                                                      models.ur3().links[1:]]),
+        np.zeros(6), np.ones(6), np.ones(6))).all()
+    with pytest.raises(ValueError, match="triangle inequality"):
+        LinkInertia(1.0, c, np.diag([1e307, 1e307, 1e308]))
+    # moved() takes rigid transforms only, and names X_AB
+    body = LinkInertia.rod(1.0, [0, 0, 0], [0.2, 0, 0], 0.01)
+    scaled = np.eye(4)
+    scaled[:3, :3] *= 1.001
+    bad_row = np.eye(4)
+    bad_row[3, 2] = 0.1
+    with pytest.raises(ValueError, match=r"the rotation block of X_AB is not orthonormal"):
+        body.moved(scaled)
+    with pytest.raises(ValueError, match=r"X_AB must have bottom row"):
+        body.moved(bad_row)
+    X = np.eye(4)
+    X[:3, :3] = [[0, -1, 0], [1, 0, 0], [0, 0, 1]]
+    np.testing.assert_allclose(body.moved(X).tensor.diagonal(), body.tensor.diagonal()[[1, 0, 2]])
+
+
+def test_a_payload_composes_with_a_tool_in_either_order():
+    robot = models.ur5e()
+    tool = np.eye(4)
+    tool[:3, :3] = [[0, 0, 1], [0, 1, 0], [-1, 0, 0]]
+    tool[:3, 3] = [0.02, 0.0, 0.15]
+    cog = [0.01, -0.02, 0.08]
+    a = dynamics.with_payload(robot, 2.5, cog, radius=0.04).with_tool(tool)
+    b = dynamics.with_payload(robot.with_tool(tool), 2.5, cog, radius=0.04)
+    assert [lk.inertia for lk in a.links] == [lk.inertia for lk in b.links]
+    np.testing.assert_array_equal(a.tool, b.tool)
+    q = np.random.default_rng(7).uniform(-np.pi, np.pi, (5, 6))
+    np.testing.assert_array_equal(dynamics.gravity_torques(a, q), dynamics.gravity_torques(b, q))
+    # the centre of gravity is the flange's, as URScript's set_payload(m, cog): the extra
+    # torques are those of m g at the flange point cog, whatever the tool
+    extra = dynamics.gravity_torques(a, q) - dynamics.gravity_torques(robot, q)
+    X = robot.fk(q)
+    p = np.einsum("kab,b->ka", X[:, :3, :3], cog) + X[:, :3, 3]
+    for k in range(len(q)):
+        J = robot.with_tool(z=0.0).jacobian(q[k])        # flange Jacobian; the point's:
+        J_p = J[:3] - np.cross(p[k] - X[k, :3, 3], J[3:].T).T
+        np.testing.assert_allclose(extra[k], 2.5 * 9.81 * J_p[2], rtol=0, atol=1e-10)

@@ -51,7 +51,7 @@ from functools import cached_property
 import numpy as np
 
 from .._checks import as_float_array, real_array
-from ..dynamics import NewtonEuler, inverse_dynamics, with_payload
+from ..dynamics import NewtonEuler, inverse_dynamics, link_inertias, with_payload
 from ..models import UR_MAX_JOINT_SPEED_DEG, UR_MAX_JOINT_TORQUE
 from . import motion
 from ._args import real_number
@@ -186,10 +186,14 @@ class SafetyLimits:
                 raise ValueError("max_joint_torque needs robot=: the torques are the robot's "
                                  "inverse dynamics (SafetyLimits.for_robot(robot) gives both)")
             try:
-                loaded = with_payload(self.robot, payload, cog)
-            except ValueError as exc:
+                link_inertias(self.robot)
+            except (TypeError, ValueError) as exc:
                 raise ValueError(f"max_joint_torque: the torque check needs the robot's "
                                  f"inertias: {exc}") from None
+            try:
+                loaded = with_payload(self.robot, payload, cog)
+            except ValueError as exc:
+                raise ValueError(f"payload, payload_cog: {exc}") from None
         elif payload or cog.any():
             raise ValueError("payload and payload_cog are only used by the torque check: "
                              "give max_joint_torque too (SafetyLimits.for_robot fills it)")
@@ -537,6 +541,11 @@ def check_motion(m, limits, command="movej", t=0.0):
     ...
     dqlab.ur.script.UnsafeTargetError: movej: joint 1 speed 6 rad/s exceeds 3.14159 rad/s ...
     """
+    _check_motion(m, limits, command, t)
+
+
+def _check_motion(m, limits, command, t, torques=None):
+    """:func:`check_motion`; its torques now, or collected in ``torques``."""
     lo, hi = m.joint_range()
     below, above = ~(lo >= limits.joint_limits[:, 0]), ~(hi <= limits.joint_limits[:, 1])
     if below.any() or above.any():
@@ -568,10 +577,20 @@ def check_motion(m, limits, command="movej", t=0.0):
         raise UnsafeTargetError(
             f"{command}: TCP acceleration {m.tcp_peak_acceleration:.6g} m/s^2 exceeds "
             f"max_tcp_acceleration = {limits.max_tcp_acceleration:.6g} m/s^2{why}")
-    if limits.checks_torques:
-        t_s, q, qd, qdd = m.samples(TORQUE_SAMPLE_PERIOD)
-        _check_torques(limits, q, qd, qdd,
-                       lambda k: f"{command} ({t_s[k]:.6g} s into the motion)")
+    _motion_torques(m, limits, command, torques)
+
+
+def _motion_torques(m, limits, command, torques=None):
+    """The torque check of a motion's samples: now, or (``torques``, a list) collected for
+    one evaluation with the rest of a program."""
+    if not limits.checks_torques:
+        return
+    t_s, q, qd, qdd = m.samples(TORQUE_SAMPLE_PERIOD)
+    block = (q, qd, qdd, lambda k: f"{command} ({t_s[k]:.6g} s into the motion)")
+    if torques is None:
+        _check_torque_blocks(limits, [block])
+    else:
+        torques.append(block)
 
 
 def _joint_torques(limits, q, qd, qdd):
@@ -588,7 +607,22 @@ def _check_torques(limits, q, qd, qdd, describe):
     """Refuse the states (N, n) if a joint torque exceeds its rating anywhere (NaN fails):
     the message names the worst joint, its peak torque, the rating and, by ``describe(k)``,
     the command and when its peak comes."""
-    q, qd, qdd = (np.ascontiguousarray(x, dtype=float) for x in (q, qd, qdd))
+    _check_torque_blocks(limits, [(q, qd, qdd, describe)])
+
+
+def _check_torque_blocks(limits, blocks):
+    """:func:`_check_torques` of several blocks of states ``(q, qd, qdd, describe)`` (the
+    motions of a program and its changes of speed), in one evaluation."""
+    if not blocks:
+        return
+    q, qd, qdd = (np.ascontiguousarray(np.concatenate([b[i] for b in blocks]), dtype=float)
+                  for i in range(3))
+    sizes = np.cumsum([0] + [len(b[0]) for b in blocks])
+
+    def describe(k):
+        i = int(np.searchsorted(sizes, k, side="right")) - 1
+        return blocks[i][3](k - sizes[i])
+
     try:
         tau = _joint_torques(limits, q, qd, qdd)
     except ValueError as exc:
@@ -755,13 +789,13 @@ def _check_reach(robot, p):
                                 f"solution: {result.reason})")
 
 
-def _plan_movel(robot, q_from, p, a, v, t, limits):
+def _plan_movel(robot, q_from, p, a, v, t, limits, torques=None):
     _check_reach(robot, p)
     try:
         m = motion.plan_movel(robot, q_from, p, a, v, t)
     except ValueError as exc:
         raise UnsafeTargetError(f"movel target {urscript_pose(p)}: {exc}") from None
-    check_motion(m, limits, "movel", t)
+    _check_motion(m, limits, "movel", t, torques)
     return m
 
 
@@ -1036,7 +1070,11 @@ def plan_command(name, target, kwargs=None, *, q_from, limits=None, robot=None):
     >>> round(m.duration, 6), float(m.peak_joint_speed()[0])
     (1.357143, 0.5)
     """
-    limits = as_safety_limits(limits, robot)
+    return _plan_command(name, target, kwargs, q_from, as_safety_limits(limits, robot), robot)
+
+
+def _plan_command(name, target, kwargs, q_from, limits, robot, torques=None):
+    """:func:`plan_command`; its torque check now, or collected in ``torques`` (a list)."""
     kw = dict(kwargs or {})
     q_from = check_joint_targets(q_from, limits=limits, command=f"{name} (q_from)")
 
@@ -1052,7 +1090,7 @@ def plan_command(name, target, kwargs=None, *, q_from, limits=None, robot=None):
                                  kw.get("t", 0.0), kw.get("r", 0.0), limits)
         q = check_joint_targets(target, limits=limits, q_from=q_from, command="movej")
         m = _plan(motion.plan_movej, "movej", q_from, q, a, v, t)
-        check_motion(m, limits, "movej", t)
+        _check_motion(m, limits, "movej", t, torques)
         return m
     if name == "movel":
         kw = take("a", "v", "t", "r")
@@ -1060,14 +1098,14 @@ def plan_command(name, target, kwargs=None, *, q_from, limits=None, robot=None):
                                  kw.get("t", 0.0), kw.get("r", 0.0), limits)
         p = _movel_target(target)
         robot = _robot_for(robot, limits, "movel")
-        return _plan_movel(robot, q_from, p, a, v, t, limits)
+        return _plan_movel(robot, q_from, p, a, v, t, limits, torques)
     if name == "servoj":
         kw = take("a", "v", "t", "lookahead_time", "gain")    # a, v: not used by servoj
         t, _, _ = _servoj_args(kw.get("t", SERVOJ_T), kw.get("lookahead_time", LOOKAHEAD_TIME),
                                kw.get("gain", GAIN))
         q = check_joint_targets(target, limits=limits, q_from=q_from, command="servoj")
         m = _plan(motion.plan_servoj, "servoj", q_from, q, t)
-        check_motion(m, limits, "servoj", t)
+        _check_motion(m, limits, "servoj", t, torques)
         return m
     if name == "stopj":
         kw = take("a")
@@ -1148,7 +1186,9 @@ def plan_program(commands, *, q_now, qd_now=None, limits=None, robot=None, strea
         motions.append(motion.plan_stop(q, qd, limits.max_joint_acceleration))
         q, qd = motions[-1].q_end, motions[-1].qd_end
     check_speed_changes = not streaming
+    torques = []                    # every line's, checked in one evaluation at the end
     for k, command in enumerate(commands, start=1):
+        first_block = len(torques)
         try:
             name, target, kw = command
             if name == "stopj":      # brakes the arm's motion; after a motion, it is at rest
@@ -1156,24 +1196,36 @@ def plan_program(commands, *, q_now, qd_now=None, limits=None, robot=None, strea
                 a = _stopj_arg(dict(kw or {}).get("a", STOPJ_A), limits)
                 m = _plan(motion.plan_stop, "stopj", q, moving, a)
             else:
-                m = plan_command(name, target, kw, q_from=q, limits=limits, robot=robot)
+                m = _plan_command(name, target, kw, q, limits, robot, torques)
             if check_speed_changes:
-                _check_junction(qd, motions[-1] if motions else None, m, limits)
+                _check_junction(qd, motions[-1] if motions else None, m, limits, torques)
         except (ValueError, TypeError) as exc:
             raise type(exc)(f"line {k}: {exc}") from None
+        _label_line(torques, first_block, k)
         motions.append(m)
         q, qd = m.q_end, m.qd_end
     if check_speed_changes:
+        first_block = len(torques)
         try:
-            _check_junction(qd, motions[-1], None, limits)
+            _check_junction(qd, motions[-1], None, limits, torques)
         except UnsafeTargetError as exc:
             raise UnsafeTargetError(f"line {len(commands)}: {exc}") from None
+        _label_line(torques, first_block, len(commands))
+    _check_torque_blocks(limits, torques)
     return motions
 
 
-def _check_junction(v0, before, after, limits):
+def _label_line(blocks, first, line):
+    """Prefix ``line {line}: `` to the descriptions of the blocks from ``first`` on."""
+    for i in range(first, len(blocks)):
+        q, qd, qdd, describe = blocks[i]
+        blocks[i] = (q, qd, qdd, lambda k, describe=describe: f"line {line}: {describe(k)}")
+
+
+def _check_junction(v0, before, after, limits, torques=None):
     """The speed change from ``v0`` (at the end of ``before``, or the arm's before the
-    program) to the start of ``after`` (None: rest after the program)."""
+    program) to the start of ``after`` (None: rest after the program); its torques now, or
+    collected in ``torques``."""
     v1 = after.qd_start if after is not None else np.zeros_like(v0)
     jump = np.abs(v1 - v0)
     if np.all(jump <= ROUNDING * (1.0 + np.abs(v0) + np.abs(v1))):   # continuous, to rounding
@@ -1195,5 +1247,9 @@ def _check_junction(v0, before, after, limits):
         signed = (v1 - v0) / period
         where = "at the change of speed to rest" if after is None else \
             "at the change of speed from the previous motion"
-        _check_torques(limits, np.stack([q, q]), np.stack([v0, v1]), np.stack([signed, signed]),
-                       lambda k: where)
+        block = (np.stack([q, q]), np.stack([v0, v1]), np.stack([signed, signed]),
+                 lambda k: where)
+        if torques is None:
+            _check_torque_blocks(limits, [block])
+        else:
+            torques.append(block)
