@@ -12,7 +12,7 @@ torque check alone:
   stand-in checks what it receives (a few states per line, one at a time with
   ``dynamics.NewtonEuler``);
 - a 2 s ``movej`` (``movej(q, q_from=...)``), its 250 samples one at a time;
-- the per-state cost of the two evaluations behind the check's private boundary, the batch
+- the per-state cost of the two evaluations behind ``SafetyLimits.joint_torques``, the batch
   and the loop of single states, on the movej's samples (below ``_BATCH_FROM`` states the
   loop is used).
 
@@ -56,20 +56,21 @@ def main(quick=False):
         jobs[f"movej, {label}"] = (
             lambda limits=limits: S.movej(target, a=1.4, v=0.6, limits=limits, q_from=q_mid),
             1, 1)
-    jobs["batch, per state"] = (lambda: dynamics.inverse_dynamics(torques._loaded, q, qd, qdd),
-                                1, len(q))
+    loaded = dynamics.with_payload(robot, 2.0, [0.0, 0.0, 0.05])
+    newton_euler = dynamics.NewtonEuler(loaded)
+    jobs["batch, per state"] = (lambda: dynamics.inverse_dynamics(loaded, q, qd, qdd), 1,
+                                len(q))
     jobs["loop, per state"] = (
-        lambda: [torques._newton_euler(q[k], qd[k], qdd[k]) for k in range(len(q))], 1, len(q))
-    assert np.allclose(S._joint_torques(torques, q, qd, qdd),
-                       dynamics.inverse_dynamics(torques._loaded, q, qd, qdd), atol=1e-12)
+        lambda: [newton_euler(q[k], qd[k], qdd[k]) for k in range(len(q))], 1, len(q))
+    assert np.allclose(torques.joint_torques(q, qd, qdd),
+                       dynamics.inverse_dynamics(loaded, q, qd, qdd), atol=1e-12)
     best = interleaved_best(jobs, repeat)
 
     print("UR3 with 2 kg: the safety checks with and without the rated torques "
           "(best CPU time)\n")
     print(f"{'check':36s} {'with torques':>14s} {'speeds only':>13s} {'ratio':>7s}")
-    for what, samples in (("trajectory (1,000 samples)", 4 * len(t) - 2),
-                          ("program (1,000 servoj lines)", None),
-                          (f"movej ({movej.duration:.1f} s, {len(q)} samples)", len(q))):
+    for what in ("trajectory (1,000 samples)", "program (1,000 servoj lines)",
+                 f"movej ({movej.duration:.1f} s, {len(q)} samples)"):
         key = what.split(" ")[0]
         a, b = best[f"{key}, with torques"], best[f"{key}, speeds only"]
         print(f"{what:36s} {a * 1e3:11.1f} ms {b * 1e3:10.1f} ms {a / b:7.1f}")

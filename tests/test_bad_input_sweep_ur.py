@@ -190,6 +190,10 @@ CASES = [
     ("SafetyLimits.payload_cog",
      lambda v, tmp: ur.SafetyLimits.for_robot(UR3, payload=2.0, payload_cog=v),
      np.array([0.0, 0.0, 0.1]), ("payload_cog",), {}),
+    *[(f"SafetyLimits.joint_torques.{name}",
+       lambda v, tmp, i=i: ur.SafetyLimits.for_robot(UR3, payload=2.0).joint_torques(
+           *[v if k == i else Q_TRAJ * 0.5 for k in range(3)]), Q_TRAJ, (name,), {})
+      for i, name in enumerate(("q", "qd", "qdd"))],
     # the client, on the kinematic arm
     ("URClient.tol", lambda v, tmp: ur.URClient(arm(), tol=v), 1e-4, ("tol",), TOL),
     ("URClient.poll_interval", lambda v, tmp: ur.URClient(arm(), poll_interval=v), 0.002,

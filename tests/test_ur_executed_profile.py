@@ -351,7 +351,8 @@ def test_nan_never_switches_the_torque_check_off(monkeypatch):
     with pytest.raises(ValueError, match="max_joint_torque needs robot="):
         SafetyLimits(max_joint_torque=RATED)
     # a torque that comes out NaN is a refusal, not a pass
-    monkeypatch.setattr(S, "_joint_torques", lambda limits, q, qd, qdd: np.full(q.shape, np.nan))
+    monkeypatch.setattr(SafetyLimits, "joint_torques", lambda self, q, qd, qdd: np.full(q.shape,
+                                                                                         np.nan))
     with pytest.raises(UnsafeTargetError, match="joint 1 torque nan N m exceeds"):
         S.movej(Q_MID + 0.1, limits=HEAVY, q_from=Q_MID)
 
@@ -360,8 +361,8 @@ def test_the_one_at_a_time_torques_are_the_batch_torques():
     m = M.plan_movej(Q_MID, Q_MID + [1.0, 0.8, -0.9, 0.5, 0.3, 0.2], a=1.0, v=0.5)
     t, q, qd, qdd = m.samples()
     assert len(t) > S._BATCH_FROM                                 # the batch path
-    batch = S._joint_torques(HEAVY, q, qd, qdd)
-    single = S._joint_torques(HEAVY, q[:10], qd[:10], qdd[:10])  # one state at a time
+    batch = HEAVY.joint_torques(q, qd, qdd)
+    single = HEAVY.joint_torques(q[:10], qd[:10], qdd[:10])      # one state at a time
     np.testing.assert_allclose(single, batch[:10], rtol=0, atol=1e-12)
     np.testing.assert_allclose(batch, dynamics.inverse_dynamics(LOADED, q, qd, qdd), rtol=0,
                                atol=1e-12)

@@ -213,6 +213,52 @@ class SafetyLimits:
     def _newton_euler(self):
         return NewtonEuler(self._loaded)
 
+    def joint_torques(self, q, qd, qdd):
+        r"""The torques the joints of ``robot`` carrying ``payload`` need at the states
+        ``(q, qd, qdd)``: :math:`\tau = M(q)\ddot q + c(q, \dot q) + g(q)`
+        (:func:`dqlab.dynamics.inverse_dynamics`), what the checks compare with
+        ``max_joint_torque``.
+
+        Parameters
+        ----------
+        q, qd, qdd : array_like, shape (N, n)
+
+        Returns
+        -------
+        ndarray, shape (N, n)
+            N m. From :data:`_BATCH_FROM` states on in one batch, below one state at a time
+            (:class:`dqlab.dynamics.NewtonEuler`, faster for a few; the same numbers).
+
+        Raises
+        ------
+        ValueError
+            If these limits check no torques (``max_joint_torque`` is None), or a state is
+            not finite (the message names it).
+
+        Examples
+        --------
+        >>> from dqlab.models import ur3
+        >>> limits = SafetyLimits.for_robot(ur3(), payload=3.0)
+        >>> q = [[0.0, 0.0, 0.0, 0.0, 0.0, 0.0]]          # stretched out, at rest
+        >>> limits.joint_torques(q, np.zeros((1, 6)), np.zeros((1, 6))).round(2) + 0.0
+        array([[  0.  , -31.03, -12.37,   0.  ,   0.  ,   0.  ]])
+        """
+        if not self.checks_torques:
+            raise ValueError("these limits check no torques (max_joint_torque is None)")
+        n = len(self.joint_limits)
+        q, qd, qdd = (np.ascontiguousarray(real_array(x, name), dtype=float)
+                      for x, name in ((q, "q"), (qd, "qd"), (qdd, "qdd")))
+        for x, name in ((q, "q"), (qd, "qd"), (qdd, "qdd")):
+            if x.ndim != 2 or x.shape[1] != n or x.shape != q.shape:
+                raise ValueError(f"{name} must have shape (N, {n}) like q, got {x.shape}")
+        try:
+            if len(q) >= _BATCH_FROM:
+                return inverse_dynamics(self._loaded, q, qd, qdd)
+            rnea = self._newton_euler
+            return np.array([rnea(q[k], qd[k], qdd[k]) for k in range(len(q))]).reshape(q.shape)
+        except ValueError as exc:
+            raise ValueError(f"q, qd, qdd: {exc}") from None
+
     @classmethod
     def for_robot(cls, robot, **overrides):
         """The limits of ``robot``: its joint limits, rated joint speeds and torques (the
@@ -593,16 +639,6 @@ def _motion_torques(m, limits, command, torques=None):
         torques.append(block)
 
 
-def _joint_torques(limits, q, qd, qdd):
-    """The joint torques of ``limits``' robot with its payload at the states (N, n): in one
-    batch from :data:`_BATCH_FROM` states on, below one state at a time (faster for few; the
-    same numbers, tested)."""
-    if len(q) >= _BATCH_FROM:
-        return inverse_dynamics(limits._loaded, q, qd, qdd)
-    rnea = limits._newton_euler
-    return np.array([rnea(q[k], qd[k], qdd[k]) for k in range(len(q))]).reshape(q.shape)
-
-
 def _check_torques(limits, q, qd, qdd, describe):
     """Refuse the states (N, n) if a joint torque exceeds its rating anywhere (NaN fails):
     the message names the worst joint, its peak torque, the rating and, by ``describe(k)``,
@@ -624,7 +660,7 @@ def _check_torque_blocks(limits, blocks):
         return blocks[i][3](k - sizes[i])
 
     try:
-        tau = _joint_torques(limits, q, qd, qdd)
+        tau = limits.joint_torques(q, qd, qdd)
     except ValueError as exc:
         raise UnsafeTargetError(f"{describe(0)}: the joint torques cannot be computed "
                                 f"({exc})") from None
