@@ -196,3 +196,15 @@ def test_a_payload_composes_with_a_tool_in_either_order():
         J = robot.with_tool(z=0.0).jacobian(q[k])        # flange Jacobian; the point's:
         J_p = J[:3] - np.cross(p[k] - X[k, :3, 3], J[3:].T).T
         np.testing.assert_allclose(extra[k], 2.5 * 9.81 * J_p[2], rtol=0, atol=1e-10)
+
+
+def test_a_calibrated_arm_keeps_its_models_ratings_and_inertias():
+    from dqlab.ur.calibration import CalibrationConf, robot_from_corrections
+
+    conf = CalibrationConf((0.0,) * 6, (1e-4,) * 6, (-1e-4,) * 6, (1e-4,) * 6)
+    calibrated, nominal = robot_from_corrections(conf, "UR5e"), models.ur5e()
+    for mine, theirs in zip(calibrated.links, nominal.links, strict=True):
+        assert (mine.max_speed, mine.max_torque, mine.inertia, mine.limits) == (
+            theirs.max_speed, theirs.max_torque, theirs.inertia, theirs.limits)
+    np.testing.assert_array_equal(SafetyLimits.for_robot(calibrated).max_joint_torque,
+                                  UR_MAX_JOINT_TORQUE["UR5e"])

@@ -59,7 +59,8 @@ from .motion import GAIN, LOOKAHEAD_TIME, MOVEJ_A, MOVEJ_V, MOVEL_A, MOVEL_V, SE
 from .poses import check_pose, transform_from_pose
 
 __all__ = [
-    "UR3_JOINT_LIMITS", "UR3_MAX_JOINT_SPEED", "UR3_MAX_JOINT_TORQUE", "SafetyLimits",
+    "UR3_JOINT_LIMITS", "UR3_MAX_JOINT_SPEED", "UR3_MAX_JOINT_TORQUE", "TORQUE_SAMPLE_PERIOD",
+    "SafetyLimits",
     "UnsafeTargetError",
     "as_safety_limits", "check_joint_targets", "check_motion", "movej", "movel", "servoj",
     "stopj", "program_from_trajectory", "check_trajectory", "plan_command", "plan_program",
@@ -226,7 +227,7 @@ class SafetyLimits:
         Returns
         -------
         ndarray, shape (N, n)
-            N m. From :data:`_BATCH_FROM` states on in one batch, below one state at a time
+            N m. From 256 states on in one batch, below one state at a time
             (:class:`dqlab.dynamics.NewtonEuler`, faster for a few; the same numbers).
 
         Raises
