@@ -95,7 +95,7 @@ __all__ = [
     "desk_arm_joints_from_lab", "desk_arm_lab_from_joints",
     "ChainShape", "UR_SHAPE", "DESK_ARM_SHAPE", "SCARA_SHAPE",
     "UR_DYNAMICS", "UR3_MDH_JOINT_MAP", "ur_link_inertias", "ur_link_inertias_from_ros",
-    "rod_link_inertias",
+    "rod_link_inertias", "with_model_inertias",
 ]
 
 PI = math.pi
@@ -652,6 +652,60 @@ def rod_link_inertias(robot: Robot, *, base_mass: float = 0.5, mass_per_metre: f
         inertias.append(LinkInertia.rod(base_mass + mass_per_metre * path, start, end,
                                         radius))
     return tuple(inertias)
+
+
+def with_model_inertias(robot: Robot, model: Robot) -> Robot:
+    r"""``robot`` -- the arm of ``model`` described by other DH parameters, a calibrated UR
+    -- carrying ``model``'s link inertias, moved into its own link frames.
+
+    A link is one body in both descriptions, but its frame is not at the same place on it: a
+    real calibration moves the DH frames of the nearly parallel joints 2 to 4 by metres along
+    their axes (:mod:`dqlab.ur.calibration`), so the model's centres of mass, copied as
+    numbers, would sit metres away from the arm. At the joints' zero the two descriptions
+    put each link at the same place (to the calibration's millimetre), so link :math:`i`'s
+    frame of ``model`` sits at the constant pose
+    :math:`X_i = X^{robot}_{0i}(0)^{-1}\,X^{model}_{0i}(0)` in its frame of ``robot``, and its
+    inertia moves by :meth:`~dqlab.inertia.LinkInertia.moved` (as :func:`ur3_mdh` carries
+    the UR3's into the report's frames). Links of ``model`` without inertia stay without.
+
+    Parameters
+    ----------
+    robot, model : Robot
+        The same number of joints.
+
+    Returns
+    -------
+    Robot
+        ``robot`` with these inertias (everything else kept).
+
+    Examples
+    --------
+    A UR3 whose frames 2 and 3 moved 12 m along their axes, as real calibrations do: the
+    gravity torques are the model's, not those of an arm 12 m long.
+
+    >>> import numpy as np
+    >>> d = list(UR_DH["UR3"]["d"]); d[1], d[2] = 12.0, -12.0
+    >>> far = Robot.from_dh_table(d=d, a=UR_DH["UR3"]["a"], alpha=UR_ALPHA)
+    >>> q = np.array([0.3, -1.0, 0.8, -1.2, 0.5, 0.1])
+    >>> from dqlab.dynamics import gravity_torques
+    >>> bool(np.allclose(gravity_torques(with_model_inertias(far, ur3()), q),
+    ...                  gravity_torques(ur3(), q), atol=1e-9))
+    True
+    """
+    check_instance(robot, Robot, "robot")
+    check_instance(model, Robot, "model")
+    if robot.n != model.n:
+        raise ValueError(f"robot and model must have as many joints, got {robot.n} and "
+                         f"{model.n}")
+    zero = np.zeros(robot.n)
+    mine = np.linalg.inv(robot.base) @ robot.fk(zero, all_frames=True)
+    theirs = np.linalg.inv(model.base) @ model.fk(zero, all_frames=True)
+    inertias = []
+    for i, link in enumerate(model.links, start=1):
+        X = np.linalg.inv(mine[i]) @ theirs[i]
+        X[3] = (0.0, 0.0, 0.0, 1.0)
+        inertias.append(None if link.inertia is None else link.inertia.moved(X))
+    return _with_inertias(robot, inertias)
 
 
 def _with_inertias(robot, inertias):

@@ -198,13 +198,34 @@ def test_a_payload_composes_with_a_tool_in_either_order():
         np.testing.assert_allclose(extra[k], 2.5 * 9.81 * J_p[2], rtol=0, atol=1e-10)
 
 
-def test_a_calibrated_arm_keeps_its_models_ratings_and_inertias():
+def test_a_calibrated_arm_keeps_its_models_ratings_and_bodies():
     from dqlab.ur.calibration import CalibrationConf, robot_from_corrections
 
-    conf = CalibrationConf((0.0,) * 6, (1e-4,) * 6, (-1e-4,) * 6, (1e-4,) * 6)
-    calibrated, nominal = robot_from_corrections(conf, "UR5e"), models.ur5e()
+    # a real UR3's calibration.conf (MyRobotLab/pyrobotlab, issue 145): its DH frames 2 to 4
+    # lie 12 to 30 m along their axes from the model's
+    conf = CalibrationConf(
+        delta_theta=(9.14361764983717684e-08, 0.178461025123001604, 6.68283349819805572,
+                     -0.578116982609792496, 6.11299818305960363e-06, -5.03926212855332345e-07),
+        delta_a=(-0.000243788991999517813, 0.00381165418642351317, 0.034503078453104935,
+                 0.000107694612896758047, -0.000198736633205663144, 0.0),
+        delta_d=(9.225352853908797e-05, 12.0620003757611567, 17.6719025641737275,
+                 -29.7339960369544869, -2.8164617795367608e-05, 0.000217420471082099831),
+        delta_alpha=(0.00115615746589403656, 0.0035851898103369975, 0.00392132336586574568,
+                     0.000406668888106365145, -0.00201170396009153762, 0.0))
+    calibrated, nominal = robot_from_corrections(conf, "UR3"), models.ur3()
     for mine, theirs in zip(calibrated.links, nominal.links, strict=True):
-        assert (mine.max_speed, mine.max_torque, mine.inertia, mine.limits) == (
-            theirs.max_speed, theirs.max_torque, theirs.inertia, theirs.limits)
+        assert (mine.max_speed, mine.max_torque, mine.limits) == (
+            theirs.max_speed, theirs.max_torque, theirs.limits)
+        assert mine.inertia.mass == theirs.inertia.mass
+        np.testing.assert_allclose(np.linalg.eigvalsh(mine.inertia.tensor),
+                                   np.linalg.eigvalsh(theirs.inertia.tensor), rtol=1e-9)
     np.testing.assert_array_equal(SafetyLimits.for_robot(calibrated).max_joint_torque,
-                                  UR_MAX_JOINT_TORQUE["UR5e"])
+                                  UR_MAX_JOINT_TORQUE["UR3"])
+    # the bodies are where the arm is: the torques are the model's to the calibration's
+    # millimetre, not those of links tens of metres long
+    q, qd, qdd = np.random.default_rng(8).normal(0.0, 1.5, (3, 20, 6))
+    tau, tau_nominal = (dynamics.inverse_dynamics(r, q, qd, qdd) for r in (calibrated, nominal))
+    assert np.abs(tau - tau_nominal).max() < 0.02 * np.abs(tau_nominal).max()
+    copied = dynamics.with_inertias(calibrated, [lk.inertia for lk in nominal.links])
+    tau_copied = dynamics.inverse_dynamics(copied, q, qd, qdd)     # the numbers copied: bodies
+    assert np.abs(tau_copied[:, 0]).max() > 10 * np.abs(tau_nominal).max()   # metres away

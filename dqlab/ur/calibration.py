@@ -413,9 +413,14 @@ def _robot(theta, a, d, alpha, model, name):
             ratings = [{"limits": lk.limits, "name": lk.name, "inertia": lk.inertia,
                         "max_speed": lk.max_speed, "max_torque": lk.max_torque}
                        for lk in nominal.links]
-    return Robot([Link(a=ai, alpha=al, d=di, theta_offset=t, **rating)
-                  for t, ai, di, al, rating in zip(theta, a, d, alpha, ratings, strict=True)],
-                 convention="dh", name=label)
+    robot = Robot([Link(a=ai, alpha=al, d=di, theta_offset=t, **rating)
+                   for t, ai, di, al, rating in zip(theta, a, d, alpha, ratings, strict=True)],
+                  convention="dh", name=label)
+    if model is None:
+        return robot
+    from ..models import with_model_inertias
+
+    return with_model_inertias(robot, _nominal(model))      # its bodies in these frames
 
 
 def _model_name(model):
