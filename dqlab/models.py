@@ -50,7 +50,7 @@ UR5         [DH]   [R2] ``ur5`` (its tensors: stated solid cylinders)   [R2] ``u
 UR10        [DH]   [R2] ``ur10`` (tensors extracted from URSim)         [R2] ``ur10``
 UR3e        [DH]   [R2] ``ur3e`` (2025 tensors from CAD)                [R2] ``ur3e`` (1)
 UR5e, UR7e  [DH]   [R2] ``ur5e``, ``ur7e`` (2025 tensors from CAD)      [R2] ``ur5e`` (2)
-UR10e       [DH]   [R2] ``ur10e`` (tensors from URSim)                  [R2] ``ur10e``
+UR10e       [DH]   [R2] ``ur10e`` (the UR10's URSim tensors)            [R2] ``ur10e``
 UR12e       [DH]   [R2] ``ur12e`` (the UR10e's)                         [R2] ``ur12e``
 UR16e       [DH]   [R2] ``ur16e``                                       [R2] ``ur16e``
 UR15        [DH]   [R2] ``ur15`` (= [R1] ``ur15``)                      [R1] ``ur15``
@@ -60,8 +60,9 @@ UR20        [DH]   [R2] ``ur20`` (2025: wrist 3 of 0.926 kg)            [R2] ``u
 UR30        [DH]   [R2] ``ur30``, without its tensors (4)               [R2] ``ur30``
 ==========  =====  ===================================================  =======================
 
-(1) The wrist 3 of the UR3 and the UR3e turns without limit (the user manuals' "infinite";
-[R2] has no position limit for it since 2024); every other joint of every model turns
+(1) The wrist 3 of the UR3 and the UR3e turns without limit: UR removed its position limit
+from [R2] in 2024 "to reflect UR3(e)'s infinite wrist 3 joint", as their data sheets give
+its range; every other joint of every model turns
 :math:`\pm 360°` (the elbow too: the files' :math:`\pm 180°` for the elbow is, as they say,
 an artificial limit for motion planners). (2) [R1]'s ``ur7e`` is a link to ``ur5e``. (3) The
 UR8 Long's links carry no rated speed or torque. (4) [R2]'s UR30 tensors are the UR16e's,
