@@ -190,6 +190,8 @@ CASES = [
     ("SafetyLimits.payload_cog",
      lambda v, tmp: ur.SafetyLimits.for_robot(UR3, payload=2.0, payload_cog=v),
      np.array([0.0, 0.0, 0.1]), ("payload_cog",), {}),
+    ("Motion.samples.period",
+     lambda v, tmp: ur.motion.plan_movej(Q0, Q1).samples(v)[1], 0.008, ("period",), {}),
     *[(f"SafetyLimits.joint_torques.{name}",
        lambda v, tmp, i=i: ur.SafetyLimits.for_robot(UR3, payload=2.0).joint_torques(
            *[v if k == i else Q_TRAJ * 0.5 for k in range(3)]), Q_TRAJ, (name,), {})

@@ -74,7 +74,7 @@ from functools import cached_property
 
 import numpy as np
 
-from .._checks import as_float_array
+from .._checks import as_float_array, check_scalar
 from ..quaternion import quaternion_distance, quaternion_from_matrix
 from ..trajectory import TimeLaw, follow_path_ur, joint_velocities, line_slerp, trapezoidal
 from ..transforms import transform_inverse
@@ -114,6 +114,8 @@ _KNOT_ANGLE = 1e-3
 _MIN_KNOTS = 8
 #: Below this translation (m) a ``movel`` is a pure rotation, timed on its angle.
 _PURE_ROTATION = 1e-9
+#: The most samples :meth:`Motion.samples` takes of one motion.
+_MAX_SAMPLES = 10_000_000
 #: The longest motion planned, s (about 11 days): beyond, the spacing of floats near the
 #: end time exceeds a microsecond, and the motion is a mistake anyway.
 MAX_DURATION = 1e6
@@ -440,15 +442,18 @@ class Motion:
         >>> qdd[:, 0].tolist()
         [1.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0, -1.0]
         """
-        period = float(period)
-        if not period > 0.0:
-            raise ValueError(f"period must be > 0, got {period!r}")
+        period = check_scalar(period, "period", minimum=0.0, strict=True)
         if self.law is None:
             q = self.q_start[None, :]
             return np.zeros(1), q, np.zeros_like(q), np.zeros_like(q)
         law = self.law
         h = np.diff(law.breaks)
-        counts = np.maximum(np.ceil(h / period).astype(int), 1)
+        steps = np.ceil(h / period)
+        if not steps.sum() <= _MAX_SAMPLES:
+            raise ValueError(f"period = {period!r} s would sample the {self.duration:.6g} s "
+                             f"motion {steps.sum():.3g} times (at most {_MAX_SAMPLES:g}): "
+                             "give a longer period")
+        counts = np.maximum(steps.astype(int), 1)
         k = np.repeat(np.arange(len(h)), counts + 1)                 # the segment of each sample
         u = np.concatenate([np.linspace(0.0, 1.0, c + 1) for c in counts])
         sigma, sd, sdd = _law_values(law, k=k, u=u)
