@@ -83,7 +83,7 @@ UR3_MAX_JOINT_TORQUE = np.array(UR_MAX_JOINT_TORQUE["UR3"])
 TORQUE_SAMPLE_PERIOD = SERVOJ_T
 
 #: A motion longer than 160 s is sampled for its torques in this many steps, not every servo
-#: period: the joints, within 4 pi of their target, move at most 0.6 mrad between samples.
+#: period: between samples a joint moves by at most 1/20,000 of its travel (0.6 mrad of 4 pi).
 _MAX_TORQUE_SAMPLES = 20_000
 
 #: Fewer samples than this are checked one state at a time (:class:`dqlab.dynamics.NewtonEuler`),
