@@ -980,7 +980,7 @@ class Robot:
           3  R      q3             0        -0.21325  0              [-360, 360] deg
           4  R      q4             0.11235  0         90             [-360, 360] deg
           5  R      q5             0.08535  0         -90            [-360, 360] deg
-          6  R      q6             0.0819   0         0              [-360, 360] deg
+          6  R      q6             0.0819   0         0              -
         """
         rows = []
         for i, lk in enumerate(self._links, start=1):
