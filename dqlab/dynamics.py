@@ -590,13 +590,41 @@ def with_inertias(robot: Robot, inertias) -> Robot:
                  name=robot.name)
 
 
-def with_payload(robot: Robot, mass: float, *, radius: float = 0.0) -> Robot:
-    r"""The robot carrying a solid sphere of ``mass`` kg (a point mass for ``radius = 0``)
-    centred at its tool centre point, welded to the last link.
+def with_payload(robot: Robot, mass: float, cog: ArrayLike = (0.0, 0.0, 0.0), *,
+                 radius: float = 0.0) -> Robot:
+    r"""The robot carrying a payload of ``mass`` kg whose centre of gravity is ``cog``, in the
+    flange frame, welded to the last link: a solid sphere of radius ``radius`` (a point mass
+    for ``radius = 0``).
 
-    The sphere's inertia, :math:`\tfrac25 m r^2` about its centre, is added to the last
-    link's (``+`` of two :class:`~dqlab.inertia.LinkInertia`), in the last link's frame, where
-    the tool sits at :math:`X_{nT}`.
+    As in URScript's ``set_payload(m, cog)``, the centre of gravity is given from the tool
+    flange (frame :math:`n`, where the tool sits at :math:`X_{nT}`), not from the TCP: the
+    payload does not depend on the tool, so ``with_payload`` and
+    :meth:`~dqlab.robot.Robot.with_tool` compose in either order to the same robot. A
+    payload centred at the TCP is ``cog=robot.tool[:3, 3]``. The sphere's inertia,
+    :math:`\tfrac25 m r^2` about its centre, is added to the last link's (``+`` of two
+    :class:`~dqlab.inertia.LinkInertia`).
+
+    Parameters
+    ----------
+    robot : Robot
+        Every link must carry a :class:`~dqlab.inertia.LinkInertia`.
+    mass : float
+        kg, >= 0.
+    cog : array_like, shape (3,), optional
+        The payload's centre of gravity in the flange frame, m (default: the flange's
+        centre).
+    radius : float, optional
+        m, >= 0.
+
+    Returns
+    -------
+    Robot
+
+    Raises
+    ------
+    ValueError
+        If ``mass`` or ``radius`` is not a number >= 0 (text and booleans included) or
+        ``cog`` not three finite numbers; a link without inertia.
 
     Examples
     --------
@@ -609,8 +637,28 @@ def with_payload(robot: Robot, mass: float, *, radius: float = 0.0) -> Robot:
     >>> extra = gravity_torques(with_payload(ur3(), 3.0), q) - gravity_torques(ur3(), q)
     >>> extra.round(3) + 0.0
     array([  0.   , -13.447,  -6.276,   0.   ,   0.   ,   0.   ])
+
+    The payload stays where it is put whatever the tool, and the tool whatever the payload:
+
+    >>> a = with_payload(ur3(), 3.0, [0.0, 0.0, 0.1]).with_tool(z=0.2)
+    >>> b = with_payload(ur3().with_tool(z=0.2), 3.0, [0.0, 0.0, 0.1])
+    >>> a.links[-1].inertia == b.links[-1].inertia and np.array_equal(a.tool, b.tool)
+    True
     """
+    cog = as_float_array(cog, "cog", (3,))
+    if cog.shape != (3,):
+        raise ValueError(f"cog must be one point of shape (3,), got shape {cog.shape}")
+    sphere = LinkInertia.sphere(mass, np.zeros(3), radius)        # (checks mass and radius)
+    with np.errstate(over="ignore"):
+        moment = sphere.mass * float(cog @ cog)
+    if not math.isfinite(moment):
+        raise ValueError("mass and cog: the payload's moment about the flange, m |cog|^2, "
+                         "overflows")
+    sphere = LinkInertia(sphere.mass, cog, sphere.tensor)
     inertias = list(link_inertias(robot))
-    sphere = LinkInertia.sphere(mass, robot.tool[:3, 3], radius)
-    inertias[-1] = inertias[-1] + sphere
+    try:
+        inertias[-1] = inertias[-1] + sphere
+    except ValueError as exc:
+        raise ValueError(f"mass and cog: the last link with the payload overflows ({exc})"
+                         ) from None
     return with_inertias(robot, inertias)

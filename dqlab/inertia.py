@@ -31,19 +31,22 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._checks import as_float_array
+from ._checks import as_float_array, check_scalar
+from .transforms import check_transform
 
 __all__ = ["LinkInertia"]
 
 
 def _mass(value, name="mass"):
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
-    if not (math.isfinite(value) and value >= 0.0):
-        raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
-    return value
+    """A mass, radius or factor: a finite number >= 0 (text and booleans refused by name)."""
+    return check_scalar(value, name, minimum=0.0)
+
+
+def _finite_tensor(tensor, what):
+    """``tensor`` if every entry is finite, else a ValueError saying which inputs overflow."""
+    if not np.all(np.isfinite(tensor)):
+        raise ValueError(f"the inertia tensor of {what} overflows (no finite float holds it)")
+    return tensor
 
 
 class LinkInertia:
@@ -103,17 +106,22 @@ class LinkInertia:
                 raise ValueError(f"tensor must have shape (3, 3) or (6,), got shape "
                                  f"{tensor.shape}")
         scale = max(float(np.abs(tensor).max()), 1e-300)
-        if not np.allclose(tensor, tensor.T, rtol=0.0, atol=1e-12 * scale):
+        unit = tensor / scale                   # the checks on entries of at most 1: no overflow
+        if not np.allclose(unit, unit.T, rtol=0.0, atol=1e-12):
             raise ValueError("tensor must be symmetric")
-        tensor = 0.5 * (tensor + tensor.T)
-        moments = np.linalg.eigvalsh(tensor)
-        slack = 1e-9 * scale
-        if moments[0] < -slack:
+        tensor = 0.5 * tensor + 0.5 * tensor.T
+        moments = np.linalg.eigvalsh(0.5 * (unit + unit.T))
+        if moments[0] < -1e-9:
             raise ValueError(f"tensor must be positive semidefinite, got principal moments "
-                             f"{moments.tolist()}")
-        if moments[0] + moments[1] < moments[2] - slack:
+                             f"{(moments * scale).tolist()}")
+        if moments[0] + moments[1] < moments[2] - 1e-9:
             raise ValueError(f"tensor violates the triangle inequality I1 + I2 >= I3 of a "
-                             f"rigid body: principal moments {moments.tolist()}")
+                             f"rigid body: principal moments {(moments * scale).tolist()}")
+        with np.errstate(over="ignore", invalid="ignore"):
+            at_origin = tensor + mass * (np.dot(com, com) * np.eye(3) - np.outer(com, com))
+        if not np.all(np.isfinite(at_origin)):
+            raise ValueError("mass, com and tensor are too large: the inertia about the frame's "
+                             "origin, I_c + m (|c|^2 I - c c^T), overflows")
         com.flags.writeable = False
         tensor.flags.writeable = False
         set_ = object.__setattr__
@@ -151,7 +159,13 @@ class LinkInertia:
         """
         mass = _mass(mass)
         radius = _mass(radius, "radius")
-        return cls(mass, centre, 0.4 * mass * radius**2 * np.eye(3))
+        centre = as_float_array(centre, "centre", (3,))
+        if centre.shape != (3,):
+            raise ValueError(f"centre must be one point of shape (3,), got shape {centre.shape}")
+        with np.errstate(over="ignore", invalid="ignore"):
+            tensor = 0.4 * mass * (radius * radius) * np.eye(3)
+        return cls(mass, centre, _finite_tensor(
+            tensor, f"a sphere of mass {mass:g} kg and radius {radius:g} m"))
 
     @classmethod
     def rod(cls, mass: float, start: ArrayLike, end: ArrayLike, radius: float
@@ -175,13 +189,25 @@ class LinkInertia:
         radius = _mass(radius, "radius")
         start = as_float_array(start, "start", (3,))
         end = as_float_array(end, "end", (3,))
-        axis = end - start
-        length = float(np.linalg.norm(axis))
-        u = axis / length if length > 0 else np.array([0.0, 0.0, 1.0])
-        along = np.outer(u, u)
-        tensor = (0.5 * mass * radius**2 * along
-                  + mass * (3 * radius**2 + length**2) / 12.0 * (np.eye(3) - along))
-        return cls(mass, 0.5 * (start + end), tensor)
+        if start.shape != (3,) or end.shape != (3,):
+            raise ValueError(f"start and end must be points of shape (3,), got shapes "
+                             f"{start.shape} and {end.shape}")
+        with np.errstate(over="ignore", invalid="ignore"):
+            axis = end - start
+            size = float(np.abs(axis).max())
+        if not math.isfinite(size):
+            raise ValueError("start and end are too far apart: their distance overflows")
+        with np.errstate(over="ignore", invalid="ignore"):
+            unit = axis / size if size > 0 else np.array([0.0, 0.0, 1.0])   # |l| <= 1
+            norm = float(np.linalg.norm(unit))
+            length = size * norm
+            u = unit / norm
+            along = np.outer(u, u)
+            r2, l2 = radius * radius, length * length
+            tensor = (0.5 * mass * r2 * along
+                      + mass * (3 * r2 + l2) / 12.0 * (np.eye(3) - along))
+        what = f"a rod of mass {mass:g} kg, length {length:g} m and radius {radius:g} m"
+        return cls(mass, 0.5 * start + 0.5 * end, _finite_tensor(tensor, what))
 
     # -- derived quantities -------------------------------------------------------------------
     @property
@@ -251,7 +277,11 @@ class LinkInertia:
         2.2
         """
         factor = _mass(factor, "factor")
-        return LinkInertia(self.mass * factor, self.com, self.tensor * factor)
+        with np.errstate(over="ignore"):
+            mass, tensor = self.mass * factor, self.tensor * factor
+        if not (math.isfinite(mass) and np.all(np.isfinite(tensor))):
+            raise ValueError(f"factor = {factor!r} makes the mass or the tensor overflow")
+        return LinkInertia(mass, self.com, tensor)
 
     def __add__(self, other: "LinkInertia") -> "LinkInertia":
         r"""Two bodies in the same frame welded into one: masses add, the centre of mass is
@@ -269,12 +299,16 @@ class LinkInertia:
         mass = self.mass + other.mass
         if mass == 0.0:
             return LinkInertia(0.0, self.com)
-        com = (self.mass * self.com + other.mass * other.com) / mass
-        tensor = np.zeros((3, 3))
-        for part in (self, other):
-            d = part.com - com
-            tensor += part.tensor + part.mass * (np.dot(d, d) * np.eye(3) - np.outer(d, d))
-        return LinkInertia(mass, com, tensor)
+        with np.errstate(over="ignore", invalid="ignore"):
+            com = (self.mass * self.com + other.mass * other.com) / mass
+            tensor = np.zeros((3, 3))
+            for part in (self, other):
+                d = part.com - com
+                tensor += part.tensor + part.mass * (np.dot(d, d) * np.eye(3) - np.outer(d, d))
+        if not (math.isfinite(mass) and np.all(np.isfinite(com))):
+            raise ValueError("the welded body's mass or centre of mass overflows")
+        return LinkInertia(mass, com, _finite_tensor(
+            tensor, "the welded body (the parts are too heavy or too far apart)"))
 
     def moved(self, X_AB: ArrayLike) -> "LinkInertia":
         r"""The same body described in frame A, when ``self`` describes it in frame B and
@@ -284,6 +318,14 @@ class LinkInertia:
         Parameters
         ----------
         X_AB : array_like, shape (4, 4)
+            A rigid transform (orthonormal rotation block of determinant +1 within 1e-9, last
+            row ``(0, 0, 0, 1)``): a scaled or sheared block would change the body, not the
+            frame it is seen from.
+
+        Raises
+        ------
+        ValueError
+            If ``X_AB`` is not one rigid 4x4 transform (the message names ``X_AB``).
 
         Examples
         --------
@@ -295,5 +337,6 @@ class LinkInertia:
         X = as_float_array(X_AB, "X_AB", (4, 4))
         if X.shape != (4, 4):
             raise ValueError(f"X_AB must be one 4x4 transform, got shape {X.shape}")
+        X = check_transform(X, 1e-9, "X_AB")
         R = X[:3, :3]
         return LinkInertia(self.mass, R @ self.com + X[:3, 3], R @ self.tensor @ R.T)

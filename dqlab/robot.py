@@ -106,12 +106,15 @@ class Link:
     max_speed : float, optional
         The joint's rated speed limit, rad/s (m/s for a prismatic joint), > 0; ``None`` (the
         default) when not known. Read by :meth:`dqlab.ur.script.SafetyLimits.for_robot`.
+    max_torque : float, optional
+        The joint's rated torque, N m (N for a prismatic joint), > 0; ``None`` (the default)
+        when not known. Read by :meth:`dqlab.ur.script.SafetyLimits.for_robot`.
 
     Raises
     ------
     ValueError
         If a parameter is not a finite number, the joint type is unknown, the limits are
-        not ordered or ``max_speed`` is not a positive number.
+        not ordered or ``max_speed`` or ``max_torque`` is not a positive number.
 
     Notes
     -----
@@ -133,7 +136,7 @@ class Link:
     """
 
     def __init__(self, a, alpha, d, theta_offset=0.0, joint=REVOLUTE, limits=None, name="",
-                 inertia=None, max_speed=None):
+                 inertia=None, max_speed=None, max_torque=None):
         values = {"a": a, "alpha": alpha, "d": d, "theta_offset": theta_offset}
         for key, value in values.items():
             try:
@@ -173,6 +176,9 @@ class Link:
             if not (math.isfinite(max_speed) and max_speed > 0.0):
                 raise ValueError(f"Link max_speed must be a finite number > 0, got {max_speed!r}")
         set_(self, "max_speed", max_speed)
+        if max_torque is not None:
+            max_torque = check_scalar(max_torque, "Link max_torque", minimum=0.0, strict=True)
+        set_(self, "max_torque", max_torque)
         if inertia is not None and not isinstance(inertia, LinkInertia):
             raise ValueError("Link inertia must be a dqlab.inertia.LinkInertia or None, got "
                              f"{type(inertia).__name__}")
@@ -974,7 +980,7 @@ class Robot:
           3  R      q3             0        -0.21325  0              [-360, 360] deg
           4  R      q4             0.11235  0         90             [-360, 360] deg
           5  R      q5             0.08535  0         -90            [-360, 360] deg
-          6  R      q6             0.0819   0         0              [-360, 360] deg
+          6  R      q6             0.0819   0         0              -
         """
         rows = []
         for i, lk in enumerate(self._links, start=1):

@@ -108,6 +108,29 @@ OTHER_CALLS = {
         lambda delta_theta, delta_a, delta_d, delta_alpha: robot_from_corrections(
             CalibrationConf(delta_theta, delta_a, delta_d, delta_alpha), "UR3").fk(Q6),
         ((0.0,) * 6, (1e-4,) * 6, (-1e-4,) * 6, (1e-4,) * 6)),
+    "models.ur_link_inertias_from_ros": (
+        lambda mass, cog, rpy, tensor: np.array([
+            I.tensor_at_origin for I in dqlab.models.ur_link_inertias_from_ros(
+                mass, cog, rpy, tensor, dqlab.models.UR_DH["UR5e"]["a"])]),
+        tuple(np.array(dqlab.models.UR_PHYSICAL_PARAMETERS["UR5e"][key])
+              for key in ("mass", "cog", "rpy", "tensor"))),
+    "models.rod_link_inertias": (
+        lambda base_mass, mass_per_metre, radius: np.array([
+            I.tensor_at_origin for I in dqlab.models.rod_link_inertias(
+                UR3, base_mass=base_mass, mass_per_metre=mass_per_metre, radius=radius)]),
+        (0.5, 4.0, 0.03)),
+    "LinkInertia": (lambda mass, com: dqlab.inertia.LinkInertia(
+        mass, com, np.diag([0.01, 0.02, 0.025])).tensor_at_origin, (2.0, V / 10)),
+    "LinkInertia.rod": (lambda mass, start, end, radius: dqlab.inertia.LinkInertia.rod(
+        mass, start, end, radius).tensor_at_origin, (1.2, V / 20, V / 10, 0.02)),
+    "LinkInertia.sphere": (lambda mass, centre, radius: dqlab.inertia.LinkInertia.sphere(
+        mass, centre, radius).tensor_at_origin, (1.2, V / 10, 0.05)),
+    "LinkInertia.scaled": (lambda factor: dqlab.inertia.LinkInertia.sphere(
+        1.2, V / 10, 0.05).scaled(factor).tensor_at_origin, (1.1,)),
+    "LinkInertia.moved": (lambda X_AB: dqlab.inertia.LinkInertia.sphere(
+        1.2, V / 10, 0.05).moved(X_AB).tensor_at_origin, (T,)),
+    "dynamics.with_payload": (lambda mass, cog: dynamics.gravity_torques(
+        dynamics.with_payload(UR3, mass, cog), Q6), (3.0, [0.0, 0.0, 0.1])),
 }
 
 

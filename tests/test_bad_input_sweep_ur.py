@@ -182,6 +182,20 @@ CASES = [
                          ("max_joint_speed", script.UR3_MAX_JOINT_SPEED),
                          ("max_joint_acceleration", 10.0), ("max_joint_step", np.pi),
                          ("max_tcp_speed", 1.0), ("max_tcp_acceleration", 5.0)]],
+    ("SafetyLimits.max_joint_torque",
+     lambda v, tmp: ur.SafetyLimits(robot=UR3, max_joint_torque=v), script.UR3_MAX_JOINT_TORQUE,
+     ("max_joint_torque",), DEFAULT_NONE),
+    ("SafetyLimits.payload", lambda v, tmp: ur.SafetyLimits.for_robot(UR3, payload=v), 2.0,
+     ("payload",), {}),
+    ("SafetyLimits.payload_cog",
+     lambda v, tmp: ur.SafetyLimits.for_robot(UR3, payload=2.0, payload_cog=v),
+     np.array([0.0, 0.0, 0.1]), ("payload_cog",), {}),
+    ("Motion.samples.period",
+     lambda v, tmp: ur.motion.plan_movej(Q0, Q1).samples(v)[1], 0.008, ("period",), {}),
+    *[(f"SafetyLimits.joint_torques.{name}",
+       lambda v, tmp, i=i: ur.SafetyLimits.for_robot(UR3, payload=2.0).joint_torques(
+           *[v if k == i else Q_TRAJ * 0.5 for k in range(3)]), Q_TRAJ, (name,), {})
+      for i, name in enumerate(("q", "qd", "qdd"))],
     # the client, on the kinematic arm
     ("URClient.tol", lambda v, tmp: ur.URClient(arm(), tol=v), 1e-4, ("tol",), TOL),
     ("URClient.poll_interval", lambda v, tmp: ur.URClient(arm(), poll_interval=v), 0.002,

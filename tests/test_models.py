@@ -73,7 +73,8 @@ def test_ur3_parameters_are_the_published_ones():
                                   [np.pi / 2, 0, 0, np.pi / 2, -np.pi / 2, 0])
     np.testing.assert_array_equal(robot.tool, np.eye(4))
     np.testing.assert_array_equal(robot.base, np.eye(4))
-    np.testing.assert_array_equal(robot.limits, [[-2 * np.pi, 2 * np.pi]] * 6)
+    np.testing.assert_array_equal(robot.limits,      # wrist 3 turns without limit
+                                  [[-2 * np.pi, 2 * np.pi]] * 5 + [[-np.inf, np.inf]])
 
 
 def test_thesis_ur3_tcp_check():

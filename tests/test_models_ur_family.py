@@ -74,7 +74,10 @@ def test_every_ur_model_is_ur_shaped_with_its_published_lengths(name):
     p = UR_DH[name]
     for link, a, alpha, d in zip(robot.links, p["a"], UR_ALPHA, p["d"], strict=True):
         assert (link.a, link.alpha, link.d, link.theta_offset) == (a, alpha, d, 0.0)
-        assert link.limits == (-2 * math.pi, 2 * math.pi)
+    for link, limit in zip(robot.links, models.UR_JOINT_RANGE_DEG[name], strict=True):
+        assert link.limits == (-math.radians(limit), math.radians(limit))
+        assert link.limits == ((-math.inf, math.inf) if link is robot.links[5] and name in
+                               ("UR3", "UR3e") else (-2 * math.pi, 2 * math.pi))
     assert robot.bare
 
 

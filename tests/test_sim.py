@@ -388,7 +388,7 @@ def test_backend_servoj_streams_and_stop_brings_the_arm_to_rest(arm):
     (lambda arm: arm.movej(UR3_HOME, v=np.inf), "v must be"),
     (lambda arm: arm.movel([0.3, 0.1, np.nan, 0, 0, 0]), "pose contains NaN"),
     (lambda arm: arm.movel([2.0, 0.0, 0.3, 0, 3.14, 0]), "pose: .* has no IK solution"),
-    (lambda arm: arm.servoj([0, 0, 0, 0, 0, 9.0]), "joint 6 = 9 is beyond"),
+    (lambda arm: arm.servoj([0, 0, 0, 0, 9.0, 0]), "joint 5 = 9 is beyond"),   # (6: no limit)
     (lambda arm: arm.servoj(UR3_HOME, gain=5000), "gain"),
     (lambda arm: arm.stop(a=-1.0), "a must be"),
 ])

@@ -690,8 +690,9 @@ def test_tracking_starts_at_the_equivalent_nearest_q_start(robot):
 
 
 def test_following_refuses_to_leave_the_joint_limits(robot):
-    q_path = np.linspace([0.4, -1.3, 1.4, -1.2, 1.0, 6.1], [0.4, -1.3, 1.4, -1.2, 1.0, 6.5], 30)
-    with pytest.raises(ValueError, match="joint 6 .* limits|limits: joint 6"):
+    # (on joint 5: the UR3's wrist 3 turns without limit)
+    q_path = np.linspace([0.4, -1.3, 1.4, -1.2, 6.1, 1.0], [0.4, -1.3, 1.4, -1.2, 6.5, 1.0], 30)
+    with pytest.raises(ValueError, match="joint 5 .* limits|limits: joint 5"):
         follow_path_ur(robot, pose_path(robot, q_path), q_start=q_path[0])
 
 

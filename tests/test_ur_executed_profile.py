@@ -1,14 +1,20 @@
 """What is checked is what runs: for random moves and trajectories that the safety checks
 accept, the joint speeds and accelerations sampled from every back end -- the kinematic arm
 (hence the stand-in) and the MuJoCo back end's commanded motion -- stay within the limits the
-checks enforce, to 1e-9; what they refuse does exceed a limit."""
+checks enforce, to 1e-9; what they refuse does exceed a limit. The same for the joint
+torques of an arm carrying a heavy payload: the inverse dynamics of the executed motion,
+sampled four times finer than the check samples it, stays within the rated torques (to the
+check's sampling, 1e-3); what the check refuses for a torque does exceed one, as much as its
+message says, at the time it says."""
 
 import math
+import re
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
+from dqlab import dynamics
 from dqlab.models import ur3
 from dqlab.ur import KinematicBackend, SafetyLimits, StepClock, UnsafeTargetError, URClient
 from dqlab.ur import motion as M
@@ -174,6 +180,194 @@ def test_random_trajectory_programs_on_the_kinematic_arm():
     assert accepted >= 5 and refused >= 3
 
 
+# --- joint torques, with a heavy payload ------------------------------------------------------
+
+#: 4 kg held 0.2 m in front of the flange (the UR3 is rated for 3 kg): about a third of random
+#: moves need more torque than the joints are rated for.
+PAYLOAD, COG = 4.0, (0.0, 0.0, 0.2)
+HEAVY = SafetyLimits.for_robot(ROBOT, payload=PAYLOAD, payload_cog=COG)
+#: The same arm built independently of the check, for the oracle's inverse dynamics.
+LOADED = dynamics.with_payload(ur3(), PAYLOAD, COG)
+RATED = np.array([56.0, 56.0, 28.0, 12.0, 12.0, 12.0])          # the UR3's, N m
+#: The check samples every 8 ms and on either side of every change of acceleration; between
+#: samples a torque can rise a little above what the samples show.
+SAMPLING = 1e-3
+
+
+def torque_ratio(q, qd, qdd, robot=LOADED):
+    """max |tau_j| / rated_j over the samples, and the torques."""
+    tau = dynamics.inverse_dynamics(robot, q, qd, qdd)
+    return float((np.abs(tau) / RATED).max()), tau
+
+
+def carrying(payload):
+    """The limits of the UR3 carrying ``payload`` kg at COG, and the oracle's arm."""
+    return (SafetyLimits.for_robot(ROBOT, payload=payload, payload_cog=COG),
+            dynamics.with_payload(ur3(), payload, COG))
+
+
+def executed(arm, step=0.002):
+    """The executed profile of the arm's running program, sampled every ``step`` s."""
+    starts = [start for start, _ in arm.timeline.motions]
+    t = np.arange(starts[0], arm.timeline.end_time, step)
+    return t - starts[0], *arm.timeline.state(t)
+
+
+def assert_refusal_is_true(message, m, robot=LOADED, payload=PAYLOAD):
+    """A torque refusal names the joint, its peak, the rating and when: the motion, sampled
+    finely, reaches that torque there and does exceed the rating."""
+    found = re.search(r"\(([\d.e+-]+) s into the motion\): joint (\d) torque ([\d.e+-]+) N m "
+                      r"exceeds its rated ([\d.e+-]+) N m \(the peak of the joint torques with a "
+                      rf"payload of {payload:g} kg\)", message)
+    assert found, message
+    when, joint, peak, rated = float(found[1]), int(found[2]) - 1, float(found[3]), \
+        float(found[4])
+    assert rated == RATED[joint]
+    t = np.linspace(0.0, m.duration, int(m.duration / 0.002) + 2)
+    breaks = m.law.breaks                  # either side of a change of acceleration
+    t = np.sort(np.concatenate([t, breaks[1:] - 1e-9, breaks[:-1] + 1e-9]))
+    ratio, tau = torque_ratio(*m.at(t), robot=robot)
+    assert ratio > 1.0
+    assert peak == pytest.approx(np.abs(tau[:, joint]).max(), rel=SAMPLING)
+    near = np.abs(t - when) <= 1e-3       # (a peak at a change of acceleration: either side)
+    assert np.abs(tau[near, joint]).max() == pytest.approx(peak, rel=SAMPLING)
+
+
+def test_random_movej_with_a_heavy_payload_on_the_kinematic_arm():
+    rng = np.random.default_rng(47)
+    accepted = torque_refused = 0
+    worst = 0.0
+    for _ in range(40):
+        q0, q1, kw = random_movej(rng)
+        try:
+            S.movej(q1, **kw, limits=HEAVY, q_from=q0)
+        except UnsafeTargetError as exc:
+            if "torque" in str(exc):
+                torque_refused += 1
+                assert_refusal_is_true(str(exc), M.plan_movej(q0, q1, **kw))
+            continue
+        accepted += 1
+        arm = KinematicBackend(q0=q0, clock=StepClock(0.01), limits=HEAVY)
+        arm.connect()
+        arm.run([("movej", q1, kw)])
+        ratio, _ = torque_ratio(*executed(arm)[1:])
+        worst = max(worst, ratio)
+    assert worst <= 1.0 + SAMPLING, worst
+    assert accepted >= 10 and torque_refused >= 5
+
+
+def test_random_movel_with_a_heavy_payload_on_the_kinematic_arm():
+    rng = np.random.default_rng(48)
+    accepted = torque_refused = 0
+    for _ in range(24):
+        q0, goal, kw = random_movel(rng)
+        payload = round(float(rng.uniform(5.0, 12.0)), 3)       # kg, at COG
+        limits, robot = carrying(payload)
+        try:
+            S.movel(goal, **kw, limits=limits, q_from=q0)
+        except UnsafeTargetError as exc:
+            if "torque" in str(exc):
+                torque_refused += 1
+                assert_refusal_is_true(str(exc), M.plan_movel(ROBOT, q0, goal, **kw), robot,
+                                       payload)
+            continue
+        accepted += 1
+        arm = KinematicBackend(q0=q0, clock=StepClock(0.01), limits=limits)
+        arm.connect()
+        arm.run([("movel", goal, kw)])
+        ratio, _ = torque_ratio(*executed(arm)[1:], robot=robot)
+        assert ratio <= 1.0 + SAMPLING
+    assert accepted >= 4 and torque_refused >= 4
+
+
+def test_trajectory_programs_with_a_heavy_payload_on_the_kinematic_arm():
+    rng = np.random.default_rng(49)
+    accepted = torque_refused = 0
+    for _ in range(12):
+        traj = random_trajectory(rng)
+        limits, robot = carrying(round(float(rng.uniform(4.0, 11.0)), 3))
+        try:
+            program = S.program_from_trajectory(traj, limits=limits, q_from=traj.q[0])
+        except UnsafeTargetError as exc:
+            if "torque" in str(exc):
+                torque_refused += 1
+                found = re.search(r"target (\d+) \(t = ([\d.e+-]+) s\): joint (\d) torque "
+                                  r"([\d.e+-]+) N m exceeds its rated", str(exc))
+                assert found, str(exc)
+                assert float(found[4]) > RATED[int(found[3]) - 1]
+            continue
+        accepted += 1
+        dt = traj.t[1] - traj.t[0]
+        clock = SimpleNamespace(now=0.0)
+        arm = KinematicBackend(q0=traj.q[0], clock=lambda c=clock: c.now, limits=limits)
+        arm.connect()
+        clock.now = dt
+        arm.run(parse_urscript(program))
+        states = []
+        for k in range(len(traj.t) + 1):
+            clock.now = dt * (k + 1)
+            states.append(arm.read_state())
+        # the executed samples, from rest to rest: speeds and accelerations as a servo
+        # stream has them, the torques of each sample with the speed on either side
+        q = np.array([traj.q[0]] + [s.q for s in states[:len(traj.t)]] + [traj.q[-1]])
+        v = np.diff(q, axis=0) / dt
+        a = np.diff(v, axis=0) / dt
+        for speeds in (v[:-1], v[1:]):
+            ratio, _ = torque_ratio(q[1:-1], speeds, a, robot=robot)
+            assert ratio <= 1.0 + 1e-9
+        for ends in (q[1:-2], q[2:-1]):             # between samples: constant speed
+            ratio, _ = torque_ratio(ends, v[1:-1], 0.0 * v[1:-1], robot=robot)
+            assert ratio <= 1.0 + 1e-9
+    assert accepted >= 3 and torque_refused >= 3
+
+
+def test_a_refused_heavy_move_sends_nothing_and_the_arm_stays():
+    up, out = [0, -np.pi / 2, 0, -np.pi / 2, 0, 0], [1.5, 0, 0, -np.pi / 2, 0, 0]
+    arm = KinematicBackend(q0=up, clock=StepClock(0.01), limits=HEAVY)
+    with URClient(arm, ROBOT, limits=HEAVY, poll_interval=0) as ur:
+        before = ur.read_state().q
+        with pytest.raises(UnsafeTargetError, match=r"joint 5 torque 17.6\d N m exceeds its "
+                                                    r"rated 12 N m"):
+            ur.movej(out, a=10.0, v=1.05, wait=False)
+        assert len(arm.timeline.motions) == 1 and arm.timeline.motions[0][1].command == "hold"
+        np.testing.assert_array_equal(ur.read_state().q, before)
+        ur.movej(out, a=1.0, v=1.05)                   # gently: within the ratings
+        # the arm's own check, for a program that does not come through the client
+        with pytest.raises(UnsafeTargetError, match=r"line 1: movej \(.* s into the motion\): "
+                                                    r"joint \d torque"):
+            arm.run([("movej", up, {"a": 10.0, "v": 1.05})])
+        np.testing.assert_allclose(ur.read_state().q, out, atol=1e-12)
+
+
+def test_nan_never_switches_the_torque_check_off(monkeypatch):
+    for bad in ([np.nan] * 6, [56.0] * 5 + [np.inf], [-1.0] * 6):
+        with pytest.raises(ValueError, match="max_joint_torque must be positive and finite"):
+            SafetyLimits.for_robot(ROBOT, max_joint_torque=bad)
+    for bad in (np.nan, -1.0, np.inf):
+        with pytest.raises(ValueError, match="payload must be"):
+            SafetyLimits.for_robot(ROBOT, payload=bad)
+    with pytest.raises(ValueError, match="payload_cog contains NaN"):
+        SafetyLimits.for_robot(ROBOT, payload=1.0, payload_cog=[0.0, np.nan, 0.0])
+    with pytest.raises(ValueError, match="max_joint_torque needs robot="):
+        SafetyLimits(max_joint_torque=RATED)
+    # a torque that comes out NaN is a refusal, not a pass
+    monkeypatch.setattr(SafetyLimits, "joint_torques", lambda self, q, qd, qdd: np.full(q.shape,
+                                                                                         np.nan))
+    with pytest.raises(UnsafeTargetError, match="joint 1 torque nan N m exceeds"):
+        S.movej(Q_MID + 0.1, limits=HEAVY, q_from=Q_MID)
+
+
+def test_the_one_at_a_time_torques_are_the_batch_torques():
+    m = M.plan_movej(Q_MID, Q_MID + [1.0, 0.8, -0.9, 0.5, 0.3, 0.2], a=1.0, v=0.5)
+    t, q, qd, qdd = m.samples()
+    assert len(t) > S._BATCH_FROM                                 # the batch path
+    batch = HEAVY.joint_torques(q, qd, qdd)
+    single = HEAVY.joint_torques(q[:10], qd[:10], qdd[:10])      # one state at a time
+    np.testing.assert_allclose(single, batch[:10], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(batch, dynamics.inverse_dynamics(LOADED, q, qd, qdd), rtol=0,
+                               atol=1e-12)
+
+
 # --- the MuJoCo back end's commanded motion -------------------------------------------------
 
 sim = pytest.importorskip("dqlab.sim", reason="the MuJoCo back end needs the extra 'sim'")
@@ -182,8 +376,8 @@ sim = pytest.importorskip("dqlab.sim", reason="the MuJoCo back end needs the ext
 class RecordingMujoco(sim.MujocoBackend):
     """The MuJoCo back end, recording the reference it commands at every simulation step."""
 
-    def __init__(self, *args, **kwargs):
-        super().__init__(*args, limits=LIMITS, **kwargs)
+    def __init__(self, *args, limits=LIMITS, **kwargs):
+        super().__init__(*args, limits=limits, **kwargs)
         self.record = []
 
     def reference(self, times, velocity_lag=0.0):
@@ -218,6 +412,30 @@ def test_random_moves_commanded_by_the_mujoco_backend(kind):
         assert_within_limits(t, q, qd)
         np.testing.assert_allclose(q[-1], plan[-1].q_end, atol=1e-12)
         done += 1
+
+
+def test_heavy_moves_commanded_by_the_mujoco_backend():
+    rng = np.random.default_rng(50)
+    done, worst = 0, 0.0
+    while done < 3:
+        q0, target, kw = random_movej(rng)
+        q0 = np.clip(q0, -3.0, 3.0)
+        target = np.clip(q0 + (target - q0) * 0.5, -3.0, 3.0)
+        try:
+            plan = S.plan_program([("movej", target, kw)], q_now=q0, limits=HEAVY, robot=ROBOT)
+        except UnsafeTargetError:
+            continue
+        arm = RecordingMujoco(q_home=q0, limits=HEAVY)
+        arm.connect()
+        arm.movej(target, **kw, r=0.0)
+        arm.advance(plan[-1].duration + 0.05)
+        t, q, qd = arm.commanded()
+        qdd = np.gradient(qd, t, axis=0)       # between two steps: the mean of either side
+        ratio, _ = torque_ratio(q, qd, qdd)
+        assert ratio <= 1.0 + SAMPLING
+        worst = max(worst, ratio)
+        done += 1
+    assert worst > 0.8, worst               # moves that do come near the ratings
 
 
 def test_a_trajectory_streamed_to_the_mujoco_backend():

@@ -77,11 +77,14 @@ def test_movej_refuses_bad_targets(q, words):
 
 def test_wrist_3_is_unlimited_on_the_ur3_but_not_for_a_model_with_limits():
     assert S.movej([0, 0, 0, 0, 0, 20.0]).startswith("movej(")
-    limits = S.SafetyLimits.for_robot(dqlab.models.ur3())
+    for model in (dqlab.models.ur3, dqlab.models.ur3e):      # the data sheets' "infinite"
+        limits = S.SafetyLimits.for_robot(model())
+        assert S.movej([0, 0, 0, 0, 0, 20.0], limits=limits).startswith("movej(")
+    limits = S.SafetyLimits.for_robot(dqlab.models.ur5())
     with pytest.raises(UnsafeTargetError, match="joint 6 = 20 rad is outside"):
         S.movej([0, 0, 0, 0, 0, 20.0], limits=limits)
     with pytest.raises(ValueError, match="joint 6 = 20 rad is outside"):       # robot.limits
-        S.movej([0, 0, 0, 0, 0, 20.0], limits=dqlab.models.ur3().limits)
+        S.movej([0, 0, 0, 0, 0, 20.0], limits=dqlab.models.ur5().limits)
 
 
 @pytest.mark.parametrize("kwargs, words", [
@@ -211,3 +214,36 @@ def test_a_links_rated_speed_is_a_positive_number(speed):
         dqlab.robot.Link(0.1, 0.0, 0.0, max_speed=speed)
     assert dqlab.robot.Link(0.1, 0.0, 0.0).max_speed is None
     assert dqlab.robot.Link(0.1, 0.0, 0.0, max_speed=2).max_speed == 2.0
+
+
+def test_urscript_never_holds_nan_or_infinity():
+    for bad in ([np.nan] * 6, [0.0] * 5 + [np.inf], [-np.inf, 0, 0, 0, 0, 0]):
+        with pytest.raises(UnsafeTargetError, match="URScript has no such number"):
+            S.urscript_list(bad)
+
+
+def test_the_torque_ratings_and_payload_of_the_limits():
+    limits = S.SafetyLimits.for_robot(dqlab.models.ur10e(), payload=5.0,
+                                      payload_cog=[0.0, 0.0, 0.05])
+    np.testing.assert_array_equal(limits.max_joint_torque, [330, 330, 150, 54, 54, 54])
+    assert limits.checks_torques and limits.payload == 5.0
+    assert not S.SafetyLimits().checks_torques                  # no robot: no torques
+    assert S.as_safety_limits(None).checks_torques              # the default UR3's: checked
+    np.testing.assert_array_equal(S.as_safety_limits(None).max_joint_torque,
+                                  S.UR3_MAX_JOINT_TORQUE)
+    # a robot without ratings has no torque check, unless given; with some, refused
+    custom = S.SafetyLimits.for_robot(dqlab.models.ur3_mdh(), max_joint_speed=1.0)
+    assert not custom.checks_torques
+    with pytest.raises(ValueError, match="payload and payload_cog are only used by the torque"):
+        S.SafetyLimits.for_robot(dqlab.models.ur3_mdh(), max_joint_speed=1.0, payload=1.0)
+    links = list(dqlab.models.ur3().links)
+    links[2] = dqlab.robot.Link(a=links[2].a, alpha=links[2].alpha, d=links[2].d,
+                                inertia=links[2].inertia, max_speed=links[2].max_speed)
+    partial = dqlab.robot.Robot(links, name="partial")
+    with pytest.raises(ValueError, match=r"no rated torque for joints \[3\]"):
+        S.SafetyLimits.for_robot(partial)
+    bare = dqlab.models.ur3().links
+    no_inertia = dqlab.robot.Robot([lk.with_inertia(None) for lk in bare], name="bare")
+    with pytest.raises(ValueError, match="max_joint_torque: the torque check needs the robot's "
+                                         "inertias"):
+        S.SafetyLimits.for_robot(no_inertia)

@@ -476,17 +476,24 @@ def robot_from_kinematics_info(info: KinematicsInfo, *, model=None, name: str = 
 
 
 def _robot(theta, a, d, alpha, model, name):
-    """The calibrated arm: these DH parameters, and the model's joint limits, rated speeds,
-    inertias and joint names (without a model: limits of +-2 pi and nothing else)."""
+    """The calibrated arm: these DH parameters, and the model's joint limits, rated speeds
+    and torques, joint names and inertias (moved into the calibrated frames); without a
+    model: limits of +-2 pi and nothing else."""
     nominal = _nominal(model, required=False)
     label = name or f"{_model_name(model) or 'UR'} (calibrated)"
     ratings = [{"limits": _LIMITS}] * 6
     if nominal is not None:
         ratings = [{"limits": lk.limits, "name": lk.name, "inertia": lk.inertia,
-                    "max_speed": lk.max_speed} for lk in nominal.links]
-    return Robot([Link(a=ai, alpha=al, d=di, theta_offset=t, **rating)
-                  for t, ai, di, al, rating in zip(theta, a, d, alpha, ratings, strict=True)],
-                 convention="dh", name=label)
+                    "max_speed": lk.max_speed, "max_torque": lk.max_torque}
+                   for lk in nominal.links]
+    robot = Robot([Link(a=ai, alpha=al, d=di, theta_offset=t, **rating)
+                   for t, ai, di, al, rating in zip(theta, a, d, alpha, ratings, strict=True)],
+                  convention="dh", name=label)
+    if nominal is None:
+        return robot
+    from ..models import with_model_inertias
+
+    return with_model_inertias(robot, nominal)      # the model's bodies in these frames
 
 
 def _model_name(model):

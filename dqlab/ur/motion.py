@@ -74,7 +74,7 @@ from functools import cached_property
 
 import numpy as np
 
-from .._checks import as_float_array
+from .._checks import as_float_array, check_scalar
 from ..quaternion import quaternion_distance, quaternion_from_matrix
 from ..trajectory import TimeLaw, follow_path_ur, joint_velocities, line_slerp, trapezoidal
 from ..transforms import transform_inverse
@@ -114,6 +114,8 @@ _KNOT_ANGLE = 1e-3
 _MIN_KNOTS = 8
 #: Below this translation (m) a ``movel`` is a pure rotation, timed on its angle.
 _PURE_ROTATION = 1e-9
+#: The most samples :meth:`Motion.samples` takes of one motion.
+_MAX_SAMPLES = 10_000_000
 #: The longest motion planned, s (about 11 days): beyond, the spacing of floats near the
 #: end time exceeds a microsecond, and the motion is a mistake anyway.
 MAX_DURATION = 1e6
@@ -409,6 +411,56 @@ class Motion:
         keep = inside[..., None]
         return q, np.where(keep, qd, 0.0), np.where(keep, qdd, 0.0)
 
+    def samples(self, period=SERVOJ_T):
+        r"""The motion sampled for the checks that cannot be bounded in closed form (the
+        joint torques): ``(t, q, qd, qdd)`` at steps of at most ``period`` within each
+        segment of the time law, both ends of every segment included -- so at a break of the
+        law, where the acceleration jumps, on either side of it (two samples at one time).
+
+        Parameters
+        ----------
+        period : float
+            Longest step, s (default the servo period, :data:`SERVOJ_T`).
+
+        Returns
+        -------
+        t : ndarray, shape (N,)
+            Times since the start of the motion, s (one sample at rest for a motion without
+            a law: a hold).
+        q, qd, qdd : ndarray, shape (N, n)
+
+        Examples
+        --------
+        The trapezoid of a ``movej`` over 1 rad at 1 rad/s^2 up to 0.5 rad/s: 0.5 s of
+        acceleration, 1.5 s of cruise, 0.5 s of braking; at its two breaks the accelerations
+        of either side:
+
+        >>> m = plan_movej([0.0, 0.0], [1.0, 0.0], a=1.0, v=0.5)
+        >>> t, q, qd, qdd = m.samples(period=0.5)
+        >>> t.tolist()
+        [0.0, 0.5, 0.5, 1.0, 1.5, 2.0, 2.0, 2.5]
+        >>> qdd[:, 0].tolist()
+        [1.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0, -1.0]
+        """
+        period = check_scalar(period, "period", minimum=0.0, strict=True)
+        if self.law is None:
+            q = self.q_start[None, :]
+            return np.zeros(1), q, np.zeros_like(q), np.zeros_like(q)
+        law = self.law
+        h = np.diff(law.breaks)
+        steps = np.ceil(h / period)
+        if not steps.sum() <= _MAX_SAMPLES:
+            raise ValueError(f"period = {period!r} s would sample the {self.duration:.6g} s "
+                             f"motion {steps.sum():.3g} times (at most {_MAX_SAMPLES:g}): "
+                             "give a longer period")
+        counts = np.maximum(steps.astype(int), 1)
+        k = np.repeat(np.arange(len(h)), counts + 1)                 # the segment of each sample
+        u = np.concatenate([np.linspace(0.0, 1.0, c + 1) for c in counts])
+        sigma, sd, sdd = _law_values(law, k=k, u=u)
+        q, slope, curvature = self.path(sigma)
+        sd, sdd = sd[:, None], sdd[:, None]
+        return (law.breaks[k] + u * h[k], q, slope * sd, curvature * sd * sd + slope * sdd)
+
     def peak_joint_speed(self):
         r"""Bound on :math:`|\dot q_i|` over the motion, rad/s, shape (n,) (see the module
         docstring)."""
@@ -485,16 +537,20 @@ class Motion:
         return 0.0 if self.law is None or not self.tcp_distance else self._peaks[1]
 
 
-def _law_values(law, t):
+def _law_values(law, t=None, *, k=None, u=None):
     r""":math:`(\sigma, \dot\sigma, \ddot\sigma)` of a
     :class:`~dqlab.trajectory.time_laws.TimeLaw` at the times ``t`` in :math:`[0, T]`, in one
     pass (Horner's rule in the local time :math:`u` of each time's segment, the derivatives
     divided by :math:`h_k` and :math:`h_k^2`): the values of ``law(t)``, several times faster
-    for one instant (the kinematic arm reads one per state; tested equal to ``law(t)``)."""
+    for one instant (the kinematic arm reads one per state; tested equal to ``law(t)``).
+    Given the segments ``k`` and local times ``u`` instead of ``t``, the values of those
+    segments' polynomials there (at a break, either side of it)."""
     c = law.coefficients
-    k = np.clip(np.searchsorted(law.breaks, t, side="right") - 1, 0, len(c) - 1)
+    if k is None:
+        k = np.clip(np.searchsorted(law.breaks, t, side="right") - 1, 0, len(c) - 1)
     h = law.breaks[k + 1] - law.breaks[k]
-    u = (t - law.breaks[k]) / h
+    if u is None:
+        u = (t - law.breaks[k]) / h
     c0, c1, c2, c3, c4, c5 = (c[k, j] for j in range(6))
     sigma = c0 + u * (c1 + u * (c2 + u * (c3 + u * (c4 + u * c5))))
     sd = (c1 + u * (2.0 * c2 + u * (3.0 * c3 + u * (4.0 * c4 + u * 5.0 * c5)))) / h

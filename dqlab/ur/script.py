@@ -24,9 +24,12 @@ frames).
 **Safety.** No text is produced for a target that is NaN, infinite or complex, a joint
 outside the robot's limits, a pose out of the arm's reach, a joint jump between successive
 targets larger than ``max_joint_step``, or a motion whose speeds or accelerations exceed the
-stated limits (:class:`SafetyLimits`). Speeds and accelerations are checked on the motion
-the controller executes, planned by :mod:`dqlab.ur.motion` -- its peaks, not its averages:
-``movej(t=1)`` over 3 rad peaks at 6 rad/s, not 3. Each refusal is an
+stated limits (:class:`SafetyLimits`), or whose joint torques -- the inverse dynamics of the
+arm with its stated payload along the motion -- exceed the joints' rated torques. Speeds and
+accelerations are checked on the motion the controller executes, planned by
+:mod:`dqlab.ur.motion` -- its peaks, not its averages: ``movej(t=1)`` over 3 rad peaks at
+6 rad/s, not 3; torques on the same motion sampled every servo period and on either side of
+every change of acceleration (:meth:`dqlab.ur.motion.Motion.samples`). Each refusal is an
 :class:`UnsafeTargetError` (a ``ValueError``) that names the command, the target and the
 reason; an argument of the wrong type is a ``TypeError`` that names it. These checks are the
 client's first line of defence; the controller's own safety system (joint and TCP limits set
@@ -43,18 +46,22 @@ receives exactly the float that was checked.
 import keyword
 import math
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 
-from .._checks import real_array
-from ..models import UR_MAX_JOINT_SPEED_DEG
+from .._checks import as_float_array, real_array
+from ..dynamics import NewtonEuler, inverse_dynamics, link_inertias, with_payload
+from ..models import UR_MAX_JOINT_SPEED_DEG, UR_MAX_JOINT_TORQUE
 from . import motion
 from ._args import real_number
 from .motion import GAIN, LOOKAHEAD_TIME, MOVEJ_A, MOVEJ_V, MOVEL_A, MOVEL_V, SERVOJ_T, STOPJ_A
 from .poses import check_pose, transform_from_pose
 
 __all__ = [
-    "UR3_JOINT_LIMITS", "UR3_MAX_JOINT_SPEED", "SafetyLimits", "UnsafeTargetError",
+    "UR3_JOINT_LIMITS", "UR3_MAX_JOINT_SPEED", "UR3_MAX_JOINT_TORQUE", "TORQUE_SAMPLE_PERIOD",
+    "SafetyLimits",
+    "UnsafeTargetError",
     "as_safety_limits", "check_joint_targets", "check_motion", "movej", "movel", "servoj",
     "stopj", "program_from_trajectory", "check_trajectory", "plan_command", "plan_program",
     "urscript_list", "urscript_pose", "URSCRIPT_KEYWORDS",
@@ -66,6 +73,23 @@ UR3_JOINT_LIMITS = np.array([[-2 * np.pi, 2 * np.pi]] * 5 + [[-np.inf, np.inf]])
 #: UR3 maximum joint speeds, rad/s: 180 deg/s (base, shoulder, elbow), 360 deg/s (wrists),
 #: :data:`dqlab.models.UR_MAX_JOINT_SPEED_DEG`.
 UR3_MAX_JOINT_SPEED = np.radians(UR_MAX_JOINT_SPEED_DEG["UR3"])
+
+#: UR3 rated joint torques, N m: 56 (base, shoulder), 28 (elbow), 12 (wrists),
+#: :data:`dqlab.models.UR_MAX_JOINT_TORQUE`.
+UR3_MAX_JOINT_TORQUE = np.array(UR_MAX_JOINT_TORQUE["UR3"])
+
+#: Longest step between two samples of a planned motion whose torques are checked, s: the
+#: servo period (:meth:`dqlab.ur.motion.Motion.samples`).
+TORQUE_SAMPLE_PERIOD = SERVOJ_T
+
+#: A motion longer than 160 s is sampled for its torques in this many steps, not every servo
+#: period: between samples a joint moves by at most 1/20,000 of its travel (0.6 mrad of 4 pi).
+_MAX_TORQUE_SAMPLES = 20_000
+
+#: Fewer samples than this are checked one state at a time (:class:`dqlab.dynamics.NewtonEuler`),
+#: more in one batch (:func:`dqlab.dynamics.inverse_dynamics`): the batch costs a fixed few
+#: milliseconds, one state some 35 microseconds (the tests check that both give the same).
+_BATCH_FROM = 256
 
 #: Relative allowance for rounding when a speed or acceleration is compared with its limit
 #: (a motion planned exactly at a limit is not refused for a rounding of its last digit).
@@ -110,6 +134,23 @@ class SafetyLimits:
     robot : dqlab.robot.Robot, optional
         The arm these limits are for: poses are checked for reach and TCP speeds computed
         with it (:meth:`for_robot` sets it).
+    max_joint_torque : ndarray, shape (6,), optional
+        The joints' rated torques, N m (:meth:`for_robot` sets those of the model,
+        :data:`dqlab.models.UR_MAX_JOINT_TORQUE`). With them, every motion's joint torques
+        -- :func:`dqlab.dynamics.inverse_dynamics` of ``robot`` carrying ``payload`` along
+        the motion -- must stay within them at every sample; ``robot`` must then be given and
+        carry inertias. None (the default of a bare ``SafetyLimits()``): torques are not
+        checked.
+    payload : float
+        The payload the arm carries, kg (default 0), as URScript's ``set_payload``.
+    payload_cog : array_like, shape (3,)
+        Its centre of gravity in the flange frame, m (default the flange's centre;
+        :func:`dqlab.dynamics.with_payload`).
+
+    Notes
+    -----
+    The torques are those of ``robot`` as it is when the limits are made (its base sets the
+    direction of gravity); a later change to its base is not seen.
     """
 
     joint_limits: np.ndarray = field(default_factory=lambda: UR3_JOINT_LIMITS.copy())
@@ -119,19 +160,15 @@ class SafetyLimits:
     max_tcp_speed: float = 1.0
     max_tcp_acceleration: float = 5.0
     robot: object = None
+    max_joint_torque: np.ndarray = None
+    payload: float = 0.0
+    payload_cog: tuple = (0.0, 0.0, 0.0)
 
     def __post_init__(self):
         lim = real_array(self.joint_limits, "joint_limits")
         if lim.ndim != 2 or lim.shape[1] != 2 or not np.all(lim[:, 0] <= lim[:, 1]):
             raise ValueError(f"joint_limits must be (n, 2) rows lo <= hi, got {lim!r}")
-        speed = real_array(self.max_joint_speed, "max_joint_speed")
-        try:
-            speed = np.broadcast_to(speed, (len(lim),))
-        except ValueError:
-            raise ValueError(f"max_joint_speed must have {len(lim)} values (one per joint), "
-                             f"got shape {speed.shape}") from None
-        if not np.all((speed > 0) & np.isfinite(speed)):
-            raise ValueError(f"max_joint_speed must be positive and finite, got {speed!r}")
+        speed = _per_joint(self.max_joint_speed, "max_joint_speed", len(lim))
         for key in ("max_joint_acceleration", "max_joint_step", "max_tcp_speed",
                     "max_tcp_acceleration"):
             value = _number(getattr(self, key), key, "SafetyLimits")
@@ -141,27 +178,113 @@ class SafetyLimits:
         if self.robot is not None and getattr(self.robot, "n", None) != len(lim):
             raise ValueError(f"robot must be a Robot with {len(lim)} joints, got "
                              f"{type(self.robot).__name__}")
+        payload = _number(self.payload, "payload", "SafetyLimits")
+        if not (payload >= 0 and math.isfinite(payload)):
+            raise ValueError(f"payload must be a finite number of kg >= 0, got {payload!r}")
+        cog = as_float_array(self.payload_cog, "payload_cog", (3,))
+        if cog.shape != (3,):
+            raise ValueError(f"payload_cog must be one point (3,), got shape {cog.shape}")
+        torque, loaded = self.max_joint_torque, None
+        if torque is not None:
+            torque = _per_joint(torque, "max_joint_torque", len(lim))
+            if self.robot is None:
+                raise ValueError("max_joint_torque needs robot=: the torques are the robot's "
+                                 "inverse dynamics (SafetyLimits.for_robot(robot) gives both)")
+            try:
+                link_inertias(self.robot)
+            except (TypeError, ValueError) as exc:
+                raise ValueError(f"max_joint_torque: the torque check needs the robot's "
+                                 f"inertias: {exc}") from None
+            try:
+                loaded = with_payload(self.robot, payload, cog)
+            except ValueError as exc:
+                raise ValueError(f"payload, payload_cog: {exc}") from None
+        elif payload or cog.any():
+            raise ValueError("payload and payload_cog are only used by the torque check: "
+                             "give max_joint_torque too (SafetyLimits.for_robot fills it)")
         object.__setattr__(self, "joint_limits", lim.copy())
-        object.__setattr__(self, "max_joint_speed", speed.copy())
+        object.__setattr__(self, "max_joint_speed", speed)
+        object.__setattr__(self, "max_joint_torque", torque)
+        object.__setattr__(self, "payload", payload)
+        object.__setattr__(self, "payload_cog", cog.copy())
+        object.__setattr__(self, "_loaded", loaded)      # the robot carrying the payload
 
-    @classmethod
-    def for_robot(cls, robot, **overrides):
-        """The limits of ``robot``: its joint limits and rated joint speeds (the links'
-        ``max_speed``), other values default or given.
+    @property
+    def checks_torques(self):
+        """Whether motions are checked against ``max_joint_torque``."""
+        return self.max_joint_torque is not None
+
+    @cached_property
+    def _newton_euler(self):
+        return NewtonEuler(self._loaded)
+
+    def joint_torques(self, q, qd, qdd):
+        r"""The torques the joints of ``robot`` carrying ``payload`` need at the states
+        ``(q, qd, qdd)``: :math:`\tau = M(q)\ddot q + c(q, \dot q) + g(q)`
+        (:func:`dqlab.dynamics.inverse_dynamics`), what the checks compare with
+        ``max_joint_torque``.
+
+        Parameters
+        ----------
+        q, qd, qdd : array_like, shape (N, n)
+
+        Returns
+        -------
+        ndarray, shape (N, n)
+            N m. From 256 states on in one batch, below one state at a time
+            (:class:`dqlab.dynamics.NewtonEuler`, faster for a few; the same numbers).
 
         Raises
         ------
         ValueError
-            If a joint of the robot has no rated speed and ``max_joint_speed`` is not given.
+            If these limits check no torques (``max_joint_torque`` is None), or a state is
+            not finite (the message names it).
+
+        Examples
+        --------
+        >>> from dqlab.models import ur3
+        >>> limits = SafetyLimits.for_robot(ur3(), payload=3.0)
+        >>> q = [[0.0, 0.0, 0.0, 0.0, 0.0, 0.0]]          # stretched out, at rest
+        >>> limits.joint_torques(q, np.zeros((1, 6)), np.zeros((1, 6))).round(2) + 0.0
+        array([[  0.  , -31.03, -12.37,   0.  ,   0.  ,   0.  ]])
+        """
+        if not self.checks_torques:
+            raise ValueError("these limits check no torques (max_joint_torque is None)")
+        n = len(self.joint_limits)
+        q, qd, qdd = (np.ascontiguousarray(real_array(x, name), dtype=float)
+                      for x, name in ((q, "q"), (qd, "qd"), (qdd, "qdd")))
+        for x, name in ((q, "q"), (qd, "qd"), (qdd, "qdd")):
+            if x.ndim != 2 or x.shape[1] != n or x.shape != q.shape:
+                raise ValueError(f"{name} must have shape (N, {n}) like q, got {x.shape}")
+        try:
+            if len(q) >= _BATCH_FROM:
+                return inverse_dynamics(self._loaded, q, qd, qdd)
+            rnea = self._newton_euler
+            return np.array([rnea(q[k], qd[k], qdd[k]) for k in range(len(q))]).reshape(q.shape)
+        except ValueError as exc:
+            raise ValueError(f"q, qd, qdd: {exc}") from None
+
+    @classmethod
+    def for_robot(cls, robot, **overrides):
+        """The limits of ``robot``: its joint limits, rated joint speeds and torques (the
+        links' ``max_speed`` and ``max_torque``), other values default or given
+        (``payload=``, ``payload_cog=``, ...).
+
+        Raises
+        ------
+        ValueError
+            If a joint of the robot has no rated speed and ``max_joint_speed`` is not given,
+            or only some joints have a rated torque and ``max_joint_torque`` is not given
+            (when none has one, torques are not checked).
 
         Examples
         --------
         >>> from dqlab.models import ur5
-        >>> SafetyLimits.for_robot(ur5()).max_joint_speed.round(4)
+        >>> limits = SafetyLimits.for_robot(ur5(), payload=2.0)
+        >>> limits.max_joint_speed.round(4)
         array([3.1416, 3.1416, 3.1416, 3.1416, 3.1416, 3.1416])
-
-        The UR3 of :func:`dqlab.models.ur3` is modelled with +-2 pi on every joint; the real
-        UR3's wrist 3 turns without limit (the default :class:`SafetyLimits`).
+        >>> limits.max_joint_torque, limits.payload
+        (array([150., 150., 150.,  28.,  28.,  28.]), 2.0)
         """
         links = getattr(robot, "links", None)
         if links is None:
@@ -174,23 +297,45 @@ class SafetyLimits:
                     f"the {robot.name or 'robot'} has no rated speed for joints {missing} "
                     "(Link.max_speed): give max_joint_speed= explicitly")
             overrides["max_joint_speed"] = np.array(speeds)
+        if "max_joint_torque" not in overrides:
+            torques = [getattr(link, "max_torque", None) for link in links]
+            missing = [i + 1 for i, t in enumerate(torques) if t is None]
+            if missing and len(missing) < len(torques):
+                raise ValueError(
+                    f"the {robot.name or 'robot'} has no rated torque for joints {missing} "
+                    "(Link.max_torque): give max_joint_torque= explicitly")
+            overrides["max_joint_torque"] = None if missing else np.array(torques)
         overrides.setdefault("joint_limits", robot.limits)
         return cls(robot=robot, **overrides)
+
+
+def _per_joint(value, name, n):
+    """One positive finite number per joint (a scalar is broadcast), a new array."""
+    a = real_array(value, name)
+    try:
+        a = np.broadcast_to(a, (n,))
+    except ValueError:
+        raise ValueError(f"{name} must have {n} values (one per joint), got shape "
+                         f"{a.shape}") from None
+    if not np.all((a > 0) & np.isfinite(a)):
+        raise ValueError(f"{name} must be positive and finite, got {a!r}")
+    return a.copy()
 
 
 def as_safety_limits(limits, robot=None):
     """``limits`` as :class:`SafetyLimits`.
 
     ``None``: the limits of ``robot`` (:meth:`SafetyLimits.for_robot`), or without a robot the
-    UR3's (:class:`SafetyLimits` with :func:`dqlab.models.ur3` as its robot); a
+    UR3's (:class:`SafetyLimits` with :func:`dqlab.models.ur3` as its robot and its rated
+    torques, :data:`UR3_MAX_JOINT_TORQUE`); a
     ``SafetyLimits`` as it is (with ``robot`` if it has none); joint limits of shape (n, 2)
     such as ``robot.limits``: those, with the other limits of ``robot`` (or the UR3's
     defaults).
 
     Examples
     --------
-    >>> from dqlab.models import ur3
-    >>> as_safety_limits(ur3().limits).joint_limits[5]
+    >>> from dqlab.models import ur5
+    >>> as_safety_limits(ur5().limits).joint_limits[5]
     array([-6.28318531,  6.28318531])
     """
     if isinstance(limits, SafetyLimits):
@@ -200,7 +345,7 @@ def as_safety_limits(limits, robot=None):
         if robot is None:
             from ..models import ur3
 
-            return SafetyLimits(robot=ur3())
+            return SafetyLimits(robot=ur3(), max_joint_torque=UR3_MAX_JOINT_TORQUE)
         return SafetyLimits.for_robot(robot)
     if robot is None:
         return SafetyLimits(joint_limits=limits)
@@ -214,12 +359,28 @@ def _fmt(x):
 def urscript_list(q):
     """A joint vector as URScript writes it: ``[q1, q2, ...]``.
 
+    Raises
+    ------
+    UnsafeTargetError
+        For NaN or infinity (URScript has no such number: it would not reach a controller
+        as the number meant).
+
     Examples
     --------
     >>> urscript_list([0, -1.5707963267948966, 0.5])
     '[0.0, -1.5707963267948966, 0.5]'
+    >>> urscript_list([float("nan")] * 6)
+    Traceback (most recent call last):
+    ...
+    dqlab.ur.script.UnsafeTargetError: q holds nan at index 0: URScript has no such number
     """
-    return "[" + ", ".join(_fmt(x) for x in real_array(q, "q").ravel()) + "]"
+    values = real_array(q, "q").ravel()
+    bad = ~np.isfinite(values)
+    if bad.any():
+        k = int(np.argmax(bad))
+        raise UnsafeTargetError(f"q holds {float(values[k])!r} at index {k}: URScript has no such "
+                                "number")
+    return "[" + ", ".join(_fmt(x) for x in values) + "]"
 
 
 def urscript_pose(p):
@@ -411,12 +572,17 @@ def _robot_for(robot, limits, command):
 def check_motion(m, limits, command="movej", t=0.0):
     r"""Check a planned :class:`~dqlab.ur.motion.Motion` against ``limits``: the joints stay
     within their limits all along, and the peaks of its joint speeds and accelerations
-    (and, for ``movel``, of the TCP's speed and acceleration) stay within the limits.
+    (and, for ``movel``, of the TCP's speed and acceleration) stay within the limits; with
+    rated torques (``limits.max_joint_torque``), the joint torques
+    :math:`\tau = M(q)\ddot q + c(q, \dot q) + g(q)` of ``limits.robot`` carrying
+    ``limits.payload``, at every sample of :meth:`~dqlab.ur.motion.Motion.samples` (every
+    servo period, :data:`TORQUE_SAMPLE_PERIOD` -- in 20,000 steps for a motion longer than
+    160 s -- and either side of every change of acceleration), stay within them.
 
     Raises
     ------
     UnsafeTargetError
-        Naming the command, the joint and the peak.
+        Naming the command, the joint and the peak (for a torque, when it comes).
 
     Examples
     --------
@@ -426,6 +592,11 @@ def check_motion(m, limits, command="movej", t=0.0):
     ...
     dqlab.ur.script.UnsafeTargetError: movej: joint 1 speed 6 rad/s exceeds 3.14159 rad/s ...
     """
+    _check_motion(m, limits, command, t)
+
+
+def _check_motion(m, limits, command, t, torques=None):
+    """:func:`check_motion`; its torques now, or collected in ``torques``."""
     lo, hi = m.joint_range()
     below, above = ~(lo >= limits.joint_limits[:, 0]), ~(hi <= limits.joint_limits[:, 1])
     if below.any() or above.any():
@@ -457,6 +628,57 @@ def check_motion(m, limits, command="movej", t=0.0):
         raise UnsafeTargetError(
             f"{command}: TCP acceleration {m.tcp_peak_acceleration:.6g} m/s^2 exceeds "
             f"max_tcp_acceleration = {limits.max_tcp_acceleration:.6g} m/s^2{why}")
+    _motion_torques(m, limits, command, torques)
+
+
+def _motion_torques(m, limits, command, torques=None):
+    """The torque check of a motion's samples: now, or (``torques``, a list) collected for
+    one evaluation with the rest of a program."""
+    if not limits.checks_torques:
+        return
+    t_s, q, qd, qdd = m.samples(max(TORQUE_SAMPLE_PERIOD, m.duration / _MAX_TORQUE_SAMPLES))
+    block = (q, qd, qdd, lambda k: f"{command} ({t_s[k]:.6g} s into the motion)")
+    if torques is None:
+        _check_torque_blocks(limits, [block])
+    else:
+        torques.append(block)
+
+
+def _check_torques(limits, q, qd, qdd, describe):
+    """Refuse the states (N, n) if a joint torque exceeds its rating anywhere (NaN fails):
+    the message names the worst joint, its peak torque, the rating and, by ``describe(k)``,
+    the command and when its peak comes."""
+    _check_torque_blocks(limits, [(q, qd, qdd, describe)])
+
+
+def _check_torque_blocks(limits, blocks):
+    """:func:`_check_torques` of several blocks of states ``(q, qd, qdd, describe)`` (the
+    motions of a program and its changes of speed), in one evaluation."""
+    if not blocks:
+        return
+    q, qd, qdd = (np.ascontiguousarray(np.concatenate([b[i] for b in blocks]), dtype=float)
+                  for i in range(3))
+    sizes = np.cumsum([0] + [len(b[0]) for b in blocks])
+
+    def describe(k):
+        i = int(np.searchsorted(sizes, k, side="right")) - 1
+        return blocks[i][3](k - sizes[i])
+
+    try:
+        tau = limits.joint_torques(q, qd, qdd)
+    except ValueError as exc:
+        raise UnsafeTargetError(f"{describe(0)}: the joint torques cannot be computed "
+                                f"({exc})") from None
+    ratio = np.abs(tau) / limits.max_joint_torque
+    bad = ~(ratio <= 1.0 + ROUNDING)
+    if bad.any():
+        k, j = np.unravel_index(int(np.argmax(np.where(bad, np.nan_to_num(ratio, nan=np.inf),
+                                                       -1.0))), ratio.shape)
+        load = (f" with a payload of {limits.payload:g} kg" if limits.payload
+                else " without payload")
+        raise UnsafeTargetError(
+            f"{describe(k)}: joint {j + 1} torque {abs(tau[k, j]):.4g} N m exceeds its rated "
+            f"{limits.max_joint_torque[j]:.4g} N m (the peak of the joint torques{load})")
 
 
 def _movej_args(a, v, t, r, limits):
@@ -608,13 +830,13 @@ def _check_reach(robot, p):
                                 f"solution: {result.reason})")
 
 
-def _plan_movel(robot, q_from, p, a, v, t, limits):
+def _plan_movel(robot, q_from, p, a, v, t, limits, torques=None):
     _check_reach(robot, p)
     try:
         m = motion.plan_movel(robot, q_from, p, a, v, t)
     except ValueError as exc:
         raise UnsafeTargetError(f"movel target {urscript_pose(p)}: {exc}") from None
-    check_motion(m, limits, "movel", t)
+    _check_motion(m, limits, "movel", t, torques)
     return m
 
 
@@ -705,8 +927,9 @@ def program_from_trajectory(trajectory, *, name="dqlab_trajectory", a=MOVEJ_A, v
     ``max_joint_step``; joint speeds and accelerations (finite differences) within the
     limits, **from the rest where the approach ``movej`` leaves the arm and to the rest at
     the end** (:func:`check_joint_targets` with ``at_rest``); the TCP's speed between
-    samples (of the ``robot``'s forward kinematics) within ``max_tcp_speed``; and, with
-    ``q_from``, the approach ``movej``'s motion. The whole program is refused if one
+    samples (of the ``robot``'s forward kinematics) within ``max_tcp_speed``; the joint
+    torques with the stated payload within the rated ones (:func:`check_trajectory`); and,
+    with ``q_from``, the approach ``movej``'s motion. The whole program is refused if one
     sample fails.
 
     Parameters
@@ -773,9 +996,13 @@ def check_trajectory(trajectory, *, limits=None, robot=None, command="trajectory
     r"""Check a joint trajectory played by ``servoj`` from rest to rest; its times and joints.
 
     The checks of :func:`program_from_trajectory`: :func:`check_joint_targets` with the
-    times and ``at_rest``, and the TCP's speed between samples,
+    times and ``at_rest``, the TCP's speed between samples,
     :math:`\lVert p_{k+1} - p_k \rVert / (t_{k+1} - t_k)` with :math:`p` the TCP position of
-    the ``robot``'s forward kinematics, within ``max_tcp_speed``.
+    the ``robot``'s forward kinematics, within ``max_tcp_speed``, and, with rated torques
+    (``limits.max_joint_torque``), the joint torques of ``limits.robot`` carrying
+    ``limits.payload`` at every sample, with the acceleration the speed check measures there
+    and the speed on either side of it, within them (in one batch of
+    :func:`dqlab.dynamics.inverse_dynamics`).
 
     Parameters
     ----------
@@ -822,7 +1049,32 @@ def check_trajectory(trajectory, *, limits=None, robot=None, command="trajectory
             raise UnsafeTargetError(
                 f"{command} target {k + 1} (t = {t[k + 1]:.6g} s): TCP speed {speed[k]:.6g} "
                 f"m/s exceeds max_tcp_speed = {limits.max_tcp_speed:.6g} m/s")
+    if limits.checks_torques:
+        _check_sample_torques(t, q, limits, command)
     return t, q
+
+
+def _check_sample_torques(t, q, limits, command):
+    r"""The joint torques of a trajectory played by ``servoj`` from rest to rest, sampled as
+    its speeds and accelerations are checked and as :func:`plan_program` checks the program
+    that plays it: at each sample :math:`k`, the acceleration
+    :math:`a_k = (v_{k+1} - v_k) / \tfrac12(\Delta t_{k-1} + \Delta t_k)` with the speed
+    before it and the speed after it (:math:`v_{k+1} = (q_{k+1} - q_k) / \Delta t_k`, 0 before
+    the first sample and after the last); between samples, the constant speed without
+    acceleration at both ends of the step."""
+    n, zero = len(q), np.zeros((1, q.shape[1]))
+    if n == 1:
+        _check_torques(limits, q, zero, zero, lambda k: f"{command} target 0 (at rest)")
+        return
+    dt = np.diff(t)
+    v = np.diff(q, axis=0) / dt[:, None]
+    v_before, v_after = np.concatenate([zero, v]), np.concatenate([v, zero])
+    spans = np.concatenate([dt[:1], dt, dt[-1:]])
+    a = (v_after - v_before) / (0.5 * (spans[:-1] + spans[1:]))[:, None]
+    knot = np.concatenate([np.arange(n), np.arange(n), np.arange(n - 1), np.arange(1, n)])
+    _check_torques(limits, q[knot], np.concatenate([v_before, v_after, v, v]),
+                   np.concatenate([a, a, np.zeros_like(v), np.zeros_like(v)]),
+                   lambda k: f"{command} target {knot[k]} (t = {t[knot[k]]:.6g} s)")
 
 
 # --------------------------------------------------------------------------------------
@@ -859,7 +1111,11 @@ def plan_command(name, target, kwargs=None, *, q_from, limits=None, robot=None):
     >>> round(m.duration, 6), float(m.peak_joint_speed()[0])
     (1.357143, 0.5)
     """
-    limits = as_safety_limits(limits, robot)
+    return _plan_command(name, target, kwargs, q_from, as_safety_limits(limits, robot), robot)
+
+
+def _plan_command(name, target, kwargs, q_from, limits, robot, torques=None):
+    """:func:`plan_command`; its torque check now, or collected in ``torques`` (a list)."""
     kw = dict(kwargs or {})
     q_from = check_joint_targets(q_from, limits=limits, command=f"{name} (q_from)")
 
@@ -875,7 +1131,7 @@ def plan_command(name, target, kwargs=None, *, q_from, limits=None, robot=None):
                                  kw.get("t", 0.0), kw.get("r", 0.0), limits)
         q = check_joint_targets(target, limits=limits, q_from=q_from, command="movej")
         m = _plan(motion.plan_movej, "movej", q_from, q, a, v, t)
-        check_motion(m, limits, "movej", t)
+        _check_motion(m, limits, "movej", t, torques)
         return m
     if name == "movel":
         kw = take("a", "v", "t", "r")
@@ -883,14 +1139,14 @@ def plan_command(name, target, kwargs=None, *, q_from, limits=None, robot=None):
                                  kw.get("t", 0.0), kw.get("r", 0.0), limits)
         p = _movel_target(target)
         robot = _robot_for(robot, limits, "movel")
-        return _plan_movel(robot, q_from, p, a, v, t, limits)
+        return _plan_movel(robot, q_from, p, a, v, t, limits, torques)
     if name == "servoj":
         kw = take("a", "v", "t", "lookahead_time", "gain")    # a, v: not used by servoj
         t, _, _ = _servoj_args(kw.get("t", SERVOJ_T), kw.get("lookahead_time", LOOKAHEAD_TIME),
                                kw.get("gain", GAIN))
         q = check_joint_targets(target, limits=limits, q_from=q_from, command="servoj")
         m = _plan(motion.plan_servoj, "servoj", q_from, q, t)
-        check_motion(m, limits, "servoj", t)
+        _check_motion(m, limits, "servoj", t, torques)
         return m
     if name == "stopj":
         kw = take("a")
@@ -913,7 +1169,9 @@ def plan_program(commands, *, q_now, qd_now=None, limits=None, robot=None, strea
     servo period: :math:`|\dot q_{next} - \dot q_{prev}| / T` with :math:`T` the mean period
     of the ``servoj`` on either side (the acceleration of a ``servoj`` stream, as
     :func:`check_joint_targets` measures it), from the arm's speed before the first and to
-    rest after the last.
+    rest after the last. With rated torques, the joint torques of every motion
+    (:func:`check_motion`) and of every such change of speed (its acceleration with the
+    speed before and after it) must stay within them.
 
     Any failure refuses the whole program; nothing is returned to run.
 
@@ -969,7 +1227,9 @@ def plan_program(commands, *, q_now, qd_now=None, limits=None, robot=None, strea
         motions.append(motion.plan_stop(q, qd, limits.max_joint_acceleration))
         q, qd = motions[-1].q_end, motions[-1].qd_end
     check_speed_changes = not streaming
+    torques = []                    # every line's, checked in one evaluation at the end
     for k, command in enumerate(commands, start=1):
+        first_block = len(torques)
         try:
             name, target, kw = command
             if name == "stopj":      # brakes the arm's motion; after a motion, it is at rest
@@ -977,24 +1237,36 @@ def plan_program(commands, *, q_now, qd_now=None, limits=None, robot=None, strea
                 a = _stopj_arg(dict(kw or {}).get("a", STOPJ_A), limits)
                 m = _plan(motion.plan_stop, "stopj", q, moving, a)
             else:
-                m = plan_command(name, target, kw, q_from=q, limits=limits, robot=robot)
+                m = _plan_command(name, target, kw, q, limits, robot, torques)
             if check_speed_changes:
-                _check_junction(qd, motions[-1] if motions else None, m, limits)
+                _check_junction(qd, motions[-1] if motions else None, m, limits, torques)
         except (ValueError, TypeError) as exc:
             raise type(exc)(f"line {k}: {exc}") from None
+        _label_line(torques, first_block, k)
         motions.append(m)
         q, qd = m.q_end, m.qd_end
     if check_speed_changes:
+        first_block = len(torques)
         try:
-            _check_junction(qd, motions[-1], None, limits)
+            _check_junction(qd, motions[-1], None, limits, torques)
         except UnsafeTargetError as exc:
             raise UnsafeTargetError(f"line {len(commands)}: {exc}") from None
+        _label_line(torques, first_block, len(commands))
+    _check_torque_blocks(limits, torques)
     return motions
 
 
-def _check_junction(v0, before, after, limits):
+def _label_line(blocks, first, line):
+    """Prefix ``line {line}: `` to the descriptions of the blocks from ``first`` on."""
+    for i in range(first, len(blocks)):
+        q, qd, qdd, describe = blocks[i]
+        blocks[i] = (q, qd, qdd, lambda k, describe=describe: f"line {line}: {describe(k)}")
+
+
+def _check_junction(v0, before, after, limits, torques=None):
     """The speed change from ``v0`` (at the end of ``before``, or the arm's before the
-    program) to the start of ``after`` (None: rest after the program)."""
+    program) to the start of ``after`` (None: rest after the program); its torques now, or
+    collected in ``torques``."""
     v1 = after.qd_start if after is not None else np.zeros_like(v0)
     jump = np.abs(v1 - v0)
     if np.all(jump <= ROUNDING * (1.0 + np.abs(v0) + np.abs(v1))):   # continuous, to rounding
@@ -1010,3 +1282,15 @@ def _check_junction(v0, before, after, limits):
             f"the joint speeds jump {where}: joint {j + 1} changes by {jump[j]:.6g} rad/s in "
             f"{period:.6g} s, an acceleration of {acc[j]:.6g} rad/s^2 above "
             f"{limits.max_joint_acceleration:.6g} rad/s^2")
+    if limits.checks_torques and period > 0.0:
+        # the acceleration of the change, with the speed before and the speed after it
+        q = after.q_start if after is not None else before.q_end
+        signed = (v1 - v0) / period
+        where = "at the change of speed to rest" if after is None else \
+            "at the change of speed from the previous motion"
+        block = (np.stack([q, q]), np.stack([v0, v1]), np.stack([signed, signed]),
+                 lambda k: where)
+        if torques is None:
+            _check_torque_blocks(limits, [block])
+        else:
+            torques.append(block)

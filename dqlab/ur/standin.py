@@ -567,7 +567,8 @@ def _arm_robot(config):
         return nominal
     corrected = robot_from_corrections(CalibrationConf(**config["calibration"]), nominal)
     links = [Link(a=c.a, alpha=c.alpha, d=c.d, theta_offset=c.theta_offset, joint=n.joint,
-                  limits=n.limits, name=n.name, inertia=n.inertia, max_speed=n.max_speed)
+                  limits=n.limits, name=n.name, inertia=c.inertia, max_speed=n.max_speed,
+                  max_torque=n.max_torque)
              for c, n in zip(corrected.links, nominal.links, strict=True)]
     return Robot(links, convention=nominal.convention, base=nominal.base, tool=nominal.tool,
                  name=f"{nominal.name} (calibrated)")
