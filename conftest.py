@@ -1,20 +1,21 @@
-"""Root pytest configuration: the chapters' time budget, their executed copies for the book,
-and no process left behind.
+"""Root pytest configuration: the chapters' time budget and environment, their executed
+copies for the book, no process left behind, and a seeded sample of the sweeps.
 
 Every chapter must run top to bottom in seconds. nbval reports one test item per cell; we
 add up the time of each notebook's cells and fail the session when a notebook exceeds its
 budget, naming it. The cells of a chapter carry the marker ``notebook``
 (``pytest -m "not notebook"`` leaves the chapters out).
 
-With ``--executed-chapters=DIR`` every chapter whose cells all ran and passed is written to
-``DIR`` with the outputs nbval received, so that the book build can show them instead of
-running the chapter a second time (``tools/executed_chapters.py`` puts them into the book's
-execution cache; ``python3 tasks.py test`` does both).
+A chapter's kernel starts with the environment the book build gives it (the variable that
+``dqlab.viz.sphinxext`` sets). With ``--executed-chapters=DIR`` every chapter whose cells
+all ran and passed is written to ``DIR`` with the outputs nbval received, so that the book
+build shows them instead of running the chapter a second time (``tools/executed_chapters.py``
+puts them into the book's execution cache; ``python3 tasks.py test`` does both).
 
 Tests start kernels (nbval), 3D-view servers and a browser; every one must be gone when the
 session ends. A child process of the test run still alive at the end fails the session.
 
-All three work with pytest-xdist (``-n 2``): each worker reports the processes it left
+All of this works with pytest-xdist (``-n 2``): each worker reports the processes it left
 behind to the controller, which also sees every cell's report and judges the budgets.
 
 The inner loop runs a sample of the sweeps. A sweep is a test function marked ``sweep``
@@ -113,6 +114,27 @@ def pytest_terminal_summary(terminalreporter):
 
 
 # ------------------------------------------------------- executed chapters for the book build
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_setup(item):
+    """A chapter's kernel starts as under the book build: with the variable that the Sphinx
+    extension ``dqlab.viz.sphinxext`` sets to the book's root, so that its 3D views load the
+    viewer script the book ships once (its outputs are then the book's)."""
+    if not _is_cell(item):
+        yield
+        return
+    from dqlab.viz.scene import BOOK_ROOT_ENV
+
+    saved = os.environ.get(BOOK_ROOT_ENV)
+    os.environ[BOOK_ROOT_ENV] = str(item.config.rootpath)
+    try:
+        yield
+    finally:
+        if saved is None:
+            del os.environ[BOOK_ROOT_ENV]
+        else:
+            os.environ[BOOK_ROOT_ENV] = saved
+
 
 class _ExecutedChapters:
     """Collects the outputs of each notebook's cells (in the process that runs them)."""

@@ -8,8 +8,9 @@
                              as nbval executed them; the in-browser site; the browser
                              checks of the built pages and of chapters run in that site
     python3 tasks.py fast    the inner loop (under a minute): every test file and docstring
-                             example, a seeded sample of each bad-input sweep; no chapters,
-                             no book, no browser, no tests marked slow
+                             example, a seeded sample of each bad-input sweep; no chapter
+                             runs (nbval, student edition), no book, no browser checks, no
+                             tests marked slow
     python3 tasks.py lint    ruff over the package, tests and scripts, then the chapters, then
                              actionlint over the GitHub workflows
     python3 tasks.py lab     open the chapters in JupyterLab
@@ -131,12 +132,14 @@ def task_test():
 def task_fast():
     """The inner loop: every test file and docstring example, a seeded sample of the sweeps.
 
-    Leaves out the chapters (nbval), the book build, the browser checks and the tests
-    marked ``slow``; all of them run in ``test``.
+    Leaves out what executes chapters (nbval, the student edition's runs: marked
+    ``notebook``), the book build, the browser checks and the tests marked ``slow``; all of
+    them run in ``test``.
     """
     ensure_environment()
     run(PYTHON, "-m", "pytest", "-q", *PARALLEL, "tests", "dqlab",
-        "-m", "not slow and not browser", f"--sweep-sample={FAST_SWEEP_SAMPLE}")
+        "-m", "not slow and not browser and not notebook",
+        f"--sweep-sample={FAST_SWEEP_SAMPLE}")
 
 
 def task_lint():

@@ -136,7 +136,8 @@ def test_the_chapters_run_once_give_the_book_what_nbval_saw(project, tmp_path, m
     jupyter_cache = pytest.importorskip("jupyter_cache")
     book = project.mkdir("book")
     good = _notebook([("print('hello')", []), ("6 * 7", ["a-tag"]),
-                      ("raise SystemExit('a robot')", ["nbval-skip", "skip-execution"])])
+                      ("raise SystemExit('a robot')", ["nbval-skip", "skip-execution"]),
+                      ("import os\nprint(os.environ['DQLAB_VIZ_BOOK_ROOT'])", [])])
     bad = _notebook([("print('before')", []), ("1 / 0", [])])
     nbformat.write(good, book / "01-good.ipynb")
     nbformat.write(bad, book / "02-bad.ipynb")
@@ -145,7 +146,7 @@ def test_the_chapters_run_once_give_the_book_what_nbval_saw(project, tmp_path, m
     result = project.runpytest_subprocess("book", "-p", "nbval.plugin", "--nbval-lax",
                                           "-p", "no:cacheprovider",
                                           f"--executed-chapters={executed}")
-    result.assert_outcomes(passed=3, failed=1, skipped=1)
+    result.assert_outcomes(passed=4, failed=1, skipped=1)
     assert not (executed / "book" / "02-bad.ipynb").exists()
     copy = json.loads((executed / "book" / "01-good.ipynb").read_text())
     nbformat.validate(nbformat.from_dict(copy))
@@ -155,7 +156,9 @@ def test_the_chapters_run_once_give_the_book_what_nbval_saw(project, tmp_path, m
     assert code[1]["outputs"][0]["data"]["text/plain"] == "42"
     assert code[1]["metadata"] == {"tags": ["a-tag"]}      # the book reads the cells' tags
     assert code[2]["outputs"] == [] and code[2]["execution_count"] is None
-    assert [c["execution_count"] for c in code[:2]] == [1, 2]
+    assert [c["execution_count"] for c in code] == [1, 2, None, 3]
+    # the kernel ran as under the book build: 3D views load the book's shared viewer script
+    assert code[3]["outputs"][0]["text"] == f"{project.path}\n"
 
     # the executed copy goes into the book's execution cache, where the build finds it
     sys.path.insert(0, str(ROOT / "tools"))
