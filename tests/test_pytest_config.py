@@ -129,8 +129,9 @@ def _notebook(cells):
 
 
 def test_the_chapters_run_once_give_the_book_what_nbval_saw(project, tmp_path, monkeypatch):
-    """A passing notebook is written with its outputs; a failing one is not written; the
-    book's execution cache takes the passing one and refuses a missing or stale copy."""
+    """On two workers: a passing notebook is written with its outputs, a failing one is not
+    written, and the budgets are judged from every cell; the book's execution cache takes
+    the passing one and refuses a missing or stale copy."""
     nbformat = pytest.importorskip("nbformat")
     pytest.importorskip("nbval")
     jupyter_cache = pytest.importorskip("jupyter_cache")
@@ -143,10 +144,17 @@ def test_the_chapters_run_once_give_the_book_what_nbval_saw(project, tmp_path, m
     nbformat.write(bad, book / "02-bad.ipynb")
     executed = tmp_path / "executed"
     monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")   # a lean session: nbval only
+    pytest.importorskip("xdist")
+    conftest = project.path / "conftest.py"      # a budget that every notebook exceeds
+    conftest.write_text(conftest.read_text().replace("NOTEBOOK_BUDGET_S = 30.0",
+                                                     "NOTEBOOK_BUDGET_S = 0.0"))
     result = project.runpytest_subprocess("book", "-p", "nbval.plugin", "--nbval-lax",
-                                          "-p", "no:cacheprovider",
+                                          "-p", "xdist.plugin", "-n", "2",
+                                          "--dist", "loadfile", "-p", "no:cacheprovider",
                                           f"--executed-chapters={executed}")
     result.assert_outcomes(passed=4, failed=1, skipped=1)
+    result.stdout.fnmatch_lines(["*notebook run times*", "*s  01-good.ipynb  OVER BUDGET",
+                                 "*s  02-bad.ipynb  OVER BUDGET"])
     assert not (executed / "book" / "02-bad.ipynb").exists()
     copy = json.loads((executed / "book" / "01-good.ipynb").read_text())
     nbformat.validate(nbformat.from_dict(copy))
