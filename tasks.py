@@ -7,7 +7,7 @@
                              chapter under nbval; the strict book build from the chapters
                              as nbval executed them; the in-browser site; the browser
                              checks of the built pages and of chapters run in that site
-    python3 tasks.py fast    the inner loop (under a minute): every test file and docstring
+    python3 tasks.py fast    the inner loop (about a minute): every test file and docstring
                              example, a seeded sample of each bad-input sweep; no chapter
                              runs (nbval, student edition), no book, no browser checks, no
                              tests marked slow
