@@ -128,6 +128,7 @@ def _notebook(cells):
     return nb
 
 
+@pytest.mark.notebook      # it runs notebooks under nbval: not in the inner loop
 def test_the_chapters_run_once_give_the_book_what_nbval_saw(project, tmp_path, monkeypatch):
     """On two workers: a passing notebook is written with its outputs, a failing one is not
     written, and the budgets are judged from every cell; the book's execution cache takes
