@@ -3,12 +3,14 @@
 
     python3 tasks.py book    build the HTML book into _build/html, with the in-browser
                              chapters (JupyterLite) in _build/html/lite
-    python3 tasks.py test    the strict book build and the in-browser site, then one pytest
-                             session: unit tests, doctests, every notebook (nbval), the
-                             browser check of the built pages and chapters run in the
-                             in-browser site
-    python3 tasks.py fast    the inner loop: unit tests and doctests, no book, no slow
-                             sweeps (about a minute)
+    python3 tasks.py test    every check, on every core: unit tests, doctests and every
+                             chapter under nbval; the strict book build from the chapters
+                             as nbval executed them; the in-browser site; the browser
+                             checks of the built pages and of chapters run in that site
+    python3 tasks.py fast    the inner loop (about a minute): every test file and docstring
+                             example, a seeded sample of each bad-input sweep; no chapter
+                             runs (nbval, student edition), no book, no browser checks, no
+                             tests marked slow
     python3 tasks.py lint    ruff over the package, tests and scripts, then the chapters, then
                              actionlint over the GitHub workflows
     python3 tasks.py lab     open the chapters in JupyterLab
@@ -98,21 +100,49 @@ def task_book():
         "    (or run 'python3 tasks.py serve' and visit http://127.0.0.1:8000)")
 
 
+#: pytest on every core; the cells of one notebook (and the tests of one file) stay on one
+#: worker, in order. PYTEST_XDIST_AUTO_NUM_WORKERS=N sets the number of workers.
+PARALLEL = ("-n", "auto", "--dist", "loadfile")
+#: Where the notebook tests leave the chapters they executed, for the book build.
+EXECUTED = BUILD / "executed-chapters"
+#: What the inner loop runs of each sweep (tests marked ``sweep``): a seeded sample.
+FAST_SWEEP_SAMPLE = 3
+
+
 def task_test():
     ensure_environment()
-    start = time.time()
-    say("building the book with warnings as errors (executes every chapter)")
+    start, times = time.time(), {}
+    shutil.rmtree(EXECUTED, ignore_errors=True)
+    say("unit tests, doctests and every chapter under nbval, on every core "
+        "(the executed chapters are kept for the book)")
+    run(PYTHON, "-m", "pytest", *PARALLEL, "-m", "not browser",
+        f"--executed-chapters={EXECUTED}")
+    times["tests and chapters"] = time.time() - start
+    say("building the book with warnings as errors, showing the chapters as the tests ran them")
+    run(PYTHON, ROOT / "tools" / "executed_chapters.py", EXECUTED)
     build_book(strict=True)
+    times["book"] = time.time() - start - sum(times.values())
     say("building the in-browser chapters; every downloaded file is checked")
     build_lite()
-    say("unit tests, doctests, notebooks (nbval) and the browser checks of the built book")
-    run(PYTHON, "-m", "pytest")     # what plain `pytest` runs: see [tool.pytest] in pyproject
-    say(f"all checks passed in {time.time() - start:.0f} s")
+    times["in-browser site"] = time.time() - start - sum(times.values())
+    say("the browser checks of the built book and of the chapters run in the in-browser site")
+    run(PYTHON, "-m", "pytest", *PARALLEL, "-m", "browser", "tests")
+    times["browser checks"] = time.time() - start - sum(times.values())
+    say(f"all checks passed in {time.time() - start:.0f} s ("
+        + ", ".join(f"{name} {seconds:.0f} s" for name, seconds in times.items()) + ")")
 
 
 def task_fast():
+    """The inner loop: every test file and docstring example, a seeded sample of the sweeps.
+
+    Leaves out what executes chapters (nbval, the student edition's runs: marked
+    ``notebook``), the book build, the browser checks and the tests marked ``slow``; all of
+    them run in ``test``.
+    """
     ensure_environment()
-    run(PYTHON, "-m", "pytest", "-q", "tests", "dqlab", "-m", "not slow and not browser")
+    run(PYTHON, "-m", "pytest", "-q", *PARALLEL, "tests", "dqlab",
+        "-m", "not slow and not browser and not notebook",
+        f"--sweep-sample={FAST_SWEEP_SAMPLE}")
 
 
 def task_lint():

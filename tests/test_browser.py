@@ -373,25 +373,3 @@ def test_download_menu_offers_the_book_pdf(site, browser):
         page.close()
     assert href.endswith("dqlab.pdf") and (HTML / "book").exists()
 
-
-def test_the_whole_book_prints_to_a_pdf(browser):
-    """The single-page build, printed by Chromium: many pages, every equation typeset.
-
-    Without a single-page build (``python3 tasks.py pdf`` makes one) the test makes it; the
-    chapters' execution cache of the HTML build makes that a matter of a minute or two.
-    """
-    import sys
-
-    sys.path.insert(0, str(ROOT / "tools"))
-    import pdf
-
-    if not (SINGLE / "index.html").exists():
-        if SINGLE != pdf.SINGLE:
-            pytest.fail(f"no single-page build in {SINGLE}")
-        pdf.build_single_page()
-
-    ARTIFACTS.mkdir(parents=True, exist_ok=True)
-    pages, math = pdf.print_pdf(SINGLE, ARTIFACTS / "dqlab.pdf", browser=browser)
-    assert pages >= MIN_PDF_PAGES, f"the PDF has {pages} pages"
-    assert math["maths"] > 500 and math["untypeset"] == 0 and math["errors"] == 0, math
-    assert (ARTIFACTS / "dqlab.pdf").read_bytes().startswith(b"%PDF")

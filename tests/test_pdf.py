@@ -1,6 +1,7 @@
 """The printed book (tools/pdf.py): a title page with the book's version and date, and no
 display equation, table or code line cut at the edge of the page.
 
+The whole book is printed once, by the test below (many pages, every equation typeset).
 The single-page build is laid out for print exactly as ``python3 tasks.py pdf`` does it
 (print media at the width of the A4 text block); every typeset display equation, table and
 code block must then lie inside the text block and show all of its content. Needs the
@@ -45,6 +46,7 @@ def test_the_pdf_has_a_title_page_and_clips_nothing(browser):  # noqa: F811
     assert f"Version {version}, {date}" in title["text"]
     assert "Quaternions and dual quaternions for robot kinematics" in title["text"]
     assert layout["clipped"] == []
-    assert pages > 100 and math["untypeset"] == 0 and math["errors"] == 0
+    assert pages > 100, f"the PDF has {pages} pages"
+    assert math["maths"] > 500 and math["untypeset"] == 0 and math["errors"] == 0, math
     assert (ARTIFACTS / "dqlab-book.pdf").read_bytes().startswith(b"%PDF")
     print(f"\n{pages} pages; {layout['scaled']} equations or tables scaled to fit")

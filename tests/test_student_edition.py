@@ -144,6 +144,7 @@ def _outputs(notebook):
                      for o in c.outputs)
 
 
+@pytest.mark.notebook
 @pytest.mark.parametrize("chapter", CHAPTERS, ids=lambda p: p.stem)
 def test_student_notebooks_run_top_to_bottom(out, chapter, monkeypatch):
     monkeypatch.setenv("PYTHONPATH", str(ROOT))
@@ -156,6 +157,7 @@ def test_student_notebooks_run_top_to_bottom(out, chapter, monkeypatch):
     assert printed.count("then run this cell again") == n_checks
 
 
+@pytest.mark.notebook
 def test_a_pasted_solution_passes_its_automatic_check(out, monkeypatch):
     monkeypatch.setenv("PYTHONPATH", str(ROOT))
     monkeypatch.setenv("MPLBACKEND", "Agg")
@@ -212,6 +214,7 @@ def _paste_solutions(original, student, *, wrong=None):
 
 
 @pytest.mark.slow
+@pytest.mark.notebook
 @pytest.mark.parametrize("chapter", CHAPTERS, ids=lambda p: p.stem)
 def test_the_reference_answers_pass_every_automatic_check(out, chapter, monkeypatch):
     monkeypatch.setenv("PYTHONPATH", str(ROOT))
@@ -221,6 +224,7 @@ def test_the_reference_answers_pass_every_automatic_check(out, chapter, monkeypa
     assert "then run this cell again" not in printed
 
 
+@pytest.mark.notebook
 @pytest.mark.parametrize("label, wrong", [
     ("ch2-ex3", "p_moving = np.array([1.0, 0.0, 0.0])\np_fixed = np.array([0.0, -1.0, 0.0])"),
     ("ch8-ex3", "d_not_flipped, d_flipped = 0.45690, 0.45690\nfailing_rows = [0, 1, 2, 3]"),

@@ -262,7 +262,9 @@ def test_save_html(tmp_path):
 
 
 def test_sphinx_extension(tmp_path, monkeypatch):
-    monkeypatch.delenv(scene_module.BOOK_ROOT_ENV, raising=False)
+    # the extension sets the variable for the rest of a build; here it is undone after the test
+    monkeypatch.setenv(scene_module.BOOK_ROOT_ENV, "")
+    monkeypatch.delenv(scene_module.BOOK_ROOT_ENV)
     connected = {}
     app = types.SimpleNamespace(
         srcdir=str(tmp_path), outdir=str(tmp_path / "html"),
