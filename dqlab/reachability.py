@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._checks import as_float_array, check_instance, check_path, check_scalar
+from ._files import write_atomically
 from .ik import ur
 from .jacobian import manipulability
 from .quaternion import check_unit_quaternion, matrix_from_quaternion
@@ -299,7 +300,9 @@ class ReachabilityMap:
             if value.dtype.kind not in "biufU":
                 raise ValueError(f"metadata {key!r} must be numbers or text, got {value.dtype}")
             arrays["meta_" + key] = value
-        np.savez_compressed(path, **arrays)
+        if path.suffix != ".npz":                 # as numpy names the file it writes
+            path = path.with_name(path.name + ".npz")
+        write_atomically(path, lambda f: np.savez_compressed(f, **arrays))
 
     @classmethod
     def load(cls, path) -> "ReachabilityMap":

@@ -44,9 +44,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._chain import CompiledChain
-from ._checks import as_float_array, check_scalar, real_array
+from ._checks import as_float_array, check_scalar, real_array, short_repr
 from .dualquat import dual_quaternion_from_transform
 from .inertia import LinkInertia
+from .transforms import check_transform
 
 __all__ = ["Link", "Robot", "REVOLUTE", "PRISMATIC"]
 
@@ -58,6 +59,16 @@ class _Offset:
 
 
 _OFFSET = _Offset()
+
+
+class _TurnEachWay:
+    """from_dh_table's default limits: one full turn each way for a revolute joint."""
+
+    def __repr__(self):
+        return "<±2π for revolute joints>"
+
+
+_TURN_EACH_WAY = _TurnEachWay()
 
 REVOLUTE = "revolute"
 PRISMATIC = "prismatic"
@@ -230,19 +241,24 @@ def _link_constants(links, convention):
     return L, R
 
 
+# How far from orthonormal the rotation block of a base or tool may be: the largest entry of
+# |R^T R - I|, an absolute tolerance (that of every check of dqlab's transforms).
+_RIGID_TOL = 1e-9
+
+
 def _check_transform_like(T, name):
+    """A base or tool transform, checked once where it enters: one rigid 4x4 transform
+    (:func:`dqlab.transforms.check_transform` with an absolute tolerance of 1e-9 on
+    :math:`R^\top R - I`), the error naming the argument."""
     if T is None:
         return np.eye(4)
     T = as_float_array(T, name, (4, 4))
     if T.shape != (4, 4):
         raise ValueError(f"{name} must be one 4x4 transform, got shape {T.shape}")
-    R = T[:3, :3]
-    if (not np.allclose(T[3], [0, 0, 0, 1], atol=1e-9)
-            or not np.allclose(R.T @ R, np.eye(3), atol=1e-9)
-            or np.linalg.det(R) < 0):
-        raise ValueError(f"{name} must be a rigid transform (rotation block and last row "
-                         "[0, 0, 0, 1])")
-    return T.copy()
+    try:
+        return check_transform(T, _RIGID_TOL, name).copy()
+    except ValueError as exc:
+        raise ValueError(f"{name} must be a rigid transform: {exc}") from None
 
 
 def _transform_attribute(name, doc):
@@ -322,7 +338,7 @@ class Robot:
     @classmethod
     def from_dh_table(cls, *, d: ArrayLike, a: ArrayLike, alpha: ArrayLike,
                       theta_offset: ArrayLike | None = None, joint: str | tuple = REVOLUTE,
-                      limits: ArrayLike | None = (-2 * math.pi, 2 * math.pi),
+                      limits: ArrayLike | None = _TURN_EACH_WAY,
                       max_speed: ArrayLike | None = None, convention: str = "dh",
                       base: ArrayLike | None = None, tool: ArrayLike | None = None,
                       name: str = "") -> "Robot":
@@ -341,14 +357,16 @@ class Robot:
             In modified DH (``convention="mdh"``) they are :math:`r_i, a_{i-1},
             \alpha_{i-1}`, as :class:`Link` reads them.
         theta_offset : array_like, shape (n,), optional
-            :math:`\theta^0_i` (radians), :math:`\theta_i = q_i + \theta^0_i`; zeros by
-            default.
+            :math:`\theta^0_i` (radians), :math:`\theta_i = q_i + \theta^0_i` (for a
+            prismatic joint the constant :math:`\theta_i`); zeros by default.
         joint : str or sequence of str, optional
             ``"revolute"`` (default) or ``"prismatic"``, for all joints or one per joint.
         limits : array_like, shape (2,) or (n, 2), or None, optional
-            Joint limits, for all joints or per joint. Default :math:`\pm 2\pi`, the range
-            of a UR joint (a revolute joint that turns one full turn each way); ``None``: no
-            limits.
+            Joint limits (radians for a revolute joint, metres for a prismatic one), for
+            all joints or per joint; ``None``: no limits. By default a revolute joint gets
+            :math:`\pm 2\pi`, the range of a UR joint (one full turn each way); a
+            prismatic joint has no such common range, so a table with a prismatic joint
+            must give its limits (its travel in metres) or ``None``.
         max_speed : array_like, shape (n,), optional
             The joints' rated speeds (rad/s), see :class:`Link`.
         convention : {"dh", "mdh"}, optional
@@ -364,8 +382,9 @@ class Robot:
         ------
         ValueError
             If a column is not a list of n finite numbers (the message names it), the
-            columns have different lengths, a twist exceeds :math:`2\pi` in magnitude (a
-            table in degrees?), or a limit or joint type is invalid.
+            columns have different lengths, a twist or an angle offset exceeds :math:`2\pi`
+            in magnitude (a table in degrees?), a prismatic joint is given no limits, or a
+            limit or joint type is invalid.
 
         Examples
         --------
@@ -400,15 +419,32 @@ class Robot:
                 sizes = ", ".join(f"{k}: {w.size}" for k, w in values.items())
                 raise ValueError(f"the columns of the table must have one entry per joint; "
                                  f"got {sizes} ({key} differs from d)")
-        big = np.abs(values["alpha"]) > 2 * math.pi
-        if big.any():
-            i = int(np.flatnonzero(big)[0])
-            raise ValueError(f"alpha[{i}] = {values['alpha'][i]:g} is more than 2 pi: twists "
-                             "are in radians (a table in degrees? convert with np.radians)")
+        for key, what in (("alpha", "twists"), ("theta_offset", "angle offsets")):
+            big = np.abs(values.get(key, np.zeros(n))) > 2 * math.pi
+            if big.any():
+                i = int(np.flatnonzero(big)[0])
+                raise ValueError(f"{key}[{i}] = {values[key][i]:g} is more than 2 pi: {what} "
+                                 "are in radians (a table in degrees? convert with np.radians)")
         theta0 = values.get("theta_offset", np.zeros(n))
-        joints = (joint,) * n if isinstance(joint, (str, int)) else tuple(joint)
+        if isinstance(joint, (str, int)):
+            joints = (joint,) * n
+        else:
+            try:
+                joints = tuple(joint)
+            except TypeError:
+                raise ValueError(f"joint must be one type or one per joint ({n}), got "
+                                 f"{short_repr(joint)}") from None
         if len(joints) != n:
-            raise ValueError(f"joint must be one type or one per joint ({n}), got {joint!r}")
+            raise ValueError(f"joint must be one type or one per joint ({n}), got "
+                             f"{short_repr(joint)}")
+        if limits is _TURN_EACH_WAY:
+            prismatic = [i for i, j in enumerate(joints) if Link(0, 0, 0, joint=j).sigma]
+            if prismatic:
+                raise ValueError(f"limits: joint {prismatic[0] + 1} is prismatic and has no "
+                                 "default range: give the joints' limits (metres for a "
+                                 "prismatic joint, radians for a revolute one), or None for "
+                                 "no limits")
+            limits = (-2 * math.pi, 2 * math.pi)
         if limits is None:
             lims = [None] * n
         else:

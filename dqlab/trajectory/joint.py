@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._checks import as_float_array, check_path, check_scalar
+from .._files import write_atomically
 from . import time_laws
 
 __all__ = ["Trajectory", "joint_trajectory", "via_points"]
@@ -138,10 +139,9 @@ class Trajectory:
 
             blocks += [self.poses[:, :3, 3], quaternion_from_matrix(self.poses[:, :3, :3])]
         table = np.concatenate(blocks, axis=1)
-        with open(path, "w", encoding="utf-8") as f:
-            f.write(",".join(self.columns()) + "\n")
-            for row in table:
-                f.write(",".join(repr(float(x)) for x in row) + "\n")
+        lines = [",".join(self.columns())]
+        lines += [",".join(repr(float(x)) for x in row) for row in table]
+        write_atomically(path, "\n".join(lines) + "\n")
 
     @classmethod
     def load_csv(cls, path):

@@ -44,13 +44,13 @@ over the target), so a crash never leaves half a file.
 import math
 import os
 import re
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from .._checks import check_tolerance, real_array
+from .._files import write_atomically
 from ..dualquat import transform_from_dual_quaternion
 from .poses import (
     dual_quaternion_from_pose,
@@ -371,14 +371,7 @@ def write_poses(path, values, *, kind="ur_pose", names=None, robot="UR3", frame=
     lines += [",".join([name] + [repr(float(x)) for x in row])
               for name, row in zip(names, values, strict=True)]
     lines.append(f"# end: {len(values)}")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent or ".")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as f:
-            f.write("\n".join(lines) + "\n")
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
+    write_atomically(path, "\n".join(lines) + "\n")
 
 
 def append_pose(path, value, *, name=None, kind="ur_pose", robot="UR3", frame="base",
