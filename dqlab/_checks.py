@@ -165,7 +165,7 @@ def short_repr(value, limit=80):
     """
     if isinstance(value, (list, tuple, dict, set, frozenset)) and len(value) > 8:
         return f"a {type(value).__name__} of {len(value)} entries"
-    if isinstance(value, np.ndarray) and value.size > 8:
+    if isinstance(value, (np.ndarray, np.generic)) and value.size > 8:
         return f"an array of shape {value.shape}"
     if isinstance(value, (str, bytes)) and len(value) > limit:
         text = repr(value[:limit])
