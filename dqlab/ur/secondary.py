@@ -30,6 +30,7 @@ import struct
 
 import numpy as np
 
+from .._checks import short_repr
 from . import script
 from .motion import GAIN, LOOKAHEAD_TIME, MOVEJ_A, MOVEJ_V, MOVEL_A, MOVEL_V, SERVOJ_T, STOPJ_A
 from .rtde import STATE_VARIABLES, RTDEReader
@@ -252,6 +253,6 @@ def _port(value, name):
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) \
             or not 0 <= value <= 65535:
         raise ValueError(f"{name} must be a TCP port number (an int in 0..65535), got "
-                         f"{value!r}")
+                         f"{short_repr(value)}")
     return int(value)
 
