@@ -44,7 +44,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._chain import CompiledChain
-from ._checks import as_float_array, check_scalar, real_array, short_repr
+from ._checks import as_float_array, check_scalar, check_text, real_array, short_repr
 from .dualquat import dual_quaternion_from_transform
 from .inertia import LinkInertia
 from .transforms import check_transform
@@ -72,6 +72,14 @@ _TURN_EACH_WAY = _TurnEachWay()
 
 REVOLUTE = "revolute"
 PRISMATIC = "prismatic"
+
+
+def _bound(value, name):
+    """A joint limit: a finite number (:func:`dqlab._checks.check_scalar`), or an infinite
+    float for no limit on that side."""
+    if isinstance(value, (float, np.floating)) and math.isinf(value):
+        return float(value)
+    return check_scalar(value, name)
 
 
 def _rot_x_h(alpha):
@@ -145,15 +153,8 @@ class Link:
 
     def __init__(self, a, alpha, d, theta_offset=0.0, joint=REVOLUTE, limits=None, name="",
                  inertia=None, max_speed=None):
-        values = {"a": a, "alpha": alpha, "d": d, "theta_offset": theta_offset}
-        for key, value in values.items():
-            try:
-                value = float(value)
-            except (TypeError, ValueError):
-                raise ValueError(f"Link {key} must be a number, got {value!r}") from None
-            if not math.isfinite(value):
-                raise ValueError(f"Link {key} must be finite, got {value!r}")
-            values[key] = value
+        values = {key: check_scalar(value, f"Link {key}") for key, value in
+                  (("a", a), ("alpha", alpha), ("d", d), ("theta_offset", theta_offset))}
         if joint in (0, "R", "r"):
             joint = REVOLUTE
         elif joint in (1, "P", "p"):
@@ -162,12 +163,12 @@ class Link:
             raise ValueError(f"Link joint must be 'revolute' or 'prismatic', got {joint!r}")
         if limits is None:
             limits = (-math.inf, math.inf)
-        try:
-            lo, hi = (float(v) for v in limits)
-        except (TypeError, ValueError):
-            raise ValueError(f"Link limits must be a pair (lo, hi), got {limits!r}") from None
-        if math.isnan(lo) or math.isnan(hi) or not lo <= hi:
-            raise ValueError(f"Link limits must satisfy lo <= hi, got {limits!r}")
+        if isinstance(limits, (str, bytes)) or np.ndim(limits) != 1 or len(limits) != 2:
+            raise ValueError(f"Link limits must be a pair (lo, hi), got {short_repr(limits)}")
+        lo, hi = _bound(limits[0], "Link limits (lo)"), _bound(limits[1], "Link limits (hi)")
+        if not lo <= hi or lo == math.inf or hi == -math.inf:
+            raise ValueError(f"Link limits must satisfy lo <= hi, lo < inf and hi > -inf, got "
+                             f"{short_repr(limits)}")
         set_ = object.__setattr__       # a Link is immutable once built
         set_(self, "a", values["a"])
         set_(self, "alpha", values["alpha"])
@@ -177,12 +178,7 @@ class Link:
         set_(self, "limits", (lo, hi))
         set_(self, "name", str(name))
         if max_speed is not None:
-            try:
-                max_speed = float(max_speed)
-            except (TypeError, ValueError):
-                raise ValueError(f"Link max_speed must be a number, got {max_speed!r}") from None
-            if not (math.isfinite(max_speed) and max_speed > 0.0):
-                raise ValueError(f"Link max_speed must be a finite number > 0, got {max_speed!r}")
+            max_speed = check_scalar(max_speed, "Link max_speed", minimum=0.0, strict=True)
         set_(self, "max_speed", max_speed)
         if inertia is not None and not isinstance(inertia, LinkInertia):
             raise ValueError("Link inertia must be a dqlab.inertia.LinkInertia or None, got "
@@ -261,6 +257,14 @@ def _check_transform_like(T, name):
         raise ValueError(f"{name} must be a rigid transform: {exc}") from None
 
 
+def _check_name(name):
+    """A robot's name: text, empty or one line of printable text (it is written into files:
+    :func:`dqlab._checks.check_text`)."""
+    if not isinstance(name, str):
+        raise TypeError(f"name must be text (the robot's name), got {short_repr(name)}")
+    return check_text(name, "name") if name else name
+
+
 def _transform_attribute(name, doc):
     """A rigid transform of the chain (base or tool): read as a copy; assigning checks it
     and recomputes the chain's constant parts."""
@@ -330,7 +334,7 @@ class Robot:
             raise ValueError(f"convention must be 'dh' or 'mdh', got {convention!r}")
         self._links = links
         self._convention = convention
-        self.name = str(name)
+        self.name = _check_name(name)
         self._base = _check_transform_like(base, "base")
         self._tool = _check_transform_like(tool, "tool")
         self._prepare()

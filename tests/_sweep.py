@@ -70,38 +70,47 @@ class Arg:
     none_ok: bool = False
     inf_ok: bool = False
     names: tuple = ()
+    extra: dict = None
+    only: tuple = None
 
     def kinds(self):
-        if self.kind in ("array", "any"):
-            return ARRAY_KINDS
-        if self.kind == "scalar":
-            return ARRAY_KINDS + NUMBER_KINDS
-        return {"int": INT_KINDS, "object": OBJECT_KINDS, "text": TEXT_KINDS,
-                "name": TEXT_KINDS, "path": PATH_KINDS, "file": FILE_KINDS}[self.kind]
+        """The kinds of bad values of this argument: those of its kind (or ``only`` these),
+        then its ``extra`` ones (a name -> a bad value, or a function of the case's folder
+        that makes one: a degenerate robot, a corrupt file of a given format...)."""
+        if self.only is not None:
+            kinds = self.only
+        elif self.kind in ("array", "any"):
+            kinds = ARRAY_KINDS
+        elif self.kind == "scalar":
+            kinds = ARRAY_KINDS + NUMBER_KINDS
+        else:
+            kinds = {"int": INT_KINDS, "object": OBJECT_KINDS, "text": TEXT_KINDS,
+                     "name": TEXT_KINDS, "path": PATH_KINDS, "file": FILE_KINDS}[self.kind]
+        return tuple(kinds) + tuple(self.extra or ())
 
 
-def A(value, none_ok=False, names=()):
-    return Arg(value, "array", none_ok, names=names)
+def A(value, none_ok=False, names=(), extra=None, inf_ok=False):
+    return Arg(value, "array", none_ok, inf_ok, names, extra)
 
 
 def Any(value):
     return Arg(value, "any")
 
 
-def S(value, none_ok=False, inf_ok=False, names=()):
-    return Arg(value, "scalar", none_ok, inf_ok, names)
+def S(value, none_ok=False, inf_ok=False, names=(), extra=None):
+    return Arg(value, "scalar", none_ok, inf_ok, names, extra)
 
 
-def Int(value, none_ok=False, names=()):
-    return Arg(value, "int", none_ok, names=names)
+def Int(value, none_ok=False, names=(), extra=None):
+    return Arg(value, "int", none_ok, names=names, extra=extra)
 
 
-def O(value, none_ok=False, names=()):  # noqa: E743
-    return Arg(value, "object", none_ok, names=names)
+def O(value, none_ok=False, names=(), extra=None):  # noqa: E743
+    return Arg(value, "object", none_ok, names=names, extra=extra)
 
 
-def T(value, none_ok=False):
-    return Arg(value, "text", none_ok)
+def T(value, none_ok=False, only=None):
+    return Arg(value, "text", none_ok, only=only)
 
 
 def Name(value, none_ok=False):
@@ -112,8 +121,8 @@ def P(value):
     return Arg(value, "path")
 
 
-def F(value):
-    return Arg(value, "file")
+def F(value, extra=None):
+    return Arg(value, "file", extra=extra)
 
 
 @dataclass
@@ -412,7 +421,10 @@ def run(case, folder):
         for label, arg in case.args.items():
             for kind in arg.kinds():
                 kwargs = good_kwargs(case)
-                if arg.kind in ("object", "text", "name", "path") or kind in OBJECT_KINDS + (
+                if arg.extra and kind in arg.extra:
+                    bad = arg.extra[kind]
+                    kwargs[label] = bad(folder) if callable(bad) else bad
+                elif arg.kind in ("object", "text", "name", "path") or kind in OBJECT_KINDS + (
                         "directory",) and arg.kind == "file":
                     kwargs[label] = bad_object(kind, folder)
                 elif arg.kind == "file":
