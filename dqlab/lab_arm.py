@@ -166,7 +166,8 @@ def motor_angles(positions, *, where="point"):
     positions : array_like, shape (K, 3)
         Cup positions in the base frame, metres.
     where : str, optional
-        How to name a point in an error message (``"point"``, ``"step"``).
+        How to name a point in an error message (``"point"``, named with its index in
+        ``positions``; ``"step"``).
 
     Returns
     -------
@@ -186,18 +187,24 @@ def motor_angles(positions, *, where="point"):
     >>> motor_angles([[0.0, -0.17, 0.5]])
     Traceback (most recent call last):
     ...
-    ValueError: point 0: (0, -170, 500) mm is out of the uArm Swift Pro's reach: ...
+    ValueError: point 0 (positions[0]): (0, -170, 500) mm is out of the uArm Swift Pro's ...
     """
     p = as_float_array(positions, "positions", (3,))
     if p.ndim != 2:
         raise ValueError(f"positions must have shape (K, 3), got {p.shape}")
+    check_text(where, "where", max_length=40)
+    for k in np.flatnonzero(np.linalg.norm(p, axis=1) > _REACH):
+        raise ValueError(f"{_label(where, k)}: ({', '.join(f'{v:.4g}' for v in p[k] * 1000)}) mm "
+                         f"is out of the uArm Swift Pro's reach: more than {_REACH:g} m from "
+                         "its base")
     result = ik.desk_arm(uarm_swift_pro(), p)
     angles = np.full((len(p), 3), np.nan)
     for k in range(len(p)):
         name = "(" + ", ".join(f"{round(v, 6) + 0.0:.4g}" for v in p[k] * 1000) + ") mm"
+        where_k = _label(where, k)
         if not result.valid[k, 0]:
             reason = str(result.reason[k]).removeprefix("unreachable: ")
-            raise ValueError(f"{where} {k}: {name} is out of the uArm Swift Pro's reach: "
+            raise ValueError(f"{where_k}: {name} is out of the uArm Swift Pro's reach: "
                              f"{reason}")
         q_lab = desk_arm_lab_from_joints(result.solutions[k, 0])
         B, L, R = np.degrees(motor_angles_from_lab(q_lab))
@@ -205,10 +212,20 @@ def motor_angles(positions, *, where="point"):
         for label, value in checks.items():
             lo, hi = MOTOR_LIMITS_DEG[label]
             if not lo - 1e-9 <= value <= hi + 1e-9:
-                raise ValueError(f"{where} {k}: {name} needs {label} = {value:.2f} deg, "
+                raise ValueError(f"{where_k}: {name} needs {label} = {value:.2f} deg, "
                                  f"outside the firmware's range [{lo:g}, {hi:g}] deg")
         angles[k] = B, L, R
     return angles
+
+
+#: Farther than this from the base (metres), no point is within the arm's reach (its arms
+#: and the cup's offsets add up to 0.37 m).
+_REACH = 1.0
+
+
+def _label(where, k):
+    """How an error names point ``k``: "point 0 (positions[0])", or "step 0"."""
+    return f"{where} {k}" + (f" (positions[{k}])" if where == "point" else "")
 
 
 def _arrivals(plan):

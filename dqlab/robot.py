@@ -155,15 +155,18 @@ class Link:
                  inertia=None, max_speed=None):
         values = {key: check_scalar(value, f"Link {key}") for key, value in
                   (("a", a), ("alpha", alpha), ("d", d), ("theta_offset", theta_offset))}
-        if joint in (0, "R", "r"):
-            joint = REVOLUTE
-        elif joint in (1, "P", "p"):
-            joint = PRISMATIC
-        if joint not in (REVOLUTE, PRISMATIC):
-            raise ValueError(f"Link joint must be 'revolute' or 'prismatic', got {joint!r}")
+        if isinstance(joint, (bool, np.bool_)) or joint not in (
+                REVOLUTE, PRISMATIC, 0, 1, "R", "r", "P", "p"):
+            raise ValueError("Link joint must be 'revolute' or 'prismatic' (or 0, 1, 'R', "
+                             f"'P'), got {short_repr(joint)}")
+        joint = REVOLUTE if joint in (REVOLUTE, 0, "R", "r") else PRISMATIC
         if limits is None:
             limits = (-math.inf, math.inf)
-        if isinstance(limits, (str, bytes)) or np.ndim(limits) != 1 or len(limits) != 2:
+        try:
+            pair = not isinstance(limits, (str, bytes)) and np.shape(limits) == (2,)
+        except ValueError:                                  # a ragged sequence
+            pair = False
+        if not pair:
             raise ValueError(f"Link limits must be a pair (lo, hi), got {short_repr(limits)}")
         lo, hi = _bound(limits[0], "Link limits (lo)"), _bound(limits[1], "Link limits (hi)")
         if not lo <= hi or lo == math.inf or hi == -math.inf:
@@ -176,7 +179,9 @@ class Link:
         set_(self, "theta_offset", values["theta_offset"])
         set_(self, "joint", joint)
         set_(self, "limits", (lo, hi))
-        set_(self, "name", str(name))
+        if not isinstance(name, str):
+            raise TypeError(f"Link name must be text, got {short_repr(name)}")
+        set_(self, "name", check_text(name, "Link name") if name else name)
         if max_speed is not None:
             max_speed = check_scalar(max_speed, "Link max_speed", minimum=0.0, strict=True)
         set_(self, "max_speed", max_speed)
@@ -334,7 +339,7 @@ class Robot:
             raise ValueError(f"convention must be 'dh' or 'mdh', got {convention!r}")
         self._links = links
         self._convention = convention
-        self.name = _check_name(name)
+        self.name = name
         self._base = _check_transform_like(base, "base")
         self._tool = _check_transform_like(tool, "tool")
         self._prepare()
@@ -456,6 +461,13 @@ class Robot:
             if lim.shape not in ((2,), (n, 2)):
                 raise ValueError(f"limits must have shape (2,) or ({n}, 2), got {lim.shape}")
             lims = [tuple(row) for row in np.broadcast_to(lim, (n, 2)).tolist()]
+            for i, (lo, hi) in enumerate(lims):
+                turns = max(abs(lo), abs(hi)) / (2 * math.pi)
+                if joints[i] in (REVOLUTE, 0, "R", "r") and math.isfinite(turns) and turns > 2:
+                    raise ValueError(f"limits of joint {i + 1} = ({lo:g}, {hi:g}) are more than "
+                                     "two turns: a revolute joint's limits are in radians (a "
+                                     "table in degrees? convert with np.radians; inf for no "
+                                     "limit)")
         speeds = values.get("max_speed", [None] * n)
         links = [Link(a=values["a"][i], alpha=values["alpha"][i], d=values["d"][i],
                       theta_offset=theta0[i], joint=joints[i], limits=lims[i],
@@ -528,6 +540,15 @@ class Robot:
     @property
     def n(self):
         return len(self._links)
+
+    @property
+    def name(self):
+        """The robot's name: text, empty or one printable line (assigning checks it)."""
+        return self._name
+
+    @name.setter
+    def name(self, value):
+        self._name = _check_name(value)
 
     base = _transform_attribute(
         "base", ":math:`X_{W0}`, shape (4, 4) (a copy; assign a new transform to change it).")

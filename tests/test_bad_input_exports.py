@@ -82,10 +82,13 @@ def test_a_name_xml_cannot_hold_is_refused_and_every_other_is_written_well_forme
         for name, message in NAMES_REFUSED.items():
             with pytest.raises(ValueError, match=r"^name must .*" + message):
                 generate(UR3, name=name)
-            robot = Robot(UR3.links, name=name)
             if name:                      # a robot without a name is written as "robot"
-                with pytest.raises(ValueError, match=r"^robot.name must .*" + message):
-                    generate(robot)
+                with pytest.raises(ValueError, match=r"^name must .*" + message):
+                    Robot(UR3.links, name=name)             # refused where it enters
+                robot = ur3()
+                with pytest.raises(ValueError, match=r"^name must .*" + message):
+                    robot.name = name
+                assert robot.name == "UR3"
         with pytest.raises(TypeError, match="^name must be text, got 123"):
             generate(UR3, name=123)
     for name in ["UR3 <bench> & \"lab\" 'one'", "Démo bras ☃ 𝔘𝔯3", "]]> --> <!--", "a" * 200]:

@@ -55,9 +55,9 @@ def test_the_uarm_model_is_the_firmwares_forward_model():
 
 
 def test_motor_angles_refuse_what_the_firmware_refuses():
-    with pytest.raises(ValueError, match=r"point 0: .* needs R = -1\.4\d deg, outside"):
+    with pytest.raises(ValueError, match=r"point 0 \(positions\[0\]\): .* needs R = -1\.4\d deg"):
         lab_arm.motor_angles([[0.2288, 0.0, 0.1781]])          # the lab's own start point
-    with pytest.raises(ValueError, match=r"point 1: .* needs B = "):
+    with pytest.raises(ValueError, match=r"point 1 \(positions\[1\]\): .* needs B = "):
         lab_arm.motor_angles([[0.2, 0.0, 0.1], [-0.1, 0.15, 0.05]])    # behind the arm
     with pytest.raises(ValueError, match="out of the uArm Swift Pro's reach"):
         lab_arm.motor_angles([[0.0, 0.4, 0.05]])
