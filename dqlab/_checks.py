@@ -228,6 +228,19 @@ def check_text(value, name, *, max_length=200, forbidden="", why=""):
     return value
 
 
+def is_boolean(value):
+    """True for a boolean or an array of booleans: not numbers, though numpy reads them as
+    0 and 1 (anything numpy cannot read as an array is not boolean here).
+
+    >>> is_boolean(True), is_boolean([True, False]), is_boolean([1, 0]), is_boolean([[1], []])
+    (True, True, False, False)
+    """
+    try:
+        return np.asarray(value).dtype.kind == "b"
+    except (TypeError, ValueError):
+        return False
+
+
 def check_instance(value, kind, name):
     """``value`` itself, or ``TypeError`` naming ``name`` unless it is an instance of
     ``kind`` (a class or a tuple of classes).

@@ -1,4 +1,4 @@
-"""Writing files so that a failed write never destroys one: the one place dqlab writes.
+"""Writing files so that a failed write never destroys one, and reading them within a bound.
 
 Every writer of dqlab (pose files, trajectories, reachability maps, G-code programs, HTML
 scenes, the book's viewer script) hands its content to :func:`write_atomically`. The content
@@ -13,7 +13,7 @@ import secrets
 
 from ._checks import check_path
 
-__all__ = ["write_atomically"]
+__all__ = ["write_atomically", "read_bytes"]
 
 
 def write_atomically(path, content, *, encoding="utf-8", name="path"):
@@ -99,3 +99,47 @@ def write_atomically(path, content, *, encoding="utf-8", name="path"):
             pass
         raise
     return path
+
+
+def read_bytes(path, *, max_bytes, what="file", name="path"):
+    """The bytes of the file ``path``, refused unread beyond ``max_bytes``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    max_bytes : int
+        The largest file accepted: a reader's bound, so that a huge or endless file (a
+        device, a file still growing) is refused, not read into memory.
+    what : str, optional
+        What the file should be, for the message ("trajectory file").
+    name : str, optional
+        The argument's name in error messages.
+
+    Raises
+    ------
+    TypeError
+        If ``path`` is not a file path.
+    ValueError
+        If the file is larger than ``max_bytes`` (naming the file and its size).
+    OSError
+        If it cannot be read (naming the file).
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "big.csv"
+    >>> _ = path.write_bytes(bytes(100))
+    >>> read_bytes(path, max_bytes=10, what="trajectory file")
+    Traceback (most recent call last):
+    ...
+    ValueError: .../big.csv: 100 bytes, more than a trajectory file may hold (10 bytes)
+    """
+    path = check_path(path, name)
+    with open(path, "rb") as f:
+        size = os.fstat(f.fileno()).st_size
+        data = f.read(max_bytes + 1) if size <= max_bytes else b""
+    if size > max_bytes or len(data) > max_bytes:
+        size = max(size, len(data))
+        raise ValueError(f"{path}: {size} bytes, more than a {what} may hold ({max_bytes} "
+                         "bytes)")
+    return data

@@ -458,7 +458,7 @@ def plan_pick_place(robot, task, *, object_pose=None, branch=0,
             if not gap <= grasp_tol:
                 raise ValueError(
                     f"step {step[i]}: the suction comes on with no object under the cup "
-                    f"(the object is {gap * 1000:.4g} mm away, grasp_tol "
+                    f"(the object, at object_pose, is {gap * 1000:.4g} mm away, grasp_tol "
                     f"{grasp_tol * 1000:.4g} mm)")
             X_CO = np.linalg.inv(cup[i]) @ X_WO
             pick_step = int(step[i])

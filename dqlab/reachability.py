@@ -35,6 +35,8 @@ __all__ = ["pose_dexterity", "super_fibonacci_quaternions", "ReachabilityMap",
 
 #: Poses per call of the solver inside :func:`reachability_statistics`: small temporaries.
 BLOCK = 8192
+#: The most orientations :func:`super_fibonacci_quaternions` makes (320 MB of them).
+MAX_ORIENTATIONS = 10 ** 7
 
 
 def pose_dexterity(robot: Robot, poses: ArrayLike, **options
@@ -172,7 +174,7 @@ def super_fibonacci_quaternions(k: int) -> NDArray[np.float64]:
     >>> q.shape, bool(np.allclose(np.linalg.norm(q, axis=1), 1.0))
     ((100, 4), True)
     """
-    k = check_scalar(k, "k", minimum=1, integer=True)
+    k = check_scalar(k, "k", minimum=1, maximum=MAX_ORIENTATIONS, integer=True)
     s = np.arange(k) + 0.5
     r, rr = np.sqrt(s / k), np.sqrt(1.0 - s / k)
     alpha = 2.0 * np.pi * s / np.sqrt(2.0)

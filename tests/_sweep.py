@@ -250,9 +250,9 @@ def bad_file(kind, good, folder):
         data = b"[" * 200_000 + b"]" * 200_000
     elif kind == "long_line":
         data = data[:64] + b"1" * 8_000_000 + b"\n"
-    if kind == "huge_file":              # a sparse file of 64 MB: no reader should read it all
+    if kind == "huge_file":              # a sparse file of 300 MB: no reader should read it
         with open(path, "wb") as f:
-            f.truncate(64 << 20)
+            f.truncate(300 << 20)
         return path
     path.write_bytes(data)
     return path
