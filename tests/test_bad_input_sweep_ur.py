@@ -15,7 +15,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from _sweep import Arg, Registry, folder, sweep_test
+from _sweep import Arg, F, Name, P, Registry, folder, sweep_test
 
 import dqlab
 from dqlab import ur
@@ -290,6 +290,25 @@ for _name, _call, _good, _names, _options in CASES_:
               group=_name.rsplit(".", 1)[0],
               **{_label: Arg(_good, _kind(_good), _options.get("none_ok", False),
                              _options.get("inf_ok", False), tuple(_names))})
+
+
+def _reads_back(written, values):
+    back = ur.read_poses(written)
+    return True if np.array_equal(back.values, np.atleast_2d(values)) else "reads back wrong"
+
+
+# the pose files themselves: a file to read, a file to write over, the header's texts
+CASES.add("ur", "read_poses.path", ur.read_poses, path=F("good.csv"), group="read_poses")
+CASES.add("ur", "write_poses.path", lambda **kw: ur.write_poses(values=[POSE, GOAL], **kw)
+          or kw["path"], path=P("w.csv"), writes="path", group="write_poses",
+          check=lambda path, kw: _reads_back(path, [POSE, GOAL]))
+CASES.add("ur", "write_poses.header", lambda **kw: ur.write_poses("h.csv", [POSE], **kw)
+          or "h.csv", robot=Name("UR3"), frame=Name("base"), tcp=Name("flange"),
+          group="write_poses", check=lambda path, kw: _reads_back(path, [POSE]))
+CASES.add("ur", "append_pose.path", lambda **kw: ur.append_pose(value=GOAL, **kw),
+          path=P("a.csv"), writes="path", group="append_pose")
+for _case in CASES.values():
+    _case.setup = good_file
 
 
 @pytest.mark.sweep
