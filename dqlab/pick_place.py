@@ -454,7 +454,7 @@ def plan_pick_place(robot, task, *, object_pose=None, branch=0,
     pick_step = None
     for i in range(len(t)):
         if suction[i] and X_CO is None and (i == 0 or not suction[i - 1]):
-            gap = np.linalg.norm(cup[i, :3, 3] - X_WO[:3, 3])
+            gap = math.hypot(*(cup[i, :3, 3] - X_WO[:3, 3]))     # far objects: no overflow
             if not gap <= grasp_tol:
                 raise ValueError(
                     f"step {step[i]}: the suction comes on with no object under the cup "

@@ -26,6 +26,7 @@ another, on their order or on running in one process.
 import os
 import re
 import signal
+import warnings
 from collections import Counter
 from dataclasses import dataclass, field, fields, is_dataclass
 from pathlib import Path
@@ -330,10 +331,14 @@ def _on_alarm(signum, frame):
 
 
 def _call_with_time_limit(call, kwargs):
+    """``call(**kwargs)`` within TIME_LIMIT, a RuntimeWarning (an overflow, a NaN made, a
+    complex number cast) raised as the error it is, whatever the session's filters."""
     previous = signal.signal(signal.SIGALRM, _on_alarm)
     signal.setitimer(signal.ITIMER_REAL, TIME_LIMIT)
     try:
-        return call(**kwargs)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", RuntimeWarning)
+            return call(**kwargs)
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, previous)

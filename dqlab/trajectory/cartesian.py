@@ -9,6 +9,7 @@ accelerations, and (when the orientation is given) unit quaternions and angular
 velocities, all in the world frame. Chapter 11 of the book derives them.
 """
 
+import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -164,7 +165,7 @@ MAX_SCREW_REACH = 1e6
 
 
 def _within_screw_reach(X, name):
-    distance = float(np.linalg.norm(X[:3, 3]))
+    distance = math.hypot(*X[:3, 3])
     if not distance <= MAX_SCREW_REACH:
         raise ValueError(f"{name} is {distance:.3g} m from the origin: too far for a screw "
                          f"path (at most {MAX_SCREW_REACH:g} m, where dual quaternions still "
@@ -268,7 +269,7 @@ def _line_law(X_A, X_B, speed, acceleration):
         raise ValueError("give the speed and the acceleration together")
     V = check_scalar(speed, "speed", minimum=0, strict=True)
     A = check_scalar(acceleration, "acceleration", minimum=0, strict=True)
-    L = float(np.linalg.norm(X_B[:3, 3] - X_A[:3, 3]))
+    L = math.hypot(*(X_B[:3, 3] - X_A[:3, 3]))            # no overflow for far poses
     if L == 0.0:
         raise ValueError("speed: the line has length 0 (a turn on the spot): give a duration")
     if not (V / L >= _TINY and A / L >= _TINY):
