@@ -403,12 +403,21 @@ def _ints(value, names=()):
     return A(value, names=names, extra=_WORDS)
 
 
+#: How calibration errors name a field of a source: "message: dh_d: ...", "corrections:
+#: delta_a: ..." (a source and its field, as the controller's message and calibration.conf
+#: call them).
+_INFO_NAMES = ("info", "message", "dh_theta", "dh_a", "dh_d", "dh_alpha")
+_CONF_NAMES = ("corrections", "calibration", "delta_theta", "delta_a", "delta_d",
+               "delta_alpha", "joint_checksum", "calibration_status")
+
+
 add(M, "kinematics_info_from_robot", calibration.kinematics_info_from_robot,
     robot=O(CALIBRATED), checksum=_ints(INFO.checksum),
     calibration_status=Int(0, extra=_STATUS))
 for _field, _value in _INFO.items():
     _arg = (_ints(_value) if _field == "checksum" else Int(_value, extra=_STATUS)
             if _field == "calibration_status" else A(_value))
+    _arg.names = _INFO_NAMES
     add(M, f"message_from_kinematics_info(KinematicsInfo.{_field})",
         lambda _f=_field, **kw: calibration.message_from_kinematics_info(
             KinematicsInfo(**{**_INFO, **kw})), group="KinematicsInfo", **{_field: _arg})
@@ -441,6 +450,7 @@ add(M, "robot_from_calibration_conf", lambda **kw: calibration.robot_from_calibr
 for _field, _value in _CONF.items():
     _arg = (_ints(_value) if _field == "joint_checksum" else Int(_value, extra=_STATUS)
             if _field == "calibration_status" else A(_value))
+    _arg.names = _CONF_NAMES
     if _field.startswith("delta_"):                   # what the robot is made of
         add(M, f"robot_from_corrections(CalibrationConf.{_field})",
             lambda **kw: calibration.robot_from_corrections(
