@@ -193,7 +193,9 @@ def motor_angles(positions, *, where="point"):
     if p.ndim != 2:
         raise ValueError(f"positions must have shape (K, 3), got {p.shape}")
     check_text(where, "where", max_length=40)
-    for k in np.flatnonzero(np.hypot(np.hypot(p[:, 0], p[:, 1]), p[:, 2]) > _REACH):
+    far = np.flatnonzero(np.hypot(np.hypot(p[:, 0], p[:, 1]), p[:, 2]) > _REACH)
+    if far.size:                                   # refused before solving (no overflow)
+        k = int(far[0])
         raise ValueError(f"{_label(where, k)}: ({', '.join(f'{v:.4g}' for v in p[k] * 1000)}) mm "
                          f"is out of the uArm Swift Pro's reach: more than {_REACH:g} m from "
                          "its base")

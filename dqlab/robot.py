@@ -462,8 +462,8 @@ class Robot:
                 raise ValueError(f"limits must have shape (2,) or ({n}, 2), got {lim.shape}")
             lims = [tuple(row) for row in np.broadcast_to(lim, (n, 2)).tolist()]
             for i, (lo, hi) in enumerate(lims):
-                turns = max(abs(lo), abs(hi)) / (2 * math.pi)
-                if joints[i] in (REVOLUTE, 0, "R", "r") and math.isfinite(turns) and turns > 2:
+                turns = max([abs(v) for v in (lo, hi) if math.isfinite(v)] + [0.0]) / (2 * math.pi)
+                if joints[i] in (REVOLUTE, 0, "R", "r") and turns > 2:
                     raise ValueError(f"limits of joint {i + 1} = ({lo:g}, {hi:g}) are more than "
                                      "two turns: a revolute joint's limits are in radians (a "
                                      "table in degrees? convert with np.radians; inf for no "
