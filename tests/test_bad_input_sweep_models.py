@@ -434,23 +434,27 @@ add(M, "kinematics_info_from_message", calibration.kinematics_info_from_message,
         "a size of 2 GB": b"\x7f\xff\xff\xff\x10" + MESSAGE[5:],
         "16 MB": MESSAGE + bytes(16 << 20)}), source=_LABEL("message"))
 add(M, "read_kinematics_info", _read_kinematics_info,
-    host=T("127.0.0.1", only=("none", "number", "list", "control", "surrogate")),
+    host=T("127.0.0.1", only=("none", "number", "list", "surrogate")),   # (no name lookups)
     port=Int(30002, extra={"one turn beyond 65535": 65536 + 30002, "negative": -1}),
     timeout=S(5.0, extra={"zero": 0.0}))
 add(M, "robot_from_kinematics_info", calibration.robot_from_kinematics_info, info=O(INFO),
-    model=O("UR5e", none_ok=True, extra={"another model": "UR10e", "no such model": "UR6"}),
+    model=O("UR5e", none_ok=True, names=_INFO_NAMES, extra={
+        "another model": "UR10e", "no such model": "UR6"}),
     name=T("", none_ok=True), source=_LABEL("message"))
 add(M, "read_calibration_conf", calibration.read_calibration_conf,
     path=F("calibration.conf", extra={"a 400-digit status": lambda folder: _file(
         folder, "big.conf", _conf_text(_deltas(CALIBRATED, UR5E), status="9" * 400))}))
 add(M, "robot_from_calibration_conf", lambda **kw: calibration.robot_from_calibration_conf(
-    **kw).fk(Q6), path=F("calibration.conf"), model=O("UR5e", extra={"another": "UR3e"}),
-    checksum=A(_CHECKSUM, none_ok=True, extra={"another arm's": (7,) * 6}),
+    **kw).fk(Q6), path=F("calibration.conf"),
+    model=O("UR5e", extra={"another (corrections fit any model)": Fine("UR3e")}),
+    checksum=A(_CHECKSUM, none_ok=True, names=("joint_checksum",),
+               extra={"another arm's": (7,) * 6}),
     name=T("", none_ok=True))
 for _field, _value in _CONF.items():
     _arg = (_ints(_value) if _field == "joint_checksum" else Int(_value, extra=_STATUS)
             if _field == "calibration_status" else A(_value))
     _arg.names = _CONF_NAMES
+    _arg.none_ok = _field in ("joint_checksum", "calibration_status")  # None: not given
     if _field.startswith("delta_"):                   # what the robot is made of
         add(M, f"robot_from_corrections(CalibrationConf.{_field})",
             lambda **kw: calibration.robot_from_corrections(
@@ -460,7 +464,8 @@ for _field, _value in _CONF.items():
         lambda **kw: ControllerStandIn("ur5e", calibration=CalibrationConf(**{**_CONF, **kw})),
         group="ControllerStandIn(calibration)", **{_field: _arg})
 add(M, "robot_from_corrections", lambda **kw: calibration.robot_from_corrections(
-    **kw).fk(Q6), corrections=O(CONF), model=O("UR5e", extra={"another": "UR10e"}),
+    **kw).fk(Q6), corrections=O(CONF),
+    model=O("UR5e", extra={"another (corrections fit any model)": Fine("UR10e")}),
     name=T("", none_ok=True), source=_LABEL("corrections"))
 add(M, "robot_from_joint_origins", lambda **kw: calibration.robot_from_joint_origins(
     **kw).fk(Q6), origins=A(_origins), name=T("", none_ok=True))
@@ -488,7 +493,7 @@ add(M, "read_ros_calibration", calibration.read_ros_calibration,
     path=F("calibration.yaml", extra=_YAML_FILES))
 add(M, "robot_from_ros_calibration", lambda **kw: calibration.robot_from_ros_calibration(
     **kw).fk(Q6), path=F("calibration.yaml", extra=_YAML_FILES),
-    model=O("UR5e", none_ok=True, extra={"another": "UR10e"}),
+    model=O("UR5e", none_ok=True, names=("kinematics",), extra={"another": "UR10e"}),
     expected_hash=T(INFO.hash, none_ok=True, only=("number", "list")), name=T("", none_ok=True))
 
 
