@@ -394,7 +394,8 @@ def write_gcode(path, plan, **options):
         As :func:`gcode_from_plan`, before any file is opened; or if ``path`` is a directory.
     OSError
         If the file cannot be written. The file is written whole or not at all: a failed
-        write leaves an existing file as it was (:func:`dqlab._files.write_atomically`).
+        write leaves an existing file as it was (the content goes to a temporary file in the
+        same folder, renamed over the old one once complete).
     """
     path = check_path(path)
     text = gcode_from_plan(plan, **options)

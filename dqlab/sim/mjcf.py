@@ -295,8 +295,7 @@ def mjcf_from_robot(robot, *, masses=None, payload=0.0, radius=None, damping=0.1
         it, and a step it would write as 0 or take as the whole motion simulates nothing),
         a link's inertia has a mass below :data:`MIN_MASS` or a principal moment below
         :data:`MIN_INERTIA` (a point mass: MuJoCo refuses it), the model's name is not one
-        line of text (:func:`dqlab._checks.check_text`: XML cannot hold a control
-        character), or the integrator is unknown.
+        line of text (XML cannot hold a control character), or the integrator is unknown.
 
     See Also
     --------
@@ -434,7 +433,7 @@ def _inertial(inertia, X_BF):
 
 def model_name_of(robot, name):
     """The name a generated model takes: ``name``, else the robot's (``"robot"`` if it has
-    none), checked as one line of text that XML can hold (:func:`dqlab._checks.check_text`;
+    none), checked as one line of text that XML can hold (``dqlab._checks.check_text``;
     the writers escape ``&``, ``<``, ``>`` and quotes)."""
     if name is None:
         return check_text(robot.name, "robot.name") if robot.name else "robot"

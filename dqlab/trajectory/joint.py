@@ -16,7 +16,7 @@ from .._checks import as_float_array, check_path, check_scalar, is_boolean, shor
 from .._files import read_bytes, write_atomically
 from . import time_laws
 
-__all__ = ["Trajectory", "joint_trajectory", "via_points"]
+__all__ = ["Trajectory", "joint_trajectory", "via_points", "MAX_CSV_BYTES"]
 
 _LAWS = ("trapezoidal", "cubic", "quintic")
 _POSE_COLUMNS = ("x [m]", "y [m]", "z [m]", "qw", "qx", "qy", "qz")
