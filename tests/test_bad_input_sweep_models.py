@@ -299,7 +299,8 @@ add(M, "closest_solution", ik.closest_solution, result=O(RESULT), q_ref=A(Q6),
         "NaN": [np.nan, 1.0], "reversed": [1.0, -1.0], "narrow": [0.5, 0.50001]}),
     wrapped=Flag(False), check=_a_valid_row)
 add(M, "closest_solution(q_ref far)", ik.closest_solution, result=O(RESULT),
-    q_ref=A(Q6, extra={"1e10": np.full(6, 1e10)}), limits=A(LIMITS), check=_a_valid_row)
+    q_ref=A(Q6, extra={"1e10 (an exact answer is right)": Fine(np.full(6, 1e10))}),
+    limits=A(LIMITS), check=_a_valid_row)
 add(M, "closest_ur_solution", ik.closest_ur_solution, robot=O(UR5E), target=_IK_TARGET,
     q_now=A(Q6), limits=A(LIMITS, none_ok=True, extra={
         "(-inf, -inf)": [-np.inf, -np.inf], "(inf, inf)": [np.inf, np.inf]}),
