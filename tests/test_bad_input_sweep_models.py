@@ -347,14 +347,18 @@ class _KinematicsServer:
 
     def __init__(self):
         self.sock = socket.create_server(("127.0.0.1", 0))
+        self.sock.settimeout(0.05)                  # accept() wakes up to see the stop
         self.port = self.sock.getsockname()[1]
+        self.stop = threading.Event()
         self.thread = threading.Thread(target=self._serve, daemon=True)
         self.thread.start()
 
     def _serve(self):
-        while True:
+        while not self.stop.is_set():
             try:
                 conn, _ = self.sock.accept()
+            except TimeoutError:
+                continue
             except OSError:
                 return
             with conn:
@@ -364,8 +368,10 @@ class _KinematicsServer:
                     pass
 
     def close(self):
-        self.sock.close()
+        self.stop.set()
         self.thread.join(10.0)
+        self.sock.close()
+        assert not self.thread.is_alive()
 
 
 SERVER = []
