@@ -311,6 +311,8 @@ class Robot:
     convention : str
     base, tool : ndarray, shape (4, 4)
     name : str
+        Empty, or one line of printable text (checked when assigned: it is written into
+        the URDF and MJCF exports).
 
     Examples
     --------
@@ -542,8 +544,7 @@ class Robot:
         return len(self._links)
 
     @property
-    def name(self):
-        """The robot's name: text, empty or one printable line (assigning checks it)."""
+    def name(self):  # documented in the class's Attributes: text, empty or one printable line
         return self._name
 
     @name.setter
