@@ -2,6 +2,8 @@
 
 import math
 import os
+import re
+import unicodedata
 from pathlib import Path
 
 import numpy as np
@@ -147,7 +149,96 @@ def _refuse(value, name, minimum, maximum, strict, finite, integer):
         want += f" {'>' if strict else '>='} {minimum:g}"
     if maximum is not None:
         want += f"{' and' if minimum is not None else ''} <= {maximum:g}"
-    raise ValueError(f"{name} must be {want}, got {value!r}")
+    raise ValueError(f"{name} must be {want}, got {short_repr(value)}")
+
+
+def short_repr(value, limit=80):
+    """The ``repr`` of ``value`` for an error message: at most ``limit`` characters on one
+    line (a long text or a big container is described, not printed whole).
+
+    >>> short_repr("x" * 1000, limit=10)
+    "'xxxxxxxxx... (1000 characters)"
+    >>> short_repr(list(range(100)))
+    'a list of 100 entries'
+    >>> short_repr(np.zeros((3, 4)))
+    'an array of shape (3, 4)'
+    """
+    if isinstance(value, (list, tuple, dict, set, frozenset)) and len(value) > 8:
+        return f"a {type(value).__name__} of {len(value)} entries"
+    if isinstance(value, (np.ndarray, np.generic)) and value.size > 8:
+        return f"an array of shape {value.shape}"
+    if isinstance(value, (str, bytes)) and len(value) > limit:
+        text = repr(value[:limit])
+        return f"{text[:limit]}... ({len(value)} characters)"
+    try:
+        text = repr(value)
+    except Exception:                           # a repr that fails says nothing useful
+        text = f"a {type(value).__name__}"
+    text = " ".join(text.split())               # one line
+    return text if len(text) <= limit else text[:limit] + "..."
+
+
+#: What no text of dqlab may hold: control characters (C0, DEL, C1), lone surrogates,
+#: the line and paragraph separators and the code points XML 1.0 excludes (U+FFFE, U+FFFF).
+_ILLEGAL_TEXT = re.compile("[\x00-\x1f\x7f-\x9f\ud800-\udfff\u2028\u2029\ufffe\uffff]")
+
+
+def check_text(value, name, *, max_length=200, forbidden="", why=""):
+    r"""``value`` itself when it is one line of text, or an error naming ``name``.
+
+    The check of a name or label that dqlab writes into a file (XML, G-code, a pose file):
+    text (``TypeError`` otherwise), not empty, at most ``max_length`` characters, and
+    without control characters (a line end would start a new line of the file), lone
+    surrogates or the other code points XML 1.0 cannot hold, or any of the characters
+    ``forbidden`` (``why`` says why they are). The message names the first bad character
+    and its position, never the whole text.
+
+    Examples
+    --------
+    >>> check_text("UR5e on the bench", "name")
+    'UR5e on the bench'
+    >>> check_text("x\nM2231 V1", "name")
+    Traceback (most recent call last):
+    ...
+    ValueError: name must be one line of printable text: character '\n' at position 1 ...
+    >>> check_text("stop!", "name", forbidden="!~?@", why="the firmware obeys them anywhere")
+    Traceback (most recent call last):
+    ...
+    ValueError: name must not hold '!' (the firmware obeys them anywhere), found at position 4
+    """
+    if not isinstance(value, str):
+        raise TypeError(f"{name} must be text, got {short_repr(value)}")
+    if not value:
+        raise ValueError(f"{name} must not be empty")
+    bad = _ILLEGAL_TEXT.search(value)
+    if bad:
+        raise ValueError(f"{name} must be one line of printable text: character "
+                         f"{bad.group()!r} at position {bad.start()} is a control character"
+                         if unicodedata.category(bad.group()) == "Cc" else
+                         f"{name} must be one line of printable text: character "
+                         f"{ascii(bad.group())} at position {bad.start()} cannot be written "
+                         "in a text file")
+    if len(value) > max_length:
+        raise ValueError(f"{name} must be at most {max_length} characters, got "
+                         f"{len(value)}")
+    for k, char in enumerate(value):
+        if char in forbidden:
+            reason = f" ({why})" if why else ""
+            raise ValueError(f"{name} must not hold {char!r}{reason}, found at position {k}")
+    return value
+
+
+def is_boolean(value):
+    """True for a boolean or an array of booleans: not numbers, though numpy reads them as
+    0 and 1 (anything numpy cannot read as an array is not boolean here).
+
+    >>> is_boolean(True), is_boolean([True, False]), is_boolean([1, 0]), is_boolean([[1], []])
+    (True, True, False, False)
+    """
+    try:
+        return np.asarray(value).dtype.kind == "b"
+    except (TypeError, ValueError):
+        return False
 
 
 def check_instance(value, kind, name):

@@ -36,6 +36,15 @@ Protocol*). A plan of
 * ``M2231 V1`` / ``M2231 V0`` -- suction pump on / off;
 * ``G2004 P..`` -- wait until the arm has arrived, then wait that many milliseconds.
 
+The firmware is built on Grbl 0.9: it reads a line up to ``\n`` or ``\r``, throws away what
+follows a ``;`` (a comment), and picks the characters ``?``, ``!``, ``~``, ``@`` and
+Ctrl-X off the serial stream wherever they stand, even inside a comment (status report, feed
+hold, cycle start, safety door, reset). So the program's name, the one text it carries, goes
+into a comment and must be one line of printable ASCII without those five characters
+(:data:`GCODE_REALTIME`); numbers are written with fixed decimals, feeds as whole mm/min up to
+the firmware's maximum rate (:data:`MAX_FEED`), and a dwell longer than a 16-bit ``P`` word
+holds is split.
+
 The firmware switches the pump and turns the hand servo as soon as it reads the line, while
 moves are queued, so the program waits for the arm to arrive (``G2004 P0``) before each of
 them. The plan's joint targets (the lab's angles, from the identified model) and the motor
@@ -46,17 +55,19 @@ degrees (the firmware serves the half space :math:`x \ge 0` only),
 """
 
 import math
-from pathlib import Path
 
 import numpy as np
 
 from . import ik
-from ._checks import as_float_array
+from ._checks import as_float_array, check_instance, check_path, check_scalar, check_text
+from ._files import write_atomically
 from .models import desk_arm_lab_from_joints
+from .pick_place import PickPlacePlan
 from .robot import Link, Robot
 
-__all__ = ["UARM_SWIFT_PRO", "MOTOR_LIMITS_DEG", "uarm_swift_pro", "motor_angles_from_lab",
-           "lab_angles_from_motor", "motor_angles", "gcode_from_plan", "write_gcode"]
+__all__ = ["UARM_SWIFT_PRO", "MOTOR_LIMITS_DEG", "MAX_FEED", "GCODE_REALTIME", "uarm_swift_pro",
+           "motor_angles_from_lab", "lab_angles_from_motor", "motor_angles", "gcode_from_plan",
+           "write_gcode"]
 
 #: UFactory's nominal dimensions of the uArm Swift Pro with its suction cup, metres (firmware
 #: constants ``MATH_LOWER_ARM``, ``MATH_UPPER_ARM``, ``MATH_L2``, ``MATH_L1`` and the
@@ -68,6 +79,22 @@ UARM_SWIFT_PRO = {"lower_arm": 0.14207, "upper_arm": 0.15881, "l2": 0.0132, "l1"
 #: arm ``R``, their sum, and the hand servo.
 MOTOR_LIMITS_DEG = {"B": (0.0, 180.0), "L": (0.0, 135.6), "R": (0.0, 119.9),
                     "L + R": (29.0, 170.0), "hand": (0.0, 180.0)}
+
+#: The fastest feed a program may ask for, mm/min: the firmware's default maximum rate
+#: (``DEFAULT_X_MAX_RATE`` of SwiftProForArduino's ``defaults_generic.h``).
+MAX_FEED = 100_000
+
+#: The characters the firmware (Grbl 0.9's serial interrupt) obeys wherever they stand, even
+#: in a comment: status report, feed hold, cycle start, safety door; Ctrl-X (reset) is a
+#: control character, refused with the others.
+GCODE_REALTIME = "?!~@"
+
+#: The longest wait of one ``G2004 P..`` line, ms: the firmware reads ``P`` with ``%d``, a
+#: 16-bit integer on the arm's ATmega2560 (at most 32767).
+_MAX_WAIT_MS = 30_000
+
+#: The longest dwell written, seconds (an hour: a longer one is a mistake of units).
+_MAX_DWELL = 3600.0
 
 
 def uarm_swift_pro() -> Robot:
@@ -139,7 +166,8 @@ def motor_angles(positions, *, where="point"):
     positions : array_like, shape (K, 3)
         Cup positions in the base frame, metres.
     where : str, optional
-        How to name a point in an error message (``"point"``, ``"step"``).
+        How to name a point in an error message (``"point"``, named with its index in
+        ``positions``; ``"step"``).
 
     Returns
     -------
@@ -159,18 +187,26 @@ def motor_angles(positions, *, where="point"):
     >>> motor_angles([[0.0, -0.17, 0.5]])
     Traceback (most recent call last):
     ...
-    ValueError: point 0: (0, -170, 500) mm is out of the uArm Swift Pro's reach: ...
+    ValueError: point 0 (positions[0]): (0, -170, 500) mm is out of the uArm Swift Pro's ...
     """
     p = as_float_array(positions, "positions", (3,))
     if p.ndim != 2:
         raise ValueError(f"positions must have shape (K, 3), got {p.shape}")
+    check_text(where, "where", max_length=40)
+    far = np.flatnonzero(np.hypot(np.hypot(p[:, 0], p[:, 1]), p[:, 2]) > _REACH)
+    if far.size:                                   # refused before solving (no overflow)
+        k = int(far[0])
+        raise ValueError(f"{_label(where, k)}: ({', '.join(f'{v:.4g}' for v in p[k] * 1000)}) mm "
+                         f"is out of the uArm Swift Pro's reach: more than {_REACH:g} m from "
+                         "its base")
     result = ik.desk_arm(uarm_swift_pro(), p)
     angles = np.full((len(p), 3), np.nan)
     for k in range(len(p)):
         name = "(" + ", ".join(f"{round(v, 6) + 0.0:.4g}" for v in p[k] * 1000) + ") mm"
+        where_k = _label(where, k)
         if not result.valid[k, 0]:
             reason = str(result.reason[k]).removeprefix("unreachable: ")
-            raise ValueError(f"{where} {k}: {name} is out of the uArm Swift Pro's reach: "
+            raise ValueError(f"{where_k}: {name} is out of the uArm Swift Pro's reach: "
                              f"{reason}")
         q_lab = desk_arm_lab_from_joints(result.solutions[k, 0])
         B, L, R = np.degrees(motor_angles_from_lab(q_lab))
@@ -178,10 +214,20 @@ def motor_angles(positions, *, where="point"):
         for label, value in checks.items():
             lo, hi = MOTOR_LIMITS_DEG[label]
             if not lo - 1e-9 <= value <= hi + 1e-9:
-                raise ValueError(f"{where} {k}: {name} needs {label} = {value:.2f} deg, "
+                raise ValueError(f"{where_k}: {name} needs {label} = {value:.2f} deg, "
                                  f"outside the firmware's range [{lo:g}, {hi:g}] deg")
         angles[k] = B, L, R
     return angles
+
+
+#: Farther than this from the base (metres), no point is within the arm's reach (its arms
+#: and the cup's offsets add up to 0.37 m).
+_REACH = 1.0
+
+
+def _label(where, k):
+    """How an error names point ``k``: "point 0 (positions[0])", or "step 0"."""
+    return f"{where} {k}" + (f" (positions[{k}])" if where == "point" else "")
 
 
 def _arrivals(plan):
@@ -222,9 +268,11 @@ def gcode_from_plan(plan, *, name="pick and place", start_feed=3000):
     plan : dqlab.pick_place.PickPlacePlan
         A plan of :func:`dqlab.pick_place.plan_pick_place` for :func:`dqlab.models.desk_arm`.
     name : str, optional
-        The program's name, in its first comment line.
-    start_feed : int, optional
-        Speed of the first move, to the start point, mm/min.
+        The program's name, in its first comment line: one line of printable ASCII, at most
+        80 characters, without the firmware's real-time characters :data:`GCODE_REALTIME`.
+    start_feed : float, optional
+        Speed of the first move, to the start point, mm/min: 1 to :data:`MAX_FEED`, written
+        rounded to a whole mm/min.
 
     Returns
     -------
@@ -235,9 +283,13 @@ def gcode_from_plan(plan, *, name="pick and place", start_feed=3000):
     Raises
     ------
     ValueError
-        Naming the first step whose point the firmware cannot reach within its limits
-        (:func:`motor_angles`) or whose wrist angle is outside the hand servo's 0 to 180
-        degrees.
+        Naming the argument (a ``name`` that is not one safe line, a ``start_feed`` that
+        is not a number in range) or the first step whose point the firmware cannot reach
+        within its limits (:func:`motor_angles`), whose wrist angle is outside the hand
+        servo's 0 to 180 degrees, whose move needs a feed above :data:`MAX_FEED` or whose
+        dwell is longer than an hour.
+    TypeError
+        If ``plan`` is not a :class:`~dqlab.pick_place.PickPlacePlan` or ``name`` not text.
 
     Examples
     --------
@@ -256,9 +308,14 @@ def gcode_from_plan(plan, *, name="pick and place", start_feed=3000):
     G0 X0.00 Y170.00 Z80.00 F3884
     M2231 V0 ; pump off
     """
-    if not (isinstance(start_feed, (int, float)) and math.isfinite(start_feed)
-            and start_feed >= 1):
-        raise ValueError(f"start_feed must be a number >= 1 (mm/min), got {start_feed!r}")
+    check_instance(plan, PickPlacePlan, "plan")
+    check_text(name, "name", max_length=80, forbidden=GCODE_REALTIME,
+               why="the firmware obeys them even in a comment")
+    if not name.isascii():
+        bad = next(k for k, c in enumerate(name) if not c.isascii())
+        raise ValueError(f"name must be ASCII text (the program is an ASCII file): character "
+                         f"{name[bad]!r} at position {bad} is not")
+    start_feed = check_scalar(start_feed, "start_feed", minimum=1, maximum=MAX_FEED)
     targets = np.asarray(plan.targets)
     timing = _arrivals(plan)
     positions = plan.cup[[a for a, _, _, _ in timing], :3, 3]
@@ -288,15 +345,28 @@ def gcode_from_plan(plan, *, name="pick and place", start_feed=3000):
             previous_wrist = wrist[k]
         _, seconds, dwell, _ = timing[k]
         if k == 0 or seconds <= 0:
-            feed = int(start_feed)
+            feed = round(start_feed)
         else:
-            feed = max(1, round(60.0 * float(np.linalg.norm(mm[k] - mm[k - 1])) / seconds))
+            distance = float(np.linalg.norm(mm[k] - mm[k - 1]))
+            feed = max(1, round(60.0 * distance / seconds))
+            if feed > MAX_FEED:
+                raise ValueError(f"step {k}: the plan moves {distance:.1f} mm in {seconds:.3g} s, "
+                                 f"a feed of {feed:.3g} mm/min, above the firmware's maximum "
+                                 f"{MAX_FEED} mm/min")
         lines.append(f"G0 X{x:.2f} Y{y:.2f} Z{z:.2f} F{feed}")
         switches = suction[k] != (suction[k - 1] if k else False)
         if switches:
+            if not dwell <= _MAX_DWELL:
+                raise ValueError(f"step {k}: a dwell of {dwell:.3g} s is longer than an hour "
+                                 "(seconds taken for milliseconds?)")
             lines.append("G2004 P0 ; wait for the arm")
             lines.append(f"M2231 V{int(suction[k])} ; pump {'on' if suction[k] else 'off'}")
-            lines.append(f"G2004 P{round(dwell * 1000)} ; dwell while the cup switches")
+            wait = round(dwell * 1000)
+            while True:            # one G2004 holds at most a 16-bit P: split a long dwell
+                lines.append(f"G2004 P{min(wait, _MAX_WAIT_MS)} ; dwell while the cup switches")
+                wait -= _MAX_WAIT_MS
+                if wait <= 0:
+                    break
     lines.append("G2004 P0 ; wait for the arm")
     lines.append("M2231 V0 ; pump off")
     return "\n".join(lines) + "\n"
@@ -315,8 +385,18 @@ def write_gcode(path, plan, **options):
     Returns
     -------
     Path
+
+    Raises
+    ------
+    TypeError
+        If ``path`` is not a file path.
+    ValueError
+        As :func:`gcode_from_plan`, before any file is opened; or if ``path`` is a directory.
+    OSError
+        If the file cannot be written. The file is written whole or not at all: a failed
+        write leaves an existing file as it was (the content goes to a temporary file in the
+        same folder, renamed over the old one once complete).
     """
+    path = check_path(path)
     text = gcode_from_plan(plan, **options)
-    path = Path(path)
-    path.write_text(text, encoding="ascii")
-    return path
+    return write_atomically(path, text, encoding="ascii")

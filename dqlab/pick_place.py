@@ -454,11 +454,11 @@ def plan_pick_place(robot, task, *, object_pose=None, branch=0,
     pick_step = None
     for i in range(len(t)):
         if suction[i] and X_CO is None and (i == 0 or not suction[i - 1]):
-            gap = np.linalg.norm(cup[i, :3, 3] - X_WO[:3, 3])
+            gap = math.hypot(*(cup[i, :3, 3] - X_WO[:3, 3]))     # far objects: no overflow
             if not gap <= grasp_tol:
                 raise ValueError(
                     f"step {step[i]}: the suction comes on with no object under the cup "
-                    f"(the object is {gap * 1000:.4g} mm away, grasp_tol "
+                    f"(the object, at object_pose, is {gap * 1000:.4g} mm away, grasp_tol "
                     f"{grasp_tol * 1000:.4g} mm)")
             X_CO = np.linalg.inv(cup[i]) @ X_WO
             pick_step = int(step[i])

@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._checks import as_float_array, check_instance, check_path, check_scalar
+from ._files import write_atomically
 from .ik import ur
 from .jacobian import manipulability
 from .quaternion import check_unit_quaternion, matrix_from_quaternion
@@ -34,6 +35,8 @@ __all__ = ["pose_dexterity", "super_fibonacci_quaternions", "ReachabilityMap",
 
 #: Poses per call of the solver inside :func:`reachability_statistics`: small temporaries.
 BLOCK = 8192
+#: The most orientations :func:`super_fibonacci_quaternions` makes (320 MB of them).
+MAX_ORIENTATIONS = 10 ** 7
 
 
 def pose_dexterity(robot: Robot, poses: ArrayLike, **options
@@ -171,7 +174,7 @@ def super_fibonacci_quaternions(k: int) -> NDArray[np.float64]:
     >>> q.shape, bool(np.allclose(np.linalg.norm(q, axis=1), 1.0))
     ((100, 4), True)
     """
-    k = check_scalar(k, "k", minimum=1, integer=True)
+    k = check_scalar(k, "k", minimum=1, maximum=MAX_ORIENTATIONS, integer=True)
     s = np.arange(k) + 0.5
     r, rr = np.sqrt(s / k), np.sqrt(1.0 - s / k)
     alpha = 2.0 * np.pi * s / np.sqrt(2.0)
@@ -299,7 +302,9 @@ class ReachabilityMap:
             if value.dtype.kind not in "biufU":
                 raise ValueError(f"metadata {key!r} must be numbers or text, got {value.dtype}")
             arrays["meta_" + key] = value
-        np.savez_compressed(path, **arrays)
+        if path.suffix != ".npz":                 # as numpy names the file it writes
+            path = path.with_name(path.name + ".npz")
+        write_atomically(path, lambda f: np.savez_compressed(f, **arrays))
 
     @classmethod
     def load(cls, path) -> "ReachabilityMap":

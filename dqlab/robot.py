@@ -44,9 +44,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._chain import CompiledChain
-from ._checks import as_float_array, check_scalar, real_array
+from ._checks import as_float_array, check_scalar, check_text, real_array, short_repr
 from .dualquat import dual_quaternion_from_transform
 from .inertia import LinkInertia
+from .transforms import check_transform
 
 __all__ = ["Link", "Robot", "REVOLUTE", "PRISMATIC"]
 
@@ -59,8 +60,26 @@ class _Offset:
 
 _OFFSET = _Offset()
 
+
+class _TurnEachWay:
+    """from_dh_table's default limits: one full turn each way for a revolute joint."""
+
+    def __repr__(self):
+        return "<±2π for revolute joints>"
+
+
+_TURN_EACH_WAY = _TurnEachWay()
+
 REVOLUTE = "revolute"
 PRISMATIC = "prismatic"
+
+
+def _bound(value, name):
+    """A joint limit: a finite number (:func:`dqlab._checks.check_scalar`), or an infinite
+    float for no limit on that side."""
+    if isinstance(value, (float, np.floating)) and math.isinf(value):
+        return float(value)
+    return check_scalar(value, name)
 
 
 def _rot_x_h(alpha):
@@ -137,29 +156,25 @@ class Link:
 
     def __init__(self, a, alpha, d, theta_offset=0.0, joint=REVOLUTE, limits=None, name="",
                  inertia=None, max_speed=None, max_torque=None):
-        values = {"a": a, "alpha": alpha, "d": d, "theta_offset": theta_offset}
-        for key, value in values.items():
-            try:
-                value = float(value)
-            except (TypeError, ValueError):
-                raise ValueError(f"Link {key} must be a number, got {value!r}") from None
-            if not math.isfinite(value):
-                raise ValueError(f"Link {key} must be finite, got {value!r}")
-            values[key] = value
-        if joint in (0, "R", "r"):
-            joint = REVOLUTE
-        elif joint in (1, "P", "p"):
-            joint = PRISMATIC
-        if joint not in (REVOLUTE, PRISMATIC):
-            raise ValueError(f"Link joint must be 'revolute' or 'prismatic', got {joint!r}")
+        values = {key: check_scalar(value, f"Link {key}") for key, value in
+                  (("a", a), ("alpha", alpha), ("d", d), ("theta_offset", theta_offset))}
+        if isinstance(joint, (bool, np.bool_)) or joint not in (
+                REVOLUTE, PRISMATIC, 0, 1, "R", "r", "P", "p"):
+            raise ValueError("Link joint must be 'revolute' or 'prismatic' (or 0, 1, 'R', "
+                             f"'P'), got {short_repr(joint)}")
+        joint = REVOLUTE if joint in (REVOLUTE, 0, "R", "r") else PRISMATIC
         if limits is None:
             limits = (-math.inf, math.inf)
         try:
-            lo, hi = (float(v) for v in limits)
-        except (TypeError, ValueError):
-            raise ValueError(f"Link limits must be a pair (lo, hi), got {limits!r}") from None
-        if math.isnan(lo) or math.isnan(hi) or not lo <= hi:
-            raise ValueError(f"Link limits must satisfy lo <= hi, got {limits!r}")
+            pair = not isinstance(limits, (str, bytes)) and np.shape(limits) == (2,)
+        except ValueError:                                  # a ragged sequence
+            pair = False
+        if not pair:
+            raise ValueError(f"Link limits must be a pair (lo, hi), got {short_repr(limits)}")
+        lo, hi = _bound(limits[0], "Link limits (lo)"), _bound(limits[1], "Link limits (hi)")
+        if not lo <= hi or lo == math.inf or hi == -math.inf:
+            raise ValueError(f"Link limits must satisfy lo <= hi, lo < inf and hi > -inf, got "
+                             f"{short_repr(limits)}")
         set_ = object.__setattr__       # a Link is immutable once built
         set_(self, "a", values["a"])
         set_(self, "alpha", values["alpha"])
@@ -167,14 +182,11 @@ class Link:
         set_(self, "theta_offset", values["theta_offset"])
         set_(self, "joint", joint)
         set_(self, "limits", (lo, hi))
-        set_(self, "name", str(name))
+        if not isinstance(name, str):
+            raise TypeError(f"Link name must be text, got {short_repr(name)}")
+        set_(self, "name", check_text(name, "Link name") if name else name)
         if max_speed is not None:
-            try:
-                max_speed = float(max_speed)
-            except (TypeError, ValueError):
-                raise ValueError(f"Link max_speed must be a number, got {max_speed!r}") from None
-            if not (math.isfinite(max_speed) and max_speed > 0.0):
-                raise ValueError(f"Link max_speed must be a finite number > 0, got {max_speed!r}")
+            max_speed = check_scalar(max_speed, "Link max_speed", minimum=0.0, strict=True)
         set_(self, "max_speed", max_speed)
         if max_torque is not None:
             max_torque = check_scalar(max_torque, "Link max_torque", minimum=0.0, strict=True)
@@ -236,19 +248,32 @@ def _link_constants(links, convention):
     return L, R
 
 
+# How far from orthonormal the rotation block of a base or tool may be: the largest entry of
+# |R^T R - I|, an absolute tolerance (that of every check of dqlab's transforms).
+_RIGID_TOL = 1e-9
+
+
 def _check_transform_like(T, name):
+    """A base or tool transform, checked once where it enters: one rigid 4x4 transform
+    (:func:`dqlab.transforms.check_transform` with an absolute tolerance of 1e-9 on
+    :math:`R^\top R - I`), the error naming the argument."""
     if T is None:
         return np.eye(4)
     T = as_float_array(T, name, (4, 4))
     if T.shape != (4, 4):
         raise ValueError(f"{name} must be one 4x4 transform, got shape {T.shape}")
-    R = T[:3, :3]
-    if (not np.allclose(T[3], [0, 0, 0, 1], atol=1e-9)
-            or not np.allclose(R.T @ R, np.eye(3), atol=1e-9)
-            or np.linalg.det(R) < 0):
-        raise ValueError(f"{name} must be a rigid transform (rotation block and last row "
-                         "[0, 0, 0, 1])")
-    return T.copy()
+    try:
+        return check_transform(T, _RIGID_TOL, name).copy()
+    except ValueError as exc:
+        raise ValueError(f"{name} must be a rigid transform: {exc}") from None
+
+
+def _check_name(name):
+    """A robot's name: text, empty or one line of printable text (it is written into files:
+    :func:`dqlab._checks.check_text`)."""
+    if not isinstance(name, str):
+        raise TypeError(f"name must be text (the robot's name), got {short_repr(name)}")
+    return check_text(name, "name") if name else name
 
 
 def _transform_attribute(name, doc):
@@ -292,6 +317,8 @@ class Robot:
     convention : str
     base, tool : ndarray, shape (4, 4)
     name : str
+        Empty, or one line of printable text (checked when assigned: it is written into
+        the URDF and MJCF exports).
 
     Examples
     --------
@@ -320,7 +347,7 @@ class Robot:
             raise ValueError(f"convention must be 'dh' or 'mdh', got {convention!r}")
         self._links = links
         self._convention = convention
-        self.name = str(name)
+        self.name = name
         self._base = _check_transform_like(base, "base")
         self._tool = _check_transform_like(tool, "tool")
         self._prepare()
@@ -328,7 +355,7 @@ class Robot:
     @classmethod
     def from_dh_table(cls, *, d: ArrayLike, a: ArrayLike, alpha: ArrayLike,
                       theta_offset: ArrayLike | None = None, joint: str | tuple = REVOLUTE,
-                      limits: ArrayLike | None = (-2 * math.pi, 2 * math.pi),
+                      limits: ArrayLike | None = _TURN_EACH_WAY,
                       max_speed: ArrayLike | None = None, convention: str = "dh",
                       base: ArrayLike | None = None, tool: ArrayLike | None = None,
                       name: str = "") -> "Robot":
@@ -347,14 +374,16 @@ class Robot:
             In modified DH (``convention="mdh"``) they are :math:`r_i, a_{i-1},
             \alpha_{i-1}`, as :class:`Link` reads them.
         theta_offset : array_like, shape (n,), optional
-            :math:`\theta^0_i` (radians), :math:`\theta_i = q_i + \theta^0_i`; zeros by
-            default.
+            :math:`\theta^0_i` (radians), :math:`\theta_i = q_i + \theta^0_i` (for a
+            prismatic joint the constant :math:`\theta_i`); zeros by default.
         joint : str or sequence of str, optional
             ``"revolute"`` (default) or ``"prismatic"``, for all joints or one per joint.
         limits : array_like, shape (2,) or (n, 2), or None, optional
-            Joint limits, for all joints or per joint. Default :math:`\pm 2\pi`, the range
-            of a UR joint (a revolute joint that turns one full turn each way); ``None``: no
-            limits.
+            Joint limits (radians for a revolute joint, metres for a prismatic one), for
+            all joints or per joint; ``None``: no limits. By default a revolute joint gets
+            :math:`\pm 2\pi`, the range of a UR joint (one full turn each way); a
+            prismatic joint has no such common range, so a table with a prismatic joint
+            must give its limits (its travel in metres) or ``None``.
         max_speed : array_like, shape (n,), optional
             The joints' rated speeds (rad/s), see :class:`Link`.
         convention : {"dh", "mdh"}, optional
@@ -370,8 +399,9 @@ class Robot:
         ------
         ValueError
             If a column is not a list of n finite numbers (the message names it), the
-            columns have different lengths, a twist exceeds :math:`2\pi` in magnitude (a
-            table in degrees?), or a limit or joint type is invalid.
+            columns have different lengths, a twist or an angle offset exceeds :math:`2\pi`
+            in magnitude (a table in degrees?), a prismatic joint is given no limits, or a
+            limit or joint type is invalid.
 
         Examples
         --------
@@ -406,15 +436,32 @@ class Robot:
                 sizes = ", ".join(f"{k}: {w.size}" for k, w in values.items())
                 raise ValueError(f"the columns of the table must have one entry per joint; "
                                  f"got {sizes} ({key} differs from d)")
-        big = np.abs(values["alpha"]) > 2 * math.pi
-        if big.any():
-            i = int(np.flatnonzero(big)[0])
-            raise ValueError(f"alpha[{i}] = {values['alpha'][i]:g} is more than 2 pi: twists "
-                             "are in radians (a table in degrees? convert with np.radians)")
+        for key, what in (("alpha", "twists"), ("theta_offset", "angle offsets")):
+            big = np.abs(values.get(key, np.zeros(n))) > 2 * math.pi
+            if big.any():
+                i = int(np.flatnonzero(big)[0])
+                raise ValueError(f"{key}[{i}] = {values[key][i]:g} is more than 2 pi: {what} "
+                                 "are in radians (a table in degrees? convert with np.radians)")
         theta0 = values.get("theta_offset", np.zeros(n))
-        joints = (joint,) * n if isinstance(joint, (str, int)) else tuple(joint)
+        if isinstance(joint, (str, int)):
+            joints = (joint,) * n
+        else:
+            try:
+                joints = tuple(joint)
+            except TypeError:
+                raise ValueError(f"joint must be one type or one per joint ({n}), got "
+                                 f"{short_repr(joint)}") from None
         if len(joints) != n:
-            raise ValueError(f"joint must be one type or one per joint ({n}), got {joint!r}")
+            raise ValueError(f"joint must be one type or one per joint ({n}), got "
+                             f"{short_repr(joint)}")
+        if limits is _TURN_EACH_WAY:
+            prismatic = [i for i, j in enumerate(joints) if Link(0, 0, 0, joint=j).sigma]
+            if prismatic:
+                raise ValueError(f"limits: joint {prismatic[0] + 1} is prismatic and has no "
+                                 "default range: give the joints' limits (metres for a "
+                                 "prismatic joint, radians for a revolute one), or None for "
+                                 "no limits")
+            limits = (-2 * math.pi, 2 * math.pi)
         if limits is None:
             lims = [None] * n
         else:
@@ -422,6 +469,13 @@ class Robot:
             if lim.shape not in ((2,), (n, 2)):
                 raise ValueError(f"limits must have shape (2,) or ({n}, 2), got {lim.shape}")
             lims = [tuple(row) for row in np.broadcast_to(lim, (n, 2)).tolist()]
+            for i, (lo, hi) in enumerate(lims):
+                turns = max([abs(v) for v in (lo, hi) if math.isfinite(v)] + [0.0]) / (2 * math.pi)
+                if joints[i] in (REVOLUTE, 0, "R", "r") and turns > 2:
+                    raise ValueError(f"limits of joint {i + 1} = ({lo:g}, {hi:g}) are more than "
+                                     "two turns: a revolute joint's limits are in radians (a "
+                                     "table in degrees? convert with np.radians; inf for no "
+                                     "limit)")
         speeds = values.get("max_speed", [None] * n)
         links = [Link(a=values["a"][i], alpha=values["alpha"][i], d=values["d"][i],
                       theta_offset=theta0[i], joint=joints[i], limits=lims[i],
@@ -494,6 +548,14 @@ class Robot:
     @property
     def n(self):
         return len(self._links)
+
+    @property
+    def name(self):  # documented in the class's Attributes: text, empty or one printable line
+        return self._name
+
+    @name.setter
+    def name(self, value):
+        self._name = _check_name(value)
 
     base = _transform_attribute(
         "base", ":math:`X_{W0}`, shape (4, 4) (a copy; assign a new transform to change it).")

@@ -458,6 +458,7 @@ def reachability_map(robot: Robot, positions: ArrayLike, orientations: ArrayLike
         raise ValueError(f"scheduler must be None, a name, a distributed.Client or an "
                          f"address, got {scheduler!r}")
     flat = positions.reshape(-1, 3)
+    chunk = min(chunk, max(len(flat), 1))           # a chunk beyond the grid: the whole grid
     records = _map_leading(functools.partial(_statistics_block, robot, orientations, block,
                                              options),
                            da.from_array(flat, chunks=(chunk, 3)), 1, (), _STATISTICS)

@@ -1,18 +1,18 @@
-"""Every public array function, every array argument, every kind of bad value.
+"""Every public array function of the core, every array argument, every kind of bad value.
 
 For each function a good call is given; each of its array arguments is then replaced, one at
 a time, by NaN, inf, None, text, complex numbers, the wrong shape, a ragged list, an empty
-batch, and huge or tiny magnitudes. The call must either raise ValueError or TypeError
-whose message names that argument (or, for magnitudes, says the result overflows), or
-return finite arrays (with an empty batch: of size 0). Anything else fails.
+batch, huge or tiny magnitudes and far values (1e100, -1e300). The call must either raise
+ValueError or TypeError whose message names that argument (or, for magnitudes, says the
+result overflows), or return finite arrays (with an empty batch: of size 0). Anything else
+fails. The machinery is ``tests/_sweep.py``'s, shared by every sweep.
 """
 
 import inspect
-import re
-from collections import Counter
 
 import numpy as np
 import pytest
+from _sweep import Any, Arg, Registry, joints_reach_target, reaches_target, sweep_test
 
 import dqlab
 from dqlab import dynamics, ik, jacobian
@@ -146,87 +146,45 @@ def _parameter_names(function, count):
 
 
 def _function(name):
-    """The public function ``name`` of the math core, from the module that holds it."""
+    """The public function ``name`` of the math core, and the module that holds it."""
     modules = (dqlab.quaternion, dqlab.rotations, dqlab.transforms, dqlab.dualquat)
-    return next(getattr(m, name) for m in modules if name in m.__all__)
+    module = next(m for m in modules if name in m.__all__)
+    return getattr(module, name), module.__name__.split(".")[-1]
 
 
-def _cases():
-    calls = {name: (_function(name), args) for name, args in GOOD_CALLS.items()}
-    calls.update(OTHER_CALLS)
-    for name, (function, args) in calls.items():
-        names = _parameter_names(function, len(args))
-        for i, label in enumerate(names):
-            for kind in BAD_KINDS:
-                yield pytest.param(function, args, i, label, kind, id=f"{name}-{label}-{kind}")
+def _positional(function, names):
+    """``function`` called with keyword arguments in the order of ``names``."""
+    return lambda **kw: function(*[kw[n] for n in names])
 
 
-def _bad_value(value, kind):
-    a = np.asarray(value, dtype=float)
-    if kind == "nan":
-        return np.where(np.arange(a.size).reshape(a.shape) == 0, np.nan, a)
-    if kind == "inf":
-        return np.where(np.arange(a.size).reshape(a.shape) == 0, np.inf, a)
-    if kind == "none":
-        return None
-    if kind == "text":
-        return "abc"
-    if kind == "complex":
-        return a + 1j
-    if kind == "wrong_shape":
-        return a[..., :-1] if a.ndim else np.ones((2, 3, 5))
-    if kind == "ragged":
-        return [[1.0, 2.0], [3.0]]
-    if kind == "empty":
-        return np.zeros((0,) + a.shape)
-    if kind == "huge":
-        return a * 1e200
-    if kind == "tiny":
-        return a * 1e-200
-    raise AssertionError(kind)
+def _arg(function, value):
+    """A number broadcast over a batch takes any shape, as J does for singular values (any
+    (m, n) matrix); every other argument has its shape."""
+    if np.ndim(value) == 0 or function is jacobian.singular_values:
+        return Any(value)
+    return Arg(value)
 
 
-BAD_KINDS = ("nan", "inf", "none", "text", "complex", "wrong_shape", "ragged", "empty",
-             "huge", "tiny")
-OUTCOMES = Counter()
+CASES = Registry()
+for _name, _args in GOOD_CALLS.items():
+    _f, _module = _function(_name)
+    _names = _parameter_names(_f, len(_args))
+    CASES.add(_module, _name, _positional(_f, _names),
+              **{n: _arg(_f, v) for n, v in zip(_names, _args, strict=True)})
+#: What a result of an IK call must be, beyond finite: valid rows reach their target.
+CHECKS = {"ik.ur": reaches_target(UR3), "ik.ur(calibrated)": reaches_target(CALIBRATED),
+          "ik.numerical": reaches_target(UR3), "ik.scara": reaches_target(scara_rsm5()),
+          "ik.desk_arm": reaches_target(desk_arm(), position_only=True),
+          "ik.closest_ur_solution": joints_reach_target(UR3)}
+for _name, (_f, _args) in OTHER_CALLS.items():
+    _names = _parameter_names(_f, len(_args))
+    _module = "robot" if _name.startswith("Robot") else _name.split(".")[0]
+    CASES.add(_module, _name, _positional(_f, _names), check=CHECKS.get(_name),
+              **{n: _arg(_f, v) for n, v in zip(_names, _args, strict=True)})
 
 
-def _all_finite(result):
-    parts = result if isinstance(result, tuple) else (result,)
-    arrays = [np.asarray(getattr(p, "solutions", p), dtype=float) for p in parts]
-    return all(np.all(np.isfinite(a)) for a in arrays), any(a.size == 0 for a in arrays)
 
-
-@pytest.mark.parametrize("function, args, index, name, kind", list(_cases()))
-def test_bad_argument_is_refused_by_name_or_gives_a_correct_result(function, args, index,
-                                                                     name, kind):
-    args = list(args)
-    args[index] = _bad_value(args[index], kind)
-    try:
-        result = function(*args)
-    except (ValueError, TypeError) as exc:
-        message = str(exc)
-        named = re.search(rf"(?<![\w.]){re.escape(name)}(?!\w)", message) is not None
-        if kind in ("huge", "tiny") and ("overflow" in message or "too large" in message):
-            named = True
-        OUTCOMES["clear error" if named else "other"] += 1
-        assert named, f"the error does not name {name!r}: {message}"
-        return
-    finite, empty = _all_finite(result)
-    correct = (kind == "empty" and empty) or (kind in ("huge", "tiny") and finite)
-    if kind == "wrong_shape" and finite and (np.ndim(args[index]) == 3
-                                             or function is jacobian.singular_values):
-        correct = True      # a scalar argument broadcast over a batch; any (m, n) matrix
-    OUTCOMES["correct result" if correct else "other"] += 1
-    assert correct, f"{kind} {name!r} was accepted: {result!r}"
-
-
-def test_zz_summary_of_the_sweep(capsys):
-    """The counts of the sweep above (run in the same session): no case may be "other"."""
-    if not OUTCOMES:
-        pytest.skip("the sweep did not run in this session")
-    total = sum(OUTCOMES.values())
-    with capsys.disabled():
-        print(f"\nbad-input sweep: {total} cases, {OUTCOMES['clear error']} clear errors, "
-              f"{OUTCOMES['correct result']} correct results, {OUTCOMES['other']} other")
-    assert OUTCOMES["other"] == 0
+@pytest.mark.sweep
+@pytest.mark.parametrize("title", list(CASES))
+def test_bad_arguments_are_refused_by_name_or_give_a_correct_result(title, request, tmp_path):
+    sweep_test(request, CASES[title], tmp_path, "core")

@@ -3,25 +3,26 @@ dqlab.pick_place (and its animation in dqlab.viz), dqlab.sim (but the UR back en
 dqlab.reachability and dqlab.scale, every argument, every kind of bad value.
 
 As in ``tests/test_bad_input_sweep.py`` for the core: for each callable a good call is
-given; each argument is then replaced, one at a time, by a bad value of its kind. Arrays and
-numbers get the core's ten kinds (NaN, inf, None, text, complex numbers, the wrong shape, a
-ragged list, an empty batch, huge and tiny magnitudes); integers the same; objects (a robot,
-a task, a path, a controller, a choice among names) get None, a number, text and a list;
-file paths get None, a number, a list and a directory. The call must raise ValueError or
-TypeError whose message names the argument (for magnitudes: or says the result overflows or
-is too large; for a path: an OSError naming the file is accepted), or return a correct
-result: for an empty batch an empty one, for huge or tiny magnitudes finite numbers, for an
-argument of any shape finite numbers, for an optional argument given None its default.
-Anything else fails, and the summary counts the outcomes per module.
+given; each argument is then replaced, one at a time, by every bad value of its kind
+(``tests/_sweep.py``: arrays and numbers get NaN, inf, None, text, complex numbers, the wrong
+shape, a ragged list, an empty batch, huge, tiny and far magnitudes, and a single number also
+a boolean, a number as text and a numpy number; integers also fractions and integers beyond
+64 bits; objects get None, a number, text, a list and a boolean; a file to write gets None,
+a number, a list, a directory and a missing folder; a file to read also an empty, binary,
+truncated, huge or deeply nested file). The call must raise ValueError or TypeError whose
+message names the argument (for magnitudes: or says the result overflows or is too large;
+for a path: an error naming the file), or return a correct result: for an empty batch an
+empty one, for huge or tiny magnitudes finite numbers, for an argument of any shape finite
+numbers, for an optional argument given None its default. Anything else fails; the
+session's summary counts the outcomes per module.
 """
 
-import re
-from collections import Counter
-from dataclasses import fields, is_dataclass
+from xml.etree import ElementTree
 
 import numpy as np
 import pytest
-from test_bad_input_sweep import BAD_KINDS, _bad_value
+from _sweep import A, F, Int, Name, O, P, Registry, S, T, sweep_test
+from _sweep import Any as Any_
 
 from dqlab import identify, ik
 from dqlab import pick_place as pp
@@ -84,60 +85,12 @@ GRID = np.array([[0.0, -0.35, 0.25], [0.9, 0.0, 0.2]])
 FIT = identify.fit_linear(A_FIT, B_FIT, names=["a", "b", "c"])
 
 
-class Arg:
-    """A good value and its kind: "array" (a fixed shape), "any" (an array whose shape may
-    change: any batch, any number of joints), "scalar", "int", "object" (a robot, a task, a
-    choice among names...), "text" (free text: any string is valid) or "path";
-    ``none_ok``: None is a valid value (the default); ``inf_ok``: infinity is (a tolerance or
-    a limit that it switches off)."""
-
-    def __init__(self, value, kind, none_ok=False, inf_ok=False):
-        self.value, self.kind = value, kind
-        self.none_ok, self.inf_ok = none_ok, inf_ok
+Any = Any_
+CASES = Registry()
 
 
-def A(value, none_ok=False):
-    return Arg(value, "array", none_ok)
-
-
-def Any(value):
-    return Arg(value, "any")
-
-
-def S(value, none_ok=False, inf_ok=False):
-    return Arg(value, "scalar", none_ok, inf_ok)
-
-
-def T(value, none_ok=False):
-    return Arg(value, "text", none_ok)
-
-
-def Int(value):
-    return Arg(value, "int")
-
-
-def O(value, none_ok=False):  # noqa: E743
-    return Arg(value, "object", none_ok)
-
-
-def P(value):
-    return Arg(value, "path")
-
-
-OBJECT_KINDS = ("none", "number", "text", "list")
-PATH_KINDS = ("none", "number", "list", "directory")
-
-
-def _bad_object(kind, tmp):
-    return {"none": None, "number": 123, "text": "abc", "list": [1.0, 2.0],
-            "directory": tmp}[kind]
-
-
-CASES = {}
-
-
-def case(module, title, call, **args):
-    CASES[title] = (module, call, args)
+def case(module, title, call, check=None, writes=None, setup=None, **args):
+    CASES.add(module, title, call, check=check, writes=writes, **args).setup = setup
 
 
 # -- dqlab.trajectory --------------------------------------------------------------------
@@ -162,8 +115,10 @@ for method in ("position", "speed", "acceleration", "jerk"):
 case(M, "TimeLaw.sample", LAW.sample, dt=S(0.25))
 case(M, "Trajectory", Trajectory, t=A(TRAJ.t), q=A(TRAJ.q), qd=A(TRAJ.qd), qdd=A(TRAJ.qdd),
      poses=A(UR3.fk(TRAJ.q), none_ok=True))
-case(M, "Trajectory.save_csv", lambda path: TRAJ.save_csv(path), path=P("traj.csv"))
-case(M, "Trajectory.load_csv", Trajectory.load_csv, path=P("traj.csv"))
+case(M, "Trajectory.save_csv", lambda path: TRAJ.save_csv(path), path=P("traj.csv"),
+     writes="path", check=lambda _, kw: _reads_back(kw["path"], TRAJ))
+case(M, "Trajectory.load_csv", Trajectory.load_csv, path=F("traj.csv"),
+     setup=lambda folder: TRAJ.save_csv(folder / "traj.csv"))
 case(M, "joint_trajectory(limits)", joint_trajectory, q_start=A(Q6), q_goal=A(Q6 + 0.5),
      v_max=A([1.0] * 6), a_max=S(2.0), law=O("trapezoidal"), dt=S(0.05))
 case(M, "joint_trajectory(duration)", joint_trajectory, q_start=A(Q6), q_goal=A(Q6 - 0.5),
@@ -255,10 +210,12 @@ RMAP = reachability_statistics(UR3, GRID, QUATS)
 case(M, "ReachabilityMap", ReachabilityMap, positions=A(RMAP.positions),
      orientations=A(RMAP.orientations), reachable=A(RMAP.reachable),
      branches=A(RMAP.branches), median_manipulability=A(RMAP.median_manipulability))
-case(M, "ReachabilityMap.save", lambda path: RMAP.save(path), path=P("map.npz"))
+case(M, "ReachabilityMap.save", lambda path: RMAP.save(path), path=P("map.npz"), writes="path",
+     check=lambda _, kw: _reads_back(kw["path"], RMAP))
 case(M, "check_ik_options", lambda **kw: check_ik_options(options={"tol": 1e-9}, **kw),
      robot=O(UR3), kind=O((4, 4)))
-case(M, "ReachabilityMap.load", ReachabilityMap.load, path=P("map.npz"))
+case(M, "ReachabilityMap.load", ReachabilityMap.load, path=F("map.npz"),
+     setup=lambda folder: RMAP.save(folder / "map.npz"))
 
 
 def _computed(*arrays):
@@ -294,7 +251,7 @@ case(M, "ik_ur_dask", _ik_ur_dask, robot=O(UR3), poses=A(UR3.fk(np.stack([Q6, -Q
      tol=S(1e-9, inf_ok=True))
 case(M, "dexterity_dask", _dexterity_dask, robot=O(UR3), poses=A(UR3.fk(np.stack([Q6, -Q6]))))
 case(M, "reachability_map", _reachability_map, robot=O(UR3), positions=A(GRID),
-     orientations=A(QUATS), chunk=Arg(1, "int", none_ok=True),
+     orientations=A(QUATS), chunk=Int(1, none_ok=True),
      scheduler=O("synchronous", none_ok=True),
      block=Int(64))
 
@@ -324,7 +281,9 @@ def _mjcf(**kw):
 
 def _urdf(**kw):
     from dqlab.sim import urdf_from_robot
-    return urdf_from_robot(**kw)
+    text = urdf_from_robot(**kw)
+    ElementTree.fromstring(text)                 # what it writes, an XML reader parses
+    return text
 
 
 def _placements(**kw):
@@ -398,9 +357,9 @@ def _sample_reference(**kw):
 case(M, "mjcf_from_robot", _mjcf, robot=O(UR3), masses=A([2.0, 3.4, 1.3, 0.8, 0.8, 0.35],
      none_ok=True), payload=S(0.5), radius=S(0.03, none_ok=True), damping=A([0.1] * 6),
      armature=S(0.01), timestep=S(0.002), integrator=O("RK4"), gravity=S(9.81),
-     base_mass=S(2.0, none_ok=True), name=T("arm", none_ok=True))
+     base_mass=S(2.0, none_ok=True), name=Name("arm", none_ok=True))
 case(M, "urdf_from_robot", _urdf, robot=O(UR3), masses=A([2.0, 3.4, 1.3, 0.8, 0.8, 0.35],
-     none_ok=True), name=T("arm", none_ok=True))
+     none_ok=True), name=Name("arm", none_ok=True))
 case(M, "link_placements", _placements, robot=O(UR3))
 case(M, "default_masses", _default_masses, robot=O(DESK))
 case(M, "ArmSimulation", _arm_simulation, robot=O(UR3))
@@ -445,127 +404,17 @@ case(M, "sample_reference", _sample_reference, t=A(TRAJ.t), q=A(TRAJ.q), qd=A(TR
 
 # -- the sweep -----------------------------------------------------------------------------
 
-def _kinds(arg):
-    return PATH_KINDS if arg.kind == "path" else (
-        OBJECT_KINDS if arg.kind in ("object", "text") else BAD_KINDS)
+def _reads_back(path, written):
+    """A check of a writer: the file it wrote reads back as what it was given."""
+    back = type(written).load_csv(path) if hasattr(written, "save_csv") else type(
+        written).load(path if str(path).endswith(".npz") else f"{path}.npz")
+    same = all(np.array_equal(getattr(back, k), getattr(written, k))
+               for k in ("t", "q", "positions", "reachable") if hasattr(written, k))
+    return True if same else f"{path} reads back as something else"
 
 
-def _cases():
-    for name, (_, _, args) in CASES.items():
-        for label, arg in args.items():
-            for kind in _kinds(arg):
-                yield pytest.param(name, label, kind, id=f"{name}-{label}-{kind}")
 
-
-def _numbers_finite(result, seen=None):
-    """Every number a result holds is finite (a ReachabilityMap checks itself: its median
-    is NaN where nothing is reachable)."""
-    if result is None or isinstance(result, (str, bool, np.bool_, type)):
-        return True
-    if isinstance(result, ReachabilityMap):
-        return all(_numbers_finite(getattr(result, k)) for k in
-                   ("positions", "orientations", "reachable", "branches"))
-    if isinstance(result, (int, float, np.number, np.ndarray)):
-        a = np.asarray(result)
-        return a.dtype.kind not in "fc" or bool(np.isfinite(a).all())
-    if isinstance(result, dict):
-        return all(_numbers_finite(v) for v in result.values())
-    if isinstance(result, (tuple, list)):
-        return all(_numbers_finite(v) for v in result)
-    if is_dataclass(result):
-        return all(_numbers_finite(getattr(result, f.name)) for f in fields(result)
-                   if f.name not in ("robot", "law", "condition_number"))
-    if isinstance(result, TimeLaw):
-        return True
-    return True
-
-
-def _is_empty(result):
-    """The result holds an empty batch: an array of size 0 in it."""
-    if isinstance(result, np.ndarray):
-        return result.size == 0
-    if isinstance(result, dict):
-        return any(_is_empty(v) for v in result.values())
-    if isinstance(result, (tuple, list)):
-        return any(_is_empty(v) for v in result)
-    if isinstance(result, ReachabilityMap):
-        return result.reachable.size == 0
-    if is_dataclass(result):
-        return any(_is_empty(getattr(result, f.name)) for f in fields(result))
-    return False
-
-
-OUTCOMES = Counter()
-
-
-@pytest.fixture(scope="module")
-def files(tmp_path_factory):
-    """The files the path cases read: a trajectory and a map written by the good calls."""
-    folder = tmp_path_factory.mktemp("sweep")
-    TRAJ.save_csv(folder / "traj.csv")
-    RMAP.save(folder / "map.npz")
-    return folder
-
-
-def test_every_good_call_works(files, monkeypatch):
-    monkeypatch.chdir(files)
-    for name, (_, call, args) in CASES.items():
-        result = call(**{k: a.value for k, a in args.items()})
-        assert _numbers_finite(result), name
-
-
-@pytest.mark.parametrize("name, label, kind", list(_cases()))
-def test_bad_argument_is_refused_by_name_or_gives_a_correct_result(name, label, kind, files,
-                                                                     monkeypatch):
-    monkeypatch.chdir(files)
-    module, call, args = CASES[name]
-    arg = args[label]
-    kwargs = {k: a.value for k, a in args.items()}
-    if arg.kind in ("object", "text", "path"):
-        kwargs[label] = _bad_object(kind, files)
-    else:
-        kwargs[label] = _bad_value(arg.value, kind)
-    try:
-        result = call(**kwargs)
-    except (ValueError, TypeError, OSError) as exc:
-        message = str(exc)
-        named = re.search(rf"(?<![\w]){re.escape(label)}(?!\w)", message) is not None
-        if kind in ("huge", "tiny") and re.search("overflow|too large", message):
-            named = True
-        if arg.kind == "path":
-            named = named or str(kwargs[label]) in message
-        if isinstance(exc, OSError) and not isinstance(exc, (ValueError, TypeError)):
-            named = arg.kind == "path" and str(files) in message
-        OUTCOMES[module, "clear error" if named else "other"] += 1
-        assert named, f"the error does not name {label!r}: {type(exc).__name__}: {message}"
-        return
-    except Exception:                               # a crash: counted, then shown
-        OUTCOMES[module, "other"] += 1
-        raise
-    finite = _numbers_finite(result)
-    correct = ((kind == "empty" and _is_empty(result))
-               or (kind in ("huge", "tiny") and finite)
-               or (arg.kind == "any" and kind in ("wrong_shape", "empty") and finite)
-               or (kind == "none" and arg.none_ok and finite)
-               or (kind == "inf" and arg.inf_ok and finite)
-               or (kind == "text" and arg.kind == "text" and finite))
-    OUTCOMES[module, "correct result" if correct else "other"] += 1
-    assert correct, f"{kind} {label!r} was accepted: {result!r}"[:2000]
-
-
-def test_zz_summary_of_the_sweep(capsys):
-    """The counts of the sweep above, per module (run in the same session): no "other"."""
-    if not OUTCOMES:
-        pytest.skip("the sweep did not run in this session")
-    modules = sorted({m for m, _ in OUTCOMES})
-    lines = [f"{'module':14s} {'cases':>6s} {'clear error':>12s} {'correct':>8s} {'other':>6s}"]
-    for m in modules + ["total"]:
-        keys = [k for k in OUTCOMES if m == "total" or k[0] == m]
-        count = Counter()
-        for k in keys:
-            count[k[1]] += OUTCOMES[k]
-        lines.append(f"{m:14s} {sum(count.values()):6d} {count['clear error']:12d} "
-                     f"{count['correct result']:8d} {count['other']:6d}")
-    with capsys.disabled():
-        print("\nPart III bad-input sweep:\n" + "\n".join(lines))
-    assert sum(v for (m, k), v in OUTCOMES.items() if k == "other") == 0
+@pytest.mark.sweep
+@pytest.mark.parametrize("title", list(CASES))
+def test_bad_arguments_are_refused_by_name_or_give_a_correct_result(title, request, tmp_path):
+    sweep_test(request, CASES[title], tmp_path, "applications")

@@ -1,21 +1,21 @@
 """Every public callable of ``dqlab.ur`` and the MuJoCo back end, every argument, every kind of
-bad value (those of ``tests/test_bad_input_sweep.py``: NaN, inf, None, text, complex numbers,
-the wrong shape, a ragged list, an empty batch, huge and tiny magnitudes).
+bad value (``tests/_sweep.py``: NaN, inf, None, text, complex numbers, the wrong shape, a
+ragged list, an empty batch, huge, tiny and far magnitudes; a single number also a boolean, a
+number as text and a numpy number; an integer also a fraction and integers beyond 64 bits; a
+host name text that cannot be one).
 
 Each call must either raise ``ValueError`` or ``TypeError`` whose message names the argument
 (by its name, or by how the command calls it: a ``movej``'s ``q`` is its "target"), or return
 a correct result: finite (a text, a state, a file written) for huge and tiny magnitudes, of
 size 0 for an empty batch, anything for ``inf`` given as a tolerance (``inf`` switches a
-check off). Anything else fails. The counts are printed at the end.
+check off). Anything else fails. The session's summary counts the outcomes.
 """
 
-import re
-from collections import Counter
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from test_bad_input_sweep import BAD_KINDS, _bad_value
+from _sweep import Arg, F, Name, P, Registry, folder, sweep_test
 
 import dqlab
 from dqlab import ur
@@ -80,7 +80,7 @@ TARGET = ("target",)
 TOL = dict(inf_ok=True)
 DEFAULT_NONE = dict(none_ok=True)            # None is the argument's default: "not given"
 #: (name, call(value, tmp_path), good value, names the message may use, options)
-CASES = [
+CASES_ = [
     # poses
     ("check_pose.p", lambda v, tmp: ur.check_pose(v), POSE, ("p", "pose"), {}),
     ("dual_quaternion_from_pose.p", lambda v, tmp: ur.dual_quaternion_from_pose(v), POSE,
@@ -158,7 +158,7 @@ CASES = [
      DEFAULT_NONE),
     ("stopj.a", lambda v, tmp: ur.stopj(v), 2.0, ("a",), {}),
     ("program_from_trajectory.t", lambda v, tmp: ur.program_from_trajectory(traj(t=v)), T_TRAJ,
-     ("t", "times"), {}),
+     ("t", "times", "time"), {}),
     ("program_from_trajectory.q", lambda v, tmp: ur.program_from_trajectory(traj(q=v)), Q_TRAJ,
      ("q",) + TARGET, {}),
     ("program_from_trajectory.a",
@@ -175,7 +175,7 @@ CASES = [
      DEFAULT_NONE),
     ("check_joint_targets.times",
      lambda v, tmp: script.check_joint_targets(Q_TRAJ, times=v, command="x"), T_TRAJ,
-     ("times", "t"), DEFAULT_NONE),
+     ("times", "t", "time"), DEFAULT_NONE),
     *[(f"SafetyLimits.{key}", lambda v, tmp, key=key: ur.SafetyLimits(**{key: v}), value,
        (key,), {})
       for key, value in [("joint_limits", script.UR3_JOINT_LIMITS[:5].tolist() + [[-7, 7]]),
@@ -216,7 +216,7 @@ CASES = [
      {}),
     ("URClient.movel.t", lambda v, tmp: Client().movel(GOAL, t=v, wait=False), 1.0, ("t",), {}),
     ("URClient.servoj_stream.t", lambda v, tmp: Client().servoj_stream(traj(t=v), timeout=2),
-     T_TRAJ, ("t", "times"), {}),
+     T_TRAJ, ("t", "times", "time"), {}),
     ("URClient.servoj_stream.q", lambda v, tmp: Client().servoj_stream(traj(q=v), timeout=2),
      Q_TRAJ, ("q",) + TARGET, {}),
     ("URClient.servoj_stream.start_tol",
@@ -297,79 +297,59 @@ CASES = [
      {}),
 ]
 
-OUTCOMES = Counter()
+def _kind(good):
+    """The sweep's kind of an argument: a host is text, a port or a count an integer, one
+    number a scalar, anything else an array."""
+    if isinstance(good, str):
+        return "text"
+    if isinstance(good, (int, np.integer)) and not isinstance(good, bool):
+        return "int"
+    return "scalar" if np.ndim(good) == 0 else "array"
 
 
-def _bad(value, kind):
-    if isinstance(value, str):                       # a host name
-        return {"nan": float("nan"), "inf": float("inf"), "none": None, "text": 12345,
-                "complex": 1j, "wrong_shape": ["127.0.0.1"], "ragged": [[1.0], []],
-                "empty": "", "huge": "1" * 10_000, "tiny": "x"}[kind]
-    return _bad_value(value, kind)
+#: Cases whose good value is refused too (a port with no server behind it): a numpy number
+#: is refused there like the int it stands for, not counted as a valid input refused.
+_REFUSED_ANYWAY = {"read_kinematics_info.port"}
+
+CASES = Registry()
+for _name, _call, _good, _names, _options in CASES_:
+    _label = _name.rsplit(".", 1)[1]
+    _arg = Arg(_good, _kind(_good), _options.get("none_ok", False),
+               _options.get("inf_ok", False), tuple(_names))
+    if _name in _REFUSED_ANYWAY:
+        _arg.only = tuple(k for k in _arg.kinds() if k != "numpy")
+    CASES.add("ur" if not _name.startswith("Mujoco") else "sim.backend", _name,
+              lambda _call=_call, **kw: _call(next(iter(kw.values())), folder()),
+              group=_name.rsplit(".", 1)[0], **{_label: _arg})
 
 
-def _finite(result):
-    """Is a returned value a correct, finite result (and is it empty)?"""
-    if result is None or isinstance(result, (str, ur.URClient, ur.KinematicBackend,
-                                             ur.StepClock, ur.SafetyLimits,
-                                             ur.SecondaryInterfaceBackend, rtde.RTDEReader,
-                                             ur.ControllerStandIn)):
-        return True, False
-    if isinstance(result, calibration.KinematicsInfo):
-        return True, False
-    if isinstance(result, ur.URState):
-        return all(np.all(np.isfinite(x)) for x in (result.q, result.qd, result.tcp_pose)), \
-            False
-    if isinstance(result, ur.PoseFile):
-        return bool(np.all(np.isfinite(result.values))), result.values.size == 0
-    if type(result).__name__ == "MujocoBackend":
-        return True, False
-    if isinstance(result, list):                    # servoj_stream's log
-        return all(_finite(r)[0] for r in result), False
-    a = np.asarray(result, dtype=float)
-    return bool(np.all(np.isfinite(a))), a.size == 0
+def _reads_back(written, values):
+    back = ur.read_poses(written)
+    return True if np.array_equal(back.values, np.atleast_2d(values)) else "reads back wrong"
 
 
-@pytest.mark.parametrize("case, kind", [pytest.param(c, k, id=f"{c[0]}-{k}")
-                                        for c in CASES for k in BAD_KINDS])
-def test_bad_argument_is_refused_by_name_or_gives_a_correct_result(case, kind, tmp_path):
-    name, call, good, names, options = case
-    value = _bad(good, kind)
-    try:
-        result = call(value, tmp_path)
-    except (ValueError, TypeError) as exc:
-        message = str(exc)
-        named = any(re.search(rf"(?<![\w.]){re.escape(n)}(?!\w)", message) for n in names)
-        OUTCOMES["clear error" if named else "other"] += 1
-        assert named, f"{name} {kind}: the error does not name {names}: {message}"
-        return
-    except TimeoutError as exc:          # a tiny timeout honoured, or a huge stream stopped
-        correct = kind in ("tiny", "huge")
-        OUTCOMES["correct result" if correct else "other"] += 1
-        assert correct, f"{name} {kind}: {exc}"
-        return
-    finite, empty = _finite(result)
-    correct = ((kind == "empty" and empty) or (kind in ("huge", "tiny") and finite)
-               or (kind == "inf" and options.get("inf_ok") and finite)
-               or (kind == "none" and options.get("none_ok")))
-    OUTCOMES["correct result" if correct else "other"] += 1
-    assert correct, f"{kind} {name!r} was accepted: {result!r}"
+# the pose files themselves: a file to read, a file to write over, the header's texts
+CASES.add("ur", "read_poses.path", ur.read_poses, path=F("good.csv"), group="read_poses")
+CASES.add("ur", "write_poses.path", lambda **kw: ur.write_poses(values=[POSE, GOAL], **kw)
+          or kw["path"], path=P("w.csv"), writes="path", group="write_poses",
+          check=lambda path, kw: _reads_back(path, [POSE, GOAL]))
+CASES.add("ur", "write_poses.header", lambda **kw: ur.write_poses("h.csv", [POSE], **kw)
+          or "h.csv", robot=Name("UR3"), frame=Name("base"), tcp=Name("flange"),
+          group="write_poses", check=lambda path, kw: _reads_back(path, [POSE]))
+CASES.add("ur", "append_pose.path", lambda **kw: ur.append_pose(value=GOAL, **kw),
+          path=P("a.csv"), writes="path", group="append_pose")
+for _case in CASES.values():
+    _case.setup = good_file
 
 
-def test_zz_summary_of_the_sweep(capsys):
-    """The counts of the sweep above (run in the same session): no case may be "other"."""
-    if not OUTCOMES:
-        pytest.skip("the sweep did not run in this session")
-    total = sum(OUTCOMES.values())
-    with capsys.disabled():
-        print(f"\nbad-input sweep of dqlab.ur and MujocoBackend: {total} cases, "
-              f"{OUTCOMES['clear error']} clear errors, {OUTCOMES['correct result']} correct "
-              f"results, {OUTCOMES['other']} other")
-    assert OUTCOMES["other"] == 0
+@pytest.mark.sweep
+@pytest.mark.parametrize("group", list(CASES.groups))
+def test_bad_arguments_are_refused_by_name_or_give_a_correct_result(group, request, tmp_path):
+    sweep_test(request, CASES.groups[group], tmp_path, "ur")
 
 
 def test_the_sweep_covers_every_public_name_of_dqlab_ur():
-    swept = {c[0].split(".")[0] for c in CASES}
+    swept = {c[0].split(".")[0] for c in CASES_}
     data = {"HOME", "ROBOT_MODE_RUNNING", "Backend", "URState", "PoseFile", "PoseFileError",
             "UnsafeTargetError", "ControllerError"}
     untested = {"RTDEBackend"}                       # needs ur_rtde (tests/test_ur_standin.py)

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 import pytransform3d.rotations as pr
 import pytransform3d.transformations as pt
+from _draws import random_unit_quaternions
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -45,18 +46,15 @@ SEEDS = st.integers(0, 2**32 - 1)
 FAST = settings(max_examples=40, deadline=None)
 
 
-def random_unit_q(rng, shape=()):
-    q = rng.normal(size=tuple(shape) + (4,))
-    return q / np.linalg.norm(q, axis=-1, keepdims=True)
-
 
 def random_dq(rng, shape=()):
-    return dual_quaternion_from_rotation_translation(random_unit_q(rng, shape),
+    return dual_quaternion_from_rotation_translation(random_unit_quaternions(rng, shape),
                                                      rng.normal(size=tuple(shape) + (3,)))
 
 
 def random_transform(rng):
-    return pt.transform_from(matrix_from_quaternion(random_unit_q(rng)), rng.normal(size=3))
+    return pt.transform_from(matrix_from_quaternion(random_unit_quaternions(rng)),
+                             rng.normal(size=3))
 
 
 def same_motion(A, B, atol=1e-12):
@@ -229,7 +227,7 @@ def test_apply_line():
 @given(SEEDS)
 def test_pair_form_equals_dual_number_form(seed):
     rng = np.random.default_rng(seed)
-    q1, q2 = random_unit_q(rng, (2,))
+    q1, q2 = random_unit_quaternions(rng, (2,))
     p1, p2 = rng.normal(size=(2, 3))
     q, p = pair_product(q1, p1, q2, p2)
     Q = dual_quaternion_product(dual_quaternion_from_pair(q1, p1),
@@ -391,7 +389,7 @@ def test_broadcasting_single_with_batch():
     Bs = random_dq(rng, (5,))
     np.testing.assert_allclose(dual_quaternion_product(Q, Bs)[3],
                                dual_quaternion_product(Q, Bs[3]))
-    q = random_unit_q(rng)
+    q = random_unit_quaternions(rng)
     assert dual_quaternion_from_rotation_translation(q, P).shape == (5, 8)
     assert sclerp(Q, Bs[0], np.linspace(0, 1, 9)).shape == (9, 8)
 
@@ -502,7 +500,7 @@ def test_dual_quaternion_class_batch_and_repr():
 
 def test_pytransform3d_rotation_helpers_agree():
     # a sanity check of the cross-check itself: same quaternion convention
-    q = random_unit_q(np.random.default_rng(16))
+    q = random_unit_quaternions(np.random.default_rng(16))
     np.testing.assert_allclose(matrix_from_quaternion(q), pr.matrix_from_quaternion(q),
                                atol=1e-14)
 

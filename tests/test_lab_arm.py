@@ -55,9 +55,9 @@ def test_the_uarm_model_is_the_firmwares_forward_model():
 
 
 def test_motor_angles_refuse_what_the_firmware_refuses():
-    with pytest.raises(ValueError, match=r"point 0: .* needs R = -1\.4\d deg, outside"):
+    with pytest.raises(ValueError, match=r"point 0 \(positions\[0\]\): .* needs R = -1\.4\d deg"):
         lab_arm.motor_angles([[0.2288, 0.0, 0.1781]])          # the lab's own start point
-    with pytest.raises(ValueError, match=r"point 1: .* needs B = "):
+    with pytest.raises(ValueError, match=r"point 1 \(positions\[1\]\): .* needs B = "):
         lab_arm.motor_angles([[0.2, 0.0, 0.1], [-0.1, 0.15, 0.05]])    # behind the arm
     with pytest.raises(ValueError, match="out of the uArm Swift Pro's reach"):
         lab_arm.motor_angles([[0.0, 0.4, 0.05]])
@@ -132,3 +132,74 @@ def test_a_plan_the_firmware_cannot_play_is_refused_by_step():
         lab_arm.gcode_from_plan(plan)
     with pytest.raises(ValueError, match="start_feed"):
         lab_arm.gcode_from_plan(plan, start_feed=float("nan"))
+
+
+NAMES_REFUSED = [
+    ("x\nM2231 V1", r"^name must be one line of printable text: character '\\n' at position 1"),
+    ("x\rM2231 V1", r"character '\\r' at position 1 is a control character"),
+    ("reset \x18", r"character '\\x18' at position 6 is a control character"),
+    ("stop!", r"^name must not hold '!' \(the firmware obeys them even in a comment\)"),
+    ("go~", r"must not hold '~'"), ("status?", r"must not hold '\?'"),
+    ("door@", r"must not hold '@'"), ("Démo", r"^name must be ASCII text .* 'é' at position 1"),
+    ("", r"^name must not be empty"), ("x" * 81, r"^name must be at most 80 characters"),
+]
+
+
+def test_a_name_that_would_reach_the_firmware_is_refused(plan):
+    """The firmware ends a line at \\n or \\r and obeys ?, !, ~, @ and Ctrl-X even inside a
+    comment (Grbl 0.9's serial interrupt): none of them may reach the program."""
+    for name, message in NAMES_REFUSED:
+        with pytest.raises(ValueError, match=message):
+            lab_arm.gcode_from_plan(plan, name=name)
+    with pytest.raises(TypeError, match="^name must be text"):
+        lab_arm.gcode_from_plan(plan, name=b"lab task")
+
+
+def test_a_name_with_g_code_letters_stays_in_its_comment(plan):
+    name = "G0 X0 Y0 Z0 F1 M2231 V1 (lab) ; $RST=* #1"
+    program = lab_arm.gcode_from_plan(plan, name=name)
+    assert program.splitlines()[0].startswith(f"; {name}: 8 steps")
+    assert all(COMMAND.match(line) for line in commands(program))
+    assert commands(program) == commands(lab_arm.gcode_from_plan(plan, name="lab task"))
+
+
+def test_the_start_feed_is_a_number_in_range_written_rounded(plan):
+    for start_feed, word in [(3000, "F3000"), (np.int64(3000), "F3000"), (1.9, "F2"),
+                             (2500.4, "F2500"), (lab_arm.MAX_FEED, "F100000")]:
+        moves = [line for line in commands(lab_arm.gcode_from_plan(plan, start_feed=start_feed))
+                 if line.startswith("G0 ")]
+        assert moves[0].endswith(" " + word), (start_feed, moves[0])
+    for start_feed in [True, "3000", 0.5, 1e30, 100_001, float("inf"), None]:
+        with pytest.raises(ValueError, match=r"^start_feed must be a finite number >= 1 and "
+                                             r"<= 100000, got "):
+            lab_arm.gcode_from_plan(plan, start_feed=start_feed)
+
+
+def test_a_plan_too_fast_for_the_firmware_is_refused_by_step():
+    rows = [REST_MM + [0, 0], [0, 170, 80, 0, 0]]
+    plan = pp.plan_pick_place(desk_arm(), pp.task_from_lab(rows), v_max=1e4, a_max=1e6,
+                              dt=1e-4)
+    with pytest.raises(ValueError, match=r"^step 1: the plan moves .* above the firmware's "
+                                         r"maximum 100000 mm/min"):
+        lab_arm.gcode_from_plan(plan)
+
+
+def test_a_long_dwell_is_split_into_waits_a_16_bit_word_holds():
+    rows = [REST_MM + [0, 0], [0, 170, 80, 0, 0], [0, 170, 30, 1, 0]]
+    plan = pp.plan_pick_place(desk_arm(), pp.task_from_lab(rows), dwell=65.0, dt=0.5)
+    lines = commands(lab_arm.gcode_from_plan(plan))
+    on = lines.index("M2231 V1")
+    assert lines[on + 1:on + 4] == ["G2004 P30000", "G2004 P30000", "G2004 P5000"]
+    assert all(int(w[7:]) <= 32767 for w in lines if w.startswith("G2004 P"))
+
+
+def test_write_gcode_refuses_before_opening_and_keeps_an_old_file(tmp_path, plan):
+    path = tmp_path / "task.gcode"
+    path.write_text("; the old program\n")
+    with pytest.raises(ValueError, match="^name must be ASCII"):
+        lab_arm.write_gcode(path, plan, name="Démo")
+    with pytest.raises(TypeError, match="^plan must be a PickPlacePlan, got a str"):
+        lab_arm.write_gcode(path, "plan")
+    assert path.read_text() == "; the old program\n"
+    with pytest.raises(ValueError, match="is a directory"):
+        lab_arm.write_gcode(tmp_path, plan)

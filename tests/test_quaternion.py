@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from _draws import random_unit_quaternions
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from pyquaternion import Quaternion as PyQuaternion
@@ -33,10 +34,6 @@ from dqlab.quaternion import (
 SEEDS = st.integers(0, 2**32 - 1)
 FAST = settings(max_examples=40, deadline=None)
 
-
-def random_unit(rng, shape=()):
-    q = rng.normal(size=tuple(shape) + (4,))
-    return q / np.linalg.norm(q, axis=-1, keepdims=True)
 
 
 def same_rotation(a, b, atol=1e-12):
@@ -117,7 +114,7 @@ def test_inverse_and_normalize(seed):
 @given(SEEDS)
 def test_q_and_minus_q_same_rotation(seed):
     rng = np.random.default_rng(seed)
-    q = random_unit(rng)
+    q = random_unit_quaternions(rng)
     v = rng.normal(size=3)
     np.testing.assert_allclose(rotate_vector(q, v), rotate_vector(-q, v), atol=1e-14)
     np.testing.assert_allclose(matrix_from_quaternion(q), matrix_from_quaternion(-q),
@@ -130,13 +127,13 @@ def test_q_and_minus_q_same_rotation(seed):
 @given(SEEDS)
 def test_rotation_is_sandwich_and_matrix(seed):
     rng = np.random.default_rng(seed)
-    q = random_unit(rng)
+    q = random_unit_quaternions(rng)
     v = rng.normal(size=3)
     sandwich = quaternion_product(quaternion_product(q, np.r_[0, v]), quaternion_conjugate(q))
     np.testing.assert_allclose(rotate_vector(q, v), sandwich[1:], atol=1e-14)
     np.testing.assert_allclose(matrix_from_quaternion(q) @ v, sandwich[1:], atol=1e-14)
     # composition: rotating by ab is rotating by b, then by a
-    p = random_unit(rng)
+    p = random_unit_quaternions(rng)
     np.testing.assert_allclose(rotate_vector(quaternion_product(q, p), v),
                                rotate_vector(q, rotate_vector(p, v)), atol=1e-13)
 
@@ -210,7 +207,7 @@ def test_exp_log_power(seed):
     rng = np.random.default_rng(seed)
     q = rng.normal(size=4)
     np.testing.assert_allclose(quaternion_exp(quaternion_log(q)), q, atol=1e-13)
-    u = random_unit(rng)
+    u = random_unit_quaternions(rng)
     np.testing.assert_allclose(quaternion_power(u, 2), quaternion_product(u, u), atol=1e-13)
     h = quaternion_power(u, 0.5)
     np.testing.assert_allclose(quaternion_product(h, h), u, atol=1e-13)
@@ -228,7 +225,7 @@ def test_log_of_minus_one_and_exp_of_zero():
 @given(SEEDS)
 def test_slerp_endpoints_unit_and_shortest(seed):
     rng = np.random.default_rng(seed)
-    q0, q1 = random_unit(rng, (2,))
+    q0, q1 = random_unit_quaternions(rng, (2,))
     t = np.linspace(0, 1, 11)
     path = slerp(q0, q1, t)
     np.testing.assert_allclose(np.linalg.norm(path, axis=-1), 1, atol=1e-14)
@@ -249,7 +246,7 @@ def test_slerp_endpoints_unit_and_shortest(seed):
 
 
 def test_slerp_equal_inputs():
-    q = random_unit(np.random.default_rng(1))
+    q = random_unit_quaternions(np.random.default_rng(1))
     np.testing.assert_allclose(slerp(q, q, 0.3), q, atol=1e-15)
     np.testing.assert_allclose(slerp(q, -q, 0.3), q, atol=1e-15)
 
@@ -314,8 +311,8 @@ def test_batch_equals_single(shape):
     rng = np.random.default_rng(11)
     a = rng.normal(size=shape + (4,))
     b = rng.normal(size=shape + (4,))
-    u = random_unit(rng, shape)
-    w = random_unit(rng, shape)
+    u = random_unit_quaternions(rng, shape)
+    w = random_unit_quaternions(rng, shape)
     v = rng.normal(size=shape + (3,))
     t = rng.uniform(size=shape)
     R = matrix_from_quaternion(u)
@@ -347,12 +344,12 @@ def test_batch_equals_single(shape):
 
 def test_broadcasting_single_with_batch():
     rng = np.random.default_rng(4)
-    q = random_unit(rng)
+    q = random_unit_quaternions(rng)
     v = rng.normal(size=(6, 3))
     out = rotate_vector(q, v)
     assert out.shape == (6, 3)
     np.testing.assert_allclose(out, v @ matrix_from_quaternion(q).T, atol=1e-14)
-    qs = random_unit(rng, (6,))
+    qs = random_unit_quaternions(rng, (6,))
     np.testing.assert_allclose(quaternion_product(q, qs)[2], quaternion_product(q, qs[2]))
     np.testing.assert_allclose(rotate_vector(qs, [1, 0, 0])[3], rotate_vector(qs[3], [1, 0, 0]))
     assert quaternion_identity((2, 3)).shape == (2, 3, 4)
@@ -417,7 +414,7 @@ def test_tolerances_are_keywords():
 
 def test_quaternion_class_wraps_array_functions():
     rng = np.random.default_rng(5)
-    a, b = random_unit(rng, (2,))
+    a, b = random_unit_quaternions(rng, (2,))
     A, B = Quaternion(a), Quaternion(b)
     np.testing.assert_array_equal((A * B).array, quaternion_product(a, b))
     np.testing.assert_array_equal(A.conjugate().array, quaternion_conjugate(a))
@@ -448,7 +445,7 @@ def test_quaternion_class_wraps_array_functions():
 
 
 def test_quaternion_class_batch_and_repr():
-    Q = Quaternion(random_unit(np.random.default_rng(6), (3,)))
+    Q = Quaternion(random_unit_quaternions(np.random.default_rng(6), (3,)))
     assert Q.shape == (3,)
     assert len(Q) == 3
     assert Q[1].shape == ()

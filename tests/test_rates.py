@@ -4,6 +4,7 @@ all against central differences and, where one exists, an independent library.""
 
 import numpy as np
 import pytest
+from _draws import random_unit_quaternions
 
 from dqlab.dualquat import (
     dual_quaternion_from_rotation_translation,
@@ -28,10 +29,6 @@ from dqlab.rotations import axis_angle_from_matrix, matrix_from_rpy, rpy_from_ma
 
 H = 1e-6
 
-
-def random_unit_quaternions(rng, n):
-    q = rng.normal(size=(n, 4))
-    return q / np.linalg.norm(q, axis=-1, keepdims=True)
 
 
 def pure(v):

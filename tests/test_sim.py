@@ -641,7 +641,7 @@ def test_complex_masses_and_a_name_that_is_not_text_are_refused():
     with pytest.raises(TypeError, match="^masses must hold real numbers"):
         mjcf_from_robot(models.ur3(), masses=np.ones(6) + 1j)
     for generate in (mjcf_from_robot, urdf_from_robot):
-        with pytest.raises(ValueError, match="^name must be text"):
+        with pytest.raises(TypeError, match="^name must be text"):
             generate(models.ur3(), name=123)
         with pytest.raises(TypeError, match="^robot must be a Robot, got None"):
             generate(None)

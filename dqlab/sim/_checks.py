@@ -3,7 +3,7 @@ argument). Scalars go through :func:`dqlab._checks.check_scalar`, like everywher
 
 import numpy as np
 
-from .._checks import real_array
+from .._checks import is_boolean, real_array
 
 _FLOAT64 = np.dtype(np.float64)
 
@@ -19,6 +19,8 @@ def vector(value, n, name):
         total = sum(value.tolist())                   # a float: fast for a few joints
         if total - total == 0.0:                      # NaN or inf, or an overflow: check
             return value
+    if is_boolean(value):
+        raise TypeError(f"{name} must hold numbers, got booleans")
     arr = real_array(value, name)
     if arr.ndim == 0:
         arr = np.full(n, float(arr))

@@ -43,15 +43,15 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-from .._checks import check_instance, check_scalar
+from .._checks import check_instance, check_scalar, check_text
 from ..models import UR_DYNAMICS, rod_link_inertias
 from ..quaternion import quaternion_from_matrix
 from ..robot import Robot
 from ._checks import per_joint
 
 __all__ = ["mjcf_from_robot", "link_placements", "default_masses", "robot_inertias",
-           "UR3_LINK_MASSES", "UR3_PAYLOAD", "UR3_BASE_MASS", "MIN_MASS", "MIN_RADIUS",
-           "MAX_RADIUS", "MIN_TIMESTEP", "MAX_TIMESTEP"]
+           "UR3_LINK_MASSES", "UR3_PAYLOAD", "UR3_BASE_MASS", "MIN_MASS", "MIN_INERTIA",
+           "MIN_RADIUS", "MAX_RADIUS", "MIN_TIMESTEP", "MAX_TIMESTEP"]
 
 #: Masses of the UR3's six moving links in kg, from Universal Robots' table of dynamic
 #: parameters (the ``ur_dh`` reference; :data:`dqlab.models.UR_DYNAMICS`, which
@@ -67,6 +67,12 @@ UR3_BASE_MASS = 11.0 - sum(UR3_LINK_MASSES)
 #: The lightest link mass accepted, kg (MuJoCo refuses a moving body whose mass or inertia
 #: is below its ``mjMINVAL``, 1e-15).
 MIN_MASS = 1e-6
+#: The smallest principal moment of inertia of a link accepted, kg m^2: MuJoCo refuses an
+#: inertia tensor whose smallest eigenvalue is below its ``mjEPS``, 1e-14 ("inertia must
+#: have positive eigenvalues"); the factor 100 covers the rounding of its own eigenvalue
+#: computation. A point mass (:meth:`~dqlab.inertia.LinkInertia.sphere` of radius 0) or a
+#: thin rod has a zero moment and is refused: a body MuJoCo moves must have extent.
+MIN_INERTIA = 1e-12
 #: The smallest radius of the drawn links, metres.
 MIN_RADIUS = 1e-3
 #: The largest radius of the drawn links, metres.
@@ -287,7 +293,9 @@ def mjcf_from_robot(robot, *, masses=None, payload=0.0, radius=None, damping=0.1
         outside [:data:`MIN_RADIUS`, :data:`MAX_RADIUS`], a time step outside
         [:data:`MIN_TIMESTEP`, :data:`MAX_TIMESTEP`]: MuJoCo refuses bodies too light for
         it, and a step it would write as 0 or take as the whole motion simulates nothing),
-        ``name`` is not text, or the integrator is unknown.
+        a link's inertia has a mass below :data:`MIN_MASS` or a principal moment below
+        :data:`MIN_INERTIA` (a point mass: MuJoCo refuses it), the model's name is not one
+        line of text (XML cannot hold a control character), or the integrator is unknown.
 
     See Also
     --------
@@ -319,6 +327,8 @@ def mjcf_from_robot(robot, *, masses=None, payload=0.0, radius=None, damping=0.1
         inertias = [inertia.scaled(m / inertia.mass) if inertia.mass > 0
                     else type(inertia).sphere(m, inertia.com)
                     for inertia, m in zip(inertias, masses, strict=True)]
+    for i, inertia in enumerate(inertias):
+        _check_moving_body(inertia, corners[i + 1], i, masses is not None)
     damping = per_joint(damping, n, "damping", positive=False)
     armature = per_joint(armature, n, "armature", positive=False)
     payload = check_scalar(payload, "payload", minimum=0)
@@ -383,25 +393,51 @@ def mjcf_from_robot(robot, *, masses=None, payload=0.0, radius=None, damping=0.1
     return "\n".join(lines)
 
 
-def _inertial(inertia, X_BF):
-    r"""The ``<inertial>`` element of a body whose link frame F sits at ``X_BF`` in it: the
-    centre of mass :math:`X_{BF}\,\mathbf c` and the tensor :math:`R I_c R^\top`, written
-    as MuJoCo's ``fullinertia`` (ixx iyy izz ixy ixz iyz)."""
+def _full_inertia(inertia, X_BF):
+    r"""The ``pos``, ``mass`` and ``fullinertia`` (ixx iyy izz ixy ixz iyz) texts of a link
+    whose frame F sits at ``X_BF`` in its body: :math:`X_{BF}\,\mathbf c` and
+    :math:`R I_c R^\top`."""
     R = X_BF[:3, :3]
     com = R @ inertia.com + X_BF[:3, 3]
     I = R @ inertia.tensor @ R.T
     full = (I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2])
-    return (f'<inertial pos="{xml_vector(com)}" mass="{xml_number(inertia.mass)}" '
-            f'fullinertia="{xml_vector(full)}"/>')
+    return xml_vector(com), xml_number(inertia.mass), xml_vector(full)
+
+
+def _check_moving_body(inertia, X_BF, i, scaled):
+    """Refuse, naming the link, an inertia MuJoCo would refuse for a moving body: a mass
+    below MIN_MASS, or a principal moment of the tensor as written below MIN_INERTIA."""
+    where = f"link {i + 1}'s inertia (robot.links[{i}].inertia"
+    where += f", scaled to masses[{i}])" if scaled else ")"
+    if not inertia.mass >= MIN_MASS:
+        raise ValueError(f"{where} has mass {inertia.mass:g} kg, below {MIN_MASS:g} kg: "
+                         "MuJoCo cannot move a body without mass")
+    full = [float(x) for x in _full_inertia(inertia, X_BF)[2].split()]
+    tensor = np.array([[full[0], full[3], full[4]], [full[3], full[1], full[5]],
+                       [full[4], full[5], full[2]]])
+    smallest = float(np.linalg.eigvalsh(tensor)[0])
+    if not smallest >= MIN_INERTIA:
+        raise ValueError(f"{where} has a principal moment of {smallest:.3g} kg m^2, below "
+                         f"{MIN_INERTIA:g} kg m^2, which MuJoCo refuses (a point mass or a "
+                         "thin rod: give the link a body, e.g. LinkInertia.sphere(m, c, "
+                         "radius=0.02))")
+
+
+def _inertial(inertia, X_BF):
+    r"""The ``<inertial>`` element of a body whose link frame F sits at ``X_BF`` in it: the
+    centre of mass :math:`X_{BF}\,\mathbf c` and the tensor :math:`R I_c R^\top`, written
+    as MuJoCo's ``fullinertia`` (ixx iyy izz ixy ixz iyz)."""
+    com, mass, full = _full_inertia(inertia, X_BF)
+    return f'<inertial pos="{com}" mass="{mass}" fullinertia="{full}"/>'
 
 
 def model_name_of(robot, name):
-    """The name a generated model takes: ``name`` (text), else the robot's."""
+    """The name a generated model takes: ``name``, else the robot's (``"robot"`` if it has
+    none), checked as one line of text that XML can hold (``dqlab._checks.check_text``;
+    the writers escape ``&``, ``<``, ``>`` and quotes)."""
     if name is None:
-        return robot.name or "robot"
-    if not isinstance(name, str):
-        raise ValueError(f"name must be text (the model's name), got {name!r}")
-    return name
+        return check_text(robot.name, "robot.name") if robot.name else "robot"
+    return check_text(name, "name")
 
 
 def _housing_and_path(indent, name, mass, radius, path, color):

@@ -256,7 +256,7 @@ class ArmSimulation:
         ValueError
             If ``torque`` has the wrong shape, holds NaN or infinity or a value beyond
             :data:`MAX_CONTROL` (which MuJoCo would set to 0), or ``steps`` is not an
-            integer >= 0.
+            integer from 0 to :data:`MAX_STEPS`.
         SimulationError
             If the state diverges during a step (MuJoCo's warnings: NaN, infinity or a
             value beyond 1e10 in an acceleration, velocity or position, after which it
@@ -269,7 +269,7 @@ class ArmSimulation:
             j = int(np.argmax(np.abs(torque)))
             raise ValueError(f"torque: joint {j + 1} = {torque[j]:.6g} is too large: MuJoCo "
                              f"ignores controls beyond {MAX_CONTROL:g}")
-        steps = check_scalar(steps, "steps", minimum=0, integer=True)
+        steps = check_scalar(steps, "steps", minimum=0, maximum=MAX_STEPS, integer=True)
         self.data.ctrl[:] = torque
         counts = self.data.warning.number            # MuJoCo's warning counters (a view)
         before = counts.tolist()

@@ -9,6 +9,7 @@ accelerations, and (when the orientation is given) unit quaternions and angular
 velocities, all in the world frame. Chapter 11 of the book derives them.
 """
 
+import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -156,6 +157,22 @@ def _one_transform(X, name):
     return X
 
 
+#: The smallest normalised speed and acceleration of a line's time law (a normal float).
+_TINY = 1e-300
+#: How far from the origin a screw path's poses may be, metres: beyond, the rounding of a
+#: unit dual quaternion's dual part (1e-16 of the distance) exceeds the unit checks' 1e-9.
+MAX_SCREW_REACH = 1e6
+
+
+def _within_screw_reach(X, name):
+    distance = math.hypot(*X[:3, 3])
+    if not distance <= MAX_SCREW_REACH:
+        raise ValueError(f"{name} is {distance:.3g} m from the origin: too far for a screw "
+                         f"path (at most {MAX_SCREW_REACH:g} m, where dual quaternions still "
+                         "hold their unit norm to 1e-9)")
+    return X
+
+
 def _normalised_law(law, duration):
     if law is None:
         if duration is None:
@@ -252,9 +269,13 @@ def _line_law(X_A, X_B, speed, acceleration):
         raise ValueError("give the speed and the acceleration together")
     V = check_scalar(speed, "speed", minimum=0, strict=True)
     A = check_scalar(acceleration, "acceleration", minimum=0, strict=True)
-    L = float(np.linalg.norm(X_B[:3, 3] - X_A[:3, 3]))
+    L = math.hypot(*(X_B[:3, 3] - X_A[:3, 3]))            # no overflow for far poses
     if L == 0.0:
         raise ValueError("speed: the line has length 0 (a turn on the spot): give a duration")
+    if not (V / L >= _TINY and A / L >= _TINY):
+        raise ValueError(f"X_A and X_B are {L:.3g} m apart: too far for a speed of {V:g} m/s "
+                         f"and an acceleration of {A:g} m/s^2 (the motion would last longer "
+                         "than a float can count)")
     return time_laws.trapezoidal(1.0, v_max=V / L, a_max=A / L)
 
 
@@ -301,8 +322,8 @@ def screw_path(X_A, X_B, *, duration=None, law=None, dt=0.005):
     >>> screw_path(X_A, X_B, duration=1.0, dt=0.5).position[1].round(6)
     array([0.212132, 0.212132, 0.      ])
     """
-    X_A = _one_transform(X_A, "X_A")
-    X_B = _one_transform(X_B, "X_B")
+    X_A = _within_screw_reach(_one_transform(X_A, "X_A"), "X_A")
+    X_B = _within_screw_reach(_one_transform(X_B, "X_B"), "X_B")
     law = _normalised_law(law, duration)
     t, s, sd, sdd = law.sample(check_scalar(dt, "dt", minimum=0, strict=True))
     Q_A, Q_B = dual_quaternion_from_transform(X_A), dual_quaternion_from_transform(X_B)

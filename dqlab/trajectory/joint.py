@@ -12,13 +12,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._checks import as_float_array, check_path, check_scalar
+from .._checks import as_float_array, check_path, check_scalar, is_boolean, short_repr
+from .._files import read_bytes, write_atomically
 from . import time_laws
 
-__all__ = ["Trajectory", "joint_trajectory", "via_points"]
+__all__ = ["Trajectory", "joint_trajectory", "via_points", "MAX_CSV_BYTES"]
 
 _LAWS = ("trapezoidal", "cubic", "quintic")
 _POSE_COLUMNS = ("x [m]", "y [m]", "z [m]", "qw", "qx", "qy", "qz")
+
+#: The largest trajectory file :meth:`Trajectory.load_csv` reads, bytes: 256 MiB, half a
+#: million samples of a six-joint arm with its tool poses.
+MAX_CSV_BYTES = 1 << 28
 
 
 @dataclass(frozen=True)
@@ -138,10 +143,9 @@ class Trajectory:
 
             blocks += [self.poses[:, :3, 3], quaternion_from_matrix(self.poses[:, :3, :3])]
         table = np.concatenate(blocks, axis=1)
-        with open(path, "w", encoding="utf-8") as f:
-            f.write(",".join(self.columns()) + "\n")
-            for row in table:
-                f.write(",".join(repr(float(x)) for x in row) + "\n")
+        lines = [",".join(self.columns())]
+        lines += [",".join(repr(float(x)) for x in row) for row in table]
+        write_atomically(path, "\n".join(lines) + "\n")
 
     @classmethod
     def load_csv(cls, path):
@@ -151,7 +155,8 @@ class Trajectory:
         ------
         ValueError
             Naming the file and the line: an empty file, bytes that are not UTF-8 text,
-            a header that is not the one :meth:`save_csv` writes, a row with the wrong
+            a file larger than :data:`MAX_CSV_BYTES`, a header that is not the one
+            :meth:`save_csv` writes, a row with the wrong
             number of values, a value that is not a finite number, instants that do not
             increase, or a last line without its line end (a truncated file, even if the
             cut fell inside the last number).
@@ -168,7 +173,7 @@ class Trajectory:
         ValueError: .../bad.csv, line 3: expected 4 values, got 3 (truncated or corrupt row)
         """
         path = check_path(path)
-        raw = path.read_bytes()
+        raw = read_bytes(path, max_bytes=MAX_CSV_BYTES, what="trajectory file")
         lines = []
         for number, line in enumerate(raw.split(b"\n"), start=1):
             try:
@@ -190,8 +195,8 @@ class Trajectory:
                               qdd=np.zeros((1, max(n, 1))),
                               poses=np.eye(4)[None] if with_poses else None).columns()
         if n == 0 or k % 3 or header != expected:
-            raise ValueError(f"{path}, line 1: header {lines[0]!r} is not a trajectory "
-                             f"header (expected 't [s],q1 [rad],...')")
+            raise ValueError(f"{path}, line 1: header {short_repr(lines[0])} is not a "
+                             f"trajectory header (expected 't [s],q1 [rad],...')")
         rows = []
         for number, line in enumerate(lines[1:], start=2):
             if not line.strip():
@@ -206,9 +211,10 @@ class Trajectory:
                 values = [float(x) for x in fields]
             except ValueError:
                 raise ValueError(f"{path}, line {number}: a value is not a number: "
-                                 f"{line!r}") from None
+                                 f"{short_repr(line)}") from None
             if not np.all(np.isfinite(values)):
-                raise ValueError(f"{path}, line {number}: NaN or infinity in {line!r}")
+                raise ValueError(f"{path}, line {number}: NaN or infinity in "
+                                 f"{short_repr(line)}")
             if rows and values[0] <= rows[-1][0]:
                 raise ValueError(f"{path}, line {number}: time {values[0]!r} does not "
                                  f"increase (previous {rows[-1][0]!r})")
@@ -239,6 +245,8 @@ class Trajectory:
 def _joint_limits(value, name, n):
     if value is None:
         return None
+    if is_boolean(value):
+        raise TypeError(f"{name} must be numbers, got booleans {short_repr(value)}")
     a = as_float_array(value, name)
     if a.ndim > 1 or (a.ndim == 1 and a.size != n):
         raise ValueError(f"{name} must be a number or have shape ({n},), got {a.shape}")

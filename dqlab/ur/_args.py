@@ -4,6 +4,8 @@ import math
 
 import numpy as np
 
+from .._checks import short_repr
+
 __all__ = ["real_number", "positive_number"]
 
 
@@ -21,13 +23,13 @@ def real_number(value, name):
     """
     if value is None or isinstance(value, (bool, np.bool_, str, bytes, complex,
                                            np.complexfloating, list, tuple, dict, set)):
-        raise TypeError(f"{name} must be a real number, got {value!r}")
+        raise TypeError(f"{name} must be a real number, got {short_repr(value)}")
     if isinstance(value, np.ndarray) and (value.ndim != 0 or value.dtype.kind not in "iuf"):
-        raise TypeError(f"{name} must be a real number, got {value!r}")
+        raise TypeError(f"{name} must be a real number, got {short_repr(value)}")
     try:
         return float(value)
     except (TypeError, ValueError):
-        raise TypeError(f"{name} must be a real number, got {value!r}") from None
+        raise TypeError(f"{name} must be a real number, got {short_repr(value)}") from None
 
 
 def positive_number(value, name):
@@ -38,5 +40,5 @@ def positive_number(value, name):
     """
     x = real_number(value, name)
     if not (x > 0.0 and math.isfinite(x)):
-        raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+        raise ValueError(f"{name} must be a finite number > 0, got {short_repr(value)}")
     return x

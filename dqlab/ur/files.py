@@ -44,13 +44,13 @@ over the target), so a crash never leaves half a file.
 import math
 import os
 import re
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from .._checks import check_tolerance, real_array
+from .._checks import check_text, check_tolerance, real_array, short_repr
+from .._files import read_bytes, write_atomically
 from ..dualquat import transform_from_dual_quaternion
 from .poses import (
     dual_quaternion_from_pose,
@@ -70,6 +70,9 @@ COLUMNS = {
 _UNITS = {"ur_pose": "m, rad", "dual_quaternion": "m"}
 _HEADER_KEYS = ("version", "kind", "units", "frame", "robot", "tcp")
 _NAME = re.compile(r"[A-Za-z0-9_.\-]+")
+
+#: The largest pose file :func:`read_poses` reads, bytes (a pose takes under 200).
+MAX_FILE_BYTES = 1 << 24
 
 
 class PoseFileError(ValueError):
@@ -129,7 +132,7 @@ class PoseFile:
 
 def _path(path):
     if not isinstance(path, (str, os.PathLike)):
-        raise TypeError(f"path must be a str or a path-like object, got {path!r}")
+        raise TypeError(f"path must be a str or a path-like object, got {short_repr(path)}")
     return Path(path)
 
 
@@ -137,7 +140,7 @@ def _check_values(kind, row, *, max_reach, unit_tol):
     """Why one row of numbers is not a valid pose of ``kind`` (``None`` if it is)."""
     for col, x in zip(COLUMNS[kind], row, strict=True):
         if not math.isfinite(x):
-            return f"column {col} is {x!r}, not a finite number"
+            return f"column {col} is {short_repr(x)}, not a finite number"
     if kind == "ur_pose":
         reach = math.hypot(*row[:3])
         angle = math.hypot(*row[3:])
@@ -205,9 +208,11 @@ def read_poses(path, *, max_reach=2.0, unit_tol=1e-9):
         raise PoseFileError(path, line, message)
 
     try:
-        raw = path.read_bytes()
+        raw = read_bytes(path, max_bytes=MAX_FILE_BYTES, what="pose file")
     except OSError as exc:
         raise PoseFileError(path, None, f"cannot be read: {exc.strerror}") from None
+    except ValueError as exc:
+        raise PoseFileError(path, None, str(exc).rpartition(": ")[2]) from None
     lines = raw.split(b"\n")
     if lines and lines[-1] == b"":
         lines.pop()
@@ -226,30 +231,31 @@ def read_poses(path, *, max_reach=2.0, unit_tol=1e-9):
         key, sep, value = entry.partition(":")
         key, value = key.strip(), value.strip()
         if not sep or key not in _HEADER_KEYS:
-            fail(i + 1, f"unknown header entry {entry!r} (expected one of {_HEADER_KEYS})")
+            fail(i + 1, f"unknown header entry {short_repr(entry)} (expected one of "
+                        f"{_HEADER_KEYS})")
         if key in header:
-            fail(i + 1, f"header entry {key!r} is repeated")
+            fail(i + 1, f"header entry {short_repr(key)} is repeated")
         header[key] = (value, i + 1)
         i += 1
     for key in _HEADER_KEYS:
         if key not in header:
-            fail(i + 1, f"header entry {key!r} is missing")
+            fail(i + 1, f"header entry {short_repr(key)} is missing")
     version, line = header["version"]
     if version != str(FORMAT_VERSION):
-        fail(line, f"format version {version!r} is not supported (this is version "
+        fail(line, f"format version {short_repr(version)} is not supported (this is version "
                    f"{FORMAT_VERSION})")
     kind, line = header["kind"]
     if kind not in COLUMNS:
-        fail(line, f"kind {kind!r} is unknown (expected one of {tuple(COLUMNS)})")
+        fail(line, f"kind {short_repr(kind)} is unknown (expected one of {tuple(COLUMNS)})")
     units, line = header["units"]
     if [u.strip() for u in units.split(",")] != _UNITS[kind].split(", "):
-        fail(line, f"units {units!r} are not supported for {kind}: expected "
+        fail(line, f"units {short_repr(units)} are not supported for {kind}: expected "
                    f"{_UNITS[kind]!r} (convert millimetres and degrees before writing)")
     columns = ("name",) + COLUMNS[kind]
     if i >= len(text):
         fail(i + 1, "the column line is missing (file truncated?)")
     if tuple(c.strip() for c in text[i].split(",")) != columns:
-        fail(i + 1, f"column line is {text[i]!r}, expected {','.join(columns)!r}")
+        fail(i + 1, f"column line is {short_repr(text[i])}, expected {','.join(columns)!r}")
     i += 1
     names, rows, seen = [], [], {}
     end_count = None
@@ -260,7 +266,7 @@ def read_poses(path, *, max_reach=2.0, unit_tol=1e-9):
         if line.startswith("#"):
             m = re.fullmatch(r"#\s*end:\s*(\d+)\s*", line)
             if not m:
-                fail(n, f"unexpected comment {line!r} among the poses")
+                fail(n, f"unexpected comment {short_repr(line)} among the poses")
             end_count = int(m.group(1))
             if end_count != len(rows):
                 fail(n, f"'# end' says {end_count} poses, the file holds {len(rows)} "
@@ -272,19 +278,19 @@ def read_poses(path, *, max_reach=2.0, unit_tol=1e-9):
                     "truncated or damaged line")
         name = fields[0].strip()
         if not _NAME.fullmatch(name):
-            fail(n, f"pose name {name!r} is empty or has characters other than letters, "
+            fail(n, f"pose name {short_repr(name)} is empty or has characters other than letters, "
                     "digits, '_', '.', '-'")
         if name in seen:
-            fail(n, f"pose name {name!r} repeats line {seen[name]}")
+            fail(n, f"pose name {short_repr(name)} repeats line {seen[name]}")
         row = []
         for col, field in zip(columns[1:], fields[1:], strict=True):
             try:
                 row.append(float(field))
             except ValueError:
-                fail(n, f"column {col} is {field.strip()!r}, not a number")
+                fail(n, f"column {col} is {short_repr(field.strip())}, not a number")
         problem = _check_values(kind, row, max_reach=max_reach, unit_tol=unit_tol)
         if problem:
-            fail(n, f"pose {name!r}: {problem}")
+            fail(n, f"pose {short_repr(name)}: {problem}")
         seen[name] = n
         names.append(name)
         rows.append(row)
@@ -338,7 +344,7 @@ def write_poses(path, values, *, kind="ur_pose", names=None, robot="UR3", frame=
     >>> folder.cleanup()
     """
     if not isinstance(kind, str) or kind not in COLUMNS:
-        raise ValueError(f"kind must be one of {tuple(COLUMNS)}, got {kind!r}")
+        raise ValueError(f"kind must be one of {tuple(COLUMNS)}, got {short_repr(kind)}")
     max_reach = check_tolerance(max_reach, "max_reach")
     unit_tol = check_tolerance(unit_tol, "unit_tol")
     path = _path(path)
@@ -347,7 +353,7 @@ def write_poses(path, values, *, kind="ur_pose", names=None, robot="UR3", frame=
     if values.ndim == 1:
         values = values[None, :]
     if values.ndim != 2 or values.shape[1] != width:
-        raise ValueError(f"values must have shape (N, {width}) for kind {kind!r}, "
+        raise ValueError(f"values must have shape (N, {width}) for kind {short_repr(kind)}, "
                          f"got {values.shape}")
     if names is None:
         names = [f"pose_{k + 1}" for k in range(len(values))]
@@ -356,29 +362,21 @@ def write_poses(path, values, *, kind="ur_pose", names=None, robot="UR3", frame=
         raise ValueError(f"names has {len(names)} entries for {len(values)} poses")
     for k, (name, row) in enumerate(zip(names, values, strict=True)):
         if not _NAME.fullmatch(name):
-            raise ValueError(f"names[{k}] = {name!r}: use letters, digits, '_', '.', '-'")
+            raise ValueError(f"names[{k}] = {short_repr(name)}: use letters, digits, '_', '.', '-'")
         if names.index(name) != k:
-            raise ValueError(f"names[{k}] = {name!r} repeats names[{names.index(name)}]")
+            raise ValueError(f"names[{k}] = {short_repr(name)} repeats names[{names.index(name)}]")
         problem = _check_values(kind, row.tolist(), max_reach=max_reach, unit_tol=unit_tol)
         if problem:
-            raise ValueError(f"pose {k} ({name!r}): {problem}")
+            raise ValueError(f"pose {k} ({short_repr(name)}): {problem}")
     for key, value in (("robot", robot), ("frame", frame), ("tcp", tcp)):
-        if not value or "\n" in str(value):
-            raise ValueError(f"{key} must be a non-empty single line, got {value!r}")
+        check_text(value, key)                      # one printable line: no header injection
     lines = [_MAGIC, f"# version: {FORMAT_VERSION}", f"# kind: {kind}",
              f"# units: {_UNITS[kind]}", f"# frame: {frame}", f"# robot: {robot}",
              f"# tcp: {tcp}", ",".join(("name",) + COLUMNS[kind])]
     lines += [",".join([name] + [repr(float(x)) for x in row])
               for name, row in zip(names, values, strict=True)]
     lines.append(f"# end: {len(values)}")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent or ".")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as f:
-            f.write("\n".join(lines) + "\n")
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
+    write_atomically(path, "\n".join(lines) + "\n")
 
 
 def append_pose(path, value, *, name=None, kind="ur_pose", robot="UR3", frame="base",
@@ -417,16 +415,17 @@ def append_pose(path, value, *, name=None, kind="ur_pose", robot="UR3", frame="b
     """
     path = _path(path)
     if not isinstance(kind, str) or kind not in COLUMNS:
-        raise ValueError(f"kind must be one of {tuple(COLUMNS)}, got {kind!r}")
+        raise ValueError(f"kind must be one of {tuple(COLUMNS)}, got {short_repr(kind)}")
     value = real_array(value, "value")
     if value.shape != (len(COLUMNS[kind]),):
         raise ValueError(f"value must be one pose of shape ({len(COLUMNS[kind])},) for kind "
-                         f"{kind!r}, got shape {value.shape}")
+                         f"{short_repr(kind)}, got shape {value.shape}")
     if path.exists():
         old = read_poses(path, max_reach=max_reach, unit_tol=unit_tol)
         for key, want in (("kind", kind), ("robot", robot), ("frame", frame), ("tcp", tcp)):
             if getattr(old, key) != want:
-                raise ValueError(f"{path} holds {key} {getattr(old, key)!r}, not {want!r}")
+                raise ValueError(f"{path} holds {key} {getattr(old, key)!r}, not "
+                                 f"{short_repr(want)}")
         names, values = list(old.names), list(old.values)
     else:
         names, values = [], []

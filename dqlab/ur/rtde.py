@@ -36,7 +36,7 @@ import time
 
 import numpy as np
 
-from .._checks import check_tolerance
+from .._checks import check_tolerance, short_repr
 from ._args import real_number
 
 __all__ = ["RTDEError", "RTDEReader", "PROTOCOL_VERSION", "TYPES", "pack", "PacketBuffer",
@@ -181,11 +181,11 @@ class RTDEReader:
     def __init__(self, host, port=30004, variables=STATE_VARIABLES, frequency=125.0):
         if not isinstance(host, str) or not host:
             raise TypeError(f"host must be a host name or address (a non-empty str), got "
-                            f"{host!r}")
+                            f"{short_repr(host)}")
         if isinstance(port, (bool, np.bool_)) or not isinstance(port, (int, np.integer)) \
                 or not 0 <= port <= 65535:
             raise ValueError(f"port must be a TCP port number (an int in 0..65535), got "
-                             f"{port!r}")
+                             f"{short_repr(port)}")
         if isinstance(variables, (str, bytes)) or not all(
                 isinstance(v, str) and v.isidentifier() and v.isascii() for v in variables):
             raise ValueError(f"variables must be a sequence of RTDE output names, got "

@@ -54,6 +54,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._checks import short_repr
 from . import script
 from .calibration import CalibrationError, KinematicsInfo, kinematics_info_from_message
 from .client import robot_and_limits
@@ -482,6 +483,6 @@ def _port(value, name):
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) \
             or not 0 <= value <= 65535:
         raise ValueError(f"{name} must be a TCP port number (an int in 0..65535), got "
-                         f"{value!r}")
+                         f"{short_repr(value)}")
     return int(value)
 

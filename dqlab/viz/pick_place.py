@@ -58,7 +58,7 @@ def animate_pick_place(scene, robot, plan, *, size=(0.06, 0.04, 0.004), name="ro
     check_instance(scene, Scene, "scene")
     check_instance(robot, Robot, "robot")
     check_instance(plan, PickPlacePlan, "plan")
-    stride = check_scalar(stride, "stride", minimum=1, integer=True)
+    stride = min(check_scalar(stride, "stride", minimum=1, integer=True), len(plan.t))
     keep = np.unique(np.append(np.arange(0, len(plan.t), stride), len(plan.t) - 1))
     t, q, suction = plan.t[keep], plan.q[keep], plan.suction[keep]
     cup, obj = plan.cup[keep], plan.object[keep]

@@ -40,6 +40,8 @@ with warnings.catch_warnings():
     import meshcat.animation
     import meshcat.geometry as g
 
+from .._files import write_atomically
+
 __all__ = ["Scene", "SceneView", "LiveView", "LiveWindow", "live_server", "stop_live_server",
            "viewer_script_path", "view_iframe"]
 
@@ -680,8 +682,7 @@ class Scene:
 
     def save_html(self, path):
         """Write the scene as a standalone HTML page (viewer script inside) to ``path``."""
-        Path(path).write_text(self.document(bundle="inline"), encoding="utf-8")
-        return Path(path)
+        return write_atomically(path, self.document(bundle="inline"))
 
     def live(self, *, height=420):
         """Mirror the scene to the live meshcat server (started on first use).

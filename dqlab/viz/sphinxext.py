@@ -17,8 +17,9 @@ one copy and ``""`` in the other): sphinx-thebe's ``const THEBE_JS_URL = ...`` t
 """
 
 import os
-import shutil
 from pathlib import Path
+
+from .._files import write_atomically
 
 
 def _copy_viewer_script(app, exception):
@@ -29,10 +30,10 @@ def _copy_viewer_script(app, exception):
     source = viewer_script_path()
     target = Path(app.outdir) / SHARED_SCRIPT
     target.parent.mkdir(parents=True, exist_ok=True)
-    shutil.copyfile(source, target)
+    write_atomically(target, source.read_bytes())
     licence = source.with_name(source.name + ".LICENSE.txt")
     if licence.exists():
-        shutil.copyfile(licence, target.with_name(target.name + ".LICENSE.txt"))
+        write_atomically(target.with_name(target.name + ".LICENSE.txt"), licence.read_bytes())
 
 
 def _drop_duplicate_scripts(app, pagename, templatename, context, doctree):
