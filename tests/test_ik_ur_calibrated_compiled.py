@@ -258,29 +258,39 @@ def test_compiled_closed_form_equals_the_one_pose_closed_form(make):
 def test_compiled_closed_forms_equal_the_batch_closed_form(make):
     """The exact arm's closed form of a batch, compiled pose by pose with the poses it does
     not solve handed to the closed form (module._exact_poses, what the batch path starts
-    from), is the closed form's own IKResult of the batch bit for bit, every array of it, at
-    the three tolerances the solver uses (tol, twice and twenty times the arms' gap: at the
-    last, wrists up to about 0.01 rad from their singularity are at it)."""
+    from), is the closed form's own IKResult of the batch, at the three tolerances the
+    solver uses (tol, twice and twenty times the arms' gap: at the last, wrists up to about
+    0.01 rad from their singularity are at it): the poses handed over bit for bit; those
+    solved compiled (the one-pose closed form on floats, math's atan2) with the same valid
+    rows, flags and reasons and the same numbers to the rounding in which math's and
+    numpy's atan2 may differ."""
     assert compiled.ready()
     robot = make(54)
     nominal = module._nominal(robot)
     X = poses_of_every_kind(robot, 55, 1500, 50)
     X[:20, :3, 3] *= 5.0                                 # out of reach
     X[20:30, :3, 3] = [0.0, 0.0, 0.3]                    # wrist centre near the axis
+    X[30:35, :3, 3] = [[1e100, 0.0, 0.0], [0.0, -1e200, 0.0], [0.0, 0.0, 1e300],
+                       [-3e16, 3e16, 3e16], [1e10, 0.0, 0.0]]          # far beyond reach
     handed_over = []
     for tol in (1e-9, 2 * nominal.position_gap, 20 * nominal.position_gap):
         fast = module._exact_poses(nominal, X, tol, 5e-7, ur)
         batch = ur(nominal.robot, X, tol=tol)
-        for name in ("solutions", "valid", "position_error", "rotation_error", "reason"):
-            np.testing.assert_array_equal(getattr(fast, name), getattr(batch, name))
-        assert list(fast.flags) == list(batch.flags)
-        for name, flag in batch.flags.items():
-            np.testing.assert_array_equal(fast.flags[name], flag)
         R = X[:, :3, :3].reshape(-1, 9).T
         done = compiled.closed_forms(np.stack(quaternion_from_matrix_entries(*R), axis=-1),
                                      X[:, :3, 3], X[:, :3, 2], nominal.exact, tol, 5e-7,
                                      NEAR_WRIST)[-1]
         handed_over.append(int((~done).sum()))
+        for name in ("valid", "reason"):
+            np.testing.assert_array_equal(getattr(fast, name), getattr(batch, name))
+        for name in ("solutions", "position_error", "rotation_error"):
+            a, b = getattr(fast, name), getattr(batch, name)
+            np.testing.assert_array_equal(a[~done], b[~done])
+            np.testing.assert_allclose(a[done], b[done], rtol=0, atol=1e-13)
+        assert list(fast.flags) == list(batch.flags)
+        for name, flag in batch.flags.items():
+            np.testing.assert_array_equal(fast.flags[name], flag)
+        assert not done[30:35].any() and (batch.position_error[30:34] >= 3e16).all()
     assert batch.reason[:20].all() and batch.rotation_error.any()   # some rows of each kind
     assert handed_over[0] < handed_over[2] < len(X) // 4, handed_over
 

@@ -218,6 +218,7 @@ def _closed_forms(Q, P, Z, constants, tol, singular_tol, near_wrist, solutions, 
 
 _TWO_PI = 2.0 * math.pi
 _HALF_SQRT2 = math.sqrt(0.5)
+_EPSILON = float(np.finfo(np.float64).eps)
 
 
 def _same(u, v):
@@ -455,6 +456,9 @@ def _closed_form(qw, qx, qy, qz, px, py, pz, zx, zy, zz, constants, tol, singula
     ry = _HALF_SQRT2 * (qw * 0.0 - qx * 0.0 + qy * 1.0 + qz * -1.0)
     rz = _HALF_SQRT2 * (qw * 0.0 + qx * 0.0 - qy * -1.0 + qz * 1.0)
     x5, y5, z5 = px - d6 * zx, py - d6 * zy, pz - d6 * zz          # wrist_center
+    reach = math.sqrt(d4 * d4 + (abs(a2) + abs(a3) + abs(d5)) ** 2)  # far_wrist
+    if not abs(x5) + abs(y5) + abs(z5 - d1) <= reach / _EPSILON:
+        return False
     any_valid = wrist_singular = elbow_singular = False
     h = 0.0
     m = 2.0 * abs(a2 * a3)

@@ -56,11 +56,14 @@ from .result import IKResult, finish
 from .targets import RIGID_TOL, parse_targets, pose_errors
 
 __all__ = ["solve", "solve_single", "solve_batch", "Block", "CHUNK", "REASON_SHOULDER",
-           "REASON_OUTER", "REASON_INNER", "REASON_REACH", "REASON_TOL"]
+           "REASON_OUTER", "REASON_INNER", "REASON_REACH", "REASON_TOL", "REASON_FAR"]
 
 CHUNK = 2048                     # poses per block: temporaries of 128 kB at most (L2-sized)
 _FLOAT64 = np.dtype(np.float64)
-_FLAGS = ("wrist_singular", "shoulder_singular", "elbow_singular", "unreachable")
+#: The flags of a result, in order: the calibrated solver's too, whose last one, a branch
+#: that did not converge, an exact arm's closed form never sets.
+_FLAGS = ("wrist_singular", "shoulder_singular", "elbow_singular", "unreachable",
+          "not_converged")
 _EYE_BYTES = np.eye(4).tobytes()
 _DQ_IDENTITY = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
 _SHOULDER = np.array([[1.0], [-1.0]])     # h+- = +h, -h: axis 0 of (s, n)
@@ -76,6 +79,8 @@ REASON_INNER = ("elbow: the wrist-1 point is closer to the shoulder than ||a2| -
                 "every branch")
 REASON_REACH = "elbow: the wrist-1 point is out of the forearm's reach on every branch"
 REASON_TOL = "no branch reproduces the pose within tol"
+REASON_FAR = ("the wrist centre is farther from the shoulder than 1 / eps times the arm's "
+              "reach: out of reach, its distance the error of every row")
 
 
 def solve(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals):
@@ -173,6 +178,8 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
     offsets = prm["offsets"] if any(prm["offsets"]) else None
     r_D = steps.target_rotation(q)
     p5 = steps.wrist_center(p, z6, prm["d6"])
+    if steps.far_wrist(p5, d1, a2, a3, d4, d5):      # out of reach by far: the batch path
+        return None
     solutions, errors = [0.0] * 48, [0.0] * 8     # (8, 6) row by row; rows not valid stay 0
     any_valid = wrist_singular = elbow_singular = False
     for s, shoulder in enumerate((1.0, -1.0)):
@@ -223,7 +230,8 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
     errors = numbers[48:]
     flags = {"wrist_singular": np.array(wrist_singular),
              "shoulder_singular": np.array(h < singular_tol * d4),
-             "elbow_singular": np.array(elbow_singular), "unreachable": np.array(False)}
+             "elbow_singular": np.array(elbow_singular), "unreachable": np.array(False),
+             "not_converged": np.array(False)}
     return IKResult(numbers[:48].reshape(8, 6), errors <= tol, errors, np.zeros(8), flags,
                     np.array("", dtype=object))
 
@@ -295,13 +303,14 @@ class Block:
         handed back to the system costs a page fault per 4 kB when it is used again)."""
         reason = np.empty(n, dtype=object)
         reason.fill("")
-        floats = np.empty(64 * n + -(-12 * n // 8))    # 48 + 8 + 8 floats, 12 booleans
+        floats = np.empty(64 * n + -(-13 * n // 8))    # 48 + 8 + 8 floats, 13 booleans
         solutions = floats[:48 * n].reshape(6, 8, n)
         pe = floats[48 * n:56 * n].reshape(8, n)
         re = floats[56 * n:64 * n].reshape(8, n)
         bools = floats[64 * n:].view(bool)
         valid = bools[:8 * n].reshape(8, n)
         flags = {name: bools[(8 + i) * n:(9 + i) * n] for i, name in enumerate(_FLAGS)}
+        flags["not_converged"][...] = False              # a closed form has no iterations
         return cls(solutions, valid, pe, re, flags, reason)
 
     def __getitem__(self, part):
@@ -357,17 +366,20 @@ def _flange(robot, targets, tool, tool_dq, d6):
         _write_rows(q, quaternion_from_matrix_entries(*e[0:3], *e[4:7], *e[8:11]))  # bottom row
     else:
         Q = targets.dual_quaternions
-        if moved:
-            Q = dual_quaternion_product(
-                dual_quaternion_conjugate(dual_quaternion_from_transform(robot.base)), Q)
-        if tooled:
-            if tool_dq is None:
-                tool_dq = dual_quaternion_from_transform(tool)
-            Q = dual_quaternion_product(Q, dual_quaternion_inverse(tool_dq))
-        c = component_rows(Q.reshape(n, 8))                   # (8, n), ours to overwrite
-        q, p = c[:4], c[4:7]
-        z6 = np.array(quaternion_rotate(*q, 0.0, 0.0, 1.0))
-        _write_rows(p, translation_from_dual_quaternion_entries(*c))   # over the dual part
+        # (a position near the largest float may overflow on the way: far_wrist finds it
+        # infinitely far, and _stand_in_far_wrists refuses it)
+        with np.errstate(over="ignore", invalid="ignore"):
+            if moved:
+                Q = dual_quaternion_product(
+                    dual_quaternion_conjugate(dual_quaternion_from_transform(robot.base)), Q)
+            if tooled:
+                if tool_dq is None:
+                    tool_dq = dual_quaternion_from_transform(tool)
+                Q = dual_quaternion_product(Q, dual_quaternion_inverse(tool_dq))
+            c = component_rows(Q.reshape(n, 8))               # (8, n), ours to overwrite
+            q, p = c[:4], c[4:7]
+            z6 = np.array(quaternion_rotate(*q, 0.0, 0.0, 1.0))
+            _write_rows(p, translation_from_dual_quaternion_entries(*c))   # over the dual part
     _write_rows(p, steps.wrist_center(p, z6, d6))
     return _Flange(q=q, p5=p)
 
@@ -406,9 +418,13 @@ def theta6_reference(q_ref, batch):
 
 def _solve_block(robot, prm, flange, targets, theta6_ref, options, out):
     """Every branch of a block of n poses (batch axis last), checked and flagged, written
-    into ``out`` (a :class:`Block` of n poses)."""
+    into ``out`` (a :class:`Block` of n poses). A pose whose wrist centre is far beyond
+    reach (:func:`~dqlab.ik.ur_steps.far_wrist`) is solved for a stand-in wrist centre
+    twice the reach away in the same direction (so the steps square nothing large), and
+    gets the distance as the error of every row."""
+    far = _stand_in_far_wrists(prm, flange)
     branches = _branches(prm, flange, theta6_ref, options.tol, out.solutions)
-    pe, re = _errors(robot, prm, flange, branches, targets, options, out)   # (8, n) each
+    pe, re = _errors(robot, prm, flange, branches, targets, options, out, far)  # (8, n) each
     ok = np.less_equal(pe, options.tol, out=out.valid)
     if options.residuals == "fk" or branches.represented is not None:   # else re is 0
         ok &= re <= options.tol
@@ -416,6 +432,27 @@ def _solve_block(robot, prm, flange, targets, theta6_ref, options, out):
     _flags(prm, branches, ok, any_valid, options.singular_tol, out.flags)
     if not any_valid.all():
         out.reason[...] = _reasons(prm, flange, branches, any_valid, options.tol)
+        if far is not None:
+            out.reason[far[0]] = REASON_FAR
+
+
+def _stand_in_far_wrists(prm, flange):
+    """The poses of a block whose wrist centre is far beyond reach, ``(columns, distances)``
+    (or None), their wrist centres in ``flange`` replaced by a stand-in out of reach
+    (twice the reach from the shoulder, along x), which the steps can square."""
+    p5 = flange.p5
+    d1, a2, a3, d4, d5 = prm["d1"], prm["a2"], prm["a3"], prm["d4"], prm["d5"]
+    with np.errstate(over="ignore", invalid="ignore"):     # (a flange that overflowed)
+        distance = steps.far_wrist(p5, d1, a2, a3, d4, d5)
+    if not distance.any():
+        return None
+    if distance.max() == math.inf:
+        raise ValueError("target: a position is so far from the robot (some 1e308 m) that "
+                         "its distance overflows")
+    cols = np.flatnonzero(distance)
+    reach = math.sqrt(d4 * d4 + (abs(a2) + abs(a3) + abs(d5)) ** 2)
+    p5[:, cols] = np.array([[2.0 * reach], [0.0], [d1]])
+    return cols, distance[cols]
 
 
 def _branches(prm, flange, theta6_ref, tol, out):
@@ -547,23 +584,30 @@ def _joint_vectors(thetas, offsets, out):
         out[...] = wrap_angle(out - np.array(offsets)[:, None, None])
 
 
-def _errors(robot, prm, flange, branches, targets, options, out):
+def _errors(robot, prm, flange, branches, targets, options, out, far=None):
     """Position and rotation errors (8, n) of every row, written into ``out`` (a
     :class:`Block`): from the clipping of the steps (``residuals="equations"``) or by
-    forward kinematics (``"fk"``)."""
+    forward kinematics (``"fk"``); for the poses ``far`` (``(columns, distances)`` of
+    :func:`_stand_in_far_wrists`, whose rows were solved for a stand-in), their distance."""
     pe, re = out.position_error, out.rotation_error
+    n = pe.shape[1]
+    poses = slice(None) if far is None else np.setdiff1d(np.arange(n), far[0])
     if options.residuals == "fk":
-        pe.T[...], re.T[...] = _fk_errors(robot, branches.solutions.T,
-                                          targets.transforms[:, None], options.tool_fix)
-        return pe, re
-    re[...] = 0.0
-    _clipping_distance(prm, flange, branches, pe)
-    if branches.represented is not None:
-        n = branches.solutions.shape[2]
-        rows = np.broadcast_to(branches.represented[:, None], (2, 2, 2, n)).reshape(8, n)
-        k, i = np.nonzero(rows)                               # row k of pose i
-        pe[k, i], re[k, i] = _fk_errors(robot, branches.solutions[:, k, i].T,
-                                        targets[i].transforms, options.tool_fix)
+        pe[:, poses], re[:, poses] = (e.T for e in _fk_errors(
+            robot, branches.solutions[:, :, poses].T, targets[poses].transforms[:, None],
+            options.tool_fix))
+    else:
+        re[...] = 0.0
+        _clipping_distance(prm, flange, branches, pe)
+        if branches.represented is not None:
+            rows = np.broadcast_to(branches.represented[:, None], (2, 2, 2, n)).reshape(8, n)
+            if far is not None:
+                rows = rows & np.isin(np.arange(n), poses)
+            k, i = np.nonzero(rows)                           # row k of pose i
+            pe[k, i], re[k, i] = _fk_errors(robot, branches.solutions[:, k, i].T,
+                                            targets[i].transforms, options.tool_fix)
+    if far is not None:
+        pe[:, far[0]], re[:, far[0]] = far[1], 0.0
     return pe, re
 
 

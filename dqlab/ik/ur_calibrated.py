@@ -60,7 +60,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._checks import rigid_rows
+from .._checks import as_float_array, rigid_rows
 from .._kernels import quaternion_from_matrix_entries, rigid_inverse
 from ..dualquat import dual_quaternion_from_transform
 from ..models import UR_ALPHA, UR_SHAPE
@@ -304,22 +304,31 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
         X_6T, X_T6, X_0T, X_06 = robot.tool, robot.tool, X_W, X_W
     else:
         X_6T = robot.tool if tool is None else _checked_tool(tool, pose_tol)
-        X_0T = rigid_inverse(robot.base) @ X_W         # the targets in frame 0 ...
         X_T6 = rigid_inverse(X_6T)                     # (base and tool checked already)
-        X_06 = X_0T @ X_T6                              # ... and the flanges they mean
+        with np.errstate(over="ignore", invalid="ignore"):
+            X_0T = rigid_inverse(robot.base) @ X_W     # the targets in frame 0 ...
+            X_06 = X_0T @ X_T6                          # ... and the flanges they mean
+        if not np.isfinite(X_06).all():
+            raise ValueError("target: a position is so far from the robot (some 1e308 m) "
+                             "that it overflows in the robot's base frame")
     wide = max(tol, 2.0 * nominal.position_gap)
+    references = _references(q_ref, batch)              # (n, 6), or None
 
-    def exact_solutions(X, tol=wide):
+    def exact_solutions(X, poses=None, tol=wide):
+        """The exact arm's closed form of the flanges X (m, 4, 4), which are those of the
+        poses ``poses`` (all n when None): each with its own reference."""
+        ref = None if references is None else (references if poses is None
+                                               else references[poses])
         if batch == () and X.shape[0] == 1:             # one pose (compiled, with numba)
-            if q_ref is None and compiled_ready():
+            if ref is None and compiled_ready():
                 result = _exact_one_pose(nominal, X[0], tol, singular_tol)
                 if result is not None:
                     return result
-            X = X[0]
-        elif q_ref is None and pose_tol <= RIGID_TOL and compiled_ready():
+            X, ref = X[0], None if ref is None else ref[0]
+        elif ref is None and pose_tol <= RIGID_TOL and compiled_ready():
             # (the targets are checked at least as strictly as the closed form checks them)
             return _exact_poses(nominal, X, tol, singular_tol, closed_form)
-        return closed_form(nominal.robot, X, tol=tol, q_ref=q_ref, singular_tol=singular_tol)
+        return closed_form(nominal.robot, X, tol=tol, q_ref=ref, singular_tol=singular_tol)
 
     start = exact_solutions(X_06)
     if batch == ():
@@ -334,7 +343,7 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
     started = found.copy()
     if near.any():                                      # (as near a wrist singularity)
         poses = np.flatnonzero(near.reshape(n, 8).any(axis=1))
-        again = exact_solutions(X_06[poses], tol=10.0 * wide)
+        again = exact_solutions(X_06[poses], poses, tol=10.0 * wide)
         rows = (8 * poses[:, None] + np.arange(8)).reshape(-1)
         use = near[rows] & again.valid.reshape(-1)
         q0[rows[use]] = again.solutions.reshape(-1, 6)[use]
@@ -367,6 +376,19 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
                   reason.reshape(batch))
 
 
+def _references(q_ref, batch):
+    """``q_ref`` (checked) as one reference per pose, (n, 6) for the n poses of leading
+    shape ``batch``, or None."""
+    if q_ref is None:
+        return None
+    q_ref = as_float_array(q_ref, "q_ref", (6,))
+    try:
+        return np.broadcast_to(q_ref, batch + (6,)).reshape(-1, 6)
+    except ValueError:
+        raise ValueError(f"q_ref of shape {q_ref.shape} does not broadcast against the "
+                         f"poses' leading shape {batch}") from None
+
+
 def _plain_pose(target, pose_tol):
     """Whether ``target`` is one rigid transform, a (4, 4) float array that passes
     :func:`~dqlab.ik.targets.parse_targets`'s check at the default tolerance (checked on
@@ -393,7 +415,7 @@ def _exact_one_pose(nominal, X_06, tol, singular_tol):
     solutions, valid, errors, flags = done
     flags = dict(zip(_FLAG_NAMES[:3], (np.array(flag) for flag in flags.tolist()),
                      strict=True))                      # wrist, shoulder, elbow singular
-    flags["unreachable"] = np.array(False)
+    flags["unreachable"] = flags["not_converged"] = np.array(False)
     return IKResult(solutions, valid, errors, np.zeros(8), flags, np.array("", dtype=object))
 
 
@@ -411,6 +433,7 @@ def _exact_poses(nominal, X_06, tol, singular_tol, closed_form):
         singular_tol, NEAR_WRIST)
     flags = dict(zip(_FLAG_NAMES[:3], flags.T, strict=True))   # wrist, shoulder, elbow
     flags["unreachable"] = np.zeros(done.shape, dtype=bool)
+    flags["not_converged"] = np.zeros(done.shape, dtype=bool)
     rotation_errors = np.zeros(errors.shape)
     reason = np.full(done.shape, "", dtype=object)
     rest = np.flatnonzero(~done)
@@ -572,7 +595,7 @@ def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, to
         X_cal6 = polished.X[first] @ X_T6               # the calibrated flange at q*
         X_exact6 = nominal.robot.fk(polished.q[first])
         corrected = exact_solutions(X_0T[poses] @ X_T6 @ rigid_inverse(X_cal6)
-                                    @ X_exact6)
+                                    @ X_exact6, poses)
         rows = (8 * poses[:, None] + np.arange(8)).reshape(-1)
         use = missing[rows] & corrected.valid.reshape(-1)
         _restart(chain, polished, unique, rows[use], corrected.solutions.reshape(-1, 6)[use],

@@ -118,6 +118,7 @@ from ..models import UR_SHAPE
 from ..robot import Robot
 from ..rotations import wrap_angle
 from ._ur_engine import (  # noqa: F401  (the reasons, re-exported)
+    REASON_FAR,
     REASON_INNER,
     REASON_OUTER,
     REASON_REACH,
@@ -264,8 +265,11 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
         :data:`SOLUTION_ORDER`; invalid rows hold zeros); ``valid`` (..., 8);
         ``position_error`` and ``rotation_error`` (..., 8) of every row (before zeroing);
         ``flags`` with boolean arrays (...) ``"wrist_singular"``, ``"shoulder_singular"``,
-        ``"elbow_singular"`` (set when a valid solution is near that singularity) and
-        ``"unreachable"`` (no valid solution); ``reason`` (...) says why a pose has no
+        ``"elbow_singular"`` (set when a valid solution is near that singularity),
+        ``"unreachable"`` (no valid solution) and ``"not_converged"`` (on a calibrated UR, a
+        branch of the nearest exact arm did not converge on the calibrated chain; never set
+        by the exact closed form, which has nothing to converge: one set of keys for every
+        UR); ``reason`` (...) says why a pose has no
         solution. Branches that coincide at a singularity are all returned (equal rows);
         :func:`distinct_solutions` marks the first of each group. For a batch, the arrays
         are stored with the poses last in memory (as the solver computes them) and given as
@@ -275,8 +279,10 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     ------
     ValueError
         If the robot is not UR-shaped (:data:`dqlab.models.UR_SHAPE`), or ``target`` has
-        the wrong shape, holds NaN, is not a rigid transform or not a unit dual quaternion.
-        Unreachable poses do not raise.
+        the wrong shape, holds NaN, is not a rigid transform or not a unit dual quaternion,
+        or is so far (some 1e308 m) that its distance overflows. Unreachable poses do not
+        raise: a pose far beyond reach (:func:`~dqlab.ik.ur_steps.far_wrist`) has no valid
+        row, each row's error being the pose's distance.
 
     Notes
     -----
@@ -339,6 +345,7 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     shoulder_singular [False  True]
     elbow_singular [False  True]
     unreachable [False False]
+    not_converged [False False]
     """
     tol = check_tolerance(tol, "tol")
     singular_tol = check_tolerance(singular_tol, "singular_tol")
