@@ -108,6 +108,10 @@ OTHER_CALLS = {
         lambda delta_theta, delta_a, delta_d, delta_alpha: robot_from_corrections(
             CalibrationConf(delta_theta, delta_a, delta_d, delta_alpha), "UR3").fk(Q6),
         ((0.0,) * 6, (1e-4,) * 6, (-1e-4,) * 6, (1e-4,) * 6)),
+    "ik.solutions.check_joint_limits": (
+        lambda limits: ik.solutions.check_joint_limits(limits, 6), (UR3.limits,)),
+    "ik.solutions.check_reference": (lambda q_ref: ik.solutions.check_reference(q_ref, 6),
+                                     (Q6,)),
 }
 
 

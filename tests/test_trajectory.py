@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 from dqlab import quaternion_conjugate, quaternion_product, rot_x, rot_y, rot_z, transform_from
 from dqlab.ik import ur
-from dqlab.models import ur3
+from dqlab.models import ur3, ur3_mdh
 from dqlab.testing import quiet_stdout
 from dqlab.trajectory import (
     CartesianPath,
@@ -569,6 +569,26 @@ def test_margins_against_forward_kinematics(robot):
     assert np.allclose(m["reach"], reach, atol=1e-14)
     assert np.allclose(m["shoulder"], np.hypot(*wrist_centre[:, :2].T) - 0.11235, atol=1e-14)
     assert np.allclose(m["wrist"], np.abs(np.sin(q[:, 4])))
+    # the report's modified-DH table is refused (the formulas read a standard one); a
+    # calibrated UR, whose table has far common normals, gets its nearest exact UR's
+    with pytest.raises(ValueError, match="robot: .* modified DH"):
+        ur_singularity_margins(ur3_mdh(), q)
+    from dqlab.ur.calibration import robot_from_joint_origins
+    S, previous = [], None                                     # joint origins, as URDF
+    for k, link in enumerate(robot.links):
+        T = np.eye(4)
+        if previous is not None:
+            T[:3, :3], T[0, 3] = rot_x(previous.alpha), previous.a
+        M = np.eye(4)
+        M[:3, :3] = rot_y(1e-3 * (k in (2, 3)))                # axes 3, 4 tilted by 1 mrad
+        M[2, 3] = link.d
+        S.append(T @ M)
+        previous = link
+    calibrated = robot_from_joint_origins(np.array(S), name="UR3 (tilted)")
+    assert abs(calibrated.links[1].d) > 1.0                   # far common normals
+    exact, tilted = ur_singularity_margins(robot, q), ur_singularity_margins(calibrated, q)
+    for name in exact:
+        assert np.abs(tilted[name] - exact[name]).max() < 2e-3, name
 
 
 def test_tracking_unwraps_through_pi(robot):

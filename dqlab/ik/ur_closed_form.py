@@ -113,7 +113,7 @@ import weakref
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._checks import as_float_array, check_tolerance, real_array
+from .._checks import check_tolerance, real_array
 from ..models import UR_SHAPE
 from ..robot import Robot
 from ..rotations import wrap_angle
@@ -127,7 +127,7 @@ from ._ur_engine import (  # noqa: F401  (the reasons, re-exported)
     solve,
 )
 from .result import IKResult
-from .solutions import closest_solution
+from .solutions import check_joint_limits, check_reference, closest_solution
 from .ur_calibrated import calibrated_ur, nominal_ur
 
 __all__ = ["ur", "ur_parameters", "distinct_solutions", "closest_ur_solution", "SOLUTION_ORDER",
@@ -462,22 +462,20 @@ def closest_ur_solution(robot: Robot, target: ArrayLike, q_now: ArrayLike, *,
     True
     """
     limits = robot.limits if limits is None else limits
-    q_now = as_float_array(q_now, "q_now", (6,))
-    lim = real_array(limits, "limits")
-    if lim.shape in ((2,), (6, 2)):
-        lo, hi = lim.T if lim.ndim == 2 else (np.full(6, lim[0]), np.full(6, lim[1]))
-        if q_now.shape == (6,):             # one joint vector: on floats
-            outside = any(not a <= v <= b for v, a, b in zip(q_now.tolist(), lo.tolist(),
-                                                             hi.tolist(), strict=True))
-        else:
-            outside = not ((q_now >= lo) & (q_now <= hi)).all()
-        if outside:
-            first = tuple(np.argwhere((q_now < lo) | (q_now > hi))[0])
-            j, value = int(first[-1]), float(q_now[first])
-            hint = (" (joint angles are radians: degrees? convert with np.radians)"
-                    if abs(value) > 4 * np.pi else "")     # beyond two turns
-            raise ValueError(f"q_now: joint {j + 1} = {value:.6g} is outside its limits "
-                             f"[{lo[j]:.6g}, {hi[j]:.6g}]{hint}")
+    lo, hi = check_joint_limits(limits, 6)
+    q_now = check_reference(q_now, 6, "q_now")
+    if q_now.shape == (6,):                 # one joint vector: on floats
+        outside = any(not a <= v <= b for v, a, b in zip(q_now.tolist(), lo.tolist(),
+                                                         hi.tolist(), strict=True))
+    else:
+        outside = not ((q_now >= lo) & (q_now <= hi)).all()
+    if outside:
+        first = tuple(np.argwhere((q_now < lo) | (q_now > hi))[0])
+        j, value = int(first[-1]), float(q_now[first])
+        hint = (" (joint angles are radians: degrees? convert with np.radians)"
+                if abs(value) > 4 * np.pi else "")     # beyond two turns
+        raise ValueError(f"q_now: joint {j + 1} = {value:.6g} is outside its limits "
+                         f"[{lo[j]:.6g}, {hi[j]:.6g}]{hint}")
     if type(target) is not np.ndarray:
         target = real_array(target, "target")
     shape = target.shape

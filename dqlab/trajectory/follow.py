@@ -20,6 +20,8 @@ import numpy as np
 
 from .._checks import as_float_array, check_instance, check_scalar
 from ..ik import SOLUTION_ORDER, IKResult, numerical, ur
+from ..ik.ur_calibrated import nominal_ur
+from ..models import UR_SHAPE
 from ..robot import Robot
 from ..rotations import wrap_angle
 from .cartesian import CartesianPath
@@ -110,17 +112,26 @@ def ur_singularity_margins(robot, q):
       s_1 y_5 = a_2 c_2 + a_3 c_{23} + d_5 s_{234}` is the wrist centre's coordinate along
       the arm, the quantity :func:`dqlab.ik.ur_closed_form.ur` tests.
 
-    All four come from the joint angles, without forward kinematics.
+    All four come from the joint angles, without forward kinematics, and from the UR's
+    standard DH lengths: those of the robot, or for a calibrated UR (whose table holds far
+    common normals on the parallel joints) those of its nearest exact UR
+    (:func:`dqlab.ik.ur_calibrated.nominal_ur`), which differ by millimetres.
 
     Parameters
     ----------
     robot : Robot
-        A UR-family arm in standard DH.
+        A UR-family arm in standard DH (exact or calibrated).
     q : array_like, shape (..., 6)
 
     Returns
     -------
     dict of str to ndarray, shape (...)
+
+    Raises
+    ------
+    ValueError
+        If the robot is in modified DH (the formulas read a standard-DH table: use the
+        standard-DH model, such as :func:`dqlab.models.ur3`) or is not a UR-family arm.
 
     Examples
     --------
@@ -132,9 +143,21 @@ def ur_singularity_margins(robot, q):
     """
     check_instance(robot, Robot, "robot")
     q = robot.check_joints(q)
-    links = robot.links
-    if len(links) != 6:
-        raise ValueError(f"a UR-family arm has 6 joints, this robot has {len(links)}")
+    if robot.n != 6:
+        raise ValueError(f"robot: a UR-family arm has 6 joints, this robot has {robot.n}")
+    if robot.convention != "dh":
+        raise ValueError("robot: ur_singularity_margins reads a UR's standard DH table, and "
+                         f"this robot is in modified DH ({robot.name or 'unnamed'}); use "
+                         "the standard-DH model of the arm, such as dqlab.models.ur3()")
+    try:
+        UR_SHAPE.check(robot)
+        links = robot.links
+    except ValueError:
+        try:
+            links = nominal_ur(robot).links      # a calibrated UR: its nearest exact UR
+        except ValueError as why:
+            raise ValueError(f"robot: ur_singularity_margins needs a UR-family arm: {why}") \
+                from None
     theta = q + np.array([lk.theta_offset for lk in links])
     a2, a3, d4, d5 = links[1].a, links[2].a, links[3].d, links[4].d
     t2, t23 = theta[..., 1], theta[..., 1] + theta[..., 2]
