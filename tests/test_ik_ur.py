@@ -213,7 +213,7 @@ def test_thesis_pose_is_singular_three_ways_and_has_one_solution(robot):
         assert result.valid.all()
         assert {k: bool(v) for k, v in result.flags.items()} == {
             "wrist_singular": True, "shoulder_singular": True, "elbow_singular": True,
-            "unreachable": False, "not_converged": False}
+            "near_singular": True, "unreachable": False, "not_converged": False}
         assert result.reason == ""
         assert_reproduces(robot, result, T, tol=1e-15)
         # one solution: every row is the generating configuration, to sqrt(eps)

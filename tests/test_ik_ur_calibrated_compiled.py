@@ -18,13 +18,27 @@ from dqlab.rotations import rot_x
 pytest.importorskip("numba")
 
 
+@pytest.fixture(autouse=True)
+def _compiled_as_the_environment_says():
+    """After a test that switched DQLAB_COMPILED, the kernels read it again (dqlab.ik.ur
+    does at each call; a test may ask ready() first)."""
+    yield
+    from dqlab.ik import _newton_compiled
+    _newton_compiled.refresh()
+
+
 @pytest.fixture
 def numpy_path(monkeypatch):
-    """A function that runs its argument with the compiled kernels switched off."""
+    """A function that runs its argument with the compiled kernels switched off, as a user
+    does: DQLAB_COMPILED=0 (read again here, as dqlab.ik.ur reads it at each call)."""
     def run(f, *args, **kwargs):
-        with monkeypatch.context() as m:
-            m.setattr(compiled, "_READY", False)
-            return f(*args, **kwargs)
+        try:
+            with monkeypatch.context() as m:
+                m.setenv("DQLAB_COMPILED", "0")
+                compiled.refresh()
+                return f(*args, **kwargs)
+        finally:
+            compiled.refresh()
     return run
 
 
@@ -119,6 +133,29 @@ def test_results_are_the_same_with_and_without_the_compiled_kernels(kind, numpy_
     np.testing.assert_array_equal(fast.reason, plain.reason)
     one = ur(robot, X[0])
     np.testing.assert_array_equal(one.valid, fast.valid[0])
+
+
+def test_the_environment_variable_switches_the_compiled_paths(monkeypatch):
+    """DQLAB_COMPILED=0 switches the compiled kernels off at the next call of dqlab.ik.ur
+    (the same solutions, within the Newton steps' stop), 1 or unset on; anything else is
+    refused naming the variable."""
+    robot = calibrated(48)
+    X = robot.fk(np.random.default_rng(49).uniform(-np.pi, np.pi, (20, 6)))
+    fast = ur(robot, X)
+    assert compiled.ready()
+    monkeypatch.setenv("DQLAB_COMPILED", "0")
+    plain = ur(robot, X)
+    assert not compiled.ready()
+    np.testing.assert_array_equal(plain.valid, fast.valid)
+    assert np.abs(plain.solutions - fast.solutions).max() < 1e-8
+    monkeypatch.setenv("DQLAB_COMPILED", "1")
+    ur(robot, X[0])
+    assert compiled.ready()
+    monkeypatch.setenv("DQLAB_COMPILED", "maybe")
+    with pytest.raises(ValueError, match="DQLAB_COMPILED must be 0"):
+        ur(robot, X[0])
+    monkeypatch.delenv("DQLAB_COMPILED")
+    compiled.refresh()
 
 
 def test_ready_without_numba(monkeypatch):
@@ -239,7 +276,7 @@ def test_compiled_closed_form_equals_the_one_pose_closed_form(make):
     handed_over = compared = 0
     for tol in (1e-9, wide, 10 * wide):
         for T in X:
-            fast = module._exact_one_pose(nominal, T, tol, 5e-7)
+            fast = module._exact_one_pose(nominal, T, tol, 5e-7, 1e-2)
             floats = _ur_engine.solve_single(nominal.robot, prm, T, tol, 5e-7, 1e-9, None)
             assert (fast is None) == (floats is None)
             if fast is None:
@@ -274,7 +311,7 @@ def test_compiled_closed_forms_equal_the_batch_closed_form(make):
                        [-3e16, 3e16, 3e16], [1e10, 0.0, 0.0]]          # far beyond reach
     handed_over = []
     for tol in (1e-9, 2 * nominal.position_gap, 20 * nominal.position_gap):
-        fast = module._exact_poses(nominal, X, tol, 5e-7, ur)
+        fast = module._exact_poses(nominal, X, tol, 5e-7, 1e-2, ur)
         batch = ur(nominal.robot, X, tol=tol)
         R = X[:, :3, :3].reshape(-1, 9).T
         done = compiled.closed_forms(np.stack(quaternion_from_matrix_entries(*R), axis=-1),
@@ -375,3 +412,27 @@ def test_restarts_step_a_shared_start_once(numpy_path):
             np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
         assert owners.size <= module._FEW_ROWS
         assert (ua & ~a.converged).sum() == 0 and ua[rows[::3]].any()
+
+
+def test_compiled_deflation_equals_the_numpy_path(numpy_path):
+    """The deflated Newton steps of _deflate, compiled and on numpy, from starts near known
+    solutions (some converge to a new one, some wander and give up), with a tool: the same
+    joint vectors to 1e-8 rad on every row that stops below the stop, the same to 1e-6 on
+    most of the others (a wandering row amplifies rounding)."""
+    robot = physically_calibrated(56)
+    (links, tool), q0, targets = chain_and_starts(robot, 57, 60)
+    rng = np.random.default_rng(58)
+    known = np.where(rng.random((len(q0), 8, 1)) < 0.5,
+                     q0[:, None] + rng.normal(0.0, 0.3, (len(q0), 8, 6)), np.nan)
+    starts = q0 + rng.normal(0.0, 0.05, q0.shape)
+    starts[-1] = 0.0                                     # (the start that is not a number)
+    fast = module._deflated_newton((links, tool), starts, targets, known, 1e-9, 10)
+    plain = numpy_path(module._deflated_newton, (links, tool), starts, targets, known, 1e-9,
+                       10)
+    chain = module._MatrixChain(links, tool)
+    errors = np.stack(pose_errors(chain.transforms(chain.frames(fast)), targets))
+    converged = errors.max(axis=0) < 1e-10
+    assert converged.mean() > 0.3 and not converged.all()
+    gap = np.abs(np.angle(np.exp(1j * (fast - plain)))).max(axis=1)
+    assert gap[converged].max() < 1e-8
+    assert np.mean(gap < 1e-6) > 0.9

@@ -54,6 +54,7 @@ from ..transforms import transform_inverse
 from . import ur_steps as steps
 from .result import IKResult, finish
 from .targets import RIGID_TOL, parse_targets, pose_errors
+from .ur_steps import NEAR_SINGULAR
 
 __all__ = ["solve", "solve_single", "solve_batch", "Block", "CHUNK", "REASON_SHOULDER",
            "REASON_OUTER", "REASON_INNER", "REASON_REACH", "REASON_TOL", "REASON_FAR"]
@@ -62,8 +63,8 @@ CHUNK = 2048                     # poses per block: temporaries of 128 kB at mos
 _FLOAT64 = np.dtype(np.float64)
 #: The flags of a result, in order: the calibrated solver's too, whose last one, a branch
 #: that did not converge, an exact arm's closed form never sets.
-_FLAGS = ("wrist_singular", "shoulder_singular", "elbow_singular", "unreachable",
-          "not_converged")
+_FLAGS = ("wrist_singular", "shoulder_singular", "elbow_singular", "near_singular",
+          "unreachable", "not_converged")
 _EYE_BYTES = np.eye(4).tobytes()
 _DQ_IDENTITY = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
 _SHOULDER = np.array([[1.0], [-1.0]])     # h+- = +h, -h: axis 0 of (s, n)
@@ -83,17 +84,20 @@ REASON_FAR = ("the wrist centre is farther from the shoulder than 1 / eps times 
               "reach: out of reach, its distance the error of every row")
 
 
-def solve(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals):
-    """:func:`dqlab.ik.ur` after its checks of ``tol``, ``singular_tol``, ``pose_tol`` and
-    ``residuals``, with ``prm`` the robot's :func:`~dqlab.ik.ur_parameters`: one pose on
-    floats when it can, else the batch path."""
+def solve(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals,
+          near_tol=NEAR_SINGULAR):
+    """:func:`dqlab.ik.ur` after its checks of ``tol``, ``singular_tol``, ``pose_tol``,
+    ``residuals`` and ``near_tol``, with ``prm`` the robot's
+    :func:`~dqlab.ik.ur_parameters`: one pose on floats when it can, else the batch path."""
     if type(target) is not np.ndarray or target.dtype is not _FLOAT64:
         target = real_array(target, "target")   # a list takes the same path as an array
     if residuals == "equations" and pose_tol <= RIGID_TOL:
-        result = solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool)
+        result = solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool,
+                              near_tol)
         if result is not None:
             return result
-    return solve_batch(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals)
+    return solve_batch(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals,
+                       near_tol)
 
 
 # --------------------------------------------------------------------------------------
@@ -154,7 +158,8 @@ def _conjugate(Q):
     return rw, -rx, -ry, -rz, dw, -dx, -dy, -dz
 
 
-def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=None):
+def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=None,
+                 near_tol=NEAR_SINGULAR):
     """One pose on Python floats: the loop of :func:`~dqlab.ik.ur_steps.candidate_solutions`
     with the checks and flags of the batch path.
 
@@ -181,7 +186,7 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
     if steps.far_wrist(p5, d1, a2, a3, d4, d5):      # out of reach by far: the batch path
         return None
     solutions, errors = [0.0] * 48, [0.0] * 8     # (8, 6) row by row; rows not valid stay 0
-    any_valid = wrist_singular = elbow_singular = False
+    any_valid = wrist_singular = elbow_singular = near = False
     for s, shoulder in enumerate((1.0, -1.0)):
         theta1, c1, s1, h, h2 = steps.shoulder_angles(p5[0], p5[1], d4, shoulder)
         if h2 < 0.0:
@@ -222,16 +227,19 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
                         row = [wrap_angle(t) for t in row]
                 solutions[6 * k:6 * k + 6] = row
                 elbow_singular = elbow_singular or sin3 < singular_tol
+                near = near or sin3 < near_tol
             any_valid = True
             wrist_singular = wrist_singular or sin5 < singular_tol
+            near = near or sin5 < near_tol
     if not any_valid:
         return None
     numbers = np.fromiter(solutions + errors, float, 56)    # (8, 6) solutions, 8 errors
     errors = numbers[48:]
     flags = {"wrist_singular": np.array(wrist_singular),
              "shoulder_singular": np.array(h < singular_tol * d4),
-             "elbow_singular": np.array(elbow_singular), "unreachable": np.array(False),
-             "not_converged": np.array(False)}
+             "elbow_singular": np.array(elbow_singular),
+             "near_singular": np.array(near or h < near_tol * d4),
+             "unreachable": np.array(False), "not_converged": np.array(False)}
     return IKResult(numbers[:48].reshape(8, 6), errors <= tol, errors, np.zeros(8), flags,
                     np.array("", dtype=object))
 
@@ -262,6 +270,7 @@ class _Options:
     singular_tol: float
     residuals: str
     tool_fix: np.ndarray
+    near_tol: float
 
 
 @dataclass
@@ -303,7 +312,7 @@ class Block:
         handed back to the system costs a page fault per 4 kB when it is used again)."""
         reason = np.empty(n, dtype=object)
         reason.fill("")
-        floats = np.empty(64 * n + -(-13 * n // 8))    # 48 + 8 + 8 floats, 13 booleans
+        floats = np.empty(64 * n + -(-14 * n // 8))    # 48 + 8 + 8 floats, 14 booleans
         solutions = floats[:48 * n].reshape(6, 8, n)
         pe = floats[48 * n:56 * n].reshape(8, n)
         re = floats[56 * n:64 * n].reshape(8, n)
@@ -330,7 +339,8 @@ class Block:
                       self.reason.reshape(batch))
 
 
-def solve_batch(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals):
+def solve_batch(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals,
+                near_tol=NEAR_SINGULAR):
     """Any poses (one or a batch) with array operations, without a Python loop over the
     poses, in blocks of :data:`CHUNK`."""
     targets = parse_targets(target, tol=pose_tol)
@@ -340,7 +350,7 @@ def solve_batch(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, re
     theta6_ref = theta6_reference(q_ref, batch)
     targets = targets.reshape((n,))
     flange = _flange(robot, targets, tool, tool_dq, prm["d6"])
-    options = _Options(tol, singular_tol, residuals, tool_fix)
+    options = _Options(tol, singular_tol, residuals, tool_fix, near_tol)
     out = Block.empty(n)
     for start in range(0, n, CHUNK):
         part = slice(start, start + CHUNK)
@@ -429,7 +439,7 @@ def _solve_block(robot, prm, flange, targets, theta6_ref, options, out):
     if options.residuals == "fk" or branches.represented is not None:   # else re is 0
         ok &= re <= options.tol
     any_valid = ok.any(axis=0)                                              # (n,)
-    _flags(prm, branches, ok, any_valid, options.singular_tol, out.flags)
+    _flags(prm, branches, ok, any_valid, options.singular_tol, options.near_tol, out.flags)
     if not any_valid.all():
         out.reason[...] = _reasons(prm, flange, branches, any_valid, options.tol)
         if far is not None:
@@ -636,13 +646,15 @@ def _fk_errors(robot, solutions, X_target, tool_fix):
     return pose_errors(X, X_target)
 
 
-def _flags(prm, branches, ok, any_valid, singular_tol, out):
+def _flags(prm, branches, ok, any_valid, singular_tol, near_tol, out):
     """The singularity and reach flags (n,) of a block, over its valid rows, written into
     ``out`` (the block's flags)."""
     n = ok.shape[1]
     ok4 = ok.reshape(2, 2, 2, n)
     shoulder = np.less(branches.h, singular_tol * prm["d4"], out=out["shoulder_singular"])
     shoulder &= any_valid
+    near = np.less(branches.h, near_tol * prm["d4"], out=out["near_singular"])
+    near &= any_valid
     np.logical_not(any_valid, out=out["unreachable"])
     # |sin theta5| (2, 1, 1, n) over (s, w) and |sin theta3| (2, 1, 2, n) over (s, w)
     for name, sine in (("wrist_singular", branches.sin5[:, None]),
@@ -651,6 +663,8 @@ def _flags(prm, branches, ok, any_valid, singular_tol, out):
             (ok4 & (sine < singular_tol)).reshape(8, n).any(axis=0, out=out[name])
         else:
             out[name][...] = False
+        if sine.min() < near_tol:
+            near |= (ok4 & (sine < near_tol)).reshape(8, n).any(axis=0)
 
 
 def _reasons(prm, flange, branches, any_valid, tol):

@@ -129,6 +129,7 @@ from ._ur_engine import (  # noqa: F401  (the reasons, re-exported)
 from .result import IKResult
 from .solutions import check_joint_limits, check_reference, closest_solution
 from .ur_calibrated import calibrated_ur, nominal_ur
+from .ur_steps import NEAR_SINGULAR
 
 __all__ = ["ur", "ur_parameters", "distinct_solutions", "closest_ur_solution", "SOLUTION_ORDER",
            "ROW_NAMES"]
@@ -201,7 +202,7 @@ def ur_parameters(robot: Robot, *, atol: float = 1e-12) -> dict:
 
 def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | None = None,
        q_ref: ArrayLike | None = None, singular_tol: float = 5e-7, pose_tol: float = 1e-9,
-       residuals: str = "equations") -> IKResult:
+       residuals: str = "equations", near_tol: float = NEAR_SINGULAR) -> IKResult:
     r"""Every closed-form inverse-kinematics solution of a UR-family arm.
 
     Solves :math:`X_{W0}\, X_{06}(q)\, X_{6T} = X` for the joint vector :math:`q` by the
@@ -239,6 +240,17 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
         or shoulder these come out near :math:`\sqrt{\varepsilon} \approx 10^{-8}` (up
         to about :math:`10^{-7}`), the conditioning of those angles; the default leaves a
         margin above that. :math:`\theta_5` itself is computed to full accuracy.
+    near_tol : float
+        A pose is flagged ``"near_singular"`` when a valid row has :math:`|\sin\theta_5|`,
+        :math:`|\sin\theta_3|` or :math:`h / d_4` below it (default
+        :data:`~dqlab.ik.ur_steps.NEAR_SINGULAR`, 0.01: about 0.57 degrees, or 1 % of
+        :math:`d_4`): there the joints are sensitive to the pose (a change
+        :math:`\delta` of the pose moves them by up to :math:`\delta` over the measure).
+        On a calibrated UR the threshold is at least four times the rotation gap between
+        the arm and its nearest exact UR (:func:`~dqlab.ik.ur_calibrated.nominal_ur`), and
+        the nearest exact UR's branches count too: within it, the calibrated arm's
+        solutions no longer follow the exact arm's branches one to one, and a pose may
+        have more solutions than the eight rows (see :mod:`dqlab.ik.ur_calibrated`).
     pose_tol : float
         Tolerance of the rigidity check of ``target`` (and ``tool``). With a tolerance above
         the default (for poses read from rounded numbers, as in the thesis's pose file),
@@ -265,7 +277,9 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
         :data:`SOLUTION_ORDER`; invalid rows hold zeros); ``valid`` (..., 8);
         ``position_error`` and ``rotation_error`` (..., 8) of every row (before zeroing);
         ``flags`` with boolean arrays (...) ``"wrist_singular"``, ``"shoulder_singular"``,
-        ``"elbow_singular"`` (set when a valid solution is near that singularity),
+        ``"elbow_singular"`` (set when a valid solution is at that singularity, within
+        ``singular_tol``), ``"near_singular"`` (a valid solution within ``near_tol`` of
+        one),
         ``"unreachable"`` (no valid solution) and ``"not_converged"`` (on a calibrated UR, a
         branch of the nearest exact arm did not converge on the calibrated chain; never set
         by the exact closed form, which has nothing to converge: one set of keys for every
@@ -344,11 +358,13 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     wrist_singular [False  True]
     shoulder_singular [False  True]
     elbow_singular [False  True]
+    near_singular [False  True]
     unreachable [False False]
     not_converged [False False]
     """
     tol = check_tolerance(tol, "tol")
     singular_tol = check_tolerance(singular_tol, "singular_tol")
+    near_tol = check_tolerance(near_tol, "near_tol")
     pose_tol = check_tolerance(pose_tol, "pose_tol")
     if residuals not in ("fk", "equations"):
         raise ValueError(f"residuals must be 'fk' or 'equations', got {residuals!r}")
@@ -361,10 +377,10 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
             raise ValueError(f"{exc}; nor is it a calibrated UR: {why}") from None
         result = calibrated_ur(robot, target, ur, tol=tol, tool=tool, q_ref=q_ref,
                                singular_tol=singular_tol, pose_tol=pose_tol,
-                               residuals=residuals)
+                               residuals=residuals, near_tol=near_tol)
     else:
         result = solve(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref,
-                       residuals)
+                       residuals, near_tol)
     result.row_names = ROW_NAMES
     return result
 

@@ -50,7 +50,7 @@ __all__ = [
     "target_rotation", "wrist_center", "far_wrist", "shoulder_angles", "half_angle_cos_sin",
     "relative_rotation_coefficients", "wrist_angles", "half_difference", "theta234_sine_cosine",
     "arm_plane_wrist", "wrist1_point", "elbow_triangle", "elbow_angles", "reach_gap",
-    "shoulder_gap", "feasible_theta234", "candidate_solutions", "NEAR_WRIST",
+    "shoulder_gap", "feasible_theta234", "candidate_solutions", "NEAR_WRIST", "NEAR_SINGULAR",
 ]
 
 #: The arrays of the steps: float64 arrays of any shape (or Python floats).
@@ -63,6 +63,12 @@ _EPSILON = float(np.finfo(float).eps)
 #: there :math:`\theta_{234}` comes from coefficients of the size of :math:`\theta_5`, and a
 #: row the forearm cannot reach moves within its wrist family (``dqlab.ik.ur``).
 NEAR_WRIST = 1e-3
+
+#: The default ``near_tol`` of :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>`: a valid row
+#: whose :math:`|\sin\theta_5|`, :math:`|\sin\theta_3|` or :math:`h / d_4` is below it
+#: (about 0.57 degrees, or 1 % of :math:`d_4`) is near a singularity, where its joints are
+#: sensitive to the pose.
+NEAR_SINGULAR = 1e-2
 
 
 def target_rotation(q: tuple) -> tuple:
