@@ -112,6 +112,7 @@ OTHER_CALLS = {
         lambda limits: ik.solutions.check_joint_limits(limits, 6), (UR3.limits,)),
     "ik.solutions.check_reference": (lambda q_ref: ik.solutions.check_reference(q_ref, 6),
                                      (Q6,)),
+    "ik.ur_branch": (lambda q: ik.ur_branch(UR3, q), (Q6,)),
 }
 
 

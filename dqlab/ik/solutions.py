@@ -154,7 +154,8 @@ def _nearest_equivalent(theta, ref, lo, hi):
 
 
 def closest_solution(result, q_ref: ArrayLike, limits: ArrayLike | None = None, *,
-                     wrapped: bool = False) -> NDArray[np.float64]:
+                     wrapped: bool = False, weights: ArrayLike | None = None
+                     ) -> NDArray[np.float64]:
     r"""The valid solution nearest ``q_ref``, as the :math:`2\pi`-equivalent nearest it within
     the joint limits.
 
@@ -177,6 +178,11 @@ def closest_solution(result, q_ref: ArrayLike, limits: ArrayLike | None = None, 
         Return the chosen row as the solver gives it (angles in :math:`(-\pi, \pi]`), not its
         equivalent nearest ``q_ref`` (what :meth:`dqlab.ik.result.IKResult.best` returns;
         only without ``limits``).
+    weights : array_like, shape (n,), optional
+        The distance is :math:`\sum_j w_j (q_j - q_{ref,j})^2` (default: every
+        :math:`w_j = 1`). Larger weights on the big joints (shoulder, elbow) make a
+        solution that moves the wrist more and the arm less the nearer one, for example
+        ``weights=(10, 10, 5, 1, 1, 1)``. Positive and finite.
 
     Returns
     -------
@@ -211,6 +217,7 @@ def closest_solution(result, q_ref: ArrayLike, limits: ArrayLike | None = None, 
     k, n = solutions.shape[-2:]
     q_ref = check_reference(q_ref, n)
     bounds = _joint_limits(limits, n)
+    weights = _weights(weights, n)
     if wrapped and bounds is not None:
         raise ValueError("wrapped=True returns a row as the solver gives it, which ignores "
                          "limits; give one or the other")
@@ -218,10 +225,11 @@ def closest_solution(result, q_ref: ArrayLike, limits: ArrayLike | None = None, 
         raise ValueError("some targets have no valid solution; check result.reason")
     batch = np.broadcast_shapes(valid.shape[:-1], q_ref.shape[:-1])
     if not batch:                          # one target: on Python floats
-        return _closest_one(solutions, valid, q_ref, bounds, wrapped)
+        return _closest_one(solutions, valid, q_ref, bounds, wrapped, weights)
     rows = np.broadcast_to(solutions, batch + (k, n)).reshape(-1, k, n)
     index = _nearest_rows(rows, np.broadcast_to(valid, batch + (k,)).reshape(-1, k),
-                          np.broadcast_to(q_ref, batch + (n,)).reshape(-1, n), bounds)
+                          np.broadcast_to(q_ref, batch + (n,)).reshape(-1, n), bounds,
+                          weights)
     if np.any(index < 0):
         where = np.unravel_index(int(np.argmin(index)), batch) if batch else ()
         target = f"target {tuple(int(i) for i in where)}" if batch else "the target"
@@ -239,7 +247,19 @@ def closest_solution(result, q_ref: ArrayLike, limits: ArrayLike | None = None, 
     return _nearest_equivalent(chosen, ref, *bounds)[0]
 
 
-def _closest_one(rows, valid, q_ref, bounds, wrapped):
+def _weights(weights, n):
+    """The joint weights of a distance (n,), checked, or None (all 1)."""
+    if weights is None:
+        return None
+    w = as_float_array(weights, "weights")
+    if w.shape != (n,):
+        raise ValueError(f"weights must have shape ({n},), one per joint, got {w.shape}")
+    if not (w > 0.0).all():
+        raise ValueError(f"weights must be positive, got {w.tolist()}")
+    return w
+
+
+def _closest_one(rows, valid, q_ref, bounds, wrapped, weights=None):
     """:func:`closest_solution` of one target: rows (k, n), valid (k,), q_ref (n,), with
     :func:`_nearest_equivalent` on the whole (k, n) block at once (the chunked loop of a
     batch would cost more than the work)."""
@@ -248,7 +268,8 @@ def _closest_one(rows, valid, q_ref, bounds, wrapped):
     else:
         u, inside = _nearest_equivalent(rows, q_ref, *bounds)
         reach = valid if inside is None else valid & inside.all(axis=-1)
-    distance = np.where(reach, np.square(u - q_ref).sum(axis=-1), np.inf)
+    squares = np.square(u - q_ref) if weights is None else weights * np.square(u - q_ref)
+    distance = np.where(reach, squares.sum(axis=-1), np.inf)
     best = int(np.argmin(distance))
     if not reach[best]:
         raise ValueError(f"the target has no valid solution within the joint limits "
@@ -259,7 +280,7 @@ def _closest_one(rows, valid, q_ref, bounds, wrapped):
 _CHUNK = 4096      # targets per block: a block's (k, 4096) temporaries stay in the cache
 
 
-def _nearest_rows(rows, valid, q_ref, bounds):
+def _nearest_rows(rows, valid, q_ref, bounds, weights=None):
     r"""For each target (rows ``(N, k, n)``, valid ``(N, k)``, q_ref ``(N, n)``) the index of
     the row whose nearest equivalent within ``bounds`` is nearest ``q_ref``, or -1.
 
@@ -297,6 +318,8 @@ def _nearest_rows(rows, valid, q_ref, bounds):
                     np.copyto(d, u)
                 d -= ref
             np.multiply(d, d, out=w)
+            if weights is not None:
+                w *= weights[j]
             dist += w
         dist[~reach] = np.inf
         best = dist.argmin(axis=0)

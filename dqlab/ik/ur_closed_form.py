@@ -113,7 +113,7 @@ import weakref
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._checks import check_tolerance, real_array
+from .._checks import check_instance, check_tolerance, real_array
 from ..models import UR_SHAPE
 from ..robot import Robot
 from ..rotations import wrap_angle
@@ -131,8 +131,8 @@ from .solutions import check_joint_limits, check_reference, closest_solution
 from .ur_calibrated import calibrated_ur, nominal_ur
 from .ur_steps import NEAR_SINGULAR
 
-__all__ = ["ur", "ur_parameters", "distinct_solutions", "closest_ur_solution", "SOLUTION_ORDER",
-           "ROW_NAMES"]
+__all__ = ["ur", "ur_parameters", "distinct_solutions", "closest_ur_solution", "ur_branch",
+           "SOLUTION_ORDER", "ROW_NAMES"]
 
 #: ``(shoulder, elbow, wrist)`` labels of the eight rows, in order ``k = 4 s + 2 e + w``.
 SOLUTION_ORDER = tuple(
@@ -425,6 +425,7 @@ def distinct_solutions(result: IKResult, atol: float = 1e-9) -> NDArray[np.bool_
 
 def closest_ur_solution(robot: Robot, target: ArrayLike, q_now: ArrayLike, *,
                         limits: ArrayLike | None = None, tol: float = 1e-9,
+                        weights: ArrayLike | None = None, keep_branch: bool = False,
                         **options) -> NDArray[np.float64]:
     r"""The joints to send a UR standing at ``q_now`` to reach ``target``: one call.
 
@@ -433,6 +434,13 @@ def closest_ur_solution(robot: Robot, target: ArrayLike, q_now: ArrayLike, *,
     :math:`\pm 2\pi`, so each joint has two candidates), and among them the joint vector
     nearest ``q_now``: :func:`~dqlab.ik.solutions.closest_solution` of :func:`ur`, with
     ``q_now`` also as the reference at a wrist singularity.
+
+    "Nearest" is the plain joint distance by default, which weighs a turn of the base as
+    much as a turn of the wrist: when the wrist cannot follow within its limits (a tool
+    twist with wrist 3 near :math:`2\pi`), the nearest solution may be on another branch,
+    the shoulder or the wrist flipped. ``weights`` makes the big joints dearer;
+    ``keep_branch=True`` keeps the arm on the branch it is on (shoulder, elbow, wrist of
+    ``q_now``, :func:`ur_branch`), and refuses a target it cannot reach on it.
 
     Parameters
     ----------
@@ -446,8 +454,14 @@ def closest_ur_solution(robot: Robot, target: ArrayLike, q_now: ArrayLike, *,
         Joint limits; default ``robot.limits``.
     tol : float
         As for :func:`ur`.
+    weights : array_like, shape (6,), optional
+        Joint weights of the distance, :math:`\sum_j w_j (q_j - q_{now,j})^2` (default all
+        1), for example ``(10, 10, 5, 1, 1, 1)`` to move the wrist rather than the arm.
+    keep_branch : bool
+        Choose only among the solutions on the branch of ``q_now``.
     **options
-        Further keywords of :func:`ur` (``singular_tol``, ``pose_tol``, ``tool``).
+        Further keywords of :func:`ur` (``singular_tol``, ``pose_tol``, ``tool``,
+        ``near_tol``).
 
     Returns
     -------
@@ -456,9 +470,10 @@ def closest_ur_solution(robot: Robot, target: ArrayLike, q_now: ArrayLike, *,
     Raises
     ------
     ValueError
-        If a target has no solution (the message gives the solver's reason), no solution
-        is within the limits, or ``q_now`` is outside the limits (a hint if it looks like
-        degrees), besides the errors of :func:`ur`.
+        If a target has no solution (the message gives the solver's reason) or, with
+        ``keep_branch``, none on the branch of ``q_now``, no solution is within the limits,
+        ``q_now`` is outside the limits (a hint if it looks like degrees) or the weights
+        are not positive, besides the errors of :func:`ur`.
 
     Examples
     --------
@@ -476,6 +491,20 @@ def closest_ur_solution(robot: Robot, target: ArrayLike, q_now: ArrayLike, *,
     array([ 0.3  , -1.205,  1.234, -0.529,  0.9  ,  0.2  ])
     >>> bool(np.allclose(robot.fk(q), X, atol=1e-12))
     True
+
+    Wrist 3 at 5.9 rad and the tool to be turned by 0.5 rad more, beyond its limit of
+    :math:`2\pi`: the nearest solution flips the wrist (joints 4 to 6 move by up to
+    2.8 rad); on the same branch, wrist 3 turns back by 5.8 rad instead:
+
+    >>> from dqlab.rotations import rot_z
+    >>> q_now = np.array([0.3, -1.2, 1.1, -0.4, 0.9, 5.9])
+    >>> twist = np.eye(4)
+    >>> twist[:3, :3] = rot_z(0.5)
+    >>> X = robot.fk(q_now) @ twist
+    >>> (closest_ur_solution(robot, X, q_now) - q_now).round(2) + 0.0     # (no -0.)
+    array([ 0.  ,  0.27,  0.03,  2.84, -1.8 , -2.64])
+    >>> (closest_ur_solution(robot, X, q_now, keep_branch=True) - q_now).round(2) + 0.0
+    array([ 0.  ,  0.  ,  0.  ,  0.  ,  0.  , -5.78])
     """
     limits = robot.limits if limits is None else limits
     lo, hi = check_joint_limits(limits, 6)
@@ -511,4 +540,61 @@ def closest_ur_solution(robot: Robot, target: ArrayLike, q_now: ArrayLike, *,
         where = tuple(int(i) for i in np.argwhere(failed)[0]) if failed.ndim else ()
         which = f"target {where}" if where else "the target"
         raise ValueError(f"{which} has no solution: {result.reason[where]}")
-    return closest_solution(result, q_now, limits)
+    if keep_branch:
+        branch = np.broadcast_to(ur_branch(robot, q_now), result.valid.shape[:-1])
+        on = result.valid & (np.arange(8) == branch[..., None])
+        if not on.any(axis=-1).all():
+            where = tuple(int(i) for i in np.argwhere(~on.any(axis=-1))[0])
+            which = f"target {where}" if where else "the target"
+            raise ValueError(f"{which} has no solution on the branch of q_now "
+                             f"({ROW_NAMES[int(branch[where])]}), which keep_branch=True "
+                             f"keeps; valid rows: "
+                             f"{np.flatnonzero(result.valid[where]).tolist()}")
+        result = IKResult(result.solutions, on, result.position_error, result.rotation_error,
+                          result.flags, result.reason)
+    return closest_solution(result, q_now, limits, weights=weights)
+
+
+def ur_branch(robot: Robot, q: ArrayLike) -> NDArray[np.int64]:
+    r"""The branch of joint vectors of a UR: the row ``4 s + 2 e + w`` of :func:`ur`'s
+    solutions (:data:`SOLUTION_ORDER`) that a pose reached with them is solved in.
+
+    With :math:`\theta = q + \theta^0` (the joint offsets): shoulder :math:`s = 1`
+    ("right") when the wrist centre lies behind the base axis along :math:`x_1`,
+    :math:`h = a_2 \cos\theta_2 + a_3 \cos(\theta_2 + \theta_3) + d_5
+    \sin\theta_{234} < 0`; elbow :math:`e = 1` ("down") when :math:`\sin\theta_3 < 0`;
+    wrist :math:`w = 1` ("flip") when :math:`\sin\theta_5 < 0`. On a calibrated UR, those
+    of its nearest exact UR (:func:`~dqlab.ik.ur_calibrated.nominal_ur`); exactly at a
+    singularity the two branches it separates are one, and either is returned.
+
+    Parameters
+    ----------
+    robot : dqlab.robot.Robot
+        A UR-family arm (exact or calibrated).
+    q : array_like, shape (..., 6)
+        Joint vectors, radians.
+
+    Returns
+    -------
+    ndarray of int, shape (...)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dqlab.models import ur5e
+    >>> q = np.array([0.3, -1.2, 1.1, -0.4, 0.9, 0.2])
+    >>> int(ur_branch(ur5e(), q)), ROW_NAMES[int(ur_branch(ur5e(), q))]
+    (4, 'right up noflip')
+    """
+    check_instance(robot, Robot, "robot")
+    q = robot.check_joints(q)
+    try:
+        _parameters(robot)
+        exact = robot
+    except ValueError:
+        exact = nominal_ur(robot)
+    t = q + np.array([lk.theta_offset for lk in exact.links])
+    a2, a3, d5 = exact.links[1].a, exact.links[2].a, exact.links[4].d
+    h = (a2 * np.cos(t[..., 1]) + a3 * np.cos(t[..., 1] + t[..., 2])
+         + d5 * np.sin(t[..., 1] + t[..., 2] + t[..., 3]))
+    return 4 * (h < 0) + 2 * (np.sin(t[..., 2]) < 0) + (np.sin(t[..., 4]) < 0)
