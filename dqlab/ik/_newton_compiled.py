@@ -363,21 +363,7 @@ def _smallest(H, ratio, near, V, known):
         largest = min(trace, row_sum)                   # >= the largest eigenvalue
         if not (largest > 0.0 and largest < math.inf):
             continue
-        ok = True                                       # Cholesky: A = L L^T
-        for j in range(6):
-            d = A[j, j]
-            for k in range(j):
-                d -= L[j, k] * L[j, k]
-            if not d > 0.0:
-                ok = False
-                break
-            L[j, j] = math.sqrt(d)
-            for i in range(j + 1, 6):
-                x = A[i, j]
-                for k in range(j):
-                    x -= L[i, k] * L[j, k]
-                L[i, j] = x / L[j, j]
-        if not ok:
+        if not _cholesky(A, 0.0, L):                    # A = L L^T
             continue
         for j in range(6):                              # Li = L^-1 (lower), G = Li^T Li
             for i in range(6):
@@ -504,22 +490,7 @@ def _deflated(links, tool, q, X_target, known, have, steps, stop, give_up_after,
                         total += J[k, a_] * J[k, b]
                     H[a_, b] = total
                 trace += H[a_, a_]
-            lam = damping / 6.0 * trace
-            ok = True
-            for j in range(6):                          # Cholesky of H + lam I
-                x = H[j, j] + lam
-                for k in range(j):
-                    x -= L[j, k] * L[j, k]
-                if not x > 0.0:
-                    ok = False
-                    break
-                L[j, j] = math.sqrt(x)
-                for i in range(j + 1, 6):
-                    x = H[i, j]
-                    for k in range(j):
-                        x -= L[i, k] * L[j, k]
-                    L[i, j] = x / L[j, j]
-            if not ok:
+            if not _cholesky(H, damping / 6.0 * trace, L):   # H + lambda I = L L^T
                 break
             for i in range(6):
                 x = g[i]
@@ -550,6 +521,24 @@ def _deflated(links, tool, q, X_target, known, have, steps, stop, give_up_after,
             scale = min(1.0, max_step / max(longest, 1e-300))
             for i in range(6):
                 q[r, i] += step[i] * scale
+
+
+def _cholesky(A, shift, L):
+    """L (6, 6, lower) with A + shift I = L L^T; False where A + shift I is not positive
+    definite (or not a number)."""
+    for j in range(6):
+        d = A[j, j] + shift
+        for k in range(j):
+            d -= L[j, k] * L[j, k]
+        if not d > 0.0:
+            return False
+        L[j, j] = math.sqrt(d)
+        for i in range(j + 1, 6):
+            x = A[i, j]
+            for k in range(j):
+                x -= L[i, k] * L[j, k]
+            L[i, j] = x / L[j, j]
+    return True
 
 
 def _largest_diagonal_column(A, out):
@@ -889,4 +878,4 @@ _COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_size", "_same", "
               "_wrap", "_closed_form", "_closed_forms", "_one_pose", "_accept", "_gram",
               "_smallest", "_largest_diagonal_column", "_times", "_rayleigh", "_are_new",
               "_load", "_recompute", "_kernel", "_outputs", "_pose_errors", "_dot_rows",
-              "_deflated"]
+              "_deflated", "_cholesky"]
