@@ -271,10 +271,12 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
     closed_form : callable
         The closed-form solver of an exact UR, ``dqlab.ik.ur`` itself (it passes itself, which
         keeps the imports between the two modules one-way).
-    tol, tool, q_ref, singular_tol, pose_tol
-        As for ``dqlab.ik.ur``. ``q_ref`` reaches the closed form (the member of a wrist
-        family it starts from); ``singular_tol`` applies to the calibrated arm's own
-        singularity measures (see Returns).
+    tol, tool, q_ref, singular_tol, pose_tol, near_tol
+        As for ``dqlab.ik.ur``. ``q_ref`` (one per pose, or one for all) reaches the closed
+        form (the member of a wrist family it starts from); ``singular_tol`` applies to the
+        calibrated arm's own singularity measures (see Returns); ``near_tol`` too, raised to
+        four times the rotation gap between the arm and its nearest exact UR, and to the
+        exact arm's branches.
     residuals : {"equations", "fk"}
         Accepted for ``dqlab.ik.ur``'s signature; a calibrated chain has no solved equations,
         so the errors always come from forward kinematics.
@@ -292,8 +294,10 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
         calibrated arm at its valid rows (the sines of the angles between joint axes 4 and
         6 and between the common normals of joints 2-3 and 3-4, and the distance of the
         wrist centre from the plane of joint 1 and joint 2's direction over :math:`d_4`),
-        ``"unreachable"``, and ``"not_converged"`` (a branch started from a solution of the
-        exact arm did not converge; its row is invalid and keeps its errors); ``reason``.
+        ``"near_singular"`` (one of them below the near threshold), ``"unreachable"``, and
+        ``"not_converged"`` (a branch started from a solution of the exact arm did not
+        converge; its row is invalid and keeps its errors): the keys of the exact closed
+        form's result, in its order; ``reason``.
 
     Raises
     ------
