@@ -19,6 +19,7 @@ from dqlab import dynamics, ik, jacobian
 from dqlab.identify import dh_parameters, robot_from_dh_parameters
 from dqlab.models import desk_arm, scara_rsm5, ur3
 from dqlab.robot import Robot
+from dqlab.trajectory.follow import singular_passes, ur_singularity_margins
 from dqlab.ur.calibration import CalibrationConf, robot_from_corrections, robot_from_joint_origins
 
 UR3 = ur3()
@@ -131,6 +132,14 @@ OTHER_CALLS = {
         1.2, V / 10, 0.05).moved(X_AB).tensor_at_origin, (T,)),
     "dynamics.with_payload": (lambda mass, cog: dynamics.gravity_torques(
         dynamics.with_payload(UR3, mass, cog), Q6), (3.0, [0.0, 0.0, 0.1])),
+    "ik.solutions.check_joint_limits": (
+        lambda limits: ik.solutions.check_joint_limits(limits, 6), (UR3.limits,)),
+    "ik.solutions.check_reference": (lambda q_ref: ik.solutions.check_reference(q_ref, 6),
+                                     (Q6,)),
+    "ik.ur_branch": (lambda q: ik.ur_branch(UR3, q), (Q6,)),
+    "trajectory.singular_passes": (
+        lambda qd, t: singular_passes(ur_singularity_margins(UR3, np.tile(Q6, (3, 1))), qd,
+                                      t, 0.11235), (np.tile(Q6, (3, 1)), [0.0, 0.1, 0.2])),
 }
 
 

@@ -143,10 +143,20 @@ def test_any_solver_and_bad_arguments():
     np.testing.assert_allclose(closest_solution(result, q, robot.limits), q, atol=1e-9)
     with pytest.raises(ValueError, match=r"limits must have shape \(2,\) or \(4, 2\)"):
         closest_solution(result, q, np.zeros((3, 2)))
-    with pytest.raises(ValueError, match="lo <= hi"):
+    with pytest.raises(ValueError, match=r"limits: joint 1 has \[1, 0\], lo > hi"):
         closest_solution(result, q, [[1.0, 0.0]] * 4)
-    with pytest.raises(ValueError, match="lo <= hi"):
+    with pytest.raises(ValueError, match=r"limits: joint 1 has \[nan, 1\], a NaN"):
         closest_solution(result, q, [np.nan, 1.0])
+    for empty in ([-np.inf, -np.inf], [np.inf, np.inf], [2e6, 3e6]):     # no usable joint
+        with pytest.raises(ValueError, match="limits: joint 1 has .* beyond 1e"):
+            closest_solution(result, q, empty)
+    for far in (1e10, -1e300):                    # joint values not accurate near there
+        with pytest.raises(ValueError, match=r"q_ref: joint 2 = .* beyond 1e\+06 rad"):
+            closest_solution(result, [0.0, far, 0.0, 0.0], [-np.inf, np.inf])
+    turns = 2 * np.pi * np.array([16000, 0, 0, -16000])               # far, but accurate
+    unlimited = closest_solution(result, q + turns, [-1e300, 1e300])
+    assert np.abs(np.angle(np.exp(1j * (unlimited - q)))).max() < 1e-10
+    assert np.abs(unlimited - q - turns).max() < np.pi
     with pytest.raises(TypeError, match="limits must hold real numbers"):
         closest_solution(result, q, np.zeros((4, 2)) + 1j)
     with pytest.raises(ValueError, match="q_ref contains NaN"):

@@ -213,7 +213,7 @@ def test_thesis_pose_is_singular_three_ways_and_has_one_solution(robot):
         assert result.valid.all()
         assert {k: bool(v) for k, v in result.flags.items()} == {
             "wrist_singular": True, "shoulder_singular": True, "elbow_singular": True,
-            "unreachable": False}
+            "near_singular": True, "unreachable": False, "not_converged": False}
         assert result.reason == ""
         assert_reproduces(robot, result, T, tol=1e-15)
         # one solution: every row is the generating configuration, to sqrt(eps)
@@ -425,6 +425,51 @@ def test_far_and_near_targets_are_unreachable_with_reasons(robot):
     # (an inner-reach failure on every branch cannot happen on a UR: the two wrist
     # branches put the wrist-1 point 2 d5 apart, more than 2 ||a2| - |a3||)
     assert 2 * UR3["d5"] > 2 * abs(abs(UR3["a2"]) - abs(UR3["a3"]))
+
+
+@pytest.mark.filterwarnings("error")
+def test_far_targets_are_unreachable_with_their_distance(robot):
+    """Targets from 10 m to 1e300 m away, on a bare arm and on one with a base and a tool,
+    alone, in a batch and in both residual modes, without a warning: no valid row, every
+    row's error the distance (beyond R5 / eps, the steps are not run: far_wrist) or the
+    clipping distance below it, never 0 or NaN; closest_ur_solution refuses them; a
+    position whose distance overflows is refused naming the target."""
+    from dqlab.ik import closest_ur_solution
+    from dqlab.ik.ur_steps import far_wrist
+    from dqlab.rotations import rot_z
+
+    q = np.array([0.3, -1.2, 1.1, -0.4, 0.9, 0.2])
+    based = ur3().with_tool(z=0.15)
+    based.base = np.eye(4)
+    based.base[:3, :3], based.base[:3, 3] = rot_z(0.7), (0.1, -0.2, 0.3)
+    distances = np.array([10.0, 1e10, 1e15, 1e17, 1e77, 1e100, 1e154, 1e156, 1e200, 1e300])
+    directions = np.array([[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0],
+                           [-0.6, 0.0, 0.8]])
+    for arm in (robot, based):
+        T = np.repeat(arm.fk(q)[None], distances.size * len(directions), axis=0)
+        T[:, :3, 3] = (distances[:, None, None] * directions).reshape(-1, 3)
+        D = np.linalg.norm(T[:, :3, 3] / distances.repeat(len(directions))[:, None],
+                           axis=-1) * distances.repeat(len(directions))
+        results = [ur(arm, T), ur(arm, T, residuals="fk")]
+        results += [ur(arm, X, residuals=mode) for X in T[::7] for mode in ("equations", "fk")]
+        for result in results:
+            assert not result.valid.any() and result.flags["unreachable"].all()
+            assert np.isfinite(result.position_error).all()
+        for result in results[:2]:
+            # within the arm's size (below 1 m) of the distance, to rounding
+            gap = np.abs(result.position_error - D[:, None])
+            assert (gap <= 1.0 + 1e-15 * D[:, None]).all(), gap.max()
+            far = D > 1e16
+            assert (result.reason[far] == urmod.REASON_FAR).all()
+            assert (result.reason[~far] != urmod.REASON_FAR).all()
+        with pytest.raises(ValueError, match="no solution: the wrist centre is farther"):
+            closest_ur_solution(arm, T[-1], q)
+    assert far_wrist((1e100, 0.0, 0.0), *(UR3[k] for k in ("d1", "a2", "a3", "d4", "d5"))) \
+        == 1e100
+    T = based.fk(q)
+    T[:3, 3] = (1.7e308, -1.7e308, 1.7e308)
+    with pytest.raises(ValueError, match="target: a position is so far"):
+        ur(based, T)
 
 
 def test_random_targets_never_raise_and_modes_agree(robot):
@@ -818,10 +863,13 @@ def test_engine_equals_the_readable_path(robot):
     floats = 0
     for X, valid in zip(T, batch.valid, strict=True):
         one = ur(robot, X)
-        floats += engine.solve_single(robot, ur_parameters(robot), X, 1e-9, 5e-7, 1e-9,
-                                      None) is not None
+        on_floats = engine.solve_single(robot, ur_parameters(robot), X, 1e-9, 5e-7, 1e-9,
+                                        None) is not None
+        floats += on_floats
         np.testing.assert_array_equal(one.valid, valid)
-        np.testing.assert_array_equal(one.solutions[valid], readable_rows(robot, X)[valid])
+        # a pose the float path hands on is solved on arrays: the readable path on arrays
+        rows = readable_rows(robot, X) if on_floats else readable_rows(robot, X[None])[0]
+        np.testing.assert_array_equal(one.solutions[valid], rows[valid])
     assert floats > 600                        # most poses went through the float path
     # several blocks, the near-wrist rows included
     big = robot.fk(np.random.default_rng(43).uniform(-np.pi, np.pi, (2 * engine.CHUNK + 5, 6)))

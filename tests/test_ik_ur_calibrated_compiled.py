@@ -18,13 +18,27 @@ from dqlab.rotations import rot_x
 pytest.importorskip("numba")
 
 
+@pytest.fixture(autouse=True)
+def _compiled_as_the_environment_says():
+    """After a test that switched DQLAB_COMPILED, the kernels read it again (dqlab.ik.ur
+    does at each call; a test may ask ready() first)."""
+    yield
+    from dqlab.ik import _newton_compiled
+    _newton_compiled.refresh()
+
+
 @pytest.fixture
 def numpy_path(monkeypatch):
-    """A function that runs its argument with the compiled kernels switched off."""
+    """A function that runs its argument with the compiled kernels switched off, as a user
+    does: DQLAB_COMPILED=0 (read again here, as dqlab.ik.ur reads it at each call)."""
     def run(f, *args, **kwargs):
-        with monkeypatch.context() as m:
-            m.setattr(compiled, "_READY", False)
-            return f(*args, **kwargs)
+        try:
+            with monkeypatch.context() as m:
+                m.setenv("DQLAB_COMPILED", "0")
+                compiled.refresh()
+                return f(*args, **kwargs)
+        finally:
+            compiled.refresh()
     return run
 
 
@@ -119,6 +133,29 @@ def test_results_are_the_same_with_and_without_the_compiled_kernels(kind, numpy_
     np.testing.assert_array_equal(fast.reason, plain.reason)
     one = ur(robot, X[0])
     np.testing.assert_array_equal(one.valid, fast.valid[0])
+
+
+def test_the_environment_variable_switches_the_compiled_paths(monkeypatch):
+    """DQLAB_COMPILED=0 switches the compiled kernels off at the next call of dqlab.ik.ur
+    (the same solutions, within the Newton steps' stop), 1 or unset on; anything else is
+    refused naming the variable."""
+    robot = calibrated(48)
+    X = robot.fk(np.random.default_rng(49).uniform(-np.pi, np.pi, (20, 6)))
+    fast = ur(robot, X)
+    assert compiled.ready()
+    monkeypatch.setenv("DQLAB_COMPILED", "0")
+    plain = ur(robot, X)
+    assert not compiled.ready()
+    np.testing.assert_array_equal(plain.valid, fast.valid)
+    assert np.abs(plain.solutions - fast.solutions).max() < 1e-8
+    monkeypatch.setenv("DQLAB_COMPILED", "1")
+    ur(robot, X[0])
+    assert compiled.ready()
+    monkeypatch.setenv("DQLAB_COMPILED", "maybe")
+    with pytest.raises(ValueError, match="DQLAB_COMPILED must be 0"):
+        ur(robot, X[0])
+    monkeypatch.delenv("DQLAB_COMPILED")
+    compiled.refresh()
 
 
 def test_ready_without_numba(monkeypatch):
@@ -239,7 +276,7 @@ def test_compiled_closed_form_equals_the_one_pose_closed_form(make):
     handed_over = compared = 0
     for tol in (1e-9, wide, 10 * wide):
         for T in X:
-            fast = module._exact_one_pose(nominal, T, tol, 5e-7)
+            fast = module._exact_one_pose(nominal, T, tol, 5e-7, 1e-2)
             floats = _ur_engine.solve_single(nominal.robot, prm, T, tol, 5e-7, 1e-9, None)
             assert (fast is None) == (floats is None)
             if fast is None:
@@ -258,29 +295,39 @@ def test_compiled_closed_form_equals_the_one_pose_closed_form(make):
 def test_compiled_closed_forms_equal_the_batch_closed_form(make):
     """The exact arm's closed form of a batch, compiled pose by pose with the poses it does
     not solve handed to the closed form (module._exact_poses, what the batch path starts
-    from), is the closed form's own IKResult of the batch bit for bit, every array of it, at
-    the three tolerances the solver uses (tol, twice and twenty times the arms' gap: at the
-    last, wrists up to about 0.01 rad from their singularity are at it)."""
+    from), is the closed form's own IKResult of the batch, at the three tolerances the
+    solver uses (tol, twice and twenty times the arms' gap: at the last, wrists up to about
+    0.01 rad from their singularity are at it): the poses handed over bit for bit; those
+    solved compiled (the one-pose closed form on floats, math's atan2) with the same valid
+    rows, flags and reasons and the same numbers to the rounding in which math's and
+    numpy's atan2 may differ."""
     assert compiled.ready()
     robot = make(54)
     nominal = module._nominal(robot)
     X = poses_of_every_kind(robot, 55, 1500, 50)
     X[:20, :3, 3] *= 5.0                                 # out of reach
     X[20:30, :3, 3] = [0.0, 0.0, 0.3]                    # wrist centre near the axis
+    X[30:35, :3, 3] = [[1e100, 0.0, 0.0], [0.0, -1e200, 0.0], [0.0, 0.0, 1e300],
+                       [-3e16, 3e16, 3e16], [1e10, 0.0, 0.0]]          # far beyond reach
     handed_over = []
     for tol in (1e-9, 2 * nominal.position_gap, 20 * nominal.position_gap):
-        fast = module._exact_poses(nominal, X, tol, 5e-7, ur)
+        fast = module._exact_poses(nominal, X, tol, 5e-7, 1e-2, ur)
         batch = ur(nominal.robot, X, tol=tol)
-        for name in ("solutions", "valid", "position_error", "rotation_error", "reason"):
-            np.testing.assert_array_equal(getattr(fast, name), getattr(batch, name))
-        assert list(fast.flags) == list(batch.flags)
-        for name, flag in batch.flags.items():
-            np.testing.assert_array_equal(fast.flags[name], flag)
         R = X[:, :3, :3].reshape(-1, 9).T
         done = compiled.closed_forms(np.stack(quaternion_from_matrix_entries(*R), axis=-1),
                                      X[:, :3, 3], X[:, :3, 2], nominal.exact, tol, 5e-7,
                                      NEAR_WRIST)[-1]
         handed_over.append(int((~done).sum()))
+        for name in ("valid", "reason"):
+            np.testing.assert_array_equal(getattr(fast, name), getattr(batch, name))
+        for name in ("solutions", "position_error", "rotation_error"):
+            a, b = getattr(fast, name), getattr(batch, name)
+            np.testing.assert_array_equal(a[~done], b[~done])
+            np.testing.assert_allclose(a[done], b[done], rtol=0, atol=1e-13)
+        assert list(fast.flags) == list(batch.flags)
+        for name, flag in batch.flags.items():
+            np.testing.assert_array_equal(fast.flags[name], flag)
+        assert not done[30:35].any() and (batch.position_error[30:34] >= 3e16).all()
     assert batch.reason[:20].all() and batch.rotation_error.any()   # some rows of each kind
     assert handed_over[0] < handed_over[2] < len(X) // 4, handed_over
 
@@ -365,3 +412,27 @@ def test_restarts_step_a_shared_start_once(numpy_path):
             np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
         assert owners.size <= module._FEW_ROWS
         assert (ua & ~a.converged).sum() == 0 and ua[rows[::3]].any()
+
+
+def test_compiled_deflation_equals_the_numpy_path(numpy_path):
+    """The deflated Newton steps of _deflate, compiled and on numpy, from starts near known
+    solutions (some converge to a new one, some wander and give up), with a tool: the same
+    joint vectors to 1e-8 rad on every row that stops below the stop, the same to 1e-6 on
+    most of the others (a wandering row amplifies rounding)."""
+    robot = physically_calibrated(56)
+    (links, tool), q0, targets = chain_and_starts(robot, 57, 60)
+    rng = np.random.default_rng(58)
+    known = np.where(rng.random((len(q0), 8, 1)) < 0.5,
+                     q0[:, None] + rng.normal(0.0, 0.3, (len(q0), 8, 6)), np.nan)
+    starts = q0 + rng.normal(0.0, 0.05, q0.shape)
+    starts[-1] = 0.0                                     # (the start that is not a number)
+    fast = module._deflated_newton((links, tool), starts, targets, known, 1e-9, 10)
+    plain = numpy_path(module._deflated_newton, (links, tool), starts, targets, known, 1e-9,
+                       10)
+    chain = module._MatrixChain(links, tool)
+    errors = np.stack(pose_errors(chain.transforms(chain.frames(fast)), targets))
+    converged = errors.max(axis=0) < 1e-10
+    assert converged.mean() > 0.3 and not converged.all()
+    gap = np.abs(np.angle(np.exp(1j * (fast - plain)))).max(axis=1)
+    assert gap[converged].max() < 1e-8
+    assert np.mean(gap < 1e-6) > 0.9

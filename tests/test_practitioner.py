@@ -244,8 +244,9 @@ def test_closest_ur_solution_is_the_composition_and_recovers_turned_joints():
     q = closest_ur_solution(robot, X, q_now)
     assert np.allclose(q, q_now, atol=1e-8)          # standing there, it is the answer
     assert np.array_equal(q, closest_solution(ur(robot, X, q_ref=q_now), q_now, robot.limits))
-    for i in range(5):                                  # one pose at a time: the same
-        assert np.array_equal(closest_ur_solution(robot, X[i], q_now[i]), q[i])
+    for i in range(5):          # one pose at a time (on floats): the same, to rounding
+        assert np.allclose(closest_ur_solution(robot, X[i], q_now[i]), q[i], rtol=0,
+                           atol=1e-13)
     # from elsewhere: within the limits, reproduces the pose, no nearer equivalent exists
     q_start = rng.uniform(-2 * np.pi + 0.01, 2 * np.pi - 0.01, (200, 6))
     q = closest_ur_solution(robot, X, q_start)
@@ -315,3 +316,63 @@ def test_closest_solution_of_one_target_equals_the_batch_path(limited):
 def IKResultRow(result, i):
     return dqlab.ik.IKResult(result.solutions[i], result.valid[i], result.position_error[i],
                              result.rotation_error[i])
+
+
+def test_closest_ur_solution_with_weights_or_on_the_branch():
+    """A 0.5 rad tool twist with wrist 3 at 5.9 rad (it cannot follow within 2 pi): by plain
+    joint distance the nearest solution turns the base by 2.25 rad and changes the shoulder;
+    with weights on the big joints the base stays; keep_branch stays on the branch of q_now
+    and unwinds wrist 3 instead; a target the branch cannot reach is refused by name."""
+    from dqlab.ik import ur_branch
+    from dqlab.rotations import rot_z
+
+    robot = ur5e().with_tool(z=0.15)
+    q_now = np.array([-2.603, -1.654, 1.893, 0.516, -2.55, 5.9])
+    twist = np.eye(4)
+    twist[:3, :3] = rot_z(0.5)
+    X = robot.fk(q_now) @ twist
+    plain = closest_ur_solution(robot, X, q_now)
+    weighted = closest_ur_solution(robot, X, q_now, weights=(10, 10, 5, 1, 1, 1))
+    kept = closest_ur_solution(robot, X, q_now, keep_branch=True)
+    assert abs(plain[0] - q_now[0]) > 2.0 and ur_branch(robot, plain) // 4 != ur_branch(
+        robot, q_now) // 4                                  # the shoulder changed
+    assert abs(weighted[0] - q_now[0]) < 1e-9
+    assert ur_branch(robot, kept) == ur_branch(robot, q_now) == 5
+    assert np.allclose(kept[:5], q_now[:5], atol=1e-9)
+    assert abs(kept[5] - (5.9 + 0.5 - 2 * np.pi)) < 1e-9
+    for q in (plain, weighted, kept):
+        assert np.allclose(robot.fk(q), X, atol=1e-10)
+    # the weights' distance is the smallest: no other valid equivalent is nearer
+    w = np.array([10, 10, 5, 1, 1, 1.0])
+    cands, within = dqlab.ik.equivalent_solutions(ur(robot, X).solutions, robot.limits)
+    ok = within & ur(robot, X).valid[:, None]
+    assert ((w * (weighted - q_now) ** 2).sum()
+            <= (w * (cands[ok] - q_now) ** 2).sum(axis=-1).min() + 1e-12)
+    # batches, and a branch that cannot reach
+    batch = closest_ur_solution(robot, np.stack([X, X]), np.stack([q_now, q_now]),
+                                keep_branch=True)
+    assert np.allclose(batch, kept)
+    q = random_joints(400, seed=11)
+    results = ur(robot, robot.fk(q))
+    i = int(np.argmax(results.count < 8))                # a pose some branches cannot reach
+    b = int(np.argmin(results.valid[i]))
+    q_there = q[int(np.argmax(ur_branch(robot, q) == b))]   # a robot on such a branch
+    with pytest.raises(ValueError, match="has no solution on the branch of q_now"):
+        closest_ur_solution(robot, robot.fk(q[i]), q_there, keep_branch=True)
+    closest_ur_solution(robot, robot.fk(q[i]), q_there)         # another branch reaches it
+    with pytest.raises(ValueError, match="weights must be positive"):
+        closest_ur_solution(robot, X, q_now, weights=(1, 1, 1, 1, 1, 0))
+    with pytest.raises(ValueError, match=r"weights must have shape \(6,\)"):
+        closest_ur_solution(robot, X, q_now, weights=(1, 1))
+    # the branch is the row a pose reached with the joints is solved in (on a calibrated
+    # UR, by its nearest exact UR's measures: the same row but within the arms' gap of a
+    # singularity)
+    from dqlab.identify import dh_parameters, robot_from_dh_parameters
+    p = dh_parameters(ur5e()) + np.random.default_rng(9).uniform(-2e-3, 2e-3, 24)
+    calibrated = robot_from_dh_parameters(ur5e(), p)
+    q = random_joints(300, seed=10)
+    for arm, share in ((robot, 1.0), (calibrated, 0.98)):
+        result = ur(arm, arm.fk(q))
+        gap = np.abs(np.angle(np.exp(1j * (result.solutions - q[:, None])))).max(axis=-1)
+        row = np.argmin(np.where(result.valid, gap, np.inf), axis=-1)
+        assert (row == ur_branch(arm, q)).mean() >= share

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 from dqlab import quaternion_conjugate, quaternion_product, rot_x, rot_y, rot_z, transform_from
 from dqlab.ik import ur
-from dqlab.models import ur3
+from dqlab.models import ur3, ur3_mdh
 from dqlab.testing import quiet_stdout
 from dqlab.trajectory import (
     CartesianPath,
@@ -569,6 +569,26 @@ def test_margins_against_forward_kinematics(robot):
     assert np.allclose(m["reach"], reach, atol=1e-14)
     assert np.allclose(m["shoulder"], np.hypot(*wrist_centre[:, :2].T) - 0.11235, atol=1e-14)
     assert np.allclose(m["wrist"], np.abs(np.sin(q[:, 4])))
+    # the report's modified-DH table is refused (the formulas read a standard one); a
+    # calibrated UR, whose table has far common normals, gets its nearest exact UR's
+    with pytest.raises(ValueError, match="robot: .* modified DH"):
+        ur_singularity_margins(ur3_mdh(), q)
+    from dqlab.ur.calibration import robot_from_joint_origins
+    S, previous = [], None                                     # joint origins, as URDF
+    for k, link in enumerate(robot.links):
+        T = np.eye(4)
+        if previous is not None:
+            T[:3, :3], T[0, 3] = rot_x(previous.alpha), previous.a
+        M = np.eye(4)
+        M[:3, :3] = rot_y(1e-3 * (k in (2, 3)))                # axes 3, 4 tilted by 1 mrad
+        M[2, 3] = link.d
+        S.append(T @ M)
+        previous = link
+    calibrated = robot_from_joint_origins(np.array(S), name="UR3 (tilted)")
+    assert abs(calibrated.links[1].d) > 1.0                   # far common normals
+    exact, tilted = ur_singularity_margins(robot, q), ur_singularity_margins(calibrated, q)
+    for name in exact:
+        assert np.abs(tilted[name] - exact[name]).max() < 2e-3, name
 
 
 def test_tracking_unwraps_through_pi(robot):
@@ -836,3 +856,31 @@ def test_a_line_takes_one_timing():
     with pytest.raises(ValueError, match="^speed: the line has length 0"):
         line_slerp(np.eye(4), transform_from(rot_z(1.0), [0.0, 0.0, 0.0]), speed=0.1,
                    acceleration=1.0)
+
+
+def test_a_line_through_the_wrist_singularity_is_named():
+    """A straight line that takes the UR5e's wrist through |sin q5| < 1e-3: the report names
+    the wrist singularity where it happens, with the joint speed it asks for (far beyond the
+    rated 3.14 rad/s, which a program's speed check would refuse later), the branch switches
+    there say so, and the summary prints it; a path away from it has no pass."""
+    from dqlab.models import ur5e
+    from dqlab.trajectory import SingularPass, line_slerp
+
+    robot = ur5e().with_tool(z=0.15)
+    q0 = np.array([0.0, -1.6, 1.6, -1.571, 0.05, 0.0])
+    q1 = q0.copy()
+    q1[4] = -0.05
+    path = line_slerp(robot.fk(q0), robot.fk(q1), speed=0.25, acceleration=0.5, dt=0.008)
+    traj, report = follow_path_ur(robot, path, q_start=q0)
+    [wrist] = [p for p in report.singularities if p.kind == "wrist"]
+    assert isinstance(wrist, SingularPass) and wrist.measure < 1e-3
+    assert wrist.speed > 10 * np.pi and wrist.joint in (4, 6)
+    assert wrist.speed == pytest.approx(np.abs(traj.qd[wrist.first:wrist.last + 1]).max())
+    assert report.switches and all("wrist singularity" in s.reason for s in report.switches)
+    assert "passes the wrist singularity" in report.summary()
+    # the circle of chapter 11 keeps away from every singularity
+    circle = circle_three_phase(CENTER, R, V, 0.1, orientation=rot_x(np.pi / 2))
+    _, calm = follow_path_ur(ur3(), circle, branch=("right", "up", "noflip"))
+    assert calm.singularities == [] and "singularity" not in calm.summary()
+    with pytest.raises(ValueError, match="near_tol"):
+        follow_path_ur(robot, path, q_start=q0, near_tol=-1.0)

@@ -23,7 +23,8 @@ two-link arm. A closed-form solver checks the robot against its
 these pieces.
 
 Helpers for the UR solutions: ``SOLUTION_ORDER`` (the meaning of the eight rows),
-``ur_parameters`` and ``distinct_solutions``. For any solver, :mod:`dqlab.ik.solutions` picks
+``ur_branch`` (the row of a joint vector), ``ur_parameters`` and ``distinct_solutions``.
+For any solver, :mod:`dqlab.ik.solutions` picks
 the solution to send a robot: ``closest_solution`` (the valid solution nearest a
 configuration, as its :math:`2\pi`-equivalent within the joint limits) and
 ``equivalent_solutions`` (every such equivalent). ``closest_ur_solution`` answers the
@@ -42,11 +43,12 @@ from .ur_closed_form import (
     closest_ur_solution,
     distinct_solutions,
     ur,
+    ur_branch,
     ur_parameters,
 )
 
 __all__ = [
     "IKResult", "SOLUTION_ORDER", "closest_solution", "closest_ur_solution", "desk_arm",
     "distinct_solutions", "equivalent_solutions", "numerical", "pose_errors", "scara", "ur",
-    "ur_parameters",
+    "ur_branch", "ur_parameters",
 ]

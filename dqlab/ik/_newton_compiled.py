@@ -23,8 +23,10 @@ arm's closed form of one pose that the one-pose path starts from: the loop of
 ``dqlab.ik._ur_engine.solve_single`` over the steps of ``dqlab.ik.ur_steps``, written out on
 floats (tested equal to it bit for bit), and :func:`closed_forms` the same for a batch of
 poses, which the batch path starts from (the poses it does not solve go to the closed form's
-own batch path). :func:`ready` says whether numba is there; the first compilation takes
-seconds, and is cached on disk for the next processes.
+own batch path); :func:`deflated` the deflated Newton steps of its ``_deflate``.
+:func:`ready` says whether numba is there and the environment variable ``DQLAB_COMPILED``
+(:mod:`dqlab._compiled`, read again by :func:`refresh`) does not switch the compiled paths
+off; the first compilation takes seconds, and is cached on disk for the next processes.
 
 The compiled path differs from the numpy path in two ways that change no result beyond
 rounding: after a step, the cosine and sine of each joint angle are turned by the step
@@ -39,24 +41,39 @@ import math
 
 import numpy as np
 
+from .._compiled import compiled_allowed
 from ._newton_lanes import INDEX, NV, W
 from ._newton_lanes import angles as lane_angles
 from ._newton_lanes import frames as lane_frames
 from ._newton_lanes import size as lane_size
 from ._newton_lanes import step as lane_step
+from .ur_steps import NEAR_SINGULAR
 
-__all__ = ["ready", "newton", "one_pose", "closed_form", "closed_forms", "unique", "are_new",
-           "accept", "gram", "smallest"]
+__all__ = ["ready", "refresh", "newton", "one_pose", "closed_form", "closed_forms", "unique",
+           "are_new", "accept", "gram", "smallest", "deflated"]
 
 _COMPILED = []     # the functions below the wrappers, compiled in place by ready()
-_READY = None      # ready()'s answer, once known
+_READY = None      # whether numba is there (the kernels compiled), once known
+_ALLOWED = True    # DQLAB_COMPILED as last read (refresh)
+
+
+def refresh():
+    """Read the environment variable ``DQLAB_COMPILED`` again
+    (:func:`dqlab._compiled.compiled_allowed`): ``dqlab.ik.ur`` does at each call on a
+    calibrated UR, so that a process may switch the compiled kernels on and off; until
+    then :func:`ready` answers with the value read last."""
+    global _ALLOWED
+    _ALLOWED = compiled_allowed()
 
 
 def ready():
-    """Whether the compiled kernels can be used: numba is installed and imports (it is
-    imported, and the kernels compiled or read from the cache, at the first call only, so
-    that importing dqlab stays quick)."""
+    """Whether the compiled kernels can be used: ``DQLAB_COMPILED`` allows them (as last
+    read, :func:`refresh`) and numba is installed and imports (it is imported, and the
+    kernels compiled or read from the cache, at the first call only, so that importing
+    dqlab stays quick)."""
     global _READY
+    if not _ALLOWED:
+        return False
     if _READY is None:
         _READY = False
         if importlib.util.find_spec("numba") is not None:
@@ -89,25 +106,27 @@ def newton(links, tool, q, X_target, tol, max_iter, *, plain, stop_factor, give_
 
 
 def one_pose(links, tool, q_start, found, position_error, rotation_error, X_0T, tol,
-             max_iter, singular_tol, d4, near, *, plain, stop_factor, give_up_after, damping,
-             max_step):
+             max_iter, singular_tol, d4, near, near_singular, *, plain, stop_factor,
+             give_up_after, damping, max_step):
     """``dqlab.ik.ur_calibrated._one_pose`` after the closed form, compiled: the Newton steps
     of the rows ``found`` (8,) of ``q_start`` (8, 6) towards ``X_0T`` (4, 4), then the
     result's arrays. None when the closed form found no row or missed one by ``near`` or
     less, or when a row does not converge or two rows converge to the same solution (the
     pose then takes the array path); else the solutions (8, 6) (wrapped,
     zero where not valid), ``valid`` (8,), the position and rotation errors (8,) (the
-    polished rows' in place of the closed form's) and the flags (5,): wrist, shoulder and
-    elbow singular, unreachable, not converged."""
+    polished rows' in place of the closed form's) and the flags (6,): wrist, shoulder and
+    elbow singular, near singular (a measure below ``near_singular``), unreachable, not
+    converged."""
     solutions, valid = np.zeros((8, 6)), np.zeros(8, dtype=np.bool_)
-    flags = np.zeros(5, dtype=np.bool_)
+    flags = np.zeros(6, dtype=np.bool_)
     pe, re = np.array(position_error, dtype=float), np.array(rotation_error, dtype=float)
     done = _one_pose(np.asarray(links, dtype=float), np.ascontiguousarray(tool, dtype=float),
                      np.ascontiguousarray(q_start, dtype=float), np.ascontiguousarray(found),
                      np.ascontiguousarray(X_0T, dtype=float), float(tol),
                      float(stop_factor * tol), int(min(plain, max_iter)), int(max_iter),
                      int(give_up_after), float(damping), float(max_step), float(singular_tol),
-                     float(d4), float(near), solutions, valid, pe, re, flags)
+                     float(d4), float(near), float(near_singular), solutions, valid, pe, re,
+                     flags)
     return (solutions, valid, pe, re, flags) if done else None
 
 
@@ -172,52 +191,71 @@ def smallest(H, ratio):
     return near, V, known
 
 
-def closed_form(flange, constants, tol, singular_tol, near_wrist):
+def deflated(links, tool, q, X_target, known, steps, *, stop, give_up_after, damping,
+             max_step):
+    """``dqlab.ik.ur_calibrated._deflated_newton`` compiled: at most ``steps`` deflated
+    Newton steps from the joint vectors q (m, 6) towards X_target (m, 4, 4), row by row,
+    each deflating the known solutions ``known`` (m, k, 6) of its pose (NaN rows: none),
+    with the stop and give-up rules of that function. The joint vectors reached (m, 6)."""
+    out = np.array(q, dtype=float, order="C", copy=True)
+    have = ~np.isnan(known[..., 0])
+    _deflated(np.asarray(links, dtype=float), np.ascontiguousarray(tool, dtype=float), out,
+              np.ascontiguousarray(X_target, dtype=float),
+              np.ascontiguousarray(np.where(have[..., None], known, 0.0), dtype=float),
+              np.ascontiguousarray(have), int(steps), float(stop), int(give_up_after),
+              float(damping), float(max_step))
+    return out
+
+
+def closed_form(flange, constants, tol, singular_tol, near_wrist, near_tol=NEAR_SINGULAR):
     """``dqlab.ik._ur_engine.solve_single`` after the flange, compiled: the closed form of the
     exact UR of ``constants`` (12,) (``d1, a2, a3, d4, d5, d6`` and the six joint offsets)
     for the flange ``(q, p, z6)`` (rotation quaternion, position, z axis). The solutions (8, 6),
-    ``valid`` (8,), the errors (8,) and the flags (3,) wrist, shoulder and elbow singular of
-    the result that function builds, or None where it returns None (a wrist within
+    ``valid`` (8,), the errors (8,) and the flags (4,) wrist, shoulder and elbow singular and
+    near singular (``near_tol``) of the result that function builds, or None where it
+    returns None (a wrist within
     ``near_wrist`` of its singularity or at it within ``tol``, the wrist centre inside the
     shoulder cylinder, no valid row): the same steps of ``dqlab.ik.ur_steps`` in the same
     order, on the same floats (tested equal bit for bit)."""
     q, p, z6 = flange
     solutions, errors = np.zeros((8, 6)), np.zeros(8)
-    flags = np.zeros(3, dtype=np.bool_)
+    flags = np.zeros(4, dtype=np.bool_)
     done = _closed_form(q[0], q[1], q[2], q[3], p[0], p[1], p[2], z6[0], z6[1], z6[2],
                         constants, float(tol), float(singular_tol), float(near_wrist),
-                        solutions, errors, flags)
+                        float(near_tol), solutions, errors, flags)
     return (solutions, errors <= tol, errors, flags) if done else None
 
 
-def closed_forms(Q, P, Z, constants, tol, singular_tol, near_wrist):
+def closed_forms(Q, P, Z, constants, tol, singular_tol, near_wrist, near_tol=NEAR_SINGULAR):
     """:func:`closed_form` of n flanges at once, pose by pose in compiled code: rotation
     quaternions ``Q`` (n, 4), positions ``P`` (n, 3) and z axes ``Z`` (n, 3). The solutions
-    (n, 8, 6), ``valid`` (n, 8), the errors (n, 8), the flags (n, 3) and ``done`` (n,):
+    (n, 8, 6), ``valid`` (n, 8), the errors (n, 8), the flags (n, 4) and ``done`` (n,):
     False where :func:`closed_form` returns None (those poses' other arrays are zeros)."""
     n = Q.shape[0]
     solutions, errors = np.zeros((n, 8, 6)), np.zeros((n, 8))
-    flags, done = np.zeros((n, 3), dtype=np.bool_), np.zeros(n, dtype=np.bool_)
+    flags, done = np.zeros((n, 4), dtype=np.bool_), np.zeros(n, dtype=np.bool_)
     _closed_forms(np.ascontiguousarray(Q, dtype=float), np.ascontiguousarray(P, dtype=float),
                   np.ascontiguousarray(Z, dtype=float), constants, float(tol),
-                  float(singular_tol), float(near_wrist), solutions, errors, flags, done)
+                  float(singular_tol), float(near_wrist), float(near_tol), solutions, errors,
+                  flags, done)
     return solutions, done[:, None] & (errors <= tol), errors, flags, done
 
 
-def _closed_forms(Q, P, Z, constants, tol, singular_tol, near_wrist, solutions, errors, flags,
-                  done):
+def _closed_forms(Q, P, Z, constants, tol, singular_tol, near_wrist, near_tol, solutions,
+                  errors, flags, done):
     """:func:`closed_forms`' work: :func:`_closed_form` of each pose, a pose it does not
     solve cleared again."""
     for i in range(Q.shape[0]):
         done[i] = _closed_form(Q[i, 0], Q[i, 1], Q[i, 2], Q[i, 3], P[i, 0], P[i, 1], P[i, 2],
                                Z[i, 0], Z[i, 1], Z[i, 2], constants, tol, singular_tol,
-                               near_wrist, solutions[i], errors[i], flags[i])
+                               near_wrist, near_tol, solutions[i], errors[i], flags[i])
         if not done[i]:
             solutions[i], errors[i], flags[i] = 0.0, 0.0, False
 
 
 _TWO_PI = 2.0 * math.pi
 _HALF_SQRT2 = math.sqrt(0.5)
+_EPSILON = float(np.finfo(np.float64).eps)
 
 
 def _same(u, v):
@@ -325,21 +363,7 @@ def _smallest(H, ratio, near, V, known):
         largest = min(trace, row_sum)                   # >= the largest eigenvalue
         if not (largest > 0.0 and largest < math.inf):
             continue
-        ok = True                                       # Cholesky: A = L L^T
-        for j in range(6):
-            d = A[j, j]
-            for k in range(j):
-                d -= L[j, k] * L[j, k]
-            if not d > 0.0:
-                ok = False
-                break
-            L[j, j] = math.sqrt(d)
-            for i in range(j + 1, 6):
-                x = A[i, j]
-                for k in range(j):
-                    x -= L[i, k] * L[j, k]
-                L[i, j] = x / L[j, j]
-        if not ok:
+        if not _cholesky(A, 0.0, L):                    # A = L L^T
             continue
         for j in range(6):                              # Li = L^-1 (lower), G = Li^T Li
             for i in range(6):
@@ -399,6 +423,124 @@ def _smallest(H, ratio, near, V, known):
                 V[r, i] = sign * v[i]
 
 
+def _deflated(links, tool, q, X_target, known, have, steps, stop, give_up_after, damping,
+              max_step):
+    """:func:`deflated`'s work, row by row: the chain's frames by DH products, the residual
+    and Jacobian at the TCP, the stop rules, the damped normal equations by Cholesky, the
+    deflation's scale and the shortening of ``_shortened``."""
+    T, N = np.empty((4, 4)), np.empty((4, 4))
+    Z, O = np.empty((6, 3)), np.empty((6, 3))
+    J, H, L = np.empty((6, 6)), np.empty((6, 6)), np.empty((6, 6))
+    e, g, y, step = np.empty(6), np.empty(6), np.empty(6), np.empty(6)
+    p = np.empty(3)
+    for r in range(q.shape[0]):
+        size, before0, before1 = math.inf, math.inf, math.inf
+        for iteration in range(steps + 1):
+            for i in range(4):
+                for j in range(4):
+                    T[i, j] = 1.0 if i == j else 0.0
+            for i in range(6):
+                for k in range(3):
+                    Z[i, k], O[i, k] = T[k, 2], T[k, 3]
+                ca, sa, a, d = links[i, 0], links[i, 1], links[i, 2], links[i, 3]
+                theta = q[r, i] + links[i, 4]
+                c, s = math.cos(theta), math.sin(theta)
+                for k in range(3):                      # T <- T A_i, A_i standard DH
+                    t0, t1, t2 = T[k, 0], T[k, 1], T[k, 2]
+                    N[k, 0] = t0 * c + t1 * s
+                    N[k, 1] = -t0 * s * ca + t1 * c * ca + t2 * sa
+                    N[k, 2] = t0 * s * sa - t1 * c * sa + t2 * ca
+                    N[k, 3] = t0 * a * c + t1 * a * s + t2 * d + T[k, 3]
+                for k in range(3):
+                    for j in range(4):
+                        T[k, j] = N[k, j]
+            for k in range(3):                          # the TCP: T tool
+                for j in range(4):
+                    N[k, j] = (T[k, 0] * tool[0, j] + T[k, 1] * tool[1, j]
+                               + T[k, 2] * tool[2, j] + (T[k, 3] if j == 3 else 0.0))
+            Xt = X_target[r]
+            for k in range(3):
+                p[k] = N[k, 3]
+                e[k] = Xt[k, 3] - p[k]
+            e[3] = 0.5 * (_dot_rows(Xt, 2, N, 1) - _dot_rows(Xt, 1, N, 2))
+            e[4] = 0.5 * (_dot_rows(Xt, 0, N, 2) - _dot_rows(Xt, 2, N, 0))
+            e[5] = 0.5 * (_dot_rows(Xt, 1, N, 0) - _dot_rows(Xt, 0, N, 1))
+            before0, before1 = before1, size            # the stop: _error_size, as numpy's
+            size = math.sqrt(max(e[0] * e[0] + e[1] * e[1] + e[2] * e[2],
+                                 e[3] * e[3] + e[4] * e[4] + e[5] * e[5]))
+            keep = size > stop
+            if iteration >= give_up_after:
+                keep = keep and size < 0.5 * before0
+            if iteration == steps or not keep:
+                break
+            for i in range(6):                          # J: linear rows first
+                zx, zy, zz = Z[i, 0], Z[i, 1], Z[i, 2]
+                rx, ry, rz = p[0] - O[i, 0], p[1] - O[i, 1], p[2] - O[i, 2]
+                J[0, i], J[1, i], J[2, i] = zy * rz - zz * ry, zz * rx - zx * rz, zx * ry - zy * rx
+                J[3, i], J[4, i], J[5, i] = zx, zy, zz
+            trace = 0.0
+            for a_ in range(6):
+                total = 0.0
+                for k in range(6):
+                    total += J[k, a_] * e[k]
+                g[a_] = total
+                for b in range(6):
+                    total = 0.0
+                    for k in range(6):
+                        total += J[k, a_] * J[k, b]
+                    H[a_, b] = total
+                trace += H[a_, a_]
+            if not _cholesky(H, damping / 6.0 * trace, L):   # H + lambda I = L L^T
+                break
+            for i in range(6):
+                x = g[i]
+                for k in range(i):
+                    x -= L[i, k] * y[k]
+                y[i] = x / L[i, i]
+            for i in range(5, -1, -1):
+                x = y[i]
+                for k in range(i + 1, 6):
+                    x -= L[k, i] * step[k]
+                step[i] = x / L[i, i]
+            dot = 0.0                                   # grad log m . step
+            for k in range(known.shape[1]):
+                if have[r, k]:
+                    r2 = 0.0
+                    for i in range(6):
+                        y[i] = _wrap(q[r, i] - known[r, k, i])
+                        r2 += y[i] * y[i]
+                    w = -2.0 / (r2 * (1.0 + r2))
+                    for i in range(6):
+                        dot += w * y[i] * step[i]
+            longest = 0.0
+            for i in range(6):
+                step[i] = step[i] / (1.0 - dot)
+                if not math.isfinite(step[i]):
+                    step[i] = 0.0
+                longest = max(longest, abs(step[i]))
+            scale = min(1.0, max_step / max(longest, 1e-300))
+            for i in range(6):
+                q[r, i] += step[i] * scale
+
+
+def _cholesky(A, shift, L):
+    """L (6, 6, lower) with A + shift I = L L^T; False where A + shift I is not positive
+    definite (or not a number)."""
+    for j in range(6):
+        d = A[j, j] + shift
+        for k in range(j):
+            d -= L[j, k] * L[j, k]
+        if not d > 0.0:
+            return False
+        L[j, j] = math.sqrt(d)
+        for i in range(j + 1, 6):
+            x = A[i, j]
+            for k in range(j):
+                x -= L[i, k] * L[j, k]
+            L[i, j] = x / L[j, j]
+    return True
+
+
 def _largest_diagonal_column(A, out):
     """out (6,): the column of A (6, 6) whose diagonal entry is the largest."""
     best = 0
@@ -440,7 +582,7 @@ def _wrap(theta):
 
 
 def _closed_form(qw, qx, qy, qz, px, py, pz, zx, zy, zz, constants, tol, singular_tol,
-                 near_wrist, solutions, errors, flags):
+                 near_wrist, near_tol, solutions, errors, flags):
     """:func:`closed_form`'s work: ``solve_single``'s loop, each line the step of
     ``dqlab.ik.ur_steps`` named beside it; False where that function returns None."""
     d1, a2, a3, d4, d5, d6 = (constants[0], constants[1], constants[2], constants[3],
@@ -455,7 +597,10 @@ def _closed_form(qw, qx, qy, qz, px, py, pz, zx, zy, zz, constants, tol, singula
     ry = _HALF_SQRT2 * (qw * 0.0 - qx * 0.0 + qy * 1.0 + qz * -1.0)
     rz = _HALF_SQRT2 * (qw * 0.0 + qx * 0.0 - qy * -1.0 + qz * 1.0)
     x5, y5, z5 = px - d6 * zx, py - d6 * zy, pz - d6 * zz          # wrist_center
-    any_valid = wrist_singular = elbow_singular = False
+    reach = math.sqrt(d4 * d4 + (abs(a2) + abs(a3) + abs(d5)) ** 2)  # far_wrist
+    if not abs(x5) + abs(y5) + abs(z5 - d1) <= reach / _EPSILON:
+        return False
+    any_valid = wrist_singular = elbow_singular = near = False
     h = 0.0
     m = 2.0 * abs(a2 * a3)
     r_out, r_in = abs(a2 + a3), abs(a2 - a3)
@@ -542,14 +687,18 @@ def _closed_form(qw, qx, qy, qz, px, py, pz, zx, zy, zz, constants, tol, singula
                         for i in range(6):
                             t[i] = _wrap(t[i])
                 elbow_singular = elbow_singular or kk / m < singular_tol
+                near = near or kk / m < near_tol
             any_valid = True
             wrist_singular = wrist_singular or sin5 < singular_tol
+            near = near or sin5 < near_tol
     flags[0], flags[1], flags[2] = wrist_singular, h < singular_tol * d4, elbow_singular
+    flags[3] = near or h < near_tol * d4
     return any_valid
 
 
 def _one_pose(links, tool, q_start, found, X_0T, tol, stop, plain, max_iter, give_up_after,
-              damping, max_step, singular_tol, d4, near, solutions, valid, pe, re, flags):
+              damping, max_step, singular_tol, d4, near, near_singular, solutions, valid, pe,
+              re, flags):
     """:func:`one_pose`'s work: False as soon as the pose needs the array path."""
     for r in range(8):
         if not found[r] and pe[r] <= near:
@@ -585,10 +734,12 @@ def _one_pose(links, tool, q_start, found, X_0T, tol, stop, plain, max_iter, giv
             flags[0] = flags[0] or measures[0, j] < singular_tol
             flags[1] = flags[1] or measures[2, j] / d4 < singular_tol
             flags[2] = flags[2] or measures[1, j] < singular_tol
-    flags[3] = True
+            flags[3] = flags[3] or min(min(measures[0, j], measures[1, j]),
+                                       measures[2, j] / d4) < near_singular
+    flags[4] = True
     for r in range(8):
-        flags[3] = flags[3] and not valid[r]
-        flags[4] = flags[4] or (exact[r] and not valid[r])
+        flags[4] = flags[4] and not valid[r]
+        flags[5] = flags[5] or (exact[r] and not valid[r])
     return True
 
 
@@ -726,4 +877,5 @@ _Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE = (
 _COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_size", "_same", "_unique",
               "_wrap", "_closed_form", "_closed_forms", "_one_pose", "_accept", "_gram",
               "_smallest", "_largest_diagonal_column", "_times", "_rayleigh", "_are_new",
-              "_load", "_recompute", "_kernel", "_outputs", "_pose_errors", "_dot_rows"]
+              "_load", "_recompute", "_kernel", "_outputs", "_pose_errors", "_dot_rows",
+              "_deflated", "_cholesky"]

@@ -54,13 +54,17 @@ from ..transforms import transform_inverse
 from . import ur_steps as steps
 from .result import IKResult, finish
 from .targets import RIGID_TOL, parse_targets, pose_errors
+from .ur_steps import NEAR_SINGULAR
 
 __all__ = ["solve", "solve_single", "solve_batch", "Block", "CHUNK", "REASON_SHOULDER",
-           "REASON_OUTER", "REASON_INNER", "REASON_REACH", "REASON_TOL"]
+           "REASON_OUTER", "REASON_INNER", "REASON_REACH", "REASON_TOL", "REASON_FAR"]
 
 CHUNK = 2048                     # poses per block: temporaries of 128 kB at most (L2-sized)
 _FLOAT64 = np.dtype(np.float64)
-_FLAGS = ("wrist_singular", "shoulder_singular", "elbow_singular", "unreachable")
+#: The flags of a result, in order: the calibrated solver's too, whose last one, a branch
+#: that did not converge, an exact arm's closed form never sets.
+_FLAGS = ("wrist_singular", "shoulder_singular", "elbow_singular", "near_singular",
+          "unreachable", "not_converged")
 _EYE_BYTES = np.eye(4).tobytes()
 _DQ_IDENTITY = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
 _SHOULDER = np.array([[1.0], [-1.0]])     # h+- = +h, -h: axis 0 of (s, n)
@@ -76,19 +80,24 @@ REASON_INNER = ("elbow: the wrist-1 point is closer to the shoulder than ||a2| -
                 "every branch")
 REASON_REACH = "elbow: the wrist-1 point is out of the forearm's reach on every branch"
 REASON_TOL = "no branch reproduces the pose within tol"
+REASON_FAR = ("the wrist centre is farther from the shoulder than 1 / eps times the arm's "
+              "reach: out of reach, its distance the error of every row")
 
 
-def solve(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals):
-    """:func:`dqlab.ik.ur` after its checks of ``tol``, ``singular_tol``, ``pose_tol`` and
-    ``residuals``, with ``prm`` the robot's :func:`~dqlab.ik.ur_parameters`: one pose on
-    floats when it can, else the batch path."""
+def solve(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals,
+          near_tol=NEAR_SINGULAR):
+    """:func:`dqlab.ik.ur` after its checks of ``tol``, ``singular_tol``, ``pose_tol``,
+    ``residuals`` and ``near_tol``, with ``prm`` the robot's
+    :func:`~dqlab.ik.ur_parameters`: one pose on floats when it can, else the batch path."""
     if type(target) is not np.ndarray or target.dtype is not _FLOAT64:
         target = real_array(target, "target")   # a list takes the same path as an array
     if residuals == "equations" and pose_tol <= RIGID_TOL:
-        result = solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool)
+        result = solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool,
+                              near_tol)
         if result is not None:
             return result
-    return solve_batch(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals)
+    return solve_batch(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals,
+                       near_tol)
 
 
 # --------------------------------------------------------------------------------------
@@ -149,7 +158,8 @@ def _conjugate(Q):
     return rw, -rx, -ry, -rz, dw, -dx, -dy, -dz
 
 
-def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=None):
+def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=None,
+                 near_tol=NEAR_SINGULAR):
     """One pose on Python floats: the loop of :func:`~dqlab.ik.ur_steps.candidate_solutions`
     with the checks and flags of the batch path.
 
@@ -173,8 +183,10 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
     offsets = prm["offsets"] if any(prm["offsets"]) else None
     r_D = steps.target_rotation(q)
     p5 = steps.wrist_center(p, z6, prm["d6"])
+    if steps.far_wrist(p5, d1, a2, a3, d4, d5):      # out of reach by far: the batch path
+        return None
     solutions, errors = [0.0] * 48, [0.0] * 8     # (8, 6) row by row; rows not valid stay 0
-    any_valid = wrist_singular = elbow_singular = False
+    any_valid = wrist_singular = elbow_singular = near = False
     for s, shoulder in enumerate((1.0, -1.0)):
         theta1, c1, s1, h, h2 = steps.shoulder_angles(p5[0], p5[1], d4, shoulder)
         if h2 < 0.0:
@@ -215,15 +227,19 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
                         row = [wrap_angle(t) for t in row]
                 solutions[6 * k:6 * k + 6] = row
                 elbow_singular = elbow_singular or sin3 < singular_tol
+                near = near or sin3 < near_tol
             any_valid = True
             wrist_singular = wrist_singular or sin5 < singular_tol
+            near = near or sin5 < near_tol
     if not any_valid:
         return None
     numbers = np.fromiter(solutions + errors, float, 56)    # (8, 6) solutions, 8 errors
     errors = numbers[48:]
     flags = {"wrist_singular": np.array(wrist_singular),
              "shoulder_singular": np.array(h < singular_tol * d4),
-             "elbow_singular": np.array(elbow_singular), "unreachable": np.array(False)}
+             "elbow_singular": np.array(elbow_singular),
+             "near_singular": np.array(near or h < near_tol * d4),
+             "unreachable": np.array(False), "not_converged": np.array(False)}
     return IKResult(numbers[:48].reshape(8, 6), errors <= tol, errors, np.zeros(8), flags,
                     np.array("", dtype=object))
 
@@ -254,6 +270,7 @@ class _Options:
     singular_tol: float
     residuals: str
     tool_fix: np.ndarray
+    near_tol: float
 
 
 @dataclass
@@ -295,13 +312,14 @@ class Block:
         handed back to the system costs a page fault per 4 kB when it is used again)."""
         reason = np.empty(n, dtype=object)
         reason.fill("")
-        floats = np.empty(64 * n + -(-12 * n // 8))    # 48 + 8 + 8 floats, 12 booleans
+        floats = np.empty(64 * n + -(-14 * n // 8))    # 48 + 8 + 8 floats, 14 booleans
         solutions = floats[:48 * n].reshape(6, 8, n)
         pe = floats[48 * n:56 * n].reshape(8, n)
         re = floats[56 * n:64 * n].reshape(8, n)
         bools = floats[64 * n:].view(bool)
         valid = bools[:8 * n].reshape(8, n)
         flags = {name: bools[(8 + i) * n:(9 + i) * n] for i, name in enumerate(_FLAGS)}
+        flags["not_converged"][...] = False              # a closed form has no iterations
         return cls(solutions, valid, pe, re, flags, reason)
 
     def __getitem__(self, part):
@@ -321,7 +339,8 @@ class Block:
                       self.reason.reshape(batch))
 
 
-def solve_batch(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals):
+def solve_batch(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals,
+                near_tol=NEAR_SINGULAR):
     """Any poses (one or a batch) with array operations, without a Python loop over the
     poses, in blocks of :data:`CHUNK`."""
     targets = parse_targets(target, tol=pose_tol)
@@ -331,7 +350,7 @@ def solve_batch(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, re
     theta6_ref = theta6_reference(q_ref, batch)
     targets = targets.reshape((n,))
     flange = _flange(robot, targets, tool, tool_dq, prm["d6"])
-    options = _Options(tol, singular_tol, residuals, tool_fix)
+    options = _Options(tol, singular_tol, residuals, tool_fix, near_tol)
     out = Block.empty(n)
     for start in range(0, n, CHUNK):
         part = slice(start, start + CHUNK)
@@ -357,17 +376,20 @@ def _flange(robot, targets, tool, tool_dq, d6):
         _write_rows(q, quaternion_from_matrix_entries(*e[0:3], *e[4:7], *e[8:11]))  # bottom row
     else:
         Q = targets.dual_quaternions
-        if moved:
-            Q = dual_quaternion_product(
-                dual_quaternion_conjugate(dual_quaternion_from_transform(robot.base)), Q)
-        if tooled:
-            if tool_dq is None:
-                tool_dq = dual_quaternion_from_transform(tool)
-            Q = dual_quaternion_product(Q, dual_quaternion_inverse(tool_dq))
-        c = component_rows(Q.reshape(n, 8))                   # (8, n), ours to overwrite
-        q, p = c[:4], c[4:7]
-        z6 = np.array(quaternion_rotate(*q, 0.0, 0.0, 1.0))
-        _write_rows(p, translation_from_dual_quaternion_entries(*c))   # over the dual part
+        # (a position near the largest float may overflow on the way: far_wrist finds it
+        # infinitely far, and _stand_in_far_wrists refuses it)
+        with np.errstate(over="ignore", invalid="ignore"):
+            if moved:
+                Q = dual_quaternion_product(
+                    dual_quaternion_conjugate(dual_quaternion_from_transform(robot.base)), Q)
+            if tooled:
+                if tool_dq is None:
+                    tool_dq = dual_quaternion_from_transform(tool)
+                Q = dual_quaternion_product(Q, dual_quaternion_inverse(tool_dq))
+            c = component_rows(Q.reshape(n, 8))               # (8, n), ours to overwrite
+            q, p = c[:4], c[4:7]
+            z6 = np.array(quaternion_rotate(*q, 0.0, 0.0, 1.0))
+            _write_rows(p, translation_from_dual_quaternion_entries(*c))   # over the dual part
     _write_rows(p, steps.wrist_center(p, z6, d6))
     return _Flange(q=q, p5=p)
 
@@ -406,16 +428,41 @@ def theta6_reference(q_ref, batch):
 
 def _solve_block(robot, prm, flange, targets, theta6_ref, options, out):
     """Every branch of a block of n poses (batch axis last), checked and flagged, written
-    into ``out`` (a :class:`Block` of n poses)."""
+    into ``out`` (a :class:`Block` of n poses). A pose whose wrist centre is far beyond
+    reach (:func:`~dqlab.ik.ur_steps.far_wrist`) is solved for a stand-in wrist centre
+    twice the reach away in the same direction (so the steps square nothing large), and
+    gets the distance as the error of every row."""
+    far = _stand_in_far_wrists(prm, flange)
     branches = _branches(prm, flange, theta6_ref, options.tol, out.solutions)
-    pe, re = _errors(robot, prm, flange, branches, targets, options, out)   # (8, n) each
+    pe, re = _errors(robot, prm, flange, branches, targets, options, out, far)  # (8, n) each
     ok = np.less_equal(pe, options.tol, out=out.valid)
     if options.residuals == "fk" or branches.represented is not None:   # else re is 0
         ok &= re <= options.tol
     any_valid = ok.any(axis=0)                                              # (n,)
-    _flags(prm, branches, ok, any_valid, options.singular_tol, out.flags)
+    _flags(prm, branches, ok, any_valid, options.singular_tol, options.near_tol, out.flags)
     if not any_valid.all():
         out.reason[...] = _reasons(prm, flange, branches, any_valid, options.tol)
+        if far is not None:
+            out.reason[far[0]] = REASON_FAR
+
+
+def _stand_in_far_wrists(prm, flange):
+    """The poses of a block whose wrist centre is far beyond reach, ``(columns, distances)``
+    (or None), their wrist centres in ``flange`` replaced by a stand-in out of reach
+    (twice the reach from the shoulder, along x), which the steps can square."""
+    p5 = flange.p5
+    d1, a2, a3, d4, d5 = prm["d1"], prm["a2"], prm["a3"], prm["d4"], prm["d5"]
+    with np.errstate(over="ignore", invalid="ignore"):     # (a flange that overflowed)
+        distance = steps.far_wrist(p5, d1, a2, a3, d4, d5)
+    if not distance.any():
+        return None
+    if distance.max() == math.inf:
+        raise ValueError("target: a position is so far from the robot (some 1e308 m) that "
+                         "its distance overflows")
+    cols = np.flatnonzero(distance)
+    reach = math.sqrt(d4 * d4 + (abs(a2) + abs(a3) + abs(d5)) ** 2)
+    p5[:, cols] = np.array([[2.0 * reach], [0.0], [d1]])
+    return cols, distance[cols]
 
 
 def _branches(prm, flange, theta6_ref, tol, out):
@@ -547,23 +594,30 @@ def _joint_vectors(thetas, offsets, out):
         out[...] = wrap_angle(out - np.array(offsets)[:, None, None])
 
 
-def _errors(robot, prm, flange, branches, targets, options, out):
+def _errors(robot, prm, flange, branches, targets, options, out, far=None):
     """Position and rotation errors (8, n) of every row, written into ``out`` (a
     :class:`Block`): from the clipping of the steps (``residuals="equations"``) or by
-    forward kinematics (``"fk"``)."""
+    forward kinematics (``"fk"``); for the poses ``far`` (``(columns, distances)`` of
+    :func:`_stand_in_far_wrists`, whose rows were solved for a stand-in), their distance."""
     pe, re = out.position_error, out.rotation_error
+    n = pe.shape[1]
+    poses = slice(None) if far is None else np.setdiff1d(np.arange(n), far[0])
     if options.residuals == "fk":
-        pe.T[...], re.T[...] = _fk_errors(robot, branches.solutions.T,
-                                          targets.transforms[:, None], options.tool_fix)
-        return pe, re
-    re[...] = 0.0
-    _clipping_distance(prm, flange, branches, pe)
-    if branches.represented is not None:
-        n = branches.solutions.shape[2]
-        rows = np.broadcast_to(branches.represented[:, None], (2, 2, 2, n)).reshape(8, n)
-        k, i = np.nonzero(rows)                               # row k of pose i
-        pe[k, i], re[k, i] = _fk_errors(robot, branches.solutions[:, k, i].T,
-                                        targets[i].transforms, options.tool_fix)
+        pe[:, poses], re[:, poses] = (e.T for e in _fk_errors(
+            robot, branches.solutions[:, :, poses].T, targets[poses].transforms[:, None],
+            options.tool_fix))
+    else:
+        re[...] = 0.0
+        _clipping_distance(prm, flange, branches, pe)
+        if branches.represented is not None:
+            rows = np.broadcast_to(branches.represented[:, None], (2, 2, 2, n)).reshape(8, n)
+            if far is not None:
+                rows = rows & np.isin(np.arange(n), poses)
+            k, i = np.nonzero(rows)                           # row k of pose i
+            pe[k, i], re[k, i] = _fk_errors(robot, branches.solutions[:, k, i].T,
+                                            targets[i].transforms, options.tool_fix)
+    if far is not None:
+        pe[:, far[0]], re[:, far[0]] = far[1], 0.0
     return pe, re
 
 
@@ -592,13 +646,15 @@ def _fk_errors(robot, solutions, X_target, tool_fix):
     return pose_errors(X, X_target)
 
 
-def _flags(prm, branches, ok, any_valid, singular_tol, out):
+def _flags(prm, branches, ok, any_valid, singular_tol, near_tol, out):
     """The singularity and reach flags (n,) of a block, over its valid rows, written into
     ``out`` (the block's flags)."""
     n = ok.shape[1]
     ok4 = ok.reshape(2, 2, 2, n)
     shoulder = np.less(branches.h, singular_tol * prm["d4"], out=out["shoulder_singular"])
     shoulder &= any_valid
+    near = np.less(branches.h, near_tol * prm["d4"], out=out["near_singular"])
+    near &= any_valid
     np.logical_not(any_valid, out=out["unreachable"])
     # |sin theta5| (2, 1, 1, n) over (s, w) and |sin theta3| (2, 1, 2, n) over (s, w)
     for name, sine in (("wrist_singular", branches.sin5[:, None]),
@@ -607,6 +663,8 @@ def _flags(prm, branches, ok, any_valid, singular_tol, out):
             (ok4 & (sine < singular_tol)).reshape(8, n).any(axis=0, out=out[name])
         else:
             out[name][...] = False
+        if sine.min() < near_tol:
+            near |= (ok4 & (sine < near_tol)).reshape(8, n).any(axis=0)
 
 
 def _reasons(prm, flange, branches, any_valid, tol):

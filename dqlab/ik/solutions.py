@@ -30,23 +30,113 @@ from numpy.typing import ArrayLike, NDArray
 from .._checks import as_float_array, real_array
 from ..rotations import wrap_angle
 
-__all__ = ["closest_solution", "equivalent_solutions"]
+__all__ = ["closest_solution", "equivalent_solutions", "check_joint_limits",
+           "check_reference", "MAX_REFERENCE"]
 
 _TWO_PI = 2.0 * math.pi
 _MAX_EQUIVALENT_JOINTS = 12
 
+#: The largest joint value (radians, some 160,000 turns) a reference configuration may hold:
+#: a joint value v is stored to about :math:`10^{-16} |v|`, so the :math:`2\pi`-equivalents
+#: near a larger one would miss the solution by more than :math:`10^{-10}` rad.
+MAX_REFERENCE = 1e6
+
+
+def check_joint_limits(limits: ArrayLike, n: int, name: str = "limits"
+                       ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    r"""Joint limits, checked: the lowest and highest value of each of ``n`` joints.
+
+    Parameters
+    ----------
+    limits : array_like, shape (2,) or (n, 2)
+        ``(lo, hi)`` for every joint, or one row per joint; ``-inf`` / ``inf`` for a joint
+        without a lower / upper limit.
+    n : int
+        Number of joints.
+    name : str
+        Name of the argument in error messages.
+
+    Returns
+    -------
+    lo, hi : ndarray, shape (n,)
+
+    Raises
+    ------
+    ValueError
+        Naming ``name`` and the joint: a wrong shape, a NaN, :math:`lo > hi`, or an interval
+        that lies beyond :data:`MAX_REFERENCE` (:math:`10^6` rad; such as
+        :math:`lo = hi = \pm\infty`, which holds no joint value).
+
+    Examples
+    --------
+    >>> check_joint_limits([-np.pi, np.pi], 2)
+    (array([-3.14159265, -3.14159265]), array([3.14159265, 3.14159265]))
+    >>> check_joint_limits([[0.0, 1.0], [np.inf, np.inf]], 2)       # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: limits: joint 2 has [inf, inf], an interval beyond 1e+06 rad, where ...
+    """
+    lim = real_array(limits, name)
+    if lim.shape not in ((2,), (n, 2)):
+        raise ValueError(f"{name} must have shape (2,) or ({n}, 2), got {lim.shape}")
+    lo, hi = (lim[:, 0], lim[:, 1]) if lim.ndim == 2 else (np.full(n, lim[0]),
+                                                            np.full(n, lim[1]))
+    # NaN fails every comparison; an interval beyond MAX_REFERENCE would give joints near it
+    bad = ~((lo <= hi) & (lo <= MAX_REFERENCE) & (hi >= -MAX_REFERENCE))
+    if bad.any():
+        j = int(np.argmax(bad))
+        why = ("a NaN" if np.isnan([lo[j], hi[j]]).any() else
+               "lo > hi: rows are (lo, hi)" if lo[j] > hi[j] else
+               f"an interval beyond {MAX_REFERENCE:.0e} rad, where joint values are not "
+               f"accurate to 1e-10 rad")
+        raise ValueError(f"{name}: joint {j + 1} has [{lo[j]:.6g}, {hi[j]:.6g}], {why}")
+    return lo.astype(float), hi.astype(float)
+
+
+def check_reference(q_ref: ArrayLike, n: int, name: str = "q_ref") -> NDArray[np.float64]:
+    r"""A reference configuration, checked: joint vectors near which a solution is chosen.
+
+    Parameters
+    ----------
+    q_ref : array_like, shape (n,) or (..., n)
+        Joint values (radians).
+    n : int
+        Number of joints.
+    name : str
+        Name of the argument in error messages.
+
+    Returns
+    -------
+    ndarray, shape (..., n)
+
+    Raises
+    ------
+    ValueError
+        Naming ``name``: a wrong shape, a NaN or infinity, or a joint value beyond
+        :data:`MAX_REFERENCE` (:math:`10^6` rad) in size, near which the joint values are
+        not accurate to :math:`10^{-10}` rad.
+
+    Examples
+    --------
+    >>> check_reference([0.0, 1e10], 2)                  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: q_ref: joint 2 = 1e+10 rad is beyond 1e+06 rad (some 160,000 turns): ...
+    """
+    q = as_float_array(q_ref, name, (n,))
+    big = np.abs(q) > MAX_REFERENCE
+    if big.any():
+        index = tuple(np.argwhere(big)[0])
+        j, value = int(index[-1]), float(q[index])
+        raise ValueError(f"{name}: joint {j + 1} = {value:.6g} rad is beyond "
+                         f"{MAX_REFERENCE:.0e} rad (some 160,000 turns): the joint values "
+                         f"near it are not accurate to 1e-10 rad")
+    return q
+
 
 def _joint_limits(limits, n):
     """``(lo, hi)`` of shape (n,) each (infinite for an unlimited joint), or ``None``."""
-    if limits is None:
-        return None
-    lim = real_array(limits, "limits")
-    if lim.shape not in ((2,), (n, 2)):
-        raise ValueError(f"limits must have shape (2,) or ({n}, 2), got {lim.shape}")
-    lo, hi = lim.T if lim.ndim == 2 else (np.full(n, lim[0]), np.full(n, lim[1]))
-    if not (lo <= hi).all():          # NaN fails this too
-        raise ValueError(f"limits must be rows (lo, hi) with lo <= hi, got {lim.tolist()}")
-    return lo, hi
+    return None if limits is None else check_joint_limits(limits, n)
 
 
 def _nearest_equivalent(theta, ref, lo, hi):
@@ -64,7 +154,8 @@ def _nearest_equivalent(theta, ref, lo, hi):
 
 
 def closest_solution(result, q_ref: ArrayLike, limits: ArrayLike | None = None, *,
-                     wrapped: bool = False) -> NDArray[np.float64]:
+                     wrapped: bool = False, weights: ArrayLike | None = None
+                     ) -> NDArray[np.float64]:
     r"""The valid solution nearest ``q_ref``, as the :math:`2\pi`-equivalent nearest it within
     the joint limits.
 
@@ -87,6 +178,11 @@ def closest_solution(result, q_ref: ArrayLike, limits: ArrayLike | None = None, 
         Return the chosen row as the solver gives it (angles in :math:`(-\pi, \pi]`), not its
         equivalent nearest ``q_ref`` (what :meth:`dqlab.ik.result.IKResult.best` returns;
         only without ``limits``).
+    weights : array_like, shape (n,), optional
+        The distance is :math:`\sum_j w_j (q_j - q_{ref,j})^2` (default: every
+        :math:`w_j = 1`). Larger weights on the big joints (shoulder, elbow) make a
+        solution that moves the wrist more and the arm less the nearer one, for example
+        ``weights=(10, 10, 5, 1, 1, 1)``. Positive and finite.
 
     Returns
     -------
@@ -119,8 +215,9 @@ def closest_solution(result, q_ref: ArrayLike, limits: ArrayLike | None = None, 
     solutions = np.asarray(result.solutions)
     valid = np.asarray(result.valid)
     k, n = solutions.shape[-2:]
-    q_ref = as_float_array(q_ref, "q_ref", (n,))
+    q_ref = check_reference(q_ref, n)
     bounds = _joint_limits(limits, n)
+    weights = _weights(weights, n)
     if wrapped and bounds is not None:
         raise ValueError("wrapped=True returns a row as the solver gives it, which ignores "
                          "limits; give one or the other")
@@ -128,10 +225,11 @@ def closest_solution(result, q_ref: ArrayLike, limits: ArrayLike | None = None, 
         raise ValueError("some targets have no valid solution; check result.reason")
     batch = np.broadcast_shapes(valid.shape[:-1], q_ref.shape[:-1])
     if not batch:                          # one target: on Python floats
-        return _closest_one(solutions, valid, q_ref, bounds, wrapped)
+        return _closest_one(solutions, valid, q_ref, bounds, wrapped, weights)
     rows = np.broadcast_to(solutions, batch + (k, n)).reshape(-1, k, n)
     index = _nearest_rows(rows, np.broadcast_to(valid, batch + (k,)).reshape(-1, k),
-                          np.broadcast_to(q_ref, batch + (n,)).reshape(-1, n), bounds)
+                          np.broadcast_to(q_ref, batch + (n,)).reshape(-1, n), bounds,
+                          weights)
     if np.any(index < 0):
         where = np.unravel_index(int(np.argmin(index)), batch) if batch else ()
         target = f"target {tuple(int(i) for i in where)}" if batch else "the target"
@@ -149,7 +247,19 @@ def closest_solution(result, q_ref: ArrayLike, limits: ArrayLike | None = None, 
     return _nearest_equivalent(chosen, ref, *bounds)[0]
 
 
-def _closest_one(rows, valid, q_ref, bounds, wrapped):
+def _weights(weights, n):
+    """The joint weights of a distance (n,), checked, or None (all 1)."""
+    if weights is None:
+        return None
+    w = as_float_array(weights, "weights")
+    if w.shape != (n,):
+        raise ValueError(f"weights must have shape ({n},), one per joint, got {w.shape}")
+    if not (w > 0.0).all():
+        raise ValueError(f"weights must be positive, got {w.tolist()}")
+    return w
+
+
+def _closest_one(rows, valid, q_ref, bounds, wrapped, weights=None):
     """:func:`closest_solution` of one target: rows (k, n), valid (k,), q_ref (n,), with
     :func:`_nearest_equivalent` on the whole (k, n) block at once (the chunked loop of a
     batch would cost more than the work)."""
@@ -158,7 +268,8 @@ def _closest_one(rows, valid, q_ref, bounds, wrapped):
     else:
         u, inside = _nearest_equivalent(rows, q_ref, *bounds)
         reach = valid if inside is None else valid & inside.all(axis=-1)
-    distance = np.where(reach, np.square(u - q_ref).sum(axis=-1), np.inf)
+    squares = np.square(u - q_ref) if weights is None else weights * np.square(u - q_ref)
+    distance = np.where(reach, squares.sum(axis=-1), np.inf)
     best = int(np.argmin(distance))
     if not reach[best]:
         raise ValueError(f"the target has no valid solution within the joint limits "
@@ -169,7 +280,7 @@ def _closest_one(rows, valid, q_ref, bounds, wrapped):
 _CHUNK = 4096      # targets per block: a block's (k, 4096) temporaries stay in the cache
 
 
-def _nearest_rows(rows, valid, q_ref, bounds):
+def _nearest_rows(rows, valid, q_ref, bounds, weights=None):
     r"""For each target (rows ``(N, k, n)``, valid ``(N, k)``, q_ref ``(N, n)``) the index of
     the row whose nearest equivalent within ``bounds`` is nearest ``q_ref``, or -1.
 
@@ -207,6 +318,8 @@ def _nearest_rows(rows, valid, q_ref, bounds):
                     np.copyto(d, u)
                 d -= ref
             np.multiply(d, d, out=w)
+            if weights is not None:
+                w *= weights[j]
             dist += w
         dist[~reach] = np.inf
         best = dist.argmin(axis=0)
@@ -255,11 +368,7 @@ def equivalent_solutions(q: ArrayLike, limits: ArrayLike = (-2 * np.pi, 2 * np.p
     if n > _MAX_EQUIVALENT_JOINTS:
         raise ValueError(f"equivalent_solutions lists 2**n candidates: at most "
                          f"{_MAX_EQUIVALENT_JOINTS} joints, got {n}")
-    limits = as_float_array(limits, "limits")
-    if limits.shape not in ((2,), (n, 2)):
-        raise ValueError(f"limits must have shape (2,) or ({n}, 2), got {limits.shape}")
-    lo = np.broadcast_to(limits[..., 0], (n,))
-    hi = np.broadcast_to(limits[..., 1], (n,))
+    lo, hi = check_joint_limits(limits, n)
     if np.any(hi - lo > 4 * np.pi + 1e-12):
         raise ValueError("equivalent_solutions handles joint ranges of at most 4 pi")
     bits = (np.arange(2 ** n)[:, None] >> np.arange(n)) & 1          # (2**n, n)

@@ -216,6 +216,19 @@ def _hint(shape):
     return ""
 
 
+def _distances(X, X_target):
+    r"""The distances between the positions of poses (..., 4, 4), each computed as
+    :math:`m \sqrt{\sum (d_i / m)^2}` with :math:`m = \max |d_i|`, which overflows only
+    when the distance itself exceeds the largest float; one float for one pose, as
+    :func:`pose_errors` computes it."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        d = X[..., :3, 3] - X_target[..., :3, 3]
+        m = np.abs(d).max(axis=-1)
+        scaled = d / np.where(m > 0.0, m, 1.0)[..., None]
+        distance = m * np.sqrt((scaled * scaled).sum(axis=-1))
+    return float(distance.reshape(-1)[0]) if X.size == 16 else distance
+
+
 def pose_errors(X: ArrayLike, X_target: ArrayLike
                 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     r"""Position and rotation errors between poses: the one error measure of :mod:`dqlab.ik`.
@@ -265,9 +278,12 @@ def pose_errors(X: ArrayLike, X_target: ArrayLike
         position_error, rotation_error = pose_error_entries(
             components(X.reshape(16 if one else lead + (16,))),
             components(X_target.reshape(16 if one else lead + (16,))))
+    if not np.isfinite(position_error).all():      # squares beyond the largest float:
+        position_error = _distances(X, X_target)   # the distance with the squares scaled
     if not (np.isfinite(position_error).all() and np.isfinite(rotation_error).all()):
         raise ValueError("X and X_target are too large for their errors (overflow): they "
-                         "must be rigid transforms")
+                         "must be rigid transforms whose positions are less than 1e308 m "
+                         "apart")
     if one:
         return np.full(lead, position_error), np.full(lead, rotation_error)
     return np.asarray(position_error), np.asarray(rotation_error)

@@ -113,11 +113,12 @@ import weakref
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._checks import as_float_array, check_tolerance, real_array
+from .._checks import check_instance, check_tolerance, real_array
 from ..models import UR_SHAPE
 from ..robot import Robot
 from ..rotations import wrap_angle
 from ._ur_engine import (  # noqa: F401  (the reasons, re-exported)
+    REASON_FAR,
     REASON_INNER,
     REASON_OUTER,
     REASON_REACH,
@@ -126,11 +127,12 @@ from ._ur_engine import (  # noqa: F401  (the reasons, re-exported)
     solve,
 )
 from .result import IKResult
-from .solutions import closest_solution
+from .solutions import check_joint_limits, check_reference, closest_solution
 from .ur_calibrated import calibrated_ur, nominal_ur
+from .ur_steps import NEAR_SINGULAR
 
-__all__ = ["ur", "ur_parameters", "distinct_solutions", "closest_ur_solution", "SOLUTION_ORDER",
-           "ROW_NAMES"]
+__all__ = ["ur", "ur_parameters", "distinct_solutions", "closest_ur_solution", "ur_branch",
+           "SOLUTION_ORDER", "ROW_NAMES"]
 
 #: ``(shoulder, elbow, wrist)`` labels of the eight rows, in order ``k = 4 s + 2 e + w``.
 SOLUTION_ORDER = tuple(
@@ -200,7 +202,7 @@ def ur_parameters(robot: Robot, *, atol: float = 1e-12) -> dict:
 
 def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | None = None,
        q_ref: ArrayLike | None = None, singular_tol: float = 5e-7, pose_tol: float = 1e-9,
-       residuals: str = "equations") -> IKResult:
+       residuals: str = "equations", near_tol: float = NEAR_SINGULAR) -> IKResult:
     r"""Every closed-form inverse-kinematics solution of a UR-family arm.
 
     Solves :math:`X_{W0}\, X_{06}(q)\, X_{6T} = X` for the joint vector :math:`q` by the
@@ -238,6 +240,17 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
         or shoulder these come out near :math:`\sqrt{\varepsilon} \approx 10^{-8}` (up
         to about :math:`10^{-7}`), the conditioning of those angles; the default leaves a
         margin above that. :math:`\theta_5` itself is computed to full accuracy.
+    near_tol : float
+        A pose is flagged ``"near_singular"`` when a valid row has :math:`|\sin\theta_5|`,
+        :math:`|\sin\theta_3|` or :math:`h / d_4` below it (default
+        :data:`~dqlab.ik.ur_steps.NEAR_SINGULAR`, 0.01: about 0.57 degrees, or 1 % of
+        :math:`d_4`): there the joints are sensitive to the pose (a change
+        :math:`\delta` of the pose moves them by up to :math:`\delta` over the measure).
+        On a calibrated UR the threshold is at least four times the rotation gap between
+        the arm and its nearest exact UR (:func:`~dqlab.ik.ur_calibrated.nominal_ur`), and
+        the nearest exact UR's branches count too: within it, the calibrated arm's
+        solutions no longer follow the exact arm's branches one to one, and a pose may
+        have more solutions than the eight rows (see :mod:`dqlab.ik.ur_calibrated`).
     pose_tol : float
         Tolerance of the rigidity check of ``target`` (and ``tool``). With a tolerance above
         the default (for poses read from rounded numbers, as in the thesis's pose file),
@@ -264,8 +277,13 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
         :data:`SOLUTION_ORDER`; invalid rows hold zeros); ``valid`` (..., 8);
         ``position_error`` and ``rotation_error`` (..., 8) of every row (before zeroing);
         ``flags`` with boolean arrays (...) ``"wrist_singular"``, ``"shoulder_singular"``,
-        ``"elbow_singular"`` (set when a valid solution is near that singularity) and
-        ``"unreachable"`` (no valid solution); ``reason`` (...) says why a pose has no
+        ``"elbow_singular"`` (set when a valid solution is at that singularity, within
+        ``singular_tol``), ``"near_singular"`` (a valid solution within ``near_tol`` of
+        one),
+        ``"unreachable"`` (no valid solution) and ``"not_converged"`` (on a calibrated UR, a
+        branch of the nearest exact arm did not converge on the calibrated chain; never set
+        by the exact closed form, which has nothing to converge: one set of keys for every
+        UR); ``reason`` (...) says why a pose has no
         solution. Branches that coincide at a singularity are all returned (equal rows);
         :func:`distinct_solutions` marks the first of each group. For a batch, the arrays
         are stored with the poses last in memory (as the solver computes them) and given as
@@ -275,8 +293,10 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     ------
     ValueError
         If the robot is not UR-shaped (:data:`dqlab.models.UR_SHAPE`), or ``target`` has
-        the wrong shape, holds NaN, is not a rigid transform or not a unit dual quaternion.
-        Unreachable poses do not raise.
+        the wrong shape, holds NaN, is not a rigid transform or not a unit dual quaternion,
+        or is so far (some 1e308 m) that its distance overflows. Unreachable poses do not
+        raise: a pose far beyond reach (:func:`~dqlab.ik.ur_steps.far_wrist`) has no valid
+        row, each row's error being the pose's distance.
 
     Notes
     -----
@@ -338,10 +358,13 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     wrist_singular [False  True]
     shoulder_singular [False  True]
     elbow_singular [False  True]
+    near_singular [False  True]
     unreachable [False False]
+    not_converged [False False]
     """
     tol = check_tolerance(tol, "tol")
     singular_tol = check_tolerance(singular_tol, "singular_tol")
+    near_tol = check_tolerance(near_tol, "near_tol")
     pose_tol = check_tolerance(pose_tol, "pose_tol")
     if residuals not in ("fk", "equations"):
         raise ValueError(f"residuals must be 'fk' or 'equations', got {residuals!r}")
@@ -354,10 +377,10 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
             raise ValueError(f"{exc}; nor is it a calibrated UR: {why}") from None
         result = calibrated_ur(robot, target, ur, tol=tol, tool=tool, q_ref=q_ref,
                                singular_tol=singular_tol, pose_tol=pose_tol,
-                               residuals=residuals)
+                               residuals=residuals, near_tol=near_tol)
     else:
         result = solve(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref,
-                       residuals)
+                       residuals, near_tol)
     result.row_names = ROW_NAMES
     return result
 
@@ -402,6 +425,7 @@ def distinct_solutions(result: IKResult, atol: float = 1e-9) -> NDArray[np.bool_
 
 def closest_ur_solution(robot: Robot, target: ArrayLike, q_now: ArrayLike, *,
                         limits: ArrayLike | None = None, tol: float = 1e-9,
+                        weights: ArrayLike | None = None, keep_branch: bool = False,
                         **options) -> NDArray[np.float64]:
     r"""The joints to send a UR standing at ``q_now`` to reach ``target``: one call.
 
@@ -410,6 +434,13 @@ def closest_ur_solution(robot: Robot, target: ArrayLike, q_now: ArrayLike, *,
     :math:`\pm 2\pi`, so each joint has two candidates), and among them the joint vector
     nearest ``q_now``: :func:`~dqlab.ik.solutions.closest_solution` of :func:`ur`, with
     ``q_now`` also as the reference at a wrist singularity.
+
+    "Nearest" is the plain joint distance by default, which weighs a turn of the base as
+    much as a turn of the wrist: when the wrist cannot follow within its limits (a tool
+    twist with wrist 3 near :math:`2\pi`), the nearest solution may be on another branch,
+    the shoulder or the wrist flipped. ``weights`` makes the big joints dearer;
+    ``keep_branch=True`` keeps the arm on the branch it is on (shoulder, elbow, wrist of
+    ``q_now``, :func:`ur_branch`), and refuses a target it cannot reach on it.
 
     Parameters
     ----------
@@ -423,8 +454,14 @@ def closest_ur_solution(robot: Robot, target: ArrayLike, q_now: ArrayLike, *,
         Joint limits; default ``robot.limits``.
     tol : float
         As for :func:`ur`.
+    weights : array_like, shape (6,), optional
+        Joint weights of the distance, :math:`\sum_j w_j (q_j - q_{now,j})^2` (default all
+        1), for example ``(10, 10, 5, 1, 1, 1)`` to move the wrist rather than the arm.
+    keep_branch : bool
+        Choose only among the solutions on the branch of ``q_now``.
     **options
-        Further keywords of :func:`ur` (``singular_tol``, ``pose_tol``, ``tool``).
+        Further keywords of :func:`ur` (``singular_tol``, ``pose_tol``, ``tool``,
+        ``near_tol``).
 
     Returns
     -------
@@ -433,9 +470,10 @@ def closest_ur_solution(robot: Robot, target: ArrayLike, q_now: ArrayLike, *,
     Raises
     ------
     ValueError
-        If a target has no solution (the message gives the solver's reason), no solution
-        is within the limits, or ``q_now`` is outside the limits (a hint if it looks like
-        degrees), besides the errors of :func:`ur`.
+        If a target has no solution (the message gives the solver's reason) or, with
+        ``keep_branch``, none on the branch of ``q_now``, no solution is within the limits,
+        ``q_now`` is outside the limits (a hint if it looks like degrees) or the weights
+        are not positive, besides the errors of :func:`ur`.
 
     Examples
     --------
@@ -453,24 +491,36 @@ def closest_ur_solution(robot: Robot, target: ArrayLike, q_now: ArrayLike, *,
     array([ 0.3  , -1.205,  1.234, -0.529,  0.9  ,  0.2  ])
     >>> bool(np.allclose(robot.fk(q), X, atol=1e-12))
     True
+
+    Wrist 3 at 5.9 rad and the tool to be turned by 0.5 rad more, beyond its limit of
+    :math:`2\pi`: the nearest solution flips the wrist (joints 4 to 6 move by up to
+    2.8 rad); on the same branch, wrist 3 turns back by 5.8 rad instead:
+
+    >>> from dqlab.rotations import rot_z
+    >>> q_now = np.array([0.3, -1.2, 1.1, -0.4, 0.9, 5.9])
+    >>> twist = np.eye(4)
+    >>> twist[:3, :3] = rot_z(0.5)
+    >>> X = robot.fk(q_now) @ twist
+    >>> (closest_ur_solution(robot, X, q_now) - q_now).round(2) + 0.0     # (no -0.)
+    array([ 0.  ,  0.27,  0.03,  2.84, -1.8 , -2.64])
+    >>> (closest_ur_solution(robot, X, q_now, keep_branch=True) - q_now).round(2) + 0.0
+    array([ 0.  ,  0.  ,  0.  ,  0.  ,  0.  , -5.78])
     """
     limits = robot.limits if limits is None else limits
-    q_now = as_float_array(q_now, "q_now", (6,))
-    lim = real_array(limits, "limits")
-    if lim.shape in ((2,), (6, 2)):
-        lo, hi = lim.T if lim.ndim == 2 else (np.full(6, lim[0]), np.full(6, lim[1]))
-        if q_now.shape == (6,):             # one joint vector: on floats
-            outside = any(not a <= v <= b for v, a, b in zip(q_now.tolist(), lo.tolist(),
-                                                             hi.tolist(), strict=True))
-        else:
-            outside = not ((q_now >= lo) & (q_now <= hi)).all()
-        if outside:
-            first = tuple(np.argwhere((q_now < lo) | (q_now > hi))[0])
-            j, value = int(first[-1]), float(q_now[first])
-            hint = (" (joint angles are radians: degrees? convert with np.radians)"
-                    if abs(value) > 4 * np.pi else "")     # beyond two turns
-            raise ValueError(f"q_now: joint {j + 1} = {value:.6g} is outside its limits "
-                             f"[{lo[j]:.6g}, {hi[j]:.6g}]{hint}")
+    lo, hi = check_joint_limits(limits, 6)
+    q_now = check_reference(q_now, 6, "q_now")
+    if q_now.shape == (6,):                 # one joint vector: on floats
+        outside = any(not a <= v <= b for v, a, b in zip(q_now.tolist(), lo.tolist(),
+                                                         hi.tolist(), strict=True))
+    else:
+        outside = not ((q_now >= lo) & (q_now <= hi)).all()
+    if outside:
+        first = tuple(np.argwhere((q_now < lo) | (q_now > hi))[0])
+        j, value = int(first[-1]), float(q_now[first])
+        hint = (" (joint angles are radians: degrees? convert with np.radians)"
+                if abs(value) > 4 * np.pi else "")     # beyond two turns
+        raise ValueError(f"q_now: joint {j + 1} = {value:.6g} is outside its limits "
+                         f"[{lo[j]:.6g}, {hi[j]:.6g}]{hint}")
     if type(target) is not np.ndarray:
         target = real_array(target, "target")
     shape = target.shape
@@ -490,4 +540,61 @@ def closest_ur_solution(robot: Robot, target: ArrayLike, q_now: ArrayLike, *,
         where = tuple(int(i) for i in np.argwhere(failed)[0]) if failed.ndim else ()
         which = f"target {where}" if where else "the target"
         raise ValueError(f"{which} has no solution: {result.reason[where]}")
-    return closest_solution(result, q_now, limits)
+    if keep_branch:
+        branch = np.broadcast_to(ur_branch(robot, q_now), result.valid.shape[:-1])
+        on = result.valid & (np.arange(8) == branch[..., None])
+        if not on.any(axis=-1).all():
+            where = tuple(int(i) for i in np.argwhere(~on.any(axis=-1))[0])
+            which = f"target {where}" if where else "the target"
+            raise ValueError(f"{which} has no solution on the branch of q_now "
+                             f"({ROW_NAMES[int(branch[where])]}), which keep_branch=True "
+                             f"keeps; valid rows: "
+                             f"{np.flatnonzero(result.valid[where]).tolist()}")
+        result = IKResult(result.solutions, on, result.position_error, result.rotation_error,
+                          result.flags, result.reason)
+    return closest_solution(result, q_now, limits, weights=weights)
+
+
+def ur_branch(robot: Robot, q: ArrayLike) -> NDArray[np.int64]:
+    r"""The branch of joint vectors of a UR: the row ``4 s + 2 e + w`` of :func:`ur`'s
+    solutions (:data:`SOLUTION_ORDER`) that a pose reached with them is solved in.
+
+    With :math:`\theta = q + \theta^0` (the joint offsets): shoulder :math:`s = 1`
+    ("right") when the wrist centre lies behind the base axis along :math:`x_1`,
+    :math:`h = a_2 \cos\theta_2 + a_3 \cos(\theta_2 + \theta_3) + d_5
+    \sin\theta_{234} < 0`; elbow :math:`e = 1` ("down") when :math:`\sin\theta_3 < 0`;
+    wrist :math:`w = 1` ("flip") when :math:`\sin\theta_5 < 0`. On a calibrated UR, those
+    of its nearest exact UR (:func:`~dqlab.ik.ur_calibrated.nominal_ur`); exactly at a
+    singularity the two branches it separates are one, and either is returned.
+
+    Parameters
+    ----------
+    robot : dqlab.robot.Robot
+        A UR-family arm (exact or calibrated).
+    q : array_like, shape (..., 6)
+        Joint vectors, radians.
+
+    Returns
+    -------
+    ndarray of int, shape (...)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dqlab.models import ur5e
+    >>> q = np.array([0.3, -1.2, 1.1, -0.4, 0.9, 0.2])
+    >>> int(ur_branch(ur5e(), q)), ROW_NAMES[int(ur_branch(ur5e(), q))]
+    (4, 'right up noflip')
+    """
+    check_instance(robot, Robot, "robot")
+    q = robot.check_joints(q)
+    try:
+        _parameters(robot)
+        exact = robot
+    except ValueError:
+        exact = nominal_ur(robot)
+    t = q + np.array([lk.theta_offset for lk in exact.links])
+    a2, a3, d5 = exact.links[1].a, exact.links[2].a, exact.links[4].d
+    h = (a2 * np.cos(t[..., 1]) + a3 * np.cos(t[..., 1] + t[..., 2])
+         + d5 * np.sin(t[..., 1] + t[..., 2] + t[..., 3]))
+    return 4 * (h < 0) + 2 * (np.sin(t[..., 2]) < 0) + (np.sin(t[..., 4]) < 0)

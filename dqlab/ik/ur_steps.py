@@ -47,21 +47,28 @@ from ..rotations import wrap_angle
 from ..transforms import check_transform
 
 __all__ = [
-    "target_rotation", "wrist_center", "shoulder_angles", "half_angle_cos_sin",
+    "target_rotation", "wrist_center", "far_wrist", "shoulder_angles", "half_angle_cos_sin",
     "relative_rotation_coefficients", "wrist_angles", "half_difference", "theta234_sine_cosine",
     "arm_plane_wrist", "wrist1_point", "elbow_triangle", "elbow_angles", "reach_gap",
-    "shoulder_gap", "feasible_theta234", "candidate_solutions", "NEAR_WRIST",
+    "shoulder_gap", "feasible_theta234", "candidate_solutions", "NEAR_WRIST", "NEAR_SINGULAR",
 ]
 
 #: The arrays of the steps: float64 arrays of any shape (or Python floats).
 Array = NDArray[np.float64]
 
 _HALF_SQRT2 = math.sqrt(0.5)           # a Python float: it serves floats and arrays
+_EPSILON = float(np.finfo(float).eps)
 
 #: :math:`|\sin\theta_5|` below which the closed form treats the wrist as at its singularity:
 #: there :math:`\theta_{234}` comes from coefficients of the size of :math:`\theta_5`, and a
 #: row the forearm cannot reach moves within its wrist family (``dqlab.ik.ur``).
 NEAR_WRIST = 1e-3
+
+#: The default ``near_tol`` of :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>`: a valid row
+#: whose :math:`|\sin\theta_5|`, :math:`|\sin\theta_3|` or :math:`h / d_4` is below it
+#: (about 0.57 degrees, or 1 % of :math:`d_4`) is near a singularity, where its joints are
+#: sensitive to the pose.
+NEAR_SINGULAR = 1e-2
 
 
 def target_rotation(q: tuple) -> tuple:
@@ -127,6 +134,64 @@ def wrist_center(p: tuple, z6: tuple, d6: float) -> tuple:
     [0.0, -0.11235, 0.69415]
     """
     return p[0] - d6 * z6[0], p[1] - d6 * z6[1], p[2] - d6 * z6[2]
+
+
+def far_wrist(p5: tuple, d1: float, a2: float, a3: float, d4: float, d5: float) -> Array:
+    r"""The distance of a wrist centre from the shoulder point when it is far beyond the arm's
+    reach (0 when it is not): a pose the steps below must not solve.
+
+    Every configuration puts the wrist centre within
+
+    .. math::
+
+        R_5 = \sqrt{d_4^2 + (|a_2| + |a_3| + |d_5|)^2}
+
+    of the shoulder point :math:`s = (0, 0, d_1)` (the wrist centre lies :math:`d_4` off the
+    arm plane, and in it within :math:`|a_2| + |a_3| + |d_5|` of the shoulder). A wrist
+    centre as far as :math:`R_5 / \varepsilon` (about :math:`4.5 \cdot 10^{15} R_5`) is out of
+    reach, and its distance :math:`D = \lVert p_5 - s \rVert` is the position error of
+    every row to rounding (the arm's whole reach is within :math:`D`'s last two digits). The steps
+    are not run for it: they square lengths, and products of squares
+    (:func:`shoulder_angles` normalises :math:`x_5 h`, of size :math:`D^2`) overflow from
+    about :math:`10^{77}` m on, where a direction of length 0 would make the errors vanish.
+
+    Far is tested on the sum of the coordinates' sizes, :math:`m = \sum |p_5 - s|_i >
+    R_5 / \varepsilon`: a pose called far has :math:`D \ge m / \sqrt 3`; the others lie
+    within :math:`R_5 / \varepsilon`, whose squares are safe. :math:`D` is computed as
+    :math:`m \sqrt{\sum (p_{5,i} - s_i)^2 / m^2}`, which cannot overflow below the largest
+    float (beyond it, or where the position overflowed on its way here, :math:`D = \infty`).
+
+    Parameters
+    ----------
+    p5 : sequence of three floats or arrays
+        The wrist centre :math:`(x_5, y_5, z_5)` (:func:`wrist_center`).
+    d1, a2, a3, d4, d5 : float
+        UR's standard DH lengths.
+
+    Returns
+    -------
+    float or ndarray
+        :math:`D` where the wrist centre is far, 0 elsewhere.
+
+    Examples
+    --------
+    >>> far_wrist((1e100, 0.0, 0.0), 0.1625, -0.425, -0.3922, 0.1333, 0.0997)
+    1e+100
+    >>> far_wrist((2.0, 0.0, 0.5), 0.1625, -0.425, -0.3922, 0.1333, 0.0997)
+    0.0
+    """
+    x, y, z = p5[0], p5[1], p5[2] - d1
+    limit = math.sqrt(d4 * d4 + (abs(a2) + abs(a3) + abs(d5)) ** 2) / _EPSILON
+    f = functions_for(type(x))
+    m = abs(x) + abs(y) + abs(z)                      # (a NaN or an infinity stays one)
+    if f.largest(m) <= limit:                         # (the common case: nothing far)
+        return 0.0 * m
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        x, y, z = x / m, y / m, z / m
+        distance = m * f.sqrt(x * x + y * y + z * z)
+    # beyond the largest float (a pose whose frame change overflowed): infinitely far
+    distance = f.where(distance < math.inf, distance, math.inf)
+    return f.where(m <= limit, 0.0, distance)
 
 
 def shoulder_angles(x5: Array, y5: Array, d4: float, sign: ArrayLike

@@ -14,9 +14,11 @@ from .cartesian import CartesianPath, circle_three_phase, line_slerp, screw_path
 from .follow import (
     BranchSwitch,
     FollowReport,
+    SingularPass,
     follow_path_numerical,
     follow_path_ur,
     joint_velocities,
+    singular_passes,
     track_branches,
     ur_singularity_margins,
 )
@@ -27,6 +29,6 @@ __all__ = [
     "TimeLaw", "cubic", "quintic", "trapezoidal", "three_phase", "time_grid",
     "Trajectory", "joint_trajectory", "via_points",
     "CartesianPath", "line_slerp", "screw_path", "circle_three_phase",
-    "BranchSwitch", "FollowReport", "follow_path_ur", "follow_path_numerical",
-    "joint_velocities", "track_branches", "ur_singularity_margins",
+    "BranchSwitch", "FollowReport", "SingularPass", "follow_path_ur", "follow_path_numerical",
+    "joint_velocities", "singular_passes", "track_branches", "ur_singularity_margins",
 ]

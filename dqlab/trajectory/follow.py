@@ -14,19 +14,23 @@ In both, :math:`\dot q = J^+ \dot x` (:func:`joint_velocities`, optionally dampe
 report.
 """
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from .._checks import as_float_array, check_instance, check_scalar
 from ..ik import SOLUTION_ORDER, IKResult, numerical, ur
+from ..ik.ur_calibrated import nominal_ur
+from ..ik.ur_steps import NEAR_SINGULAR
+from ..models import UR_SHAPE
 from ..robot import Robot
 from ..rotations import wrap_angle
 from .cartesian import CartesianPath
 from .joint import Trajectory
 
-__all__ = ["BranchSwitch", "FollowReport", "follow_path_ur", "follow_path_numerical",
-           "joint_velocities", "track_branches", "ur_singularity_margins"]
+__all__ = ["BranchSwitch", "SingularPass", "FollowReport", "follow_path_ur",
+           "follow_path_numerical", "joint_velocities", "track_branches",
+           "ur_singularity_margins", "singular_passes"]
 
 
 def joint_velocities(J, twist, *, damping=0.0):
@@ -110,17 +114,26 @@ def ur_singularity_margins(robot, q):
       s_1 y_5 = a_2 c_2 + a_3 c_{23} + d_5 s_{234}` is the wrist centre's coordinate along
       the arm, the quantity :func:`dqlab.ik.ur_closed_form.ur` tests.
 
-    All four come from the joint angles, without forward kinematics.
+    All four come from the joint angles, without forward kinematics, and from the UR's
+    standard DH lengths: those of the robot, or for a calibrated UR (whose table holds far
+    common normals on the parallel joints) those of its nearest exact UR
+    (:func:`dqlab.ik.ur_calibrated.nominal_ur`), which differ by millimetres.
 
     Parameters
     ----------
     robot : Robot
-        A UR-family arm in standard DH.
+        A UR-family arm in standard DH (exact or calibrated).
     q : array_like, shape (..., 6)
 
     Returns
     -------
     dict of str to ndarray, shape (...)
+
+    Raises
+    ------
+    ValueError
+        If the robot is in modified DH (the formulas read a standard-DH table: use the
+        standard-DH model, such as :func:`dqlab.models.ur3`) or is not a UR-family arm.
 
     Examples
     --------
@@ -132,9 +145,13 @@ def ur_singularity_margins(robot, q):
     """
     check_instance(robot, Robot, "robot")
     q = robot.check_joints(q)
-    links = robot.links
-    if len(links) != 6:
-        raise ValueError(f"a UR-family arm has 6 joints, this robot has {len(links)}")
+    if robot.n != 6:
+        raise ValueError(f"robot: a UR-family arm has 6 joints, this robot has {robot.n}")
+    if robot.convention != "dh":
+        raise ValueError("robot: ur_singularity_margins reads a UR's standard DH table, and "
+                         f"this robot is in modified DH ({robot.name or 'unnamed'}); use "
+                         "the standard-DH model of the arm, such as dqlab.models.ur3()")
+    links = _ur_links(robot)
     theta = q + np.array([lk.theta_offset for lk in links])
     a2, a3, d4, d5 = links[1].a, links[2].a, links[3].d, links[4].d
     t2, t23 = theta[..., 1], theta[..., 1] + theta[..., 2]
@@ -144,6 +161,19 @@ def ur_singularity_margins(robot, q):
             "elbow": np.abs(np.sin(theta[..., 2])),
             "reach": abs(a2) + abs(a3) - rho,
             "shoulder": np.hypot(h, d4) - abs(d4)}
+
+
+def _ur_links(robot):
+    """The standard-DH links of a UR (exact, or a calibrated UR's nearest exact UR)."""
+    try:
+        UR_SHAPE.check(robot)
+        return robot.links
+    except ValueError:
+        try:
+            return nominal_ur(robot).links          # a calibrated UR: its nearest exact UR
+        except ValueError as why:
+            raise ValueError(f"robot: ur_singularity_margins needs a UR-family arm: {why}") \
+                from None
 
 
 @dataclass(frozen=True)
@@ -185,6 +215,120 @@ class BranchSwitch:
 
 
 @dataclass(frozen=True)
+class SingularPass:
+    r"""A stretch of a followed path within ``near_tol`` of a singularity of the arm.
+
+    Attributes
+    ----------
+    kind : str
+        ``"wrist"`` (:math:`|\sin\theta_5|`), ``"elbow"`` (:math:`|\sin\theta_3|`) or
+        ``"shoulder"`` (:math:`h / |d_4|`, the wrist centre's distance from the plane
+        of the base axis and joint 2's direction over :math:`d_4`), the measures of
+        :func:`ur_singularity_margins`.
+    index, time : int, float
+        The point of the stretch nearest the singularity, and its instant (seconds).
+    measure : float
+        The smallest measure on the stretch.
+    first, last : int
+        The stretch's first and last points.
+    speed : float
+        The largest joint speed on the stretch (rad/s), and ``joint`` (1-based) the joint
+        that reaches it: near a singularity a Cartesian path asks for joint speeds that
+        grow as the measure shrinks.
+    joint : int
+    """
+
+    kind: str
+    index: int
+    time: float
+    measure: float
+    first: int
+    last: int
+    speed: float
+    joint: int
+
+    @property
+    def closest(self):
+        """The smallest measure, with its name: ``"|sin q5| = 0.002"``."""
+        what = {"wrist": "|sin q5|", "elbow": "|sin q3|", "shoulder": "h / d4"}[self.kind]
+        return f"{what} = {self.measure:.2g}"
+
+    def __str__(self):
+        return (f"t = {self.time:.3f} s (point {self.index}): passes the {self.kind} "
+                f"singularity, {self.closest}; joint {self.joint} at {self.speed:.3g} "
+                f"rad/s (points {self.first}-{self.last})")
+
+
+def singular_passes(margins, qd, t, d4, near_tol=NEAR_SINGULAR):
+    r"""The stretches of a path within ``near_tol`` of a singularity, each one
+    :class:`SingularPass`.
+
+    Parameters
+    ----------
+    margins : dict of str to ndarray, shape (N,)
+        :func:`ur_singularity_margins` along the path.
+    qd : ndarray, shape (N, 6)
+        The joint speeds along it.
+    t : ndarray, shape (N,)
+        Its instants.
+    d4 : float
+        The arm's :math:`d_4` (the shoulder margin is read as :math:`h / |d_4|`, with
+        :math:`h^2 = (m + |d_4|)^2 - d_4^2` from the margin :math:`m`).
+    near_tol : float
+        The threshold of the measures (default
+        :data:`dqlab.ik.ur_steps.NEAR_SINGULAR`, 0.01), as ``near_tol`` of
+        :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>`.
+
+    Returns
+    -------
+    list of SingularPass
+        In the order of the path.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> m = {"wrist": np.array([0.5, 0.005, 0.002, 0.3]), "elbow": np.ones(4),
+    ...      "shoulder": np.ones(4)}
+    >>> qd = np.zeros((4, 6)); qd[2, 3] = 60.0
+    >>> [p] = singular_passes(m, qd, np.arange(4) * 0.1, 0.13)
+    >>> p.kind, p.index, p.closest, p.joint, p.speed, (p.first, p.last)
+    ('wrist', 2, '|sin q5| = 0.002', 4, 60.0, (1, 2))
+    """
+    near_tol = check_scalar(near_tol, "near_tol", minimum=0)
+    d4 = check_scalar(d4, "d4")
+    if d4 == 0.0:
+        raise ValueError("d4 must not be 0 (the shoulder margin is read over |d4|)")
+    qd = as_float_array(qd, "qd", (6,))
+    t = as_float_array(t, "t")
+    if qd.ndim != 2 or t.shape != qd.shape[:1]:
+        raise ValueError(f"qd must have shape (N, 6) and t shape (N,), got {qd.shape} and "
+                         f"{t.shape}")
+    if not isinstance(margins, dict) or not {"wrist", "elbow", "shoulder"} <= set(margins):
+        raise ValueError("margins must be the dict of ur_singularity_margins (wrist, elbow, "
+                         "shoulder)")
+    wrist, elbow, shoulder = (as_float_array(margins[k], f"margins['{k}']") for k in
+                              ("wrist", "elbow", "shoulder"))
+    if not wrist.shape == elbow.shape == shoulder.shape == t.shape:
+        raise ValueError(f"margins must hold arrays of shape {t.shape}, one value per point")
+    h = np.sqrt(np.maximum((shoulder + abs(d4)) ** 2 - d4 * d4, 0.0))
+    measures = {"wrist": wrist, "elbow": elbow, "shoulder": h / abs(d4)}
+    speed = np.abs(qd)
+    passes = []
+    for kind, measure in measures.items():
+        near = measure < near_tol
+        if not near.any():
+            continue
+        edges = np.flatnonzero(np.diff(np.concatenate([[0], near.astype(np.int8), [0]])))
+        for first, end in zip(edges[::2], edges[1::2], strict=True):
+            index = first + int(np.argmin(measure[first:end]))
+            peak = np.unravel_index(int(np.argmax(speed[first:end])), speed[first:end].shape)
+            passes.append(SingularPass(kind, int(index), float(t[index]),
+                                       float(measure[index]), int(first), int(end - 1),
+                                       float(speed[first:end][peak]), int(peak[1]) + 1))
+    return sorted(passes, key=lambda p: p.first)
+
+
+@dataclass(frozen=True)
 class FollowReport:
     """What happened while following a path.
 
@@ -206,7 +350,11 @@ class FollowReport:
     branch : ndarray of int, shape (N,), optional
         The solution row used at each point (closed form only).
     switches : list of BranchSwitch
-        Every change of row (closed form only).
+        Every change of row (closed form only); one at a point within ``near_tol`` of a
+        singularity says so in its ``reason``.
+    singularities : list of SingularPass
+        Every stretch of the path within ``near_tol`` of a singularity, with the joint
+        speed it asks for there (:func:`singular_passes`).
     """
 
     method: str
@@ -216,6 +364,7 @@ class FollowReport:
     margins: dict
     branch: np.ndarray = None
     switches: list = field(default_factory=list)
+    singularities: list = field(default_factory=list)
 
     def summary(self):
         """A few lines for printing."""
@@ -228,6 +377,9 @@ class FollowReport:
         if self.branch is not None:
             lines.append(f"{len(self.switches)} branch switch(es)" + "".join(
                 "\n  " + str(s) for s in self.switches))
+        if self.singularities:
+            lines.append(f"{len(self.singularities)} pass(es) near a singularity" + "".join(
+                "\n  " + str(p) for p in self.singularities))
         return "\n".join(lines)
 
 
@@ -367,7 +519,7 @@ def track_branches(result, *, q_start=None, branch=None, max_step=0.1, t=None):
 
 
 def follow_path_ur(robot, path, *, q_start=None, branch=None, max_step=0.1, damping=0.0,
-                   tol=1e-9):
+                   tol=1e-9, near_tol=NEAR_SINGULAR):
     r"""Follow a Cartesian path with the closed-form UR solver and branch tracking.
 
     1. Every pose of the path is solved at once by :func:`dqlab.ik.ur_closed_form.ur` (all
@@ -384,6 +536,11 @@ def follow_path_ur(robot, path, *, q_start=None, branch=None, max_step=0.1, damp
     5. :math:`\dot q = J^{-1} (\dot p, \omega)` (:func:`joint_velocities`, optionally
        damped) and :math:`\ddot q` the central difference of :math:`\dot q`
        (``numpy.gradient``).
+    6. Every stretch within ``near_tol`` of a singularity is named in the report
+       (``report.singularities``): there a Cartesian path asks for joint speeds that grow
+       as the measure shrinks (a straight line through the wrist singularity turns joints
+       4 and 6 at hundreds of rad/s), which a program's speed check refuses later; a branch
+       switch there says which singularity it is at.
 
     Parameters
     ----------
@@ -404,6 +561,11 @@ def follow_path_ur(robot, path, *, q_start=None, branch=None, max_step=0.1, damp
         :math:`\lambda` of :func:`joint_velocities` (0: the exact inverse).
     tol : float
         Passed to :func:`dqlab.ik.ur_closed_form.ur`: every point reproduces its pose to ``tol``.
+    near_tol : float
+        A stretch of the path where :math:`|\sin\theta_5|`, :math:`|\sin\theta_3|` or
+        :math:`h / d_4` is below it passes a singularity: it is reported
+        (``report.singularities``, :func:`singular_passes`), with the joint speed it asks
+        for, and a branch switch there names it (default 0.01, as ``dqlab.ik.ur``).
 
     Returns
     -------
@@ -456,15 +618,33 @@ def follow_path_ur(robot, path, *, q_start=None, branch=None, max_step=0.1, damp
     qd = joint_velocities(robot.jacobian(q), path.twist, damping=damping)
     qdd = np.gradient(qd, path.t, axis=0) if N > 1 else np.zeros_like(qd)
     pick = (np.arange(N), rows)
+    margins = ur_singularity_margins(robot, q)
+    passes = singular_passes(margins, qd, path.t, _ur_links(robot)[3].d, near_tol)
     report = FollowReport(
         method="closed-form", position_error=res.position_error[pick],
         rotation_error=res.rotation_error[pick],
         max_step=np.max(np.abs(np.diff(q, axis=0)), axis=-1),
-        margins=ur_singularity_margins(robot, q), branch=rows, switches=switches)
+        margins=margins, branch=rows, switches=_named(switches, passes),
+        singularities=passes)
     return Trajectory(t=path.t, q=q, qd=qd, qdd=qdd, poses=poses), report
 
 
-def follow_path_numerical(robot, path, q_start, *, damping=0.0, tol=1e-10, max_iter=100):
+def _named(switches, passes):
+    """The switches, each within a pass near a singularity (or next to one) with that
+    singularity named in its reason."""
+    named = []
+    for switch in switches:
+        near = [p for p in passes if p.first - 1 <= switch.index <= p.last + 1]
+        if near:
+            p = min(near, key=lambda p: p.measure)
+            switch = replace(switch, reason=f"{switch.reason}; at the {p.kind} singularity "
+                                            f"({p.closest})")
+        named.append(switch)
+    return named
+
+
+def follow_path_numerical(robot, path, q_start, *, damping=0.0, tol=1e-10, max_iter=100,
+                          near_tol=NEAR_SINGULAR):
     r"""Follow the positions of a path as the UR3 report does: numerical IK, warm start.
 
     For each point :math:`k`, :math:`q_k` solves :math:`p(q_k) = p_k` by damped least
@@ -488,6 +668,8 @@ def follow_path_numerical(robot, path, q_start, *, damping=0.0, tol=1e-10, max_i
         Position tolerance of each solve, metres.
     max_iter : int
         Iteration limit of each solve.
+    near_tol : float
+        As for :func:`follow_path_ur`: the passes near a singularity reported.
 
     Returns
     -------
@@ -534,8 +716,11 @@ def follow_path_numerical(robot, path, q_start, *, damping=0.0, tol=1e-10, max_i
     J_v = robot.jacobian(q)[:, :3, :]
     qd = joint_velocities(J_v, path.velocity, damping=damping)
     qdd = np.gradient(qd, path.t, axis=0) if N > 1 else np.zeros_like(qd)
+    margins = ur_singularity_margins(robot, q)
     report = FollowReport(method="numerical", position_error=error,
                           rotation_error=np.zeros(N),
                           max_step=np.max(np.abs(np.diff(q, axis=0)), axis=-1),
-                          margins=ur_singularity_margins(robot, q))
+                          margins=margins,
+                          singularities=singular_passes(margins, qd, path.t,
+                                                        _ur_links(robot)[3].d, near_tol))
     return Trajectory(t=path.t, q=q, qd=qd, qdd=qdd), report
