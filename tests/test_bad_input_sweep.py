@@ -94,6 +94,13 @@ OTHER_CALLS = {
                              (Q6, Q6 / 2, Q6 / 3)),
     "dynamics.gravity": (lambda gravity: dynamics.gravity_torques(UR3, Q6, gravity=gravity),
                          ([0.0, 0.0, -9.81],)),
+    "dynamics.regressor": (lambda q, qd, qdd: dynamics.regressor(UR3, q, qd, qdd),
+                           (Q6, Q6 / 2, Q6 / 3)),
+    "dynamics.link_jacobians": (lambda q: dynamics.link_jacobians(UR3, q), (Q6,)),
+    "dynamics.inertias_from_parameters": (
+        lambda parameters: np.array([I.tensor for I in
+                                     dynamics.inertias_from_parameters(parameters)]),
+        (dynamics.inertial_parameters(UR3),)),
     "ik.ur(calibrated)": (lambda target: ik.ur(CALIBRATED, target), (CALIBRATED.fk(Q6),)),
     "ik.closest_ur_solution": (lambda target, q_now: ik.closest_ur_solution(UR3, target, q_now),
                                (UR3.fk(Q6), Q6)),
