@@ -86,6 +86,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._checks import as_float_array, components, finite_or_raise, stack_components
+from ._dynamics_compiled import constants as compiled_constants
+from ._dynamics_compiled import forward as compiled_forward
+from ._dynamics_compiled import inverse as compiled_inverse
+from ._dynamics_compiled import kernel_inverse as compiled_kernel_inverse
+from ._dynamics_compiled import mass as compiled_mass
+from ._dynamics_compiled import ready as compiled_ready
+from ._dynamics_compiled import regressor_rows as compiled_regressor
 from ._dynamics_floats import constants as float_constants
 from ._dynamics_floats import inverse_dynamics as inverse_dynamics_on_floats
 from ._kernels import dual_quaternion_mul
@@ -221,9 +228,12 @@ def _adjoint(Q, real, dual):
 
 
 def _compiled_or_none(robot, inertias):
-    """The compiled kernels prepared for ``robot`` (:mod:`dqlab._dynamics_compiled`), or None
-    where they cannot be used."""
-    return None
+    """The constants of ``robot`` for the compiled kernels of :mod:`dqlab._dynamics_compiled`
+    (``inertias`` None: without inertias, for the regressor), or None where they cannot be
+    used (numba absent, or ``DQLAB_COMPILED=0``)."""
+    if not compiled_ready():
+        return None
+    return compiled_constants(robot, inertias, joint_twists(robot))
 
 
 # --------------------------------------------------------------------------------------
@@ -306,8 +316,14 @@ def _recursion(robot, inertias, q, qd, qdd, g_0, energy):
 
 
 def _torques(robot, inertias, q, qd, qdd, g_0):
-    """:func:`_newton_euler`'s torques; one state (q of shape (n,)) runs the same recursion
-    on Python floats (:mod:`dqlab._dynamics_floats`, tested equal), much faster."""
+    """:func:`_newton_euler`'s torques: compiled when it can be
+    (:mod:`dqlab._dynamics_compiled`); else one state (q of shape (n,)) runs the same
+    recursion on Python floats (:mod:`dqlab._dynamics_floats`), a batch on numpy arrays. All
+    tested equal."""
+    consts = _compiled_or_none(robot, inertias)
+    if consts is not None:
+        with np.errstate(over="ignore", invalid="ignore"):
+            return compiled_inverse(consts, q, qd, qdd, g_0)
     if q.ndim != 1:
         return _newton_euler(robot, inertias, q, qd, qdd, g_0)
     consts = float_constants(robot, inertias, joint_twists(robot), g_0)
@@ -396,22 +412,35 @@ class NewtonEuler:
         self.robot = robot
         self._slides = "prismatic" in robot.joint_types
         self.gravity = tuple(float(x) for x in robot.base[:3, :3] @ g_0)
-        self._constants = float_constants(robot, inertias, joint_twists(robot),
-                                                     g_0)
+        self._g_0 = np.array(g_0, dtype=float)
+        self._constants = float_constants(robot, inertias, joint_twists(robot), g_0)
+        self._compiled = _compiled_or_none(robot, inertias)
 
     def __call__(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> NDArray[np.float64]:
         """Joint torques, shape (n,) for one state (a batch goes to
         :func:`inverse_dynamics`)."""
         shape = (self.robot.n,)
-        if not all(type(x) is np.ndarray and x.dtype == np.float64 and x.shape == shape
-                   for x in (q, qd, qdd)):    # anything but one float state: the checked path
+        if not (type(q) is np.ndarray and type(qd) is np.ndarray and type(qdd) is np.ndarray
+                and q.shape == qd.shape == qdd.shape == shape and q.dtype == qd.dtype
+                == qdd.dtype == np.float64):    # anything but one float state: checked path
+            return inverse_dynamics(self.robot, q, qd, qdd, gravity=self.gravity)
+        if self._slides:
+            self.robot.check_joints(q, name="q")        # a slide beyond its travel
+        if self._compiled is not None:                  # NaN or infinity in makes NaN out
+            standard, links = self._compiled
+            out = np.empty((1, shape[0]))
+            with np.errstate(over="ignore", invalid="ignore"):
+                compiled_kernel_inverse(standard, links, q[None], qd[None], qdd[None],
+                                        self._g_0, out)
+            tau = out[0]
+            check = sum(tau.tolist())
+            if check - check == 0.0:
+                return tau
             return inverse_dynamics(self.robot, q, qd, qdd, gravity=self.gravity)
         state = [q.tolist(), qd.tolist(), qdd.tolist()]
         total = sum(state[0]) + sum(state[1]) + sum(state[2])
         if not total - total == 0.0:           # NaN or infinity: the checked path names it
             return inverse_dynamics(self.robot, q, qd, qdd, gravity=self.gravity)
-        if self._slides:
-            self.robot.check_joints(q, name="q")        # a slide beyond its travel
         tau = inverse_dynamics_on_floats(self._constants, *state)
         check = sum(tau)
         if not check - check == 0.0:
@@ -594,9 +623,10 @@ def _mass_matrix(robot, inertias, q):
     """:func:`mass_matrix` on checked arrays: compiled when it can be
     (:mod:`dqlab._dynamics_compiled`), one state on Python floats, else the composite rigid
     bodies below."""
-    compiled = _compiled_or_none(robot, inertias)
-    if compiled is not None:
-        return compiled.mass_matrix(q)
+    consts = _compiled_or_none(robot, inertias)
+    if consts is not None:
+        with np.errstate(over="ignore", invalid="ignore"):
+            return compiled_mass(consts, q)
     if q.ndim == 1:         # one state: n runs of the float path, its constants read once
         consts = float_constants(robot, inertias, joint_twists(robot), np.zeros(3))
         q_list, zero = q.tolist(), [0.0] * robot.n
@@ -741,10 +771,10 @@ def forward_dynamics(robot: Robot, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, 
     array([ 55. , -72.4,  17.4])
     """
     (q, qd, tau), g_0, inertias = _check(robot, q, [(qd, "qd"), (tau, "tau")], gravity)
-    compiled = _compiled_or_none(robot, inertias)
+    consts = _compiled_or_none(robot, inertias)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        if compiled is not None:
-            qdd, D = compiled.forward_dynamics(q, qd, tau, g_0)
+        if consts is not None:
+            qdd, D = compiled_forward(consts, q, qd, tau, g_0)
         else:
             qdd, D = _articulated_body(robot, inertias, q, qd, tau, g_0)
     _check_pivots(robot, inertias, D, q, qd, tau)
@@ -808,11 +838,12 @@ def _check_pivots(robot, inertias, D, q, qd, tau):
         config = tuple(int(k) for k in np.argwhere(small.any(axis=-1))[0])
         joint = int(np.flatnonzero(small[config])[-1]) + 1
         where = f" at q[{', '.join(map(str, config))}]" if config else ""
+        moved = (f"links {joint} to {robot.n}, with the joints beyond it free, have"
+                 if joint < robot.n else f"link {joint} has")
         raise ValueError(
-            f"the mass matrix M(q) is singular{where}: joint {joint} moves no mass (links "
-            f"{joint} to {robot.n}, with the joints beyond it free, have no inertia for its "
-            f"motion; pivot D_{joint} = {D[config + (joint - 1,)]:.3g}). Give link {joint} a "
-            f"mass away from its joint's axis or an inertia about it")
+            f"the mass matrix M(q) is singular{where}: joint {joint} moves no mass ({moved} "
+            f"no inertia for its motion; pivot D_{joint} = {D[config + (joint - 1,)]:.3g}). "
+            f"Give link {joint} a mass away from its joint's axis or an inertia about it")
     if not finite.all():
         for x, name in ((q, "q"), (qd, "qd"), (tau, "tau")):
             as_float_array(x, name)
@@ -938,10 +969,10 @@ def regressor(robot: Robot, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, *,
     True
     """
     (q, qd, qdd), g_0, _ = _check(robot, q, [(qd, "qd"), (qdd, "qdd")], gravity)
-    compiled = _compiled_or_none(robot, None)
+    consts = _compiled_or_none(robot, None)
     with np.errstate(over="ignore", invalid="ignore"):
-        if compiled is not None:
-            Y = compiled.regressor(q, qd, qdd, g_0)
+        if consts is not None:
+            Y = compiled_regressor(consts, q, qd, qdd, g_0)
         else:
             Y = _regressor(robot, q, qd, qdd, g_0)
     return finite_or_raise(Y, (q, "q", (robot.n,)), (qd, "qd", (robot.n,)),
