@@ -241,11 +241,11 @@ def _spatial(links, i, out):
     out[4, 2] = out[5, 1] = iyz - m * cy * cz
 
 
-def _add_moved(R, p, A, out):
+def _add_moved(R, p, A, out, unit, twist, h):
     """out += Ad A Ad^{-1} for the pose (R, p): an inertia (6, 6) of the child's frame added in
     the parent's, column by column: A's columns are momenta of the child's unit twists, and
-    Ad A Ad^{-1} e is the momentum, moved out, of the twist e moved in."""
-    unit, twist, h = np.empty(6), np.empty(6), np.empty(6)
+    Ad A Ad^{-1} e is the momentum, moved out, of the twist e moved in (``unit``, ``twist``,
+    ``h``: work arrays of 6)."""
     for k in range(6):
         unit[:] = 0.0
         unit[k] = 1.0
@@ -295,28 +295,90 @@ def _inverse(standard, links, q, qd, qdd, g_0, out):
             out[k, i] = _power(links[i, 6:12], w)
 
 
+def _parameters(links, i, out):
+    """Link i's ten parameters (m, m c, I_O as xx, xy, yy, xz, yz, zz) into ``out``."""
+    m = links[i, 12]
+    cx, cy, cz = links[i, 13], links[i, 14], links[i, 15]
+    cc = cx * cx + cy * cy + cz * cz
+    out[0], out[1], out[2], out[3] = m, m * cx, m * cy, m * cz
+    out[4] = links[i, 16] + m * (cc - cx * cx)
+    out[5] = links[i, 19] - m * cx * cy
+    out[6] = links[i, 17] + m * (cc - cy * cy)
+    out[7] = links[i, 20] - m * cx * cz
+    out[8] = links[i, 21] - m * cy * cz
+    out[9] = links[i, 18] + m * (cc - cz * cz)
+
+
+def _add_moved_parameters(R, p, x, out):
+    """out += the parameters x of a body described in a child frame, described in its parent,
+    where the child sits at (R, p): m, R h + m p, and the tensor about the parent's origin,
+    R I R^T + (2 (R h).p + m |p|^2) I - (R h) p^T - p (R h)^T - m p p^T."""
+    m = x[0]
+    h0 = R[0, 0] * x[1] + R[0, 1] * x[2] + R[0, 2] * x[3]
+    h1 = R[1, 0] * x[1] + R[1, 1] * x[2] + R[1, 2] * x[3]
+    h2 = R[2, 0] * x[1] + R[2, 1] * x[2] + R[2, 2] * x[3]
+    # R I R^T, I symmetric from its six entries
+    a00, a01, a11, a02, a12, a22 = x[4], x[5], x[6], x[7], x[8], x[9]
+    t00 = a00 * R[0, 0] + a01 * R[0, 1] + a02 * R[0, 2]      # rows of I R^T
+    t01 = a00 * R[1, 0] + a01 * R[1, 1] + a02 * R[1, 2]
+    t02 = a00 * R[2, 0] + a01 * R[2, 1] + a02 * R[2, 2]
+    t10 = a01 * R[0, 0] + a11 * R[0, 1] + a12 * R[0, 2]
+    t11 = a01 * R[1, 0] + a11 * R[1, 1] + a12 * R[1, 2]
+    t12 = a01 * R[2, 0] + a11 * R[2, 1] + a12 * R[2, 2]
+    t20 = a02 * R[0, 0] + a12 * R[0, 1] + a22 * R[0, 2]
+    t21 = a02 * R[1, 0] + a12 * R[1, 1] + a22 * R[1, 2]
+    t22 = a02 * R[2, 0] + a12 * R[2, 1] + a22 * R[2, 2]
+    r00 = R[0, 0] * t00 + R[0, 1] * t10 + R[0, 2] * t20
+    r01 = R[0, 0] * t01 + R[0, 1] * t11 + R[0, 2] * t21
+    r11 = R[1, 0] * t01 + R[1, 1] * t11 + R[1, 2] * t21
+    r02 = R[0, 0] * t02 + R[0, 1] * t12 + R[0, 2] * t22
+    r12 = R[1, 0] * t02 + R[1, 1] * t12 + R[1, 2] * t22
+    r22 = R[2, 0] * t02 + R[2, 1] * t12 + R[2, 2] * t22
+    p0, p1, p2 = p[0], p[1], p[2]
+    s = 2.0 * (h0 * p0 + h1 * p1 + h2 * p2) + m * (p0 * p0 + p1 * p1 + p2 * p2)
+    out[0] += m
+    out[1] += h0 + m * p0
+    out[2] += h1 + m * p1
+    out[3] += h2 + m * p2
+    out[4] += r00 + s - 2.0 * h0 * p0 - m * p0 * p0
+    out[5] += r01 - h0 * p1 - p0 * h1 - m * p0 * p1
+    out[6] += r11 + s - 2.0 * h1 * p1 - m * p1 * p1
+    out[7] += r02 - h0 * p2 - p0 * h2 - m * p0 * p2
+    out[8] += r12 - h1 * p2 - p1 * h2 - m * p1 * p2
+    out[9] += r22 + s - 2.0 * h2 * p2 - m * p2 * p2
+
+
+def _parameters_momentum(x, s, out):
+    """The momentum of the body of parameters x for the twist s: p = m v + w x (m c),
+    L = I_O w + (m c) x v."""
+    m, h0, h1, h2 = x[0], x[1], x[2], x[3]
+    w0, w1, w2, v0, v1, v2 = s[0], s[1], s[2], s[3], s[4], s[5]
+    out[0] = m * v0 + w1 * h2 - w2 * h1
+    out[1] = m * v1 + w2 * h0 - w0 * h2
+    out[2] = m * v2 + w0 * h1 - w1 * h0
+    out[3] = x[4] * w0 + x[5] * w1 + x[7] * w2 + h1 * v2 - h2 * v1
+    out[4] = x[5] * w0 + x[6] * w1 + x[8] * w2 + h2 * v0 - h0 * v2
+    out[5] = x[7] * w0 + x[8] * w1 + x[9] * w2 + h0 * v1 - h1 * v0
+
+
 def _mass(standard, links, q, out):
     m, n = q.shape
     R = np.empty((n, 3, 3))
     p = np.empty((n, 3))
-    composite = np.empty((n, 6, 6))
+    composite = np.empty((n, 10))                  # the composite bodies' ten parameters
     h = np.empty(6)
     for k in range(m):
         for i in range(n):
             _pose(standard, links, i, q[k, i], R[i], p[i])
-            _spatial(links, i, composite[i])
+            _parameters(links, i, composite[i])
         for i in range(n - 1, -1, -1):
-            for r in range(6):
-                s = 0.0
-                for c in range(6):
-                    s += composite[i, r, c] * links[i, 6 + c]
-                h[r] = s
+            _parameters_momentum(composite[i], links[i, 6:12], h)
             out[k, i, i] = _power(links[i, 6:12], h)
             for j in range(i - 1, -1, -1):
                 _outward(R[j + 1], p[j + 1], h, h)
                 out[k, i, j] = out[k, j, i] = _power(links[j, 6:12], h)
             if i > 0:
-                _add_moved(R[i], p[i], composite[i], composite[i - 1])
+                _add_moved_parameters(R[i], p[i], composite[i], composite[i - 1])
 
 
 def _forward(standard, links, q, qd, tau, g_0, qdd, D):
@@ -329,6 +391,7 @@ def _forward(standard, links, q, qd, tau, g_0, qdd, D):
     M_a = np.empty((6, 6))
     xi, joint, h, F_a, rate, swapped = (np.empty(6), np.empty(6), np.empty(6), np.empty(6),
                                         np.empty(6), np.empty(6))
+    work = np.empty((3, 6))
     for k in range(m):
         xi[:] = 0.0
         for i in range(n):                         # 1. outwards: twists and biases
@@ -359,7 +422,7 @@ def _forward(standard, links, q, qd, tau, g_0, qdd, D):
                     for e in range(6):
                         s += M_a[r, e] * c[i, e]
                     F_a[r] = s
-                _add_moved(R[i], p[i], M_a, M_A[i - 1])
+                _add_moved(R[i], p[i], M_a, M_A[i - 1], work[0], work[1], work[2])
                 _outward(R[i], p[i], F_a, F_a)
                 F_A[i - 1] += F_a
         rate[:] = 0.0
@@ -444,5 +507,6 @@ def _regressor(standard, links, q, qd, qdd, g_0, out):
 
 
 _COMPILED += ["_pose", "_inward", "_outward", "_cross", "_power", "_momentum", "_spatial",
-              "_add_moved", "_inverse", "_mass", "_forward", "_parameter_wrenches",
+              "_add_moved", "_parameters", "_add_moved_parameters", "_parameters_momentum",
+              "_inverse", "_mass", "_forward", "_parameter_wrenches",
               "_regressor"]
