@@ -260,30 +260,42 @@ def _add_moved(R, p, A, out, unit, twist, h):
             out[r, k] += h[r]
 
 
+def _twists(standard, links, q, qd, qdd, g_0, R, p, xi, rate, joint, tmp):
+    """The outward pass of Newton--Euler for one state: every link's pose (R, p), twist
+    (xi, (n, 6)) and its rate (rate, (n, 6)), from the base at rest rising at -g
+    (``joint``, ``tmp``: work arrays of 6)."""
+    n = q.shape[0]
+    for i in range(n):
+        _pose(standard, links, i, q[i], R[i], p[i])
+        if i == 0:
+            xi[0, :] = 0.0
+            rate[0, :] = 0.0
+            rate[0, 3], rate[0, 4], rate[0, 5] = -g_0[0], -g_0[1], -g_0[2]
+            _inward(R[0], p[0], xi[0], xi[0])
+            _inward(R[0], p[0], rate[0], rate[0])
+        else:
+            _inward(R[i], p[i], xi[i - 1], xi[i])
+            _inward(R[i], p[i], rate[i - 1], rate[i])
+        for c in range(6):
+            joint[c] = links[i, 6 + c] * qd[i]
+            xi[i, c] += joint[c]
+        _cross(xi[i], joint, tmp)
+        for c in range(6):
+            rate[i, c] += links[i, 6 + c] * qdd[i] + tmp[c]
+
+
 def _inverse(standard, links, q, qd, qdd, g_0, out):
     m, n = q.shape
     R = np.empty((n, 3, 3))
     p = np.empty((n, 3))
-    xi, rate, joint, net, h, tmp, w = (np.empty(6), np.empty(6), np.empty(6),
-                                       np.empty((n, 6)), np.empty(6), np.empty(6),
-                                       np.empty(6))
+    xi, rate, net = np.empty((n, 6)), np.empty((n, 6)), np.empty((n, 6))
+    joint, h, tmp, w = np.empty(6), np.empty(6), np.empty(6), np.empty(6)
     for k in range(m):
-        xi[:] = 0.0
-        rate[:] = 0.0
-        rate[3], rate[4], rate[5] = -g_0[0], -g_0[1], -g_0[2]
+        _twists(standard, links, q[k], qd[k], qdd[k], g_0, R, p, xi, rate, joint, tmp)
         for i in range(n):
-            _pose(standard, links, i, q[k, i], R[i], p[i])
-            _inward(R[i], p[i], xi, xi)
-            _inward(R[i], p[i], rate, rate)
-            for c in range(6):
-                joint[c] = links[i, 6 + c] * qd[k, i]
-                xi[c] += joint[c]
-            _cross(xi, joint, tmp)
-            for c in range(6):
-                rate[c] += links[i, 6 + c] * qdd[k, i] + tmp[c]
-            _momentum(links, i, rate, net[i])
-            _momentum(links, i, xi, h)
-            _cross(xi, h, tmp)
+            _momentum(links, i, rate[i], net[i])
+            _momentum(links, i, xi[i], h)
+            _cross(xi[i], h, tmp)
             for c in range(6):
                 net[i, c] += tmp[c]
         w[:] = 0.0
@@ -482,22 +494,11 @@ def _regressor(standard, links, q, qd, qdd, g_0, out):
     R = np.empty((n, 3, 3))
     p = np.empty((n, 3))
     columns = np.empty((n, 10, 6))
-    xi, rate, joint, tmp = np.empty(6), np.empty(6), np.empty(6), np.empty(6)
+    xi, rate, joint, tmp = np.empty((n, 6)), np.empty((n, 6)), np.empty(6), np.empty(6)
     for k in range(m):
-        xi[:] = 0.0
-        rate[:] = 0.0
-        rate[3], rate[4], rate[5] = -g_0[0], -g_0[1], -g_0[2]
+        _twists(standard, links, q[k], qd[k], qdd[k], g_0, R, p, xi, rate, joint, tmp)
         for i in range(n):
-            _pose(standard, links, i, q[k, i], R[i], p[i])
-            _inward(R[i], p[i], xi, xi)
-            _inward(R[i], p[i], rate, rate)
-            for c in range(6):
-                joint[c] = links[i, 6 + c] * qd[k, i]
-                xi[c] += joint[c]
-            _cross(xi, joint, tmp)
-            for c in range(6):
-                rate[c] += links[i, 6 + c] * qdd[k, i] + tmp[c]
-            _parameter_wrenches(xi, rate, columns[i])
+            _parameter_wrenches(xi[i], rate[i], columns[i])
         for i in range(n - 1, -1, -1):             # columns of links i..n in frame i
             for j in range(i, n):
                 for e in range(10):
@@ -508,5 +509,5 @@ def _regressor(standard, links, q, qd, qdd, g_0, out):
 
 _COMPILED += ["_pose", "_inward", "_outward", "_cross", "_power", "_momentum", "_spatial",
               "_add_moved", "_parameters", "_add_moved_parameters", "_parameters_momentum",
-              "_inverse", "_mass", "_forward", "_parameter_wrenches",
+              "_twists", "_inverse", "_mass", "_forward", "_parameter_wrenches",
               "_regressor"]

@@ -277,15 +277,18 @@ def _newton_euler(robot, inertias, q, qd, qdd, g_0, *, energy=False):
         return _recursion(robot, inertias, q, qd, qdd, g_0, energy)
 
 
-def _recursion(robot, inertias, q, qd, qdd, g_0, energy):
+def _outwards(robot, q, qd, qdd, g_0):
+    """The outward pass: per link, its twist and the twist's rate in its own frame,
+    ``(omega, v, omega_dot, v_dot)`` of shape (..., 3) each, from the base at rest rising at
+    -g; and the link dual quaternions Q_{i-1,i} (..., n, 8)."""
     Q = dual_quaternion_from_transform(robot.link_transforms(q))      # Q_{i-1,i}, (..., n, 8)
     Q_star = dual_quaternion_conjugate(Q)
     s = joint_twists(robot)
     lead = q.shape[:-1]
     omega, v = np.zeros(lead + (3,)), np.zeros(lead + (3,))            # the base at rest,
     omega_dot, v_dot = np.zeros(lead + (3,)), np.broadcast_to(-g_0, lead + (3,))  # rising at -g
-    wrenches, kinetic = [], 0.0
-    for i, inertia in enumerate(inertias):
+    twists = []
+    for i in range(robot.n):
         qd_i, qdd_i = qd[..., i, None], qdd[..., i, None]
         s_real, s_dual = s[i]
         # the twist and its rate, carried from frame i-1 into frame i, plus the joint's own
@@ -295,6 +298,16 @@ def _recursion(robot, inertias, q, qd, qdd, g_0, energy):
         turn, slide = dual_cross(omega, v, s_real * qd_i, s_dual * qd_i)
         omega_dot = omega_dot + s_real * qdd_i + turn
         v_dot = v_dot + s_dual * qdd_i + slide
+        twists.append((omega, v, omega_dot, v_dot))
+    return twists, Q
+
+
+def _recursion(robot, inertias, q, qd, qdd, g_0, energy):
+    twists, Q = _outwards(robot, q, qd, qdd, g_0)
+    s = joint_twists(robot)
+    lead = q.shape[:-1]
+    wrenches, kinetic = [], 0.0
+    for inertia, (omega, v, omega_dot, v_dot) in zip(inertias, twists, strict=True):
         # Newton-Euler for link i: the rate of its momentum h = M xi
         p, L = inertia.momentum(omega, v)
         p_dot, L_dot = inertia.momentum(omega_dot, v_dot)
@@ -1003,20 +1016,10 @@ def _momentum_per_parameter(omega, v):
 def _regressor(robot, q, qd, qdd, g_0):
     """The regressor of :func:`regressor`'s docstring on checked arrays (..., n)."""
     n, lead = robot.n, q.shape[:-1]
-    Q = dual_quaternion_from_transform(robot.link_transforms(q))
-    Q_star = dual_quaternion_conjugate(Q)
+    twists, Q = _outwards(robot, q, qd, qdd, g_0)
     s = joint_twists(robot)
-    omega, v = np.zeros(lead + (3,)), np.zeros(lead + (3,))
-    omega_dot, v_dot = np.zeros(lead + (3,)), np.broadcast_to(-g_0, lead + (3,))
     columns = []                       # per link: the net wrenches of its ten parameters
-    for i in range(n):                 # outwards: the recursion's twists and their rates
-        qd_i, qdd_i = qd[..., i, None], qdd[..., i, None]
-        s_real, s_dual = s[i]
-        omega, v = _adjoint(Q_star[..., i, :], omega, v)
-        omega, v = omega + s_real * qd_i, v + s_dual * qd_i
-        omega_dot, v_dot = _adjoint(Q_star[..., i, :], omega_dot, v_dot)
-        turn, slide = dual_cross(omega, v, s_real * qd_i, s_dual * qd_i)
-        omega_dot, v_dot = omega_dot + s_real * qdd_i + turn, v_dot + s_dual * qdd_i + slide
+    for omega, v, omega_dot, v_dot in twists:
         p, L = _momentum_per_parameter(omega, v)
         p_dot, L_dot = _momentum_per_parameter(omega_dot, v_dot)
         carried_f, carried_n = dual_cross(omega[..., None, :], v[..., None, :], p, L)
