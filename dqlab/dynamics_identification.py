@@ -37,7 +37,7 @@ from .robot import Robot
 
 __all__ = ["parameter_names", "preferred_order", "motor_regressor", "regressor_with_motors",
            "BaseParameters", "base_parameters", "FourierTrajectory", "exciting_trajectory",
-           "IdentifiedModel", "MOTOR_PARAMETER_NAMES", "KHALIL_ORDER"]
+           "IdentifiedModel", "MOTOR_PARAMETER_NAMES", "KHALIL_ORDER", "MARGIN", "GRID"]
 
 #: The order in which :func:`preferred_order` prefers a link's parameters as base
 #: parameters: the inertia's entries, the first moments, the mass.
