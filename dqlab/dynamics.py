@@ -1,4 +1,4 @@
-r"""Rigid-body dynamics of a serial arm: Newton--Euler on twists and wrenches as dual vectors.
+r"""Rigid-body dynamics of a serial arm: twists and wrenches as dual vectors.
 
 The arm's equations of motion are
 
@@ -9,60 +9,75 @@ The arm's equations of motion are
 with the mass matrix :math:`M`, the Coriolis and centrifugal torques :math:`c` and the
 gravity torques :math:`g` (chapter "Dynamics"). This module computes them from the robot's
 kinematics (:meth:`~dqlab.robot.Robot.link_transforms`) and the inertial parameters its
-links carry (:class:`~dqlab.inertia.LinkInertia`), by the recursive Newton--Euler algorithm
-written with dual vectors.
+links carry (:class:`~dqlab.inertia.LinkInertia`), by the field's algorithms written with
+dual vectors: the recursive Newton--Euler algorithm (:func:`inverse_dynamics`), the
+composite-rigid-body algorithm (:func:`mass_matrix`), the articulated-body algorithm
+(:func:`forward_dynamics`) and the inverse dynamics as a linear function of the inertial
+parameters (:func:`regressor`, :func:`inertial_parameters`).
 
 Dual vectors
 ------------
-A *twist* is the dual vector :math:`\hat\xi = \omega + \varepsilon\,\mathbf v` (angular
+A *twist* is the dual vector :math:`\xi = \omega + \varepsilon\,\mathbf v` (angular
 velocity, and velocity of the body point at the frame's origin: the twist of chapter
-"Differential kinematics"); a *wrench* is :math:`\hat w = \mathbf f + \varepsilon\,\mathbf n`
-(force, and moment about the frame's origin). Both are moved from frame B to frame A, where
-:math:`\hat Q_{AB}` is the pose of B, by the dual-quaternion sandwich of lines (chapter "Dual
+"Differential kinematics"); a *wrench* is :math:`\mathcal F = \mathbf f + \varepsilon\,\mathbf n`
+(force, and moment about the frame's origin). As 6-vectors they are ordered real part first,
+:math:`(\omega, \mathbf v)` and :math:`(\mathbf f, \mathbf n)` (the *dual order*; the
+Jacobian's rows are :math:`(\mathbf v, \omega)`, Featherstone's force vectors
+:math:`(\mathbf n, \mathbf f)`). Both are moved from frame B to frame A, where
+:math:`Q_{AB}` is the pose of B, by the dual-quaternion sandwich of lines (chapter "Dual
 quaternions"), the *adjoint*:
 
 .. math::
 
-   \hat\xi_A = \hat Q_{AB}\,\hat\xi_B\,\hat Q_{AB}^{*},\qquad
-   \hat w_A = \hat Q_{AB}\,\hat w_B\,\hat Q_{AB}^{*}
+   \xi_A = Q_{AB}\,\xi_B\,Q_{AB}^{*},\qquad
+   \mathcal F_A = Q_{AB}\,\mathcal F_B\,Q_{AB}^{*}
 
-(:func:`dqlab.dualquat.dual_quaternion_apply_line`). The cross product of dual vectors,
+(:func:`dqlab.dualquat.dual_quaternion_apply_line`); in the dual order both are the matrix
+:math:`\operatorname{Ad}_Q = \left(\begin{smallmatrix} R & 0 \\ [\mathbf t]_\times R & R
+\end{smallmatrix}\right)`. The cross product of dual vectors,
 
 .. math::
 
-   \hat a \times \hat b = \mathbf a \times \mathbf b
+   a \times b = \mathbf a \times \mathbf b
    + \varepsilon\,(\mathbf a \times \mathbf b^\circ + \mathbf a^\circ \times \mathbf b),
 
-is the rate of change of a twist or of a momentum carried by a moving frame, and the power of
-a wrench on a twist is the dual part of their dual dot product,
-:math:`\langle\hat\xi, \hat w\rangle = \omega\cdot\mathbf n + \mathbf v\cdot\mathbf f`.
+is the rate of change of a twist or of a momentum carried by a moving frame (one operator
+for both: Featherstone's :math:`\times` and :math:`\times^*` differ only by the order of a
+force's components), and the power of a wrench on a twist is the dual part of their dual dot
+product, :math:`\langle\xi, \mathcal F\rangle = \omega\cdot\mathbf n + \mathbf v\cdot\mathbf f`.
 
 Recursive Newton--Euler
 -----------------------
 In the link frames :math:`i` of the robot's convention, with
-:math:`\hat Q_i = \hat Q_{i-1,i}(q_i)` and the unit twist :math:`\hat s_i` of joint :math:`i`
+:math:`Q_i = Q_{i-1,i}(q_i)` and the unit twist :math:`\mathcal S_i` of joint :math:`i`
 (its axis as a line, :math:`\mathbf l + \varepsilon\,\mathbf m`, for a revolute joint;
 :math:`\varepsilon\,\mathbf l` for a prismatic one), seen from frame :math:`i`:
 
 .. math::
 
-   \hat\xi_i &= \hat Q_i^{*}\,\hat\xi_{i-1}\,\hat Q_i + \hat s_i\,\dot q_i, \\
-   \dot{\hat\xi}_i &= \hat Q_i^{*}\,\dot{\hat\xi}_{i-1}\,\hat Q_i + \hat s_i\,\ddot q_i
-     + \hat\xi_i \times \hat s_i\,\dot q_i, \\
-   \hat w_i &= \mathcal M_i\,\dot{\hat\xi}_i + \hat\xi_i \times \mathcal M_i\,\hat\xi_i
-     + \hat Q_{i+1}\,\hat w_{i+1}\,\hat Q_{i+1}^{*}, \\
-   \tau_i &= \langle \hat s_i, \hat w_i \rangle,
+   \xi_i &= Q_i^{*}\,\xi_{i-1}\,Q_i + \mathcal S_i\,\dot q_i, \\
+   \dot\xi_i &= Q_i^{*}\,\dot\xi_{i-1}\,Q_i + \mathcal S_i\,\ddot q_i
+     + \xi_i \times \mathcal S_i\,\dot q_i, \\
+   \mathcal F_i &= \mathcal M_i\,\dot\xi_i + \xi_i \times \mathcal M_i\,\xi_i
+     + Q_{i+1}\,\mathcal F_{i+1}\,Q_{i+1}^{*}, \\
+   \tau_i &= \langle \mathcal S_i, \mathcal F_i \rangle,
 
-from the base at rest, :math:`\hat\xi_0 = 0`, accelerating upwards at :math:`-\mathbf g`,
-:math:`\dot{\hat\xi}_0 = -\varepsilon\,\mathbf g_0` (gravity is felt as that acceleration),
-and :math:`\hat w_{n+1} = 0`. :math:`\mathcal M_i` is link :math:`i`'s inertia as a map from
-twists to momenta (:meth:`~dqlab.inertia.LinkInertia.momentum`).
+from the base at rest, :math:`\xi_0 = 0`, accelerating upwards at :math:`-\mathbf g`,
+:math:`\dot\xi_0 = -\varepsilon\,\mathbf g_0` (gravity is felt as that acceleration),
+and :math:`\mathcal F_{n+1} = 0`. :math:`\dot\xi_i` is the rate of the components of
+:math:`\xi_i` in frame :math:`i`. :math:`\mathcal M_i` is link :math:`i`'s inertia as a map
+from twists to momenta (:meth:`~dqlab.inertia.LinkInertia.momentum`).
 
 Every function takes joint vectors of shape ``(..., n)`` and broadcasts over the leading axes
 like :meth:`~dqlab.robot.Robot.fk`. Gravity is a vector in the world frame (the robot's base
 transform turns it into frame 0), :math:`(0, 0, -9.81)` m/s^2 by default. The tool frame
 carries no mass; a payload is part of the last link's inertia
 (:func:`with_payload`). Units: radians, metres, seconds, kilograms, newtons.
+
+With numba installed, the batch and single-state paths run compiled kernels
+(``dqlab._dynamics_compiled``, tested equal to the numpy code here, which stays the
+reference and the path without numba); ``DQLAB_COMPILED=0`` in the environment switches them
+off.
 """
 
 import math
@@ -71,6 +86,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._checks import as_float_array, components, finite_or_raise, stack_components
+from ._dynamics_compiled import constants as compiled_constants
+from ._dynamics_compiled import forward as compiled_forward
+from ._dynamics_compiled import inverse as compiled_inverse
+from ._dynamics_compiled import kernel_inverse as compiled_kernel_inverse
+from ._dynamics_compiled import mass as compiled_mass
+from ._dynamics_compiled import ready as compiled_ready
+from ._dynamics_compiled import regressor_rows as compiled_regressor
 from ._dynamics_floats import constants as float_constants
 from ._dynamics_floats import inverse_dynamics as inverse_dynamics_on_floats
 from ._kernels import dual_quaternion_mul
@@ -87,6 +109,8 @@ __all__ = [
     "inverse_dynamics", "mass_matrix", "gravity_torques", "coriolis_torques",
     "forward_dynamics", "kinetic_energy", "potential_energy", "link_inertias",
     "joint_twists", "dual_cross", "with_payload", "with_inertias", "NewtonEuler", "GRAVITY",
+    "link_jacobians", "regressor", "inertial_parameters", "inertias_from_parameters",
+    "PARAMETER_NAMES", "SINGULAR_PIVOT",
 ]
 
 #: Gravity in the world frame by default, m/s^2: 9.81 along -z.
@@ -118,13 +142,13 @@ def link_inertias(robot: Robot) -> tuple[LinkInertia, ...]:
 
 
 def joint_twists(robot: Robot) -> NDArray[np.float64]:
-    r"""The unit twist :math:`\hat s_i` of every joint, seen from its link's frame :math:`i`.
+    r"""The unit twist :math:`\mathcal S_i` of every joint, seen from its link's frame :math:`i`.
 
     A revolute joint turns link :math:`i` about its axis at unit speed: the twist is the axis
-    as a line, :math:`\hat s_i = \mathbf l + \varepsilon\,\mathbf m` (unit direction, and
+    as a line, :math:`\mathcal S_i = \mathbf l + \varepsilon\,\mathbf m` (unit direction, and
     moment :math:`\mathbf m = \mathbf c \times \mathbf l` for a point :math:`\mathbf c` on
     the axis, chapter "Dual quaternions"). A prismatic joint slides it along its axis:
-    :math:`\hat s_i = \varepsilon\,\mathbf l`. In modified DH the axis is frame :math:`i`'s
+    :math:`\mathcal S_i = \varepsilon\,\mathbf l`. In modified DH the axis is frame :math:`i`'s
     :math:`z` axis, :math:`\mathbf l = (0, 0, 1)`, :math:`\mathbf m = 0`. In standard DH it
     is the :math:`z` axis of frame :math:`i-1`, which the constant part
     :math:`T_x(a_i) R_x(\alpha_i)` of the link moves to
@@ -161,18 +185,18 @@ def joint_twists(robot: Robot) -> NDArray[np.float64]:
 
 def dual_cross(a: ArrayLike, a_dual: ArrayLike, b: ArrayLike, b_dual: ArrayLike
                ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    r"""Cross product of the dual vectors :math:`\hat a = \mathbf a + \varepsilon\mathbf a^\circ`
-    and :math:`\hat b = \mathbf b + \varepsilon\mathbf b^\circ`.
+    r"""Cross product of the dual vectors :math:`a = \mathbf a + \varepsilon\mathbf a^\circ`
+    and :math:`b = \mathbf b + \varepsilon\mathbf b^\circ`.
 
     .. math::
 
-       \hat a \times \hat b = \mathbf a \times \mathbf b
+       a \times b = \mathbf a \times \mathbf b
        + \varepsilon\,(\mathbf a \times \mathbf b^\circ + \mathbf a^\circ \times \mathbf b)
 
     It is half the commutator of the two as pure dual quaternions,
-    :math:`\tfrac12(\hat a\hat b - \hat b\hat a)`. With a twist :math:`\hat\xi` on the left
-    it is the rate of change of a twist or of a momentum :math:`\hat b` carried by a frame
-    moving with :math:`\hat\xi`.
+    :math:`\tfrac12(ab - ba)`. With a twist :math:`\xi` on the left
+    it is the rate of change of a twist or of a momentum :math:`b` carried by a frame
+    moving with :math:`\xi`.
 
     Parameters
     ----------
@@ -191,7 +215,7 @@ def dual_cross(a: ArrayLike, a_dual: ArrayLike, b: ArrayLike, b_dual: ArrayLike
 
 
 def _adjoint(Q, real, dual):
-    r""":math:`\hat Q\,(\mathbf a + \varepsilon\mathbf a^\circ)\,\hat Q^*` on dual vectors,
+    r""":math:`Q\,(\mathbf a + \varepsilon\mathbf a^\circ)\,Q^*` on dual vectors,
     by two dual-quaternion products on the components: what
     :func:`~dqlab.dualquat.dual_quaternion_apply_line` computes, without its argument checks
     (the recursion's intermediate values are not the caller's input, and an input so large
@@ -201,6 +225,15 @@ def _adjoint(Q, real, dual):
     conjugate = (Qc[0], -Qc[1], -Qc[2], -Qc[3], Qc[4], -Qc[5], -Qc[6], -Qc[7])
     y = dual_quaternion_mul(dual_quaternion_mul(Qc, x), conjugate)
     return stack_components(y[1:4]), stack_components(y[5:8])
+
+
+def _compiled_or_none(robot, inertias):
+    """The constants of ``robot`` for the compiled kernels of :mod:`dqlab._dynamics_compiled`
+    (``inertias`` None: without inertias, for the regressor), or None where they cannot be
+    used (numba absent, or ``DQLAB_COMPILED=0``)."""
+    if not compiled_ready():
+        return None
+    return compiled_constants(robot, inertias, joint_twists(robot))
 
 
 # --------------------------------------------------------------------------------------
@@ -244,15 +277,18 @@ def _newton_euler(robot, inertias, q, qd, qdd, g_0, *, energy=False):
         return _recursion(robot, inertias, q, qd, qdd, g_0, energy)
 
 
-def _recursion(robot, inertias, q, qd, qdd, g_0, energy):
+def _outwards(robot, q, qd, qdd, g_0):
+    """The outward pass: per link, its twist and the twist's rate in its own frame,
+    ``(omega, v, omega_dot, v_dot)`` of shape (..., 3) each, from the base at rest rising at
+    -g; and the link dual quaternions Q_{i-1,i} (..., n, 8)."""
     Q = dual_quaternion_from_transform(robot.link_transforms(q))      # Q_{i-1,i}, (..., n, 8)
     Q_star = dual_quaternion_conjugate(Q)
     s = joint_twists(robot)
     lead = q.shape[:-1]
     omega, v = np.zeros(lead + (3,)), np.zeros(lead + (3,))            # the base at rest,
     omega_dot, v_dot = np.zeros(lead + (3,)), np.broadcast_to(-g_0, lead + (3,))  # rising at -g
-    wrenches, kinetic = [], 0.0
-    for i, inertia in enumerate(inertias):
+    twists = []
+    for i in range(robot.n):
         qd_i, qdd_i = qd[..., i, None], qdd[..., i, None]
         s_real, s_dual = s[i]
         # the twist and its rate, carried from frame i-1 into frame i, plus the joint's own
@@ -262,6 +298,16 @@ def _recursion(robot, inertias, q, qd, qdd, g_0, energy):
         turn, slide = dual_cross(omega, v, s_real * qd_i, s_dual * qd_i)
         omega_dot = omega_dot + s_real * qdd_i + turn
         v_dot = v_dot + s_dual * qdd_i + slide
+        twists.append((omega, v, omega_dot, v_dot))
+    return twists, Q
+
+
+def _recursion(robot, inertias, q, qd, qdd, g_0, energy):
+    twists, Q = _outwards(robot, q, qd, qdd, g_0)
+    s = joint_twists(robot)
+    lead = q.shape[:-1]
+    wrenches, kinetic = [], 0.0
+    for inertia, (omega, v, omega_dot, v_dot) in zip(inertias, twists, strict=True):
         # Newton-Euler for link i: the rate of its momentum h = M xi
         p, L = inertia.momentum(omega, v)
         p_dot, L_dot = inertia.momentum(omega_dot, v_dot)
@@ -283,8 +329,14 @@ def _recursion(robot, inertias, q, qd, qdd, g_0, energy):
 
 
 def _torques(robot, inertias, q, qd, qdd, g_0):
-    """:func:`_newton_euler`'s torques; one state (q of shape (n,)) runs the same recursion
-    on Python floats (:mod:`dqlab._dynamics_floats`, tested equal), much faster."""
+    """:func:`_newton_euler`'s torques: compiled when it can be
+    (:mod:`dqlab._dynamics_compiled`); else one state (q of shape (n,)) runs the same
+    recursion on Python floats (:mod:`dqlab._dynamics_floats`), a batch on numpy arrays. All
+    tested equal."""
+    consts = _compiled_or_none(robot, inertias)
+    if consts is not None:
+        with np.errstate(over="ignore", invalid="ignore"):
+            return compiled_inverse(consts, q, qd, qdd, g_0)
     if q.ndim != 1:
         return _newton_euler(robot, inertias, q, qd, qdd, g_0)
     consts = float_constants(robot, inertias, joint_twists(robot), g_0)
@@ -373,22 +425,35 @@ class NewtonEuler:
         self.robot = robot
         self._slides = "prismatic" in robot.joint_types
         self.gravity = tuple(float(x) for x in robot.base[:3, :3] @ g_0)
-        self._constants = float_constants(robot, inertias, joint_twists(robot),
-                                                     g_0)
+        self._g_0 = np.array(g_0, dtype=float)
+        self._constants = float_constants(robot, inertias, joint_twists(robot), g_0)
+        self._compiled = _compiled_or_none(robot, inertias)
 
     def __call__(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> NDArray[np.float64]:
         """Joint torques, shape (n,) for one state (a batch goes to
         :func:`inverse_dynamics`)."""
         shape = (self.robot.n,)
-        if not all(type(x) is np.ndarray and x.dtype == np.float64 and x.shape == shape
-                   for x in (q, qd, qdd)):    # anything but one float state: the checked path
+        if not (type(q) is np.ndarray and type(qd) is np.ndarray and type(qdd) is np.ndarray
+                and q.shape == qd.shape == qdd.shape == shape and q.dtype == qd.dtype
+                == qdd.dtype == np.float64):    # anything but one float state: checked path
+            return inverse_dynamics(self.robot, q, qd, qdd, gravity=self.gravity)
+        if self._slides:
+            self.robot.check_joints(q, name="q")        # a slide beyond its travel
+        if self._compiled is not None:                  # NaN or infinity in makes NaN out
+            standard, links = self._compiled
+            out = np.empty((1, shape[0]))
+            with np.errstate(over="ignore", invalid="ignore"):
+                compiled_kernel_inverse(standard, links, q[None], qd[None], qdd[None],
+                                        self._g_0, out)
+            tau = out[0]
+            check = sum(tau.tolist())
+            if check - check == 0.0:
+                return tau
             return inverse_dynamics(self.robot, q, qd, qdd, gravity=self.gravity)
         state = [q.tolist(), qd.tolist(), qdd.tolist()]
         total = sum(state[0]) + sum(state[1]) + sum(state[2])
         if not total - total == 0.0:           # NaN or infinity: the checked path names it
             return inverse_dynamics(self.robot, q, qd, qdd, gravity=self.gravity)
-        if self._slides:
-            self.robot.check_joints(q, name="q")        # a slide beyond its travel
         tau = inverse_dynamics_on_floats(self._constants, *state)
         check = sum(tau)
         if not check - check == 0.0:
@@ -431,9 +496,114 @@ def coriolis_torques(robot: Robot, q: ArrayLike, qd: ArrayLike) -> NDArray[np.fl
                            (q, "q", (robot.n,)), (qd, "qd", (robot.n,)))
 
 
+# --------------------------------------------------------------------------------------
+# Dual 6-vectors as matrices: the spatial inertia, the adjoint, the power
+
+def _spatial_inertia(inertia):
+    r""":math:`\mathcal M` as a 6x6 matrix in the dual orders, twist :math:`(\omega,
+    \mathbf v)` to momentum :math:`(\mathbf p, \mathbf L)`: the matrix of
+    :meth:`~dqlab.inertia.LinkInertia.momentum`,
+
+    .. math::
+
+       \mathcal M = \begin{pmatrix} -m[\mathbf c]_\times & m I \\ I_O & m[\mathbf c]_\times
+       \end{pmatrix}
+
+    (:math:`\mathbf p = m\mathbf v + \omega\times m\mathbf c`,
+    :math:`\mathbf L = I_O\,\omega + m\mathbf c\times\mathbf v`)."""
+    m, (x, y, z) = inertia.mass, inertia.com
+    mc = m * np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+    return np.block([[-mc, m * np.eye(3)], [inertia.tensor_at_origin, mc]])
+
+
+def _adjoint_matrix(X):
+    r""":math:`\operatorname{Ad}_Q`, the 6x6 matrix of the sandwich :math:`x \mapsto Q\,x\,Q^*`
+    on dual 6-vectors (real part first) for the pose :math:`X = (R, \mathbf t)` of :math:`Q`,
+    shape (..., 6, 6): the same matrix for twists and wrenches,
+
+    .. math::
+
+       \operatorname{Ad}_Q = \begin{pmatrix} R & 0 \\ [\mathbf t]_\times R & R\end{pmatrix}
+
+    (:math:`\omega' = R\,\omega`, :math:`\mathbf v' = R\,\mathbf v + \mathbf t\times
+    R\,\omega`: what :func:`~dqlab.dualquat.dual_quaternion_apply_line` computes)."""
+    R, t = X[..., :3, :3], X[..., :3, 3]
+    tx = np.zeros(X.shape[:-2] + (3, 3))
+    tx[..., 0, 1], tx[..., 0, 2], tx[..., 1, 2] = -t[..., 2], t[..., 1], -t[..., 0]
+    tx[..., 1, 0], tx[..., 2, 0], tx[..., 2, 1] = t[..., 2], -t[..., 1], t[..., 0]
+    Ad = np.zeros(X.shape[:-2] + (6, 6))
+    Ad[..., :3, :3] = Ad[..., 3:, 3:] = R
+    Ad[..., 3:, :3] = tx @ R
+    return Ad
+
+
+def _apply(A, x):
+    """A x for stacks of 6x6 matrices and 6-vectors."""
+    return (A @ x[..., None])[..., 0]
+
+
+def _power(twist, wrench):
+    r""":math:`\langle\xi, \mathcal F\rangle = \omega\cdot\mathbf n + \mathbf v\cdot\mathbf f` of
+    6-vectors in the dual orders (the pairing that swaps the halves)."""
+    return (np.sum(twist[..., :3] * wrench[..., 3:], axis=-1)
+            + np.sum(twist[..., 3:] * wrench[..., :3], axis=-1))
+
+
+def _cross(x, y):
+    r""":math:`x\times y` of :func:`dual_cross` on 6-vectors in the dual order (..., 6)."""
+    a, a_dual, b, b_dual = x[..., :3], x[..., 3:], y[..., :3], y[..., 3:]
+    real, dual = _cross3(a, b), _cross3(a, b_dual) + _cross3(a_dual, b)
+    return np.concatenate([real, dual], axis=-1)
+
+
+def _cross3(a, b):
+    """The cross product of 3-vectors on the last axis, written out (numpy's is slow on small
+    arrays)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0], out[..., 1], out[..., 2] = a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
+    return out
+
+
+def _transforms(robot, q):
+    """The adjoint matrices of the links' poses :math:`X_{i-1,i}` and of their inverses
+    (..., n, 6, 6), and the joint twists as 6-vectors (n, 6)."""
+    X = robot.link_transforms(q)
+    X_inverse = np.zeros_like(X)
+    R_T = np.swapaxes(X[..., :3, :3], -1, -2)
+    X_inverse[..., :3, :3] = R_T
+    X_inverse[..., :3, 3] = -(R_T @ X[..., :3, 3, None])[..., 0]
+    return (_adjoint_matrix(X), _adjoint_matrix(X_inverse),
+            joint_twists(robot).reshape(robot.n, 6))
+
+
+# --------------------------------------------------------------------------------------
+# The mass matrix: composite rigid bodies
+
 def mass_matrix(robot: Robot, q: ArrayLike) -> NDArray[np.float64]:
-    r""":math:`M(q)`, the joint-space mass matrix: column :math:`j` is the inverse dynamics
-    without gravity at rest with :math:`\ddot q = e_j`.
+    r""":math:`M(q)`, the joint-space mass matrix, by the composite-rigid-body algorithm.
+
+    Freeze joints :math:`i+1, \dots, n`: links :math:`i` to :math:`n` move as one rigid body,
+    the *composite* body :math:`i`, whose spatial inertia, in frame :math:`i`, gathers the
+    links' inertias moved there by the adjoint on both sides,
+
+    .. math::
+
+       \mathcal M^c_i = \mathcal M_i + \operatorname{Ad}_{Q_{i+1}}\,\mathcal M^c_{i+1}\,
+       \operatorname{Ad}_{Q_{i+1}}^{-1}, \qquad \mathcal M^c_n = \mathcal M_n .
+
+    Joint :math:`i` turning at unit rate gives it the momentum
+    :math:`h_i = \mathcal M^c_i\,\mathcal S_i`, and the power of that momentum on the unit
+    twist of any joint :math:`j \le i`, both in frame :math:`j`, is the entry
+
+    .. math::
+
+       M_{ji} = M_{ij} = \bigl\langle \mathcal S_j,\
+       \operatorname{Ad}_{Q_{j+1}} \cdots \operatorname{Ad}_{Q_i}\, h_i \bigr\rangle
+
+    (Featherstone 2008, section 6.2, in dual-vector form: :math:`\operatorname{Ad}_Q` is the
+    sandwich :math:`Q\,x\,Q^*`, the same matrix for twists and momenta).
 
     Parameters
     ----------
@@ -443,7 +613,8 @@ def mass_matrix(robot: Robot, q: ArrayLike) -> NDArray[np.float64]:
     Returns
     -------
     ndarray, shape (..., n, n)
-        Symmetric, positive definite; kg m^2 (kg for a prismatic joint's entries).
+        Symmetric, positive semidefinite (definite unless a joint moves no mass); kg m^2
+        (kg for a prismatic joint's entries).
 
     Examples
     --------
@@ -452,28 +623,137 @@ def mass_matrix(robot: Robot, q: ArrayLike) -> NDArray[np.float64]:
     >>> M = mass_matrix(ur3(), np.zeros(6))
     >>> bool(np.allclose(M, M.T)), bool(np.all(np.linalg.eigvalsh(M) > 0))
     (True, True)
+    >>> unit = np.eye(6)          # column j: the torques of a unit acceleration of joint j
+    >>> columns = inverse_dynamics(ur3(), np.zeros(6), np.zeros(6), unit, gravity=(0, 0, 0))
+    >>> bool(np.allclose(M, columns.T))
+    True
     """
-    (q,), g_0, inertias = _check(robot, q, (), (0.0, 0.0, 0.0))
-    return _mass_matrix(robot, inertias, q, g_0)
+    (q,), _, inertias = _check(robot, q, (), (0.0, 0.0, 0.0))
+    return finite_or_raise(_mass_matrix(robot, inertias, q), (q, "q", (robot.n,)))
 
 
-def _mass_matrix(robot, inertias, q, g_0):
-    n = robot.n
+def _mass_matrix(robot, inertias, q):
+    """:func:`mass_matrix` on checked arrays: compiled when it can be
+    (:mod:`dqlab._dynamics_compiled`), one state on Python floats, else the composite rigid
+    bodies below."""
+    consts = _compiled_or_none(robot, inertias)
+    if consts is not None:
+        with np.errstate(over="ignore", invalid="ignore"):
+            return compiled_mass(consts, q)
     if q.ndim == 1:         # one state: n runs of the float path, its constants read once
-        consts = float_constants(robot, inertias, joint_twists(robot), g_0)
-        q_list, zero = q.tolist(), [0.0] * n
+        consts = float_constants(robot, inertias, joint_twists(robot), np.zeros(3))
+        q_list, zero = q.tolist(), [0.0] * robot.n
         return np.array([inverse_dynamics_on_floats(consts, q_list, zero, e_j)
-                         for e_j in np.eye(n).tolist()]).T.copy()
-    q_columns = np.broadcast_to(q[..., None, :], q.shape[:-1] + (n, n))
-    unit = np.broadcast_to(np.eye(n), q_columns.shape)
-    columns = _newton_euler(robot, inertias, q_columns, np.zeros_like(q_columns), unit, g_0)
-    return np.swapaxes(columns, -1, -2).copy()
+                         for e_j in np.eye(robot.n).tolist()]).T.copy()
+    with np.errstate(over="ignore", invalid="ignore"):
+        return _composite_rigid_body(robot, inertias, q)
 
+
+def _composite_rigid_body(robot, inertias, q):
+    """The algorithm of :func:`mass_matrix`'s docstring, on arrays of shape (..., n)."""
+    n, lead = robot.n, q.shape[:-1]
+    Ad, Ad_inverse, S = _transforms(robot, q)
+    composite = [np.broadcast_to(_spatial_inertia(inertia), lead + (6, 6))
+                 for inertia in inertias]
+    M = np.empty(lead + (n, n))
+    for i in range(n - 1, -1, -1):
+        h = composite[i] @ S[i]              # momentum of links i..n, joint i at unit rate
+        M[..., i, i] = _power(S[i], h)
+        for j in range(i - 1, -1, -1):       # carried down the chain into frame j
+            h = _apply(Ad[..., j + 1, :, :], h)
+            M[..., i, j] = M[..., j, i] = _power(S[j], h)
+        if i > 0:                             # the composite body i-1 takes body i in
+            composite[i - 1] = (composite[i - 1]
+                                + Ad[..., i, :, :] @ composite[i] @ Ad_inverse[..., i, :, :])
+    return M
+
+
+def link_jacobians(robot: Robot, q: ArrayLike) -> NDArray[np.float64]:
+    r"""The Jacobian of every link's twist, in the link's own frame, dual order.
+
+    Link :math:`i` moves with :math:`\xi_i = J_i(q)\,\dot q`; column :math:`j \le i` of
+    :math:`J_i` is joint :math:`j`'s unit twist carried out to frame :math:`i`,
+    :math:`\operatorname{Ad}_{Q_{j,i}}^{-1}\mathcal S_j`, and the columns :math:`j > i` are
+    zero. The kinetic energy :math:`\tfrac12\sum_i\langle\xi_i, \mathcal M_i\xi_i\rangle`
+    then gives the mass matrix as a sum over the links,
+
+    .. math::
+
+       M(q) = \sum_i J_i^\top\, \Pi\,\mathcal M_i\, J_i ,\qquad
+       \Pi = \begin{pmatrix} 0 & I \\ I & 0 \end{pmatrix}
+
+    (:math:`\Pi` the pairing of the power, :math:`\langle\xi, h\rangle = \xi^\top\Pi h`).
+
+    Parameters
+    ----------
+    robot : Robot
+    q : array_like, shape (..., n)
+
+    Returns
+    -------
+    ndarray, shape (..., n, 6, n)
+        Entry ``[..., i, :, j]``: rows :math:`(\omega, \mathbf v)`, the velocity of the body
+        point at frame ``i + 1``'s origin, in that frame.
+
+    Examples
+    --------
+    The last link's Jacobian, turned and moved to the flange, is the geometric Jacobian of
+    :meth:`~dqlab.robot.Robot.jacobian` (rows :math:`(\mathbf v, \omega)`, base frame):
+
+    >>> import numpy as np
+    >>> from dqlab.models import ur3
+    >>> q = np.array([0.3, -1.2, 1.1, -0.4, 0.9, 0.2])
+    >>> J6 = link_jacobians(ur3(), q)[-1]
+    >>> R = ur3().fk(q)[:3, :3]
+    >>> bool(np.allclose(R @ J6[:3], ur3().jacobian(q)[3:]))      # the angular rows
+    True
+    """
+    if not isinstance(robot, Robot):
+        raise TypeError(f"robot must be a dqlab Robot, got {type(robot).__name__}")
+    q = robot.check_joints(q, name="q")
+    n, lead = robot.n, q.shape[:-1]
+    _, Ad_inverse, S = _transforms(robot, q)
+    J = np.zeros(lead + (n, 6, n))
+    for i in range(n):
+        if i > 0:                             # carried out from frame i-1 into frame i
+            J[..., i, :, :i] = Ad_inverse[..., i, :, :] @ J[..., i - 1, :, :i]
+        J[..., i, :, i] = S[i]
+    return finite_or_raise(J, (q, "q", (n,)))
+
+
+# --------------------------------------------------------------------------------------
+# Forward dynamics: articulated bodies
 
 def forward_dynamics(robot: Robot, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, *,
                      gravity: ArrayLike = GRAVITY) -> NDArray[np.float64]:
-    r"""Joint accelerations under the torques ``tau``:
-    :math:`\ddot q = M(q)^{-1}\bigl(\tau - c(q, \dot q) - g(q)\bigr)`.
+    r"""Joint accelerations under the torques ``tau``,
+    :math:`\ddot q = M(q)^{-1}\bigl(\tau - c(q, \dot q) - g(q)\bigr)`, by the
+    articulated-body algorithm.
+
+    Three passes over the chain, :math:`O(n)` operations, without forming :math:`M`
+    (Featherstone 2008, section 7.3, in dual-vector form, with the power
+    :math:`\langle\cdot,\cdot\rangle` and :math:`\operatorname{Ad}_Q` as in
+    :func:`mass_matrix`):
+
+    1. outwards, the twists :math:`\xi_i` of the recursive Newton--Euler algorithm, the
+       velocity-product accelerations :math:`\mathbf c_i = \xi_i\times\mathcal S_i\dot q_i`
+       and the bias wrenches :math:`\mathcal F^A_i = \xi_i\times\mathcal M_i\xi_i`;
+    2. inwards, the *articulated* inertia of links :math:`i..n` with their joints free,
+       :math:`\mathcal M^A_i`: with :math:`U_i = \mathcal M^A_i\mathcal S_i`,
+       :math:`D_i = \langle\mathcal S_i, U_i\rangle` and
+       :math:`u_i = \tau_i - \langle\mathcal S_i, \mathcal F^A_i\rangle`, link :math:`i-1`
+       takes in
+       :math:`\mathcal M^a_i = \mathcal M^A_i - U_i\,\langle U_i, \cdot\rangle / D_i` and
+       :math:`\mathcal F^a_i = \mathcal F^A_i + \mathcal M^a_i\mathbf c_i + U_i u_i / D_i`,
+       moved by :math:`\operatorname{Ad}_{Q_i}` (on both sides for the inertia);
+    3. outwards from the base rising at :math:`-\mathbf g`, the accelerations
+       :math:`\ddot q_i = \bigl(u_i - \langle\dot\xi'_i, U_i\rangle\bigr) / D_i` with
+       :math:`\dot\xi'_i = \operatorname{Ad}^{-1}_{Q_i}\dot\xi_{i-1} + \mathbf c_i`, and
+       :math:`\dot\xi_i = \dot\xi'_i + \mathcal S_i\ddot q_i`.
+
+    :math:`D_i` is the inertia joint :math:`i` feels when the joints beyond it are free; the
+    :math:`D_i` are the pivots of a factorisation of :math:`M`, which is singular exactly when
+    one of them is zero: when a joint moves no mass.
 
     Parameters
     ----------
@@ -484,6 +764,13 @@ def forward_dynamics(robot: Robot, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, 
     Returns
     -------
     ndarray, shape (..., n)
+
+    Raises
+    ------
+    ValueError
+        As :func:`inverse_dynamics`; and when :math:`M(q)` is singular, naming the joint that
+        moves no mass (a massless last link, a point mass on its own joint's axis), or when
+        the inertias are so large that it overflows.
 
     Examples
     --------
@@ -497,18 +784,264 @@ def forward_dynamics(robot: Robot, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, 
     array([ 55. , -72.4,  17.4])
     """
     (q, qd, tau), g_0, inertias = _check(robot, q, [(qd, "qd"), (tau, "tau")], gravity)
-    bias = _torques(robot, inertias, q, qd, np.zeros_like(q), g_0)
-    M = _mass_matrix(robot, inertias, q, np.zeros(3))
-    qdd = np.linalg.solve(M, (tau - bias)[..., None])[..., 0]
+    consts = _compiled_or_none(robot, inertias)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        if consts is not None:
+            qdd, D = compiled_forward(consts, q, qd, tau, g_0)
+        else:
+            qdd, D = _articulated_body(robot, inertias, q, qd, tau, g_0)
+    _check_pivots(robot, inertias, D, q, qd, tau)
     return finite_or_raise(qdd, (q, "q", (robot.n,)), (qd, "qd", (robot.n,)),
                            (tau, "tau", (robot.n,)))
+
+
+def _articulated_body(robot, inertias, q, qd, tau, g_0):
+    """The three passes of :func:`forward_dynamics`'s docstring on arrays of shape (..., n);
+    returns the accelerations and the pivots D, both (..., n)."""
+    n, lead = robot.n, q.shape[:-1]
+    Ad, Ad_inverse, S = _transforms(robot, q)
+    xi = np.zeros(lead + (6,))
+    c, M_A, F_A = [], [], []
+    for i, inertia in enumerate(inertias):             # 1. outwards: twists and biases
+        joint = S[i] * qd[..., i, None]
+        xi = _apply(Ad_inverse[..., i, :, :], xi) + joint
+        M_i = np.broadcast_to(_spatial_inertia(inertia), lead + (6, 6))
+        c.append(_cross(xi, joint))
+        M_A.append(M_i)
+        F_A.append(_cross(xi, _apply(M_i, xi)))
+    U, D, u = [None] * n, np.empty(lead + (n,)), [None] * n
+    for i in range(n - 1, -1, -1):                     # 2. inwards: articulated inertias
+        U[i] = M_A[i] @ S[i]
+        D[..., i] = _power(S[i], U[i])
+        u[i] = tau[..., i] - _power(S[i], F_A[i])
+        if i > 0:
+            M_a = M_A[i] - U[i][..., :, None] * _swap(U[i])[..., None, :] / D[..., i, None, None]
+            F_a = F_A[i] + _apply(M_a, c[i]) + U[i] * (u[i] / D[..., i])[..., None]
+            M_A[i - 1] = M_A[i - 1] + Ad[..., i, :, :] @ M_a @ Ad_inverse[..., i, :, :]
+            F_A[i - 1] = F_A[i - 1] + _apply(Ad[..., i, :, :], F_a)
+    qdd = np.empty(lead + (n,))
+    xi_dot = np.broadcast_to(np.concatenate([np.zeros(3), -g_0]), lead + (6,))  # rising at -g
+    for i in range(n):                                 # 3. outwards: accelerations
+        xi_dot = _apply(Ad_inverse[..., i, :, :], xi_dot) + c[i]
+        qdd[..., i] = (u[i] - _power(xi_dot, U[i])) / D[..., i]
+        xi_dot = xi_dot + S[i] * qdd[..., i, None]
+    return qdd, D
+
+
+def _swap(x):
+    r""":math:`\Pi x`: the two halves of 6-vectors exchanged (so that
+    :math:`\langle\xi, h\rangle = \xi\cdot\Pi h`)."""
+    return np.concatenate([x[..., 3:], x[..., :3]], axis=-1)
+
+
+#: A pivot of the articulated-body algorithm below this fraction of the largest one is taken
+#: as zero: the mass matrix is then singular to working precision.
+SINGULAR_PIVOT = 1e-12
+
+
+def _check_pivots(robot, inertias, D, q, qd, tau):
+    """A ValueError naming the joint that moves no mass, or the inertias that overflow.
+
+    The inward pass meets the pivots from the flange down; after a zero pivot the inner ones
+    are not numbers, so the joint named is the outermost one with a zero pivot."""
+    finite = np.isfinite(D)
+    scale = np.where(finite, D, 0.0).max(axis=-1, keepdims=True, initial=0.0)
+    small = finite & (D <= SINGULAR_PIVOT * scale)
+    if small.any():
+        config = tuple(int(k) for k in np.argwhere(small.any(axis=-1))[0])
+        joint = int(np.flatnonzero(small[config])[-1]) + 1
+        where = f" at q[{', '.join(map(str, config))}]" if config else ""
+        moved = (f"links {joint} to {robot.n}, with the joints beyond it free, have"
+                 if joint < robot.n else f"link {joint} has")
+        raise ValueError(
+            f"the mass matrix M(q) is singular{where}: joint {joint} moves no mass ({moved} "
+            f"no inertia for its motion; pivot D_{joint} = {D[config + (joint - 1,)]:.3g}). "
+            f"Give link {joint} a mass away from its joint's axis or an inertia about it")
+    if not finite.all():
+        for x, name in ((q, "q"), (qd, "qd"), (tau, "tau")):
+            as_float_array(x, name)
+        largest = max(range(robot.n), key=lambda k: np.abs(inertias[k].tensor).max()
+                      + inertias[k].mass)
+        raise ValueError(
+            f"the mass matrix M(q) overflows: the links' inertias are too large to be "
+            f"represented (link {largest + 1} has mass {inertias[largest].mass:.3g} kg and "
+            f"a tensor up to {np.abs(inertias[largest].tensor).max():.3g} kg m^2)")
+
+
+# --------------------------------------------------------------------------------------
+# Linear in the inertial parameters: the regressor
+
+#: The ten inertial parameters of one link, in the order of :func:`inertial_parameters`:
+#: mass, first moment m c, and the inertia tensor about the link frame's origin.
+PARAMETER_NAMES = ("m", "mx", "my", "mz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
+
+
+def inertial_parameters(robot: Robot) -> NDArray[np.float64]:
+    r"""The robot's inertial parameters :math:`\pi`, ten per link, shape (10 n,).
+
+    Per link, in its own frame: :math:`m`, :math:`m\mathbf c` (three), and the inertia tensor
+    about the frame's origin :math:`I_O = I_c + m(\lVert\mathbf c\rVert^2 I -
+    \mathbf c\mathbf c^\top)` as :math:`I_{xx}, I_{xy}, I_{yy}, I_{xz}, I_{yz}, I_{zz}`
+    (:data:`PARAMETER_NAMES`; pinocchio's order). The link's momentum is linear in them,
+    :math:`\mathbf p = m\mathbf v + \omega\times m\mathbf c`,
+    :math:`\mathbf L = I_O\,\omega + m\mathbf c\times\mathbf v`, and so are the joint torques:
+    :math:`\tau = Y(q, \dot q, \ddot q)\,\pi` (:func:`regressor`).
+
+    Examples
+    --------
+    >>> from dqlab.models import ur3
+    >>> pi = inertial_parameters(ur3())
+    >>> pi.shape, pi[[0, 10]]                  # the masses of links 1 and 2
+    ((60,), array([2.  , 3.42]))
+    """
+    parameters = []
+    for inertia in link_inertias(robot):
+        I_O = inertia.tensor_at_origin
+        parameters += [inertia.mass, *(inertia.mass * inertia.com),
+                       I_O[0, 0], I_O[0, 1], I_O[1, 1], I_O[0, 2], I_O[1, 2], I_O[2, 2]]
+    return np.array(parameters)
+
+
+def inertias_from_parameters(parameters: ArrayLike) -> tuple[LinkInertia, ...]:
+    r"""The link inertias of inertial parameters :math:`\pi` (:func:`inertial_parameters`'s
+    layout, ten per link), or a ValueError naming the first link whose ten numbers no rigid
+    body has (a negative mass, a first moment without mass, a tensor about the centre of mass
+    that is not positive semidefinite or breaks the triangle inequality).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dqlab.models import ur3
+    >>> inertias = inertias_from_parameters(inertial_parameters(ur3()))
+    >>> bool(np.allclose(inertias[1].com, link_inertias(ur3())[1].com))
+    True
+    """
+    pi = as_float_array(parameters, "parameters")
+    if pi.ndim != 1 or pi.size == 0 or pi.size % 10:
+        raise ValueError(f"parameters must have shape (10 n,), ten per link, got shape "
+                         f"{pi.shape}")
+    inertias = []
+    for k, (m, mx, my, mz, ixx, ixy, iyy, ixz, iyz, izz) in enumerate(pi.reshape(-1, 10), 1):
+        scale = max(abs(m), 1e-300)
+        if m < 0 or (m == 0 and (mx, my, mz) != (0.0, 0.0, 0.0)):
+            raise ValueError(f"parameters of link {k}: a mass of {m:.6g} kg with a first "
+                             f"moment ({mx:.3g}, {my:.3g}, {mz:.3g}) kg m is no rigid body")
+        com = np.array([mx, my, mz]) / scale if m > 0 else np.zeros(3)
+        I_O = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+        I_c = I_O - m * (np.dot(com, com) * np.eye(3) - np.outer(com, com))
+        try:
+            inertias.append(LinkInertia(m, com, I_c))
+        except ValueError as error:
+            raise ValueError(f"parameters of link {k} are no rigid body's: {error}") from None
+    return tuple(inertias)
+
+
+def regressor(robot: Robot, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, *,
+              gravity: ArrayLike = GRAVITY) -> NDArray[np.float64]:
+    r"""The joint torques as a linear function of the inertial parameters,
+    :math:`\tau = Y(q, \dot q, \ddot q)\,\pi`, with :math:`\pi` = :func:`inertial_parameters`.
+
+    The net wrench of link :math:`j` in Newton--Euler form,
+    :math:`\mathcal M_j\dot\xi_j + \xi_j\times\mathcal M_j\xi_j`, is linear in its ten
+    parameters because the momentum is: column :math:`k` of link :math:`j` is that wrench for
+    the momentum of the :math:`k`-th parameter alone (:math:`m`: :math:`h = \mathbf v`;
+    :math:`m c_x`: :math:`h = \omega\times\mathbf e_x + \varepsilon\,\mathbf e_x\times\mathbf v`;
+    :math:`I_{xy}`: :math:`h = \varepsilon E_{xy}\,\omega`, ...). Carried inwards as the
+    recursion carries wrenches, its power on the unit twist of each joint :math:`i \le j` is
+
+    .. math::
+
+       Y_{i,\,10j+k} = \bigl\langle \mathcal S_i,\ \operatorname{Ad}_{Q_{i+1}}\cdots
+       \operatorname{Ad}_{Q_j}\,\bigl(\mathcal M^{(k)}\dot\xi_j + \xi_j\times
+       \mathcal M^{(k)}\xi_j\bigr)\bigr\rangle ,
+
+    zero for :math:`i > j`, with the twists and their rates of :func:`inverse_dynamics`
+    (gravity included, as the base rising at :math:`-\mathbf g`).
+
+    Parameters
+    ----------
+    robot : Robot
+        Its links' inertias are not used (only their presence is checked), but every link must
+        carry one, as for :func:`inverse_dynamics`.
+    q, qd, qdd : array_like, shape (..., n)
+    gravity : array_like, shape (3,), optional
+
+    Returns
+    -------
+    ndarray, shape (..., n, 10 n)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dqlab.models import ur3
+    >>> q, qd, qdd = np.zeros(6), np.ones(6), np.full(6, 0.5)
+    >>> Y = regressor(ur3(), q, qd, qdd)
+    >>> Y.shape
+    (6, 60)
+    >>> bool(np.allclose(Y @ inertial_parameters(ur3()), inverse_dynamics(ur3(), q, qd, qdd)))
+    True
+    """
+    (q, qd, qdd), g_0, _ = _check(robot, q, [(qd, "qd"), (qdd, "qdd")], gravity)
+    consts = _compiled_or_none(robot, None)
+    with np.errstate(over="ignore", invalid="ignore"):
+        if consts is not None:
+            Y = compiled_regressor(consts, q, qd, qdd, g_0)
+        else:
+            Y = _regressor(robot, q, qd, qdd, g_0)
+    return finite_or_raise(Y, (q, "q", (robot.n,)), (qd, "qd", (robot.n,)),
+                           (qdd, "qdd", (robot.n,)))
+
+
+def _momentum_per_parameter(omega, v):
+    r"""The momentum of a twist for each of the ten parameters alone, (..., 10, 3) twice:
+    :math:`\mathbf p = m\mathbf v + \omega\times m\mathbf c`,
+    :math:`\mathbf L = I_O\omega + m\mathbf c\times\mathbf v`, term by term."""
+    lead = np.broadcast_shapes(omega.shape, v.shape)[:-1]
+    p, L = np.zeros(lead + (10, 3)), np.zeros(lead + (10, 3))
+    p[..., 0, :] = v                                          # m
+    for k, e in enumerate(np.eye(3), start=1):                # m c_x, m c_y, m c_z
+        p[..., k, :] = np.cross(omega, e)
+        L[..., k, :] = np.cross(e, v)
+    wx, wy, wz = omega[..., 0], omega[..., 1], omega[..., 2]
+    # I_O omega, one entry of I_O at a time: Ixx, Ixy, Iyy, Ixz, Iyz, Izz
+    L[..., 4, 0] = wx
+    L[..., 5, 0], L[..., 5, 1] = wy, wx
+    L[..., 6, 1] = wy
+    L[..., 7, 0], L[..., 7, 2] = wz, wx
+    L[..., 8, 1], L[..., 8, 2] = wz, wy
+    L[..., 9, 2] = wz
+    return p, L
+
+
+def _regressor(robot, q, qd, qdd, g_0):
+    """The regressor of :func:`regressor`'s docstring on checked arrays (..., n)."""
+    n, lead = robot.n, q.shape[:-1]
+    twists, Q = _outwards(robot, q, qd, qdd, g_0)
+    s = joint_twists(robot)
+    columns = []                       # per link: the net wrenches of its ten parameters
+    for omega, v, omega_dot, v_dot in twists:
+        p, L = _momentum_per_parameter(omega, v)
+        p_dot, L_dot = _momentum_per_parameter(omega_dot, v_dot)
+        carried_f, carried_n = dual_cross(omega[..., None, :], v[..., None, :], p, L)
+        columns.append((p_dot + carried_f, L_dot + carried_n))          # (..., 10, 3) each
+    Y = np.zeros(lead + (n, 10 * n))
+    f, m = np.zeros(lead + (0, 10, 3)), np.zeros(lead + (0, 10, 3))    # links i+1..n
+    for i in range(n - 1, -1, -1):     # inwards: carried into frame i, then link i's own
+        if i < n - 1:
+            f, m = _adjoint(Q[..., i + 1, None, None, :], f, m)
+        f = np.concatenate([columns[i][0][..., None, :, :], f], axis=-3)
+        m = np.concatenate([columns[i][1][..., None, :, :], m], axis=-3)
+        s_real, s_dual = s[i]
+        power = m @ s_real + f @ s_dual                       # (..., n - i, 10)
+        Y[..., i, 10 * i:] = power.reshape(lead + (10 * (n - i),))
+    return Y
 
 
 # --------------------------------------------------------------------------------------
 # Energy
 
 def kinetic_energy(robot: Robot, q: ArrayLike, qd: ArrayLike) -> NDArray[np.float64]:
-    r"""Kinetic energy :math:`T = \tfrac12\sum_i \langle\hat\xi_i, \mathcal M_i\hat\xi_i\rangle
+    r"""Kinetic energy :math:`T = \tfrac12\sum_i \langle\xi_i, \mathcal M_i\xi_i\rangle
     = \tfrac12\,\dot q^\top M(q)\,\dot q`, shape (...), J.
 
     Examples
@@ -533,7 +1066,7 @@ def potential_energy(robot: Robot, q: ArrayLike, *, gravity: ArrayLike = GRAVITY
     origin), shape (...), J.
 
     The centres of mass are placed by the product of chapter "Forward kinematics",
-    :math:`\hat Q_{Wi} = \hat Q_{W0}\,\hat Q_{01} \cdots \hat Q_{i-1,i}`.
+    :math:`Q_{Wi} = Q_{W0}\,Q_{01} \cdots Q_{i-1,i}`.
 
     Examples
     --------

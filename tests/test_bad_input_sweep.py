@@ -16,6 +16,7 @@ from _sweep import Any, Arg, Registry, joints_reach_target, reaches_target, swee
 
 import dqlab
 from dqlab import dynamics, ik, jacobian
+from dqlab import dynamics_identification as dyn_id
 from dqlab.identify import dh_parameters, robot_from_dh_parameters
 from dqlab.models import desk_arm, scara_rsm5, ur3
 from dqlab.robot import Robot
@@ -68,6 +69,11 @@ GOOD_CALLS = {
     "dual_quaternion_power": (D, 0.5), "sclerp": (D, dqlab.dual_quaternion_identity(), 0.3),
 }
 
+W_UR3 = dyn_id.regressor_with_motors(
+    UR3, *np.random.default_rng(0).uniform(-3.0, 3.0, (3, 20, 6))).reshape(-1, 78)
+BASE_UR3 = dyn_id.base_parameters(W_UR3, dyn_id.parameter_names(UR3))
+FOURIER = dyn_id.FourierTrajectory(np.zeros(2), np.ones((2, 3)), np.ones((2, 3)), 2.0)
+
 OTHER_CALLS = {
     "Robot.fk": (UR3.fk, (Q6,)), "Robot.fk_dq": (UR3.fk_dq, (Q6,)),
     "Robot.fk_dq_screw": (UR3.fk_dq_screw, (Q6,)), "Robot.jacobian": (UR3.jacobian, (Q6,)),
@@ -95,6 +101,28 @@ OTHER_CALLS = {
                              (Q6, Q6 / 2, Q6 / 3)),
     "dynamics.gravity": (lambda gravity: dynamics.gravity_torques(UR3, Q6, gravity=gravity),
                          ([0.0, 0.0, -9.81],)),
+    "dynamics.regressor": (lambda q, qd, qdd: dynamics.regressor(UR3, q, qd, qdd),
+                           (Q6, Q6 / 2, Q6 / 3)),
+    "dynamics.link_jacobians": (lambda q: dynamics.link_jacobians(UR3, q), (Q6,)),
+    "dynamics.inertias_from_parameters": (
+        lambda parameters: np.array([I.tensor for I in
+                                     dynamics.inertias_from_parameters(parameters)]),
+        (dynamics.inertial_parameters(UR3),)),
+    "dynamics_identification.motor_regressor": (dyn_id.motor_regressor, (Q6, Q6 / 3)),
+    "dynamics_identification.regressor_with_motors": (
+        lambda q, qd, qdd: dyn_id.regressor_with_motors(UR3, q, qd, qdd), (Q6, Q6 / 2, Q6 / 3)),
+    "dynamics_identification.base_parameters": (
+        lambda W: dyn_id.base_parameters(W, dyn_id.parameter_names(UR3)).K, (W_UR3,)),
+    "dynamics_identification.FourierTrajectory.sample": (
+        lambda t: FOURIER.sample(t), (0.3,)),
+    "dynamics_identification.exciting_trajectory": (
+        lambda centre, half_range, qd_max, qdd_max: dyn_id.exciting_trajectory(
+            UR3, BASE_UR3, centre=centre, half_range=half_range, qd_max=qd_max,
+            qdd_max=qdd_max, iterations=0, samples=30)[0].a,
+        ([0.0, -1.5, 0.0, -1.5, 0.0, 0.0], [1.0] * 6, [1.5] * 6, [5.0] * 6)),
+    "dynamics_identification.IdentifiedModel": (
+        lambda q, qd, qdd: dyn_id.IdentifiedModel(UR3, BASE_UR3, np.ones(BASE_UR3.rank))
+        .inverse_dynamics(q, qd, qdd), (Q6, Q6 / 2, Q6 / 3)),
     "ik.ur(calibrated)": (lambda target: ik.ur(CALIBRATED, target), (CALIBRATED.fk(Q6),)),
     "ik.closest_ur_solution": (lambda target, q_now: ik.closest_ur_solution(UR3, target, q_now),
                                (UR3.fk(Q6), Q6)),

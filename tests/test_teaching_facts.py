@@ -94,3 +94,16 @@ def test_the_guide_uses_the_computed_facts():
     assert used <= set(teaching_facts.facts()) | {"book_version", "book_date"}
     # no chapter's time is typed in the guide: the plan's table is the only one
     assert "| chapter | before | after | time |" not in text
+
+
+def test_the_week_tables_follow_the_plan_and_leave_room_for_exams():
+    semester = teaching_facts.SEMESTER
+    assert len(semester) == 14 and sum(1 for *_, weeks in semester if not weeks) == 2
+    facts = teaching_facts.facts()
+    assert facts["semester_table"].count("\n| ") == 14
+    wrong = [(c, lab, dict(weeks)) for c, lab, weeks in teaching_facts.SECOND_COURSE]
+    wrong[5][2]["14-dynamics"] = Fraction(1, 2)          # 1.5 weeks where the plan says 2
+    with pytest.raises(ValueError, match="14-dynamics"):
+        teaching_facts.schedule_table(wrong)
+    with pytest.raises(ValueError, match="not the chapters"):
+        teaching_facts.schedule_table(semester, ["01-complex-numbers"])

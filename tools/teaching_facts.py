@@ -11,6 +11,9 @@ MyST substitutions it sets (``{{ name }}`` in ``book/teaching-guide.md`` and oth
     chapter of ``_toc.yml`` has no row or a row names no chapter (:func:`chapter_table`).
 ``course_weeks``, ``core_weeks``
     The time of all numbered chapters, and of those before :data:`SECOND_COURSE_FROM`.
+``semester_table``, ``second_course_table``, ``semester_weeks``, ``second_course_weeks``
+    The two courses week by week (:data:`SEMESTER`, :data:`SECOND_COURSE`), checked against
+    :data:`CHAPTER_PLAN` (:func:`schedule_table`), and their numbers of weeks.
 ``browser_cells``
     Per chapter, its code cells, how many of them run in the in-browser copy and how many
     are tagged ``native-only`` (and skipped there), with what those need
@@ -36,7 +39,7 @@ CHAPTER_PLAN = {
     "01-complex-numbers": (
         "trigonometry, vectors in the plane",
         "rotate and scale by complex products; a planar arm as a sum of exponentials",
-        Fraction(1)),
+        Fraction(1, 2)),
     "02-rotations": (
         "chapter 1; matrix products",
         "rotation matrices, moving and fixed axes, Euler and roll–pitch–yaw angles, gimbal "
@@ -44,7 +47,7 @@ CHAPTER_PLAN = {
     "03-quaternions": (
         "chapter 2",
         r"quaternion algebra, rotating by $\mathsf q\,\mathbf p\,\mathsf q^*$, conversions, "
-        "SLERP", Fraction(1)),
+        "SLERP", Fraction(3, 2)),
     "04-rigid-transforms": (
         "chapter 2",
         "homogeneous transforms, monogram frame names, composing and inverting poses",
@@ -62,11 +65,11 @@ CHAPTER_PLAN = {
     "08-inverse-kinematics": (
         "chapter 7",
         "closed-form solutions (desktop arm, SCARA, all eight of the UR3), singularities, "
-        "damped least squares", Fraction(2)),
+        "damped least squares", Fraction(3, 2)),
     "09-differential-kinematics": (
         "chapter 7; chapter 8 for the last sections",
         "the Jacobian, quaternion and dual-quaternion rates, singular configurations, "
-        "manipulability", Fraction(1)),
+        "manipulability", Fraction(3, 2)),
     "10-joint-trajectories": (
         "chapter 8",
         "time laws and their peaks, synchronised joints, via-point splines, trajectory files",
@@ -78,26 +81,113 @@ CHAPTER_PLAN = {
     "12-identification-pick-and-place": (
         "chapters 7 and 8; least squares",
         "linear and nonlinear identification, what cannot be identified, calibration, a "
-        "pick-and-place plan for a real desktop arm", Fraction(1)),
+        "pick-and-place plan for a real desktop arm", Fraction(3, 2)),
     "13-programming-a-ur3": (
         "chapters 3, 8 and 10",
         "UR pose vectors, pose files, checked URScript, the record-and-replay program "
         "against a controller stand-in", Fraction(1)),
     "14-dynamics": (
-        "chapters 5, 7 and 9 (twists, link dual quaternions, the Jacobian); Newton's laws "
-        "for a rigid body",
+        "chapters 5, 7 and 9 (twists, link dual quaternions, the Jacobian); Newton's laws, "
+        "the inertia tensor, angular momentum about a moving point, Euler's equations",
         "link inertias, twists and wrenches as dual vectors, recursive Newton–Euler, "
-        r"$M(q)$, $c(q, \dot q)$ and $g(q)$ of the UR3, the energy balance", Fraction(3, 2)),
+        r"$M(q)$, $c(q, \dot q)$ and $g(q)$ of the UR3, composite and articulated bodies, "
+        "Christoffel symbols, the energy balance, tool wrenches, motors and friction",
+        Fraction(2)),
     "15-simulating-the-arm": (
         "chapters 11 and 14",
         "a MuJoCo model from a DH table, PD and computed-torque tracking of the report's "
         "circle, what model errors cost, what a simulator of our own model can confirm",
         Fraction(1)),
+    "16-identifying-the-dynamics": (
+        "chapters 12 (least squares, unidentifiable combinations), 14 and 15",
+        "the regressor and the base parameters, an exciting trajectory, estimation from a "
+        "logged run, validation, computed torque with the identified model",
+        Fraction(1)),
 }
 
 #: The first chapter of the second course (or of student projects): the chapters from it on
 #: are not in the one-semester plan.
-SECOND_COURSE_FROM = "14-dynamics"
+SECOND_COURSE_FROM = "12-identification-pick-and-place"
+
+#: The first course, week by week: ``(chapters, lab, {chapter: weeks of it})``; a week
+#: without chapters is an exam or a review. Its chapters' weeks must add up to
+#: :data:`CHAPTER_PLAN`'s (:func:`schedule_table` checks it).
+SEMESTER = [
+    ("preface, 1, start of 2", "install the environment; run chapter 1; exercises 1.2–1.3",
+     {"01-complex-numbers": Fraction(1, 2), "02-rotations": Fraction(1, 2)}),
+    ("2, start of 3", "the course notes' worked examples with `rot_x`, `rot_z`; gimbal lock",
+     {"02-rotations": Fraction(1, 2), "03-quaternions": Fraction(1, 2)}),
+    ("3", "quaternion products by hand and with `dqlab`; the four branches",
+     {"03-quaternions": Fraction(1)}),
+    ("4, start of 5", "frames of a workcell; dual numbers",
+     {"04-rigid-transforms": Fraction(1, 2), "05-dual-quaternions": Fraction(1, 2)}),
+    ("5", "dual quaternions, screws, ScLERP", {"05-dual-quaternions": Fraction(1)}),
+    ("6", "DH tables of the UR3 (standard and modified), the SCARA",
+     {"06-describing-manipulators": Fraction(1)}),
+    ("midterm", "review of Part I and chapter 6; the midterm exam", {}),
+    ("7", "forward kinematics three ways; operation counts",
+     {"07-forward-kinematics": Fraction(1)}),
+    ("8 (closed forms: the desktop arm, the SCARA, the UR3)",
+     "the lab report's inverse model and its slip; all eight UR3 solutions",
+     {"08-inverse-kinematics": Fraction(1)}),
+    ("8 (singularities, numerical IK), start of 9", "a singular pose; the Jacobian column by "
+     "column", {"08-inverse-kinematics": Fraction(1, 2),
+                "09-differential-kinematics": Fraction(1, 2)}),
+    ("9", "manipulability maps; quaternion and dual-quaternion rates",
+     {"09-differential-kinematics": Fraction(1)}),
+    ("10", "time laws; synchronising six joints", {"10-joint-trajectories": Fraction(1)}),
+    ("11", "the UR3 draws the report's circle", {"11-cartesian-paths": Fraction(1)}),
+    ("review", "review; final exam or project presentations", {}),
+]
+
+#: The second course (or the second half of a two-semester course), as :data:`SEMESTER`.
+SECOND_COURSE = [
+    ("rigid-body mechanics (if needed)", "the inertia tensor, angular momentum about a moving "
+     "point, Euler's equations: the mechanics chapter 14 assumes", {}),
+    ("12 (identification, calibration)", "identifying the desktop arm; calibrating the UR3",
+     {"12-identification-pick-and-place": Fraction(1)}),
+    ("12 (pick and place), start of 13", "the pick-and-place plan; UR poses and pose files",
+     {"12-identification-pick-and-place": Fraction(1, 2),
+      "13-programming-a-ur3": Fraction(1, 2)}),
+    ("13", "the programming lab (below)", {"13-programming-a-ur3": Fraction(1, 2)}),
+    ("14 (inertias, twists and wrenches, one body, the recursion)",
+     "the UR3's link table; the sandwich of a wrench; Newton–Euler by hand",
+     {"14-dynamics": Fraction(1)}),
+    ("14 (the mass matrix, composite and articulated bodies, motors)",
+     "gravity torques and the mass matrix of the UR3; a hand-written pass checked against "
+     "`dqlab`", {"14-dynamics": Fraction(1)}),
+    ("15", "PD against computed torque on the report's circle; a payload the model does not "
+     "know", {"15-simulating-the-arm": Fraction(1)}),
+    ("16", "identify the simulated arm; then a payload, or the arm you have",
+     {"16-identifying-the-dynamics": Fraction(1)}),
+    ("the robot you have", "read the arm's calibration, solve its inverse kinematics, "
+     "measure what the nominal model misses", {}),
+]
+
+
+def schedule_table(schedule, chapters=None):
+    """A week-by-week Markdown table of ``schedule`` (:data:`SEMESTER` or
+    :data:`SECOND_COURSE`), or a ValueError if a chapter's weeks in it do not add up to
+    :data:`CHAPTER_PLAN`'s, it names a chapter that is not in the plan, or it does not hold
+    exactly the chapters ``chapters`` (stems; not checked when None)."""
+    total = {}
+    for _, _, weeks in schedule:
+        for stem, share in weeks.items():
+            if stem not in CHAPTER_PLAN:
+                raise ValueError(f"the schedule names {stem!r}, which CHAPTER_PLAN has not")
+            total[stem] = total.get(stem, 0) + share
+    wrong = {stem: (float(weeks), float(CHAPTER_PLAN[stem][2]))
+             for stem, weeks in total.items() if weeks != CHAPTER_PLAN[stem][2]}
+    if wrong:
+        raise ValueError(f"the schedule's weeks differ from CHAPTER_PLAN's (schedule, plan): "
+                         f"{wrong}")
+    if chapters is not None and set(total) != set(chapters):
+        raise ValueError(f"the schedule holds {sorted(total)}, not the chapters "
+                         f"{sorted(chapters)}")
+    lines = ["| week | chapters | lab |", "|---|---|---|"]
+    for k, (chapters, lab, _) in enumerate(schedule, start=1):
+        lines.append(f"| {k} | {chapters} | {lab} |")
+    return "\n".join(lines)
 
 
 def _weeks(value):
@@ -191,8 +281,15 @@ def exercise_sentence(counts, chapter):
 def facts(book=editions.BOOK):
     """Every substitution of this extension, ``{name: Markdown}``."""
     total, core = course_weeks(book)
+    stems = [p.stem for p in editions.chapters(book)]
+    cut = stems.index(SECOND_COURSE_FROM) if SECOND_COURSE_FROM in stems else len(stems)
+    first, second = stems[:cut], stems[cut:]
     out = {"exercise_checks": editions.check_table(book),
            "chapter_table": chapter_table(book),
+           "semester_table": schedule_table(SEMESTER, first),
+           "second_course_table": schedule_table(SECOND_COURSE, second),
+           "semester_weeks": str(len(SEMESTER)),
+           "second_course_weeks": str(len(SECOND_COURSE)),
            "course_weeks": f"{float(total):g}", "core_weeks": f"{float(core):g}",
            "browser_cells": browser_table(book)}
     counts = editions.check_counts(book)
