@@ -73,7 +73,7 @@ from numpy.typing import ArrayLike, NDArray
 from ._checks import as_float_array, components, finite_or_raise, stack_components
 from ._dynamics_floats import constants as float_constants
 from ._dynamics_floats import inverse_dynamics as inverse_dynamics_on_floats
-from ._kernels import dual_quaternion_mul
+from ._kernels import dual_quaternion_mul, momentum
 from .dualquat import (
     dual_quaternion_apply,
     dual_quaternion_conjugate,
@@ -263,8 +263,8 @@ def _recursion(robot, inertias, q, qd, qdd, g_0, energy):
         omega_dot = omega_dot + s_real * qdd_i + turn
         v_dot = v_dot + s_dual * qdd_i + slide
         # Newton-Euler for link i: the rate of its momentum h = M xi
-        p, L = inertia.momentum(omega, v)
-        p_dot, L_dot = inertia.momentum(omega_dot, v_dot)
+        p, L = momentum(inertia.mass, inertia.com, inertia.tensor, omega, v)
+        p_dot, L_dot = momentum(inertia.mass, inertia.com, inertia.tensor, omega_dot, v_dot)
         carried_f, carried_n = dual_cross(omega, v, p, L)
         wrenches.append((p_dot + carried_f, L_dot + carried_n))
         if energy:
