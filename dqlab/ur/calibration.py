@@ -916,7 +916,7 @@ def robot_from_joint_origins(origins, *, name: str = "") -> Robot:
         raise ValueError("origins are too large: the joints' positions or the DH parameters "
                          "overflow (no float holds them)")
     robot = Robot([Link(a=a, alpha=al, d=d, theta_offset=t, limits=_LIMITS)
-                   for t, d, a, al in rows], convention="dh", name=name)
+                   for t, d, a, al in rows.tolist()], convention="dh", name=name)
     with np.errstate(over="ignore", invalid="ignore"):
         tool = np.linalg.inv(robot.fk(np.zeros(len(W)))) @ W[-1]
     if not np.isfinite(tool).all():
