@@ -462,3 +462,22 @@ def norm_last_axis(a):
         safe = np.where(m > 0.0, m, 1.0)
         n[risky] = m * np.sqrt(np.sum((sub / safe[..., None]) ** 2, axis=-1))
     return n
+
+
+# --------------------------------------------------------------------------------------
+# Rigid bodies
+
+
+def momentum(mass, com, tensor, omega, v):
+    r"""The momentum :math:`\mathbf p + \varepsilon\mathbf L` of a body (mass :math:`m`,
+    centre of mass :math:`\mathbf c`, tensor :math:`I_c` about it) moving with the twist
+    :math:`\omega + \varepsilon\mathbf v` (arrays (..., 3)): :math:`\mathbf p = m\,(\mathbf v
+    + \omega\times\mathbf c)`, :math:`\mathbf L = I_c\,\omega + \mathbf c\times\mathbf p`
+    (:meth:`dqlab.inertia.LinkInertia.momentum`, which checks its arguments and calls this).
+
+    >>> momentum(2.0, np.array([0.1, 0.0, 0.0]), np.zeros((3, 3)), np.array([0.0, 0.0, 1.0]),
+    ...          np.zeros(3))
+    (array([0. , 0.2, 0. ]), array([0.  , 0.  , 0.02]))
+    """
+    p = mass * (v + np.cross(omega, com))
+    return p, omega @ tensor.T + np.cross(com, p)

@@ -95,7 +95,7 @@ from ._dynamics_compiled import ready as compiled_ready
 from ._dynamics_compiled import regressor_rows as compiled_regressor
 from ._dynamics_floats import constants as float_constants
 from ._dynamics_floats import inverse_dynamics as inverse_dynamics_on_floats
-from ._kernels import dual_quaternion_mul
+from ._kernels import dual_quaternion_mul, momentum
 from .dualquat import (
     dual_quaternion_apply,
     dual_quaternion_conjugate,
@@ -309,8 +309,8 @@ def _recursion(robot, inertias, q, qd, qdd, g_0, energy):
     wrenches, kinetic = [], 0.0
     for inertia, (omega, v, omega_dot, v_dot) in zip(inertias, twists, strict=True):
         # Newton-Euler for link i: the rate of its momentum h = M xi
-        p, L = inertia.momentum(omega, v)
-        p_dot, L_dot = inertia.momentum(omega_dot, v_dot)
+        p, L = momentum(inertia.mass, inertia.com, inertia.tensor, omega, v)
+        p_dot, L_dot = momentum(inertia.mass, inertia.com, inertia.tensor, omega_dot, v_dot)
         carried_f, carried_n = dual_cross(omega, v, p, L)
         wrenches.append((p_dot + carried_f, L_dot + carried_n))
         if energy:

@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._checks import as_float_array, check_scalar
+from ._kernels import momentum
 from .transforms import check_transform
 
 __all__ = ["LinkInertia"]
@@ -40,6 +41,17 @@ __all__ = ["LinkInertia"]
 def _mass(value, name="mass"):
     """A mass, radius or factor: a finite number >= 0 (text and booleans refused by name)."""
     return check_scalar(value, name, minimum=0.0)
+
+
+def _check_moment_at_origin(mass, point, names):
+    r"""A ValueError naming ``names`` (the arguments that placed the body) unless a float
+    holds :math:`m\,\lVert\mathbf c\rVert^2`, the size of the parallel-axis term of a
+    body of mass ``mass`` whose centre of mass is ``point``."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        moment = mass * float(point @ point)
+    if not math.isfinite(moment):
+        raise ValueError(f"{names} are too large: the inertia about the frame's origin, "
+                         "m |c|^2, overflows")
 
 
 def _finite_tensor(tensor, what):
@@ -162,6 +174,7 @@ class LinkInertia:
         centre = as_float_array(centre, "centre", (3,))
         if centre.shape != (3,):
             raise ValueError(f"centre must be one point of shape (3,), got shape {centre.shape}")
+        _check_moment_at_origin(mass, centre, "mass and centre")
         with np.errstate(over="ignore", invalid="ignore"):
             tensor = 0.4 * mass * (radius * radius) * np.eye(3)
         return cls(mass, centre, _finite_tensor(
@@ -207,7 +220,10 @@ class LinkInertia:
             tensor = (0.5 * mass * r2 * along
                       + mass * (3 * r2 + l2) / 12.0 * (np.eye(3) - along))
         what = f"a rod of mass {mass:g} kg, length {length:g} m and radius {radius:g} m"
-        return cls(mass, 0.5 * start + 0.5 * end, _finite_tensor(tensor, what))
+        tensor = _finite_tensor(tensor, what)
+        centre = 0.5 * start + 0.5 * end
+        _check_moment_at_origin(mass, centre, "mass, start and end")
+        return cls(mass, centre, tensor)
 
     # -- derived quantities -------------------------------------------------------------------
     @property
@@ -259,11 +275,24 @@ class LinkInertia:
         -------
         p, L : ndarray, shape (..., 3)
             Linear momentum and angular momentum about the frame's origin.
+
+        Raises
+        ------
+        ValueError
+            Naming ``omega`` or ``v``: not real vectors of shape (..., 3), NaN or infinity,
+            shapes that do not broadcast; or a momentum that overflows.
         """
-        omega = np.asarray(omega, dtype=float)
-        v = np.asarray(v, dtype=float)
-        p = self.mass * (v + np.cross(omega, self.com))
-        L = omega @ self.tensor.T + np.cross(self.com, p)
+        omega = as_float_array(omega, "omega", (3,))
+        v = as_float_array(v, "v", (3,))
+        try:
+            np.broadcast_shapes(omega.shape, v.shape)
+        except ValueError:
+            raise ValueError(f"omega and v must broadcast, got shapes {omega.shape} and "
+                             f"{v.shape}") from None
+        with np.errstate(over="ignore", invalid="ignore"):
+            p, L = momentum(self.mass, self.com, self.tensor, omega, v)
+        if not (np.isfinite(p).all() and np.isfinite(L).all()):
+            raise ValueError("omega and v are too large: the momentum overflows")
         return p, L
 
     # -- new inertias from this one ---------------------------------------------------------

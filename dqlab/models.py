@@ -384,6 +384,11 @@ UR_PHYSICAL_PARAMETERS["UR7e"] = dict(UR_PHYSICAL_PARAMETERS["UR5e"],
 UR_PHYSICAL_PARAMETERS["UR12e"] = dict(UR_PHYSICAL_PARAMETERS["UR10e"],
                                        source=_R2.format("ur12e") + " @ 9743c966 (2025)")
 
+#: How far apart (m, largest coordinate at sample joint vectors) the flanges of two
+#: descriptions of one arm may be in :func:`with_model_inertias`: a calibration moves them
+#: by millimetres, the links of two different arms are centimetres to metres apart.
+_SAME_ARM = 0.02
+
 #: Published tensors the models do not take (see the module docstring, note 4), and why.
 _TENSORS_NOT_TAKEN = {
     "UR30": "the UR16e's tensors copied (one sign apart), too small for the UR30's links"}
@@ -424,6 +429,14 @@ def ur_link_inertias(masses: ArrayLike, centres_of_mass: ArrayLike,
     -------
     tuple of LinkInertia
 
+    Raises
+    ------
+    TypeError, ValueError
+        Naming the argument: not real numbers of its shape, NaN or infinity, a negative
+        mass or radius, ``a`` missing without ``tensors``; a row of the table that is no
+        rigid body (a tensor that is not symmetric, has a negative principal moment or breaks
+        the triangle inequality) or whose inertia overflows, naming the link.
+
     Examples
     --------
     >>> p = UR_DYNAMICS["UR3"]
@@ -434,29 +447,51 @@ def ur_link_inertias(masses: ArrayLike, centres_of_mass: ArrayLike,
     >>> approx[1].tensor.diagonal().round(6)     # the upper arm: the table's first row
     array([0.009619, 0.021728, 0.021728])
     """
-    masses = as_float_array(masses, "masses")
-    coms = as_float_array(centres_of_mass, "centres_of_mass")
-    if masses.shape != (6,) or coms.shape != (6, 3):
-        raise ValueError(f"masses must have shape (6,) and centres_of_mass (6, 3), got "
-                         f"{masses.shape} and {coms.shape}")
+    masses = _table(masses, "masses", (6,))
+    wrong = np.flatnonzero(masses < 0.0)
+    if wrong.size:
+        raise ValueError(f"masses must be >= 0, got {float(masses[wrong[0]])!r} kg for link "
+                         f"{wrong[0] + 1}")
+    coms = _table(centres_of_mass, "centres_of_mass", (6, 3))
+    a = None if a is None else _table(a, "a", (6,))
+    radius = check_scalar(radius, "radius", minimum=0.0)
     if tensors is None:
         if a is None:
             raise ValueError("without tensors, give the DH lengths a for the cylinders")
-        a = as_float_array(a, "a", (6,))
-        if a.shape != (6,):
-            raise ValueError(f"a must have shape (6,), got {a.shape}")
-        radius = check_scalar(radius, "radius", minimum=0.0)
         # the axis of each cylinder in its DH frame: along x for the upper arm and the
         # forearm; along the joint's own axis for the housings (z_{i-1} seen from frame i:
         # y for links 1, 4 and 5, whose twist alpha is +-pi/2, z for link 6)
         axes = np.array([[0, 1, 0], [1, 0, 0], [1, 0, 0], [0, 1, 0], [0, 1, 0], [0, 0, 1.0]])
         lengths = [2 * radius, abs(a[1]), abs(a[2]), 2 * radius, 2 * radius, 2 * radius]
-        return tuple(LinkInertia.rod(m, c - 0.5 * h * u, c + 0.5 * h * u, radius)
-                     for m, c, u, h in zip(masses, coms, axes, lengths, strict=True))
+        return _bodies(lambda m, c, u, h: LinkInertia.rod(m, c - 0.5 * h * u, c + 0.5 * h * u,
+                                                          radius),
+                       zip(masses, coms, axes, lengths, strict=True),
+                       "masses, centres_of_mass, a and radius")
     tensors = as_float_array(tensors, "tensors")
     if tensors.shape not in ((6, 6), (6, 3, 3)):
         raise ValueError(f"tensors must have shape (6, 6) or (6, 3, 3), got {tensors.shape}")
-    return tuple(LinkInertia(m, c, t) for m, c, t in zip(masses, coms, tensors, strict=True))
+    return _bodies(LinkInertia, zip(masses, coms, tensors, strict=True),
+                   "masses, centres_of_mass and tensors")
+
+
+def _table(value, name, shape):
+    """A table of finite numbers of the given ``shape``, or an error naming ``name``."""
+    table = as_float_array(value, name)
+    if table.shape != shape:
+        raise ValueError(f"{name} must have shape {shape}, got shape {table.shape}")
+    return table
+
+
+def _bodies(make, rows, names):
+    """``make(*row)`` of each link's row, as a tuple; a ValueError naming the link and
+    ``names`` (the arguments its row comes from) when the row is no rigid body."""
+    bodies = []
+    for i, row in enumerate(rows):
+        try:
+            bodies.append(make(*row))
+        except ValueError as exc:
+            raise ValueError(f"link {i + 1} of {names}: {exc}") from None
+    return tuple(bodies)
 
 
 def _quarter_turns(R):
@@ -527,15 +562,11 @@ def ur_link_inertias_from_ros(mass: ArrayLike, cog: ArrayLike, rpy: ArrayLike,
     >>> p["cog"][1], inertias[1].com.round(6).tolist()
     ((-0.2125, 0.0, 0.11336), [0.2125, 0.0, 0.11336])
     """
-    mass = as_float_array(mass, "mass")
-    cog = as_float_array(cog, "cog")
-    rpy = as_float_array(rpy, "rpy")
-    tensor = as_float_array(tensor, "tensor")
-    a = as_float_array(a, "a")
-    for value, name, shape in ((mass, "mass", (6,)), (cog, "cog", (6, 3)), (rpy, "rpy", (6, 3)),
-                               (tensor, "tensor", (6, 6)), (a, "a", (6,))):
-        if value.shape != shape:
-            raise ValueError(f"{name} must have shape {shape}, got {value.shape}")
+    mass = _table(mass, "mass", (6,))
+    cog = _table(cog, "cog", (6, 3))
+    rpy = _table(rpy, "rpy", (6, 3))
+    tensor = _table(tensor, "tensor", (6, 6))
+    a = _table(a, "a", (6,))
     turn_down = np.array([[1.0, 0, 0], [0, 0, 1], [0, -1, 0]])        # R_x(-pi/2)
     turns = (turn_down, np.eye(3), np.eye(3), turn_down, turn_down.T, np.eye(3))
     shifts = (np.zeros(3), np.array([-a[1], 0, 0]), np.array([-a[2], 0, 0]),
@@ -647,11 +678,16 @@ def rod_link_inertias(robot: Robot, *, base_mass: float = 0.5, mass_per_metre: f
                 corner = np.array([nxt.a, 0.0, 0.0])
                 end = corner + nxt.d * np.array([0.0, -math.sin(nxt.alpha),
                                                  math.cos(nxt.alpha)])
-        path = float(np.linalg.norm(corner - start) + np.linalg.norm(end - corner))
-        if np.linalg.norm(end - start) < 1e-9:
+        path = math.hypot(*(corner - start)) + math.hypot(*(end - corner))   # no overflow
+        if math.hypot(*(end - start)) < 1e-9:
             start, end = start - radius * axis, start + radius * axis
-        inertias.append(LinkInertia.rod(base_mass + mass_per_metre * path, start, end,
-                                        radius))
+        try:
+            inertias.append(LinkInertia.rod(base_mass + mass_per_metre * path, start, end,
+                                            radius))
+        except ValueError as exc:
+            raise ValueError(f"link {i + 1} of the robot, a rod of {path:g} m: base_mass + "
+                             f"mass_per_metre x length and radius give no finite inertia "
+                             f"({exc})") from None
     return tuple(inertias)
 
 
@@ -672,12 +708,21 @@ def with_model_inertias(robot: Robot, model: Robot) -> Robot:
     Parameters
     ----------
     robot, model : Robot
-        The same number of joints.
+        Two descriptions of one arm: the same number of joints, and flanges (bases and tools
+        left out) within 2 cm of each other at sample joint vectors.
 
     Returns
     -------
     Robot
         ``robot`` with these inertias (everything else kept).
+
+    Raises
+    ------
+    TypeError
+        If ``robot`` or ``model`` is not a :class:`~dqlab.robot.Robot`.
+    ValueError
+        If they are not two descriptions of one arm (the message names both): the links of
+        another arm would be carried to places they do not have.
 
     Examples
     --------
@@ -698,6 +743,10 @@ def with_model_inertias(robot: Robot, model: Robot) -> Robot:
     if robot.n != model.n:
         raise ValueError(f"robot and model must have as many joints, got {robot.n} and "
                          f"{model.n}")
+    gap = _flange_gap(robot, model)
+    if not gap <= _SAME_ARM:
+        raise ValueError(f"robot and model must describe one arm: their flanges are {gap:.3g} m "
+                         f"apart at sample joint vectors (at most {_SAME_ARM:g} m)")
     zero = np.zeros(robot.n)
     mine = np.linalg.inv(robot.base) @ robot.fk(zero, all_frames=True)
     theirs = np.linalg.inv(model.base) @ model.fk(zero, all_frames=True)
@@ -707,6 +756,17 @@ def with_model_inertias(robot: Robot, model: Robot) -> Robot:
         X[3] = (0.0, 0.0, 0.0, 1.0)
         inertias.append(None if link.inertia is None else link.inertia.moved(X))
     return _with_inertias(robot, inertias)
+
+
+def _flange_gap(robot, model):
+    """The largest distance between the flanges of ``robot`` and ``model`` (bases and tools
+    left out) at 16 joint vectors drawn within ``robot``'s limits (clipped to one turn)."""
+    lo, hi = np.clip(robot.limits, -PI, PI).T
+    q = lo + (hi - lo) * np.random.default_rng(5).uniform(size=(16, robot.n))
+    bare = [Robot(r.links, convention=r.convention) for r in (robot, model)]
+    with np.errstate(over="ignore", invalid="ignore"):
+        gap = bare[0].fk(q)[:, :3, 3] - bare[1].fk(q)[:, :3, 3]
+        return float(np.max(np.abs(gap)))
 
 
 def _with_inertias(robot, inertias):
@@ -1244,11 +1304,18 @@ def six_r(a2: float = 0.4, r4: float = 0.35, r7: float = 0.1) -> Robot:
     -------
     Robot
 
+    Raises
+    ------
+    ValueError
+        If a length is not a finite number (text and booleans included; the message names
+        it), or so large that the links' inertias overflow.
+
     Examples
     --------
     >>> six_r().fk([0, 0, 0, 0, 0, 0])[:3, 3].round(6) + 0.0
     array([ 0.4 ,  0.  , -0.45])
     """
+    a2, r4, r7 = (check_scalar(x, name) for x, name in ((a2, "a2"), (r4, "r4"), (r7, "r7")))
     alpha = (0.0, PI / 2, 0.0, PI / 2, -PI / 2, PI / 2)
     a = (0.0, 0.0, a2, 0.0, 0.0, 0.0)
     r = (0.0, 0.0, 0.0, r4, 0.0, 0.0)
@@ -1316,16 +1383,24 @@ class ChainShape:
         ----------
         robot : Robot
         atol : float
-            Tolerance of the comparisons (lengths in metres, angles in radians).
+            Tolerance of the comparisons (lengths in metres, angles in radians), a finite
+            number >= 0.
+
+        Raises
+        ------
+        TypeError
+            If ``robot`` is not a :class:`~dqlab.robot.Robot`.
+        ValueError
+            If ``atol`` is not a finite number >= 0, or the robot does not have the shape.
         """
+        check_instance(robot, Robot, "robot")
+        atol = check_scalar(atol, "atol", minimum=0.0)
         problem = self._difference(robot, atol)
         if problem:
             raise ValueError(f"{self.label} needs {self.description}; {problem}")
 
     def _difference(self, robot, atol):
-        links = getattr(robot, "links", None)
-        if links is None:
-            return f"got {type(robot).__name__}, not a Robot"
+        links = robot.links
         if robot.convention != self.convention:
             return f"the robot's convention is {robot.convention!r}"
         joints = "".join("R" if lk.is_revolute else "P" for lk in links)
@@ -1344,7 +1419,8 @@ class ChainShape:
                     return f"link {i + 1} has {name} = {getattr(links[i], name)!r}"
             for i in nonzero:
                 if abs(getattr(links[i], name)) <= atol:
-                    return f"link {i + 1} has {name} = 0"
+                    return (f"link {i + 1} has {name} = {getattr(links[i], name)!r}, zero "
+                            f"within atol = {atol:g}")
         return ""
 
 

@@ -260,9 +260,6 @@ CASES_ = [
      30.0, ("start_timeout",), {}),
     ("ControllerStandIn.primary_port", lambda v, tmp: ur.ControllerStandIn(primary_port=v), 0,
      ("primary_port",), {}),
-    ("read_kinematics_info.port",
-     lambda v, tmp: calibration.read_kinematics_info("127.0.0.1", v, timeout=0.01), 30002,
-     ("port",), {}),
     ("kinematics_info_from_robot.checksum",
      lambda v, tmp: calibration.kinematics_info_from_robot(UR3, checksum=v), (7,) * 6,
      ("checksum",), {}),
@@ -307,17 +304,11 @@ def _kind(good):
     return "scalar" if np.ndim(good) == 0 else "array"
 
 
-#: Cases whose good value is refused too (a port with no server behind it): a numpy number
-#: is refused there like the int it stands for, not counted as a valid input refused.
-_REFUSED_ANYWAY = {"read_kinematics_info.port"}
-
 CASES = Registry()
 for _name, _call, _good, _names, _options in CASES_:
     _label = _name.rsplit(".", 1)[1]
     _arg = Arg(_good, _kind(_good), _options.get("none_ok", False),
                _options.get("inf_ok", False), tuple(_names))
-    if _name in _REFUSED_ANYWAY:
-        _arg.only = tuple(k for k in _arg.kinds() if k != "numpy")
     CASES.add("ur" if not _name.startswith("Mujoco") else "sim.backend", _name,
               lambda _call=_call, **kw: _call(next(iter(kw.values())), folder()),
               group=_name.rsplit(".", 1)[0], **{_label: _arg})

@@ -16,6 +16,7 @@ from dqlab.models import (
     UR_MODELS,
     UR_PHYSICAL_PARAMETERS,
 )
+from dqlab.robot import Robot
 from dqlab.ur.script import SafetyLimits
 
 #: What the sources leave out (see the module docstring of dqlab.models).
@@ -229,3 +230,16 @@ def test_a_calibrated_arm_keeps_its_models_ratings_and_bodies():
     copied = dynamics.with_inertias(calibrated, [lk.inertia for lk in nominal.links])
     tau_copied = dynamics.inverse_dynamics(copied, q, qd, qdd)     # the numbers copied: bodies
     assert np.abs(tau_copied[:, 0]).max() > 10 * np.abs(tau_nominal).max()   # metres away
+
+
+def test_model_inertias_go_only_onto_a_description_of_the_same_arm():
+    """Another arm's bodies would land where this arm has no links: refused, naming both."""
+    d = list(models.UR_DH["UR3"]["d"])
+    d[1], d[2] = 12.0, -12.0                         # the UR3, its frames 12 m along the axes
+    far = Robot.from_dh_table(d=d, a=models.UR_DH["UR3"]["a"], alpha=models.UR_ALPHA)
+    assert models.with_model_inertias(far, models.ur3()).links[1].inertia is not None
+    with pytest.raises(ValueError, match=r"^robot and model must describe one arm: their "
+                                         r"flanges are 0\.\d+ m apart"):
+        models.with_model_inertias(far, models.ur5e())
+    with pytest.raises(TypeError, match="^model must be a Robot, got None"):
+        models.with_model_inertias(far, None)

@@ -456,6 +456,18 @@ def test_joint_origins_with_a_moved_base_and_a_tool_keep_forward_kinematics():
     assert np.abs(robot.fk(q) - chain_fk(origins, q)).max() < 1e-12
 
 
+def test_joint_origins_far_away_keep_forward_kinematics_or_are_refused():
+    """Origins 1e300 m apart give the chain's own forward kinematics (no overflow in a norm);
+    beyond what a float holds, a clear refusal."""
+    origins = dh_origins(ur5e())
+    origins[:, 0, 3] = -1e300
+    robot = robot_from_joint_origins(origins)
+    assert np.abs(robot.fk(Q) - chain_fk(origins, Q)).max() < 1e-15 * 1e300
+    origins[:, 0, 3] = 1.5e308
+    with pytest.raises(ValueError, match="^origins are too large"):
+        robot_from_joint_origins(origins)
+
+
 def test_joint_origins_of_a_controllers_arm_give_its_dh_parameters_back():
     """Reading the DH parameters of a physically perturbed arm (far common normals), then
     its origins, then the parameters again, gives the same parameters."""
@@ -757,8 +769,28 @@ def test_checksums_and_status_are_unsigned_32_bit_integers(checksum, status, nam
         kinematics_info_from_robot(ur5e(), checksum=checksum, calibration_status=status)
 
 
+def test_kinematics_info_is_checked_when_it_is_made():
+    """What the controller's message cannot carry is refused by its field, before a message
+    packs NaN or struct fails on a number; the encoder and decoder name their argument."""
+    info = kinematics_info_from_robot(ur5e())
+    fields = dict(checksum=info.checksum, theta=info.theta, a=info.a, d=info.d,
+                  alpha=info.alpha, calibration_status=0)
+    for field, bad, error in [("d", (math.nan,) * 6, ValueError), ("theta", (0.0,) * 5, ValueError),
+                              ("a", None, TypeError), ("alpha", ("0",) * 6, TypeError),
+                              ("checksum", (2 ** 32,) * 6, ValueError),
+                              ("calibration_status", True, ValueError)]:
+        with pytest.raises(error, match=rf"^{field}(\[0\])? must"):
+            KinematicsInfo(**{**fields, field: bad})
+    assert KinematicsInfo(**{**fields, "d": np.array(info.d)}) == info     # as tuples
+    with pytest.raises(TypeError, match="^info must be a KinematicsInfo, got None"):
+        message_from_kinematics_info(None)
+    with pytest.raises(TypeError, match="^message must be bytes, got 'abc'"):
+        kinematics_info_from_message("abc")
+
+
 @pytest.mark.parametrize("kwargs, name", [
     (dict(host=None), "host"), (dict(host=""), "host"), (dict(host=123), "host"),
+    (dict(host="x\ud800"), "host"), (dict(host="x\ny"), "host"),
     (dict(port=30002 + 65536), "port"), (dict(port=0), "port"), (dict(port="30002"), "port"),
     (dict(port=30002.0), "port"), (dict(timeout=0), "timeout"),
     (dict(timeout=float("nan")), "timeout"), (dict(timeout="1"), "timeout"),

@@ -182,7 +182,7 @@ def test_program_checks_the_approach_and_the_arguments():
 
 
 def test_safety_limits_validate_themselves():
-    with pytest.raises(ValueError, match="max_joint_step must be positive"):
+    with pytest.raises(ValueError, match="max_joint_step must be a finite number > 0"):
         S.SafetyLimits(max_joint_step=0.0)
     with pytest.raises(ValueError, match="joint_limits"):
         S.SafetyLimits(joint_limits=[[1.0, -1.0]] * 6)

@@ -71,9 +71,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._checks import check_path, check_scalar, real_array
+from .._checks import (
+    check_instance,
+    check_path,
+    check_scalar,
+    check_text,
+    real_array,
+    short_repr,
+)
 from ..ik import pose_errors
-from ..models import UR_MODELS
+from ..models import UR_MODELS, with_model_inertias
 from ..robot import Link, Robot
 from ..rotations import rot_x, rot_y, rot_z
 from ..transforms import check_transform
@@ -113,6 +120,9 @@ _NEAR_ZERO = 1e-12
 #: How many rewritings of a ur_calibration file's parameters are hashed before giving up.
 _MAX_REWRITINGS = 60_000
 _MAX_DEPTH = 16
+#: The longest a socket waits at once, s (it cannot wait beyond what the platform's clock
+#: holds, ~1e9 s): a longer timeout is waited in turns.
+_LONGEST_WAIT = 3600.0
 
 
 def _quote(value, limit=60):
@@ -146,6 +156,22 @@ class KinematicsInfo:
     theta, a, d, alpha : tuple of 6 float
         Standard DH, metres and radians; ``theta`` holds the joint-angle offsets.
     calibration_status : int
+
+    Raises
+    ------
+    TypeError, ValueError
+        Naming the field, unless the checksums and the status are unsigned 32-bit integers
+        (:func:`check_identifiers`) and ``theta``, ``a``, ``d``, ``alpha`` six finite real
+        numbers each: what the controller's message can carry.
+
+    Examples
+    --------
+    >>> KinematicsInfo((1,) * 6, (0,) * 6, (0,) * 6, (0.1,) * 6, (0,) * 6).d
+    (0.1, 0.1, 0.1, 0.1, 0.1, 0.1)
+    >>> KinematicsInfo((1,) * 6, (0,) * 6, (0,) * 6, (float("nan"),) * 6, (0,) * 6)
+    Traceback (most recent call last):
+    ...
+    ValueError: d must be 6 finite numbers, got nan for joint 1
     """
 
     checksum: tuple
@@ -154,6 +180,13 @@ class KinematicsInfo:
     d: tuple
     alpha: tuple
     calibration_status: int = 0
+
+    def __post_init__(self):
+        checksum, status = check_identifiers(self.checksum, self.calibration_status)
+        object.__setattr__(self, "checksum", checksum)
+        object.__setattr__(self, "calibration_status", status)
+        for field in ("theta", "a", "d", "alpha"):
+            object.__setattr__(self, field, _six_numbers(getattr(self, field), field))
 
     @property
     def hash(self) -> str:
@@ -175,6 +208,21 @@ class KinematicsInfo:
         'calib_12788084448423163542'
         """
         return _hash(_hash_text(self.theta, self.d, self.a, self.alpha))
+
+
+def _six_numbers(value, name):
+    """``value`` as a tuple of six finite floats (one per joint), or an error naming
+    ``name``."""
+    a = real_array(value, name)
+    if a.shape != (6,):
+        raise ValueError(f"{name} must be 6 finite numbers (one per joint), got shape "
+                         f"{a.shape}")
+    wrong = np.flatnonzero(~np.isfinite(a))
+    if wrong.size:
+        j = int(wrong[0])
+        raise ValueError(f"{name} must be 6 finite numbers, got {float(a[j])!r} for joint "
+                         f"{j + 1}")
+    return tuple(a.tolist())
 
 
 def _hash_text(theta, d, a, alpha):
@@ -236,8 +284,8 @@ def kinematics_info_from_robot(robot: Robot, *, checksum=(UNCALIBRATED,) * 6,
     links = getattr(robot, "links", None)
     if (links is None or robot.convention != "dh" or len(links) != 6
             or not all(lk.is_revolute for lk in links)):
-        raise ValueError(f"robot must be six revolute joints in standard DH, got {robot!r}")
-    checksum, calibration_status = check_identifiers(checksum, calibration_status)
+        raise ValueError(f"robot must be six revolute joints in standard DH, got "
+                         f"{short_repr(robot)}")
     return KinematicsInfo(checksum, *(tuple(getattr(lk, k) for lk in links)
                                       for k in ("theta_offset", "a", "d", "alpha")),
                           calibration_status)
@@ -277,6 +325,7 @@ def message_from_kinematics_info(info: KinematicsInfo) -> bytes:
     >>> len(message), message[4], message[9]        # header, then one sub-package of 225
     (230, 16, 5)
     """
+    check_instance(info, KinematicsInfo, "info")        # its fields checked when it was made
     body = _BODY.pack(*info.checksum, *info.theta, *info.a, *info.d, *info.alpha,
                       info.calibration_status)
     package = _HEADER.pack(_HEADER.size + len(body), KINEMATICS_INFO) + body
@@ -289,7 +338,7 @@ def kinematics_info_from_message(message: bytes, *, source: str = "message"
 
     Parameters
     ----------
-    message : bytes
+    message : bytes, bytearray or memoryview
         One whole message, header included; the other sub-packages are skipped.
     source : str
         Named in error messages.
@@ -300,6 +349,8 @@ def kinematics_info_from_message(message: bytes, *, source: str = "message"
 
     Raises
     ------
+    TypeError
+        If ``message`` is not bytes.
     CalibrationError
         Naming the field: a message that is not a robot state, a size that does not match,
         no kinematics info, a kinematics info of another length, NaN or infinity.
@@ -315,6 +366,8 @@ def kinematics_info_from_message(message: bytes, *, source: str = "message"
     ...
     dqlab.ur.calibration.CalibrationError: message: size: the header says 230 bytes, ...
     """
+    if not isinstance(message, (bytes, bytearray, memoryview)):
+        raise TypeError(f"message must be bytes, got {short_repr(message)}")
     message = bytes(message)
     if len(message) < _MESSAGE_HEADER.size:
         raise CalibrationError(source, "size", f"{len(message)} bytes, shorter than a header")
@@ -374,10 +427,12 @@ def read_kinematics_info(host: str, port: int = 30002, *, timeout: float = 5.0
     Parameters
     ----------
     host : str
+        A host name or address (one line of text).
     port : int
         30001 (primary) or 30002 (secondary) on a robot.
     timeout : float
-        Seconds to wait for it.
+        Seconds to wait for it, any finite number > 0 (a long wait is waited in turns of
+        an hour: a socket cannot wait beyond what the platform's clock holds).
 
     Returns
     -------
@@ -396,11 +451,17 @@ def read_kinematics_info(host: str, port: int = 30002, *, timeout: float = 5.0
     if not isinstance(host, str) or not host.strip():
         raise TypeError(f"host must be a host name or address (a non-empty str), got "
                         f"{_quote(host)}")
+    check_text(host, "host", max_length=253)
     port = check_scalar(port, "port", minimum=1, maximum=65535, integer=True)
     timeout = check_scalar(timeout, "timeout", minimum=0, strict=True)
     source = f"{host}:{port}"
     deadline = time.monotonic() + timeout
-    with socket.create_connection((host, port), timeout=timeout) as sock:
+    try:
+        sock = socket.create_connection((host, port), timeout=min(timeout, _LONGEST_WAIT))
+    except UnicodeError as exc:                 # what the name lookup cannot encode (IDNA)
+        raise ValueError(f"host must be a host name or address, got {_quote(host)}: "
+                         f"{_one_line(exc)}") from None
+    with sock:
         buffer = b""
         while True:
             while len(buffer) >= _MESSAGE_HEADER.size:
@@ -419,11 +480,11 @@ def read_kinematics_info(host: str, port: int = 30002, *, timeout: float = 5.0
             left = deadline - time.monotonic()
             if left <= 0:
                 raise TimeoutError(f"{source}: no kinematics info within {timeout} s")
-            sock.settimeout(left)
+            sock.settimeout(min(left, _LONGEST_WAIT))
             try:
                 data = sock.recv(65536)
             except socket.timeout:
-                raise TimeoutError(f"{source}: no kinematics info within {timeout} s") from None
+                continue                        # the deadline above says whether time is up
             if not data:
                 raise ConnectionError(f"{source}: closed before sending the kinematics info")
             buffer += data
@@ -470,15 +531,15 @@ def robot_from_kinematics_info(info: KinematicsInfo, *, model=None, name: str = 
     _nominal(model, required=False)
     if not isinstance(info, KinematicsInfo):
         raise TypeError(f"info must be a KinematicsInfo, got {type(info).__name__}")
-    robot = _robot(info.theta, info.a, info.d, info.alpha, model, name)
-    _check_model(robot, model, source, "dh_a, dh_d")
+    robot = _robot(info.theta, info.a, info.d, info.alpha, model, name, source, "dh_a, dh_d")
     return robot
 
 
-def _robot(theta, a, d, alpha, model, name):
+def _robot(theta, a, d, alpha, model, name, source, field):
     """The calibrated arm: these DH parameters, and the model's joint limits, rated speeds
     and torques, joint names and inertias (moved into the calibrated frames); without a
-    model: limits of +-2 pi and nothing else."""
+    model: limits of +-2 pi and nothing else. A calibration that does not fit the model is
+    refused first, naming ``source`` and ``field`` (:func:`_check_model`)."""
     nominal = _nominal(model, required=False)
     label = name or f"{_model_name(model) or 'UR'} (calibrated)"
     ratings = [{"limits": _LIMITS}] * 6
@@ -491,8 +552,7 @@ def _robot(theta, a, d, alpha, model, name):
                   convention="dh", name=label)
     if nominal is None:
         return robot
-    from ..models import with_model_inertias
-
+    _check_model(robot, model, source, field)
     return with_model_inertias(robot, nominal)      # the model's bodies in these frames
 
 
@@ -787,15 +847,14 @@ def robot_from_corrections(corrections: CalibrationConf, model, *, name: str = "
                                    ) from None
         if values.shape != (6,) or not np.isfinite(values).all():
             raise CalibrationError(source, field, f"must be 6 finite numbers, got "
-                                   f"{values.tolist()}")
+                                   f"{short_repr(values)}")
         deltas[field] = values.tolist()
     links = _nominal(model).links
     theta = [lk.theta_offset + dt for lk, dt in zip(links, deltas["delta_theta"], strict=True)]
     a = [lk.a + da for lk, da in zip(links, deltas["delta_a"], strict=True)]
     d = [lk.d + dd for lk, dd in zip(links, deltas["delta_d"], strict=True)]
     alpha = [lk.alpha + dl for lk, dl in zip(links, deltas["delta_alpha"], strict=True)]
-    robot = _robot(theta, a, d, alpha, model, name)
-    _check_model(robot, model, source, ", ".join(_DELTAS))
+    robot = _robot(theta, a, d, alpha, model, name, source, ", ".join(_DELTAS))
     return robot
 
 
@@ -851,6 +910,27 @@ def robot_from_joint_origins(origins, *, name: str = "") -> Robot:
     S = check_transform(origins, name="origins")
     if S.ndim != 3 or S.shape[0] < 1:
         raise ValueError(f"origins must have shape (n, 4, 4), got {S.shape}")
+    with np.errstate(over="ignore", invalid="ignore"):    # overflow: refused below
+        W, base, rows = _dh_rows(S)
+    if not (np.isfinite(W).all() and np.isfinite(rows).all()):
+        raise ValueError("origins are too large: the joints' positions or the DH parameters "
+                         "overflow (no float holds them)")
+    robot = Robot([Link(a=a, alpha=al, d=d, theta_offset=t, limits=_LIMITS)
+                   for t, d, a, al in rows.tolist()], convention="dh", name=name)
+    with np.errstate(over="ignore", invalid="ignore"):
+        tool = np.linalg.inv(robot.fk(np.zeros(len(W)))) @ W[-1]
+    if not np.isfinite(tool).all():
+        raise ValueError("origins are too large: the flange's pose overflows")
+    if not np.allclose(base, np.eye(4), rtol=0, atol=_ROUNDING):
+        robot.base = base
+    if not np.allclose(tool, np.eye(4), rtol=0, atol=_ROUNDING):    # more than rounding
+        robot.tool = tool
+    return robot
+
+
+def _dh_rows(S):
+    """The joints' frames at q = 0 in frame 0 (n, 4, 4), frame 0 in the world, and the DH
+    rows ``(theta, d, a, alpha)`` of :func:`robot_from_joint_origins`."""
     W = np.empty_like(S)
     W[0] = S[0]
     for i in range(1, len(S)):
@@ -875,14 +955,7 @@ def robot_from_joint_origins(origins, *, name: str = "") -> Robot:
         rows.append((theta, float((foot - o_prev) @ u), float((origin - foot) @ x),
                      _angle(u, v, x)))
         x_prev, o_prev = x, origin
-    robot = Robot([Link(a=a, alpha=al, d=d, theta_offset=t, limits=_LIMITS)
-                   for t, d, a, al in rows], convention="dh", name=name)
-    tool = np.linalg.inv(robot.fk(np.zeros(len(W)))) @ W[-1]
-    if not np.allclose(base, np.eye(4), rtol=0, atol=_ROUNDING):
-        robot.base = base
-    if not np.allclose(tool, np.eye(4), rtol=0, atol=_ROUNDING):    # more than rounding
-        robot.tool = tool
-    return robot
+    return W, base, np.array(rows)
 
 
 def _frame_zero(W1):
@@ -915,7 +988,7 @@ def _common_normal(p, u, q, v, o_prev, x_prev):
     foot = p + ((o_prev - p) @ u) * u
     origin = q + ((foot - q) @ v) * v
     gap = origin - foot
-    size = float(np.linalg.norm(gap))
+    size = math.hypot(*gap.tolist())             # no overflow of the squares far away
     return foot, origin, (gap / size if size > 1e-15 else x_prev)
 
 
@@ -1076,8 +1149,7 @@ def robot_from_ros_calibration(path, *, model=None, expected_hash: str | None = 
                                f"no equivalent set of its DH parameters hashes to it (as read: "
                                f"{_hash(read)}): edited or damaged")
     theta, d, a, alpha = found
-    robot = _robot(theta, a, d, alpha, model, name)
-    _check_model(robot, model, path, "kinematics")
+    robot = _robot(theta, a, d, alpha, model, name, path, "kinematics")
     return robot
 
 

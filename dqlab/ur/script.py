@@ -44,13 +44,12 @@ receives exactly the float that was checked.
 """
 
 import keyword
-import math
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
 
-from .._checks import as_float_array, real_array
+from .._checks import as_float_array, check_scalar, real_array, short_repr
 from ..dynamics import NewtonEuler, inverse_dynamics, link_inertias, with_payload
 from ..models import UR_MAX_JOINT_SPEED_DEG, UR_MAX_JOINT_TORQUE
 from . import motion
@@ -166,21 +165,23 @@ class SafetyLimits:
 
     def __post_init__(self):
         lim = real_array(self.joint_limits, "joint_limits")
-        if lim.ndim != 2 or lim.shape[1] != 2 or not np.all(lim[:, 0] <= lim[:, 1]):
-            raise ValueError(f"joint_limits must be (n, 2) rows lo <= hi, got {lim!r}")
+        if lim.ndim != 2 or lim.shape[1] != 2:
+            raise ValueError(f"joint_limits must have shape (n, 2), rows (lo, hi), got shape "
+                             f"{lim.shape}")
+        wrong = np.flatnonzero(~(lim[:, 0] <= lim[:, 1]))          # NaN included
+        if wrong.size:
+            j = int(wrong[0])
+            raise ValueError(f"joint_limits must be rows (lo, hi) with lo <= hi: joint {j + 1} "
+                             f"has {short_repr(lim[j].tolist())}")
         speed = _per_joint(self.max_joint_speed, "max_joint_speed", len(lim))
         for key in ("max_joint_acceleration", "max_joint_step", "max_tcp_speed",
                     "max_tcp_acceleration"):
-            value = _number(getattr(self, key), key, "SafetyLimits")
-            if not (value > 0 and math.isfinite(value)):
-                raise ValueError(f"{key} must be positive and finite, got {value!r}")
-            object.__setattr__(self, key, value)
+            object.__setattr__(self, key, check_scalar(getattr(self, key), key, minimum=0.0,
+                                                       strict=True))
         if self.robot is not None and getattr(self.robot, "n", None) != len(lim):
             raise ValueError(f"robot must be a Robot with {len(lim)} joints, got "
                              f"{type(self.robot).__name__}")
-        payload = _number(self.payload, "payload", "SafetyLimits")
-        if not (payload >= 0 and math.isfinite(payload)):
-            raise ValueError(f"payload must be a finite number of kg >= 0, got {payload!r}")
+        payload = check_scalar(self.payload, "payload", minimum=0.0)
         cog = as_float_array(self.payload_cog, "payload_cog", (3,))
         if cog.shape != (3,):
             raise ValueError(f"payload_cog must be one point (3,), got shape {cog.shape}")
@@ -317,8 +318,11 @@ def _per_joint(value, name, n):
     except ValueError:
         raise ValueError(f"{name} must have {n} values (one per joint), got shape "
                          f"{a.shape}") from None
-    if not np.all((a > 0) & np.isfinite(a)):
-        raise ValueError(f"{name} must be positive and finite, got {a!r}")
+    wrong = np.flatnonzero(~((a > 0) & np.isfinite(a)))
+    if wrong.size:
+        j = int(wrong[0])
+        raise ValueError(f"{name} must be positive and finite, got {float(a[j])!r} for joint "
+                         f"{j + 1}")
     return a.copy()
 
 

@@ -54,7 +54,7 @@ import zlib
 
 import numpy as np
 
-from .._checks import real_array
+from .._checks import check_scalar, real_array, short_repr
 from . import rtde
 from ._args import positive_number
 from .calibration import (
@@ -301,18 +301,20 @@ class ControllerStandIn:
 
         if not isinstance(model, str) or not callable(getattr(models, model, None)) \
                 or model.startswith("_"):
-            raise ValueError(f"model must name a function of dqlab.models, got {model!r}")
+            raise ValueError(f"model must name a function of dqlab.models, got "
+                             f"{short_repr(model)}")
         q0 = HOME if q0 is None else q0
         q0 = real_array(q0, "q0")
         if q0.shape != (6,) or not np.all(np.isfinite(q0)):
-            raise ValueError(f"q0 must be 6 finite joint angles, got {q0.tolist()}")
+            raise ValueError(f"q0 must be 6 finite joint angles, got "
+                             f"{q0.tolist() if q0.shape == (6,) else f'shape {q0.shape}'}")
         version = tuple(controller_version) if isinstance(controller_version,
                                                           (tuple, list)) else ()
         if len(version) != 4 or not all(isinstance(v, (int, np.integer)) and
                                         not isinstance(v, bool) and 0 <= v < 2 ** 32
                                         for v in version):
             raise ValueError(f"controller_version must be 4 ints (major, minor, bugfix, build),"
-                             f" got {controller_version!r}")
+                             f" got {short_repr(controller_version)}")
         if calibration is not None:
             if not isinstance(calibration, CalibrationConf):
                 raise TypeError(f"calibration must be a dqlab.ur.calibration.CalibrationConf "
@@ -455,11 +457,9 @@ class ControllerStandIn:
 
 
 def _port(value, name):
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) \
-            or not 0 <= value <= 65535:
-        raise ValueError(f"{name} must be a TCP port number (an int in 0..65535; 0: any free "
-                         f"port), got {value!r}")
-    return int(value)
+    """A TCP port to listen on: an int in 0..65535, 0 for any free port."""
+    return check_scalar(value, f"{name} (a TCP port, 0: any free port)", minimum=0,
+                        maximum=65535, integer=True)
 
 
 def _names(body, what):
