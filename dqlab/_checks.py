@@ -507,7 +507,9 @@ def rotation_or_raise(name, err, det, tol):
     """
     check_tolerance(tol, "tol")
     if not err <= tol:
-        raise ValueError(
-            f"{name} is not orthonormal: |R^T R - I| reaches {err:.3g} (tolerance {tol:g})")
+        rounding = ("; that tolerance is too small: rounding alone leaves errors of a few "
+                    "1e-16 in a rotation stored in floats" if err <= 1e-14 else "")
+        raise ValueError(f"{name} is not orthonormal: |R^T R - I| reaches {err:.3g} "
+                         f"(tolerance {tol:g}){rounding}")
     if not det > 0.0:
         raise ValueError(f"{name} is a reflection (determinant -1), not a rotation")

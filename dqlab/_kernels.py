@@ -468,6 +468,18 @@ def norm_last_axis(a):
 # Rigid bodies
 
 
+def dual_cross(a, a_dual, b, b_dual):
+    r"""The cross product of dual vectors (arrays (..., 3)): :math:`\mathbf a\times\mathbf b
+    + \varepsilon\,(\mathbf a\times\mathbf b^\circ + \mathbf a^\circ\times\mathbf b)`
+    (:func:`dqlab.dynamics.dual_cross`, which checks its arguments and calls this).
+
+    >>> dual_cross(np.array([0.0, 0.0, 1.0]), np.zeros(3), np.array([1.0, 0.0, 0.0]),
+    ...            np.zeros(3))
+    (array([0., 1., 0.]), array([0., 0., 0.]))
+    """
+    return np.cross(a, b), np.cross(a, b_dual) + np.cross(a_dual, b)
+
+
 def momentum(mass, com, tensor, omega, v):
     r"""The momentum :math:`\mathbf p + \varepsilon\mathbf L` of a body (mass :math:`m`,
     centre of mass :math:`\mathbf c`, tensor :math:`I_c` about it) moving with the twist

@@ -85,7 +85,8 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._checks import as_float_array, components, finite_or_raise, stack_components
+from ._checks import (as_float_array, check_instance, components, finite_or_raise, short_repr,
+                      stack_components)
 from ._dynamics_compiled import constants as compiled_constants
 from ._dynamics_compiled import forward as compiled_forward
 from ._dynamics_compiled import inverse as compiled_inverse
@@ -95,6 +96,7 @@ from ._dynamics_compiled import ready as compiled_ready
 from ._dynamics_compiled import regressor_rows as compiled_regressor
 from ._dynamics_floats import constants as float_constants
 from ._dynamics_floats import inverse_dynamics as inverse_dynamics_on_floats
+from ._kernels import dual_cross as _dual_cross
 from ._kernels import dual_quaternion_mul, momentum
 from .dualquat import (
     dual_quaternion_apply,
@@ -171,6 +173,7 @@ def joint_twists(robot: Robot) -> NDArray[np.float64]:
     array([[0., 0., 0.],
            [0., 0., 1.]])
     """
+    check_instance(robot, Robot, "robot")
     twists = []
     for link in robot.links:
         if robot.convention == "dh":
@@ -206,12 +209,29 @@ def dual_cross(a: ArrayLike, a_dual: ArrayLike, b: ArrayLike, b_dual: ArrayLike
     -------
     real, dual : ndarray, shape (..., 3)
 
+    Raises
+    ------
+    ValueError
+        Naming the argument: a shape other than (..., 3), shapes that do not broadcast, NaN
+        or infinity, or a product too large for a float.
+
     Examples
     --------
     >>> dual_cross([0, 0, 1], [0, 0, 0], [1, 0, 0], [0, 0, 0])
-    (array([0, 1, 0]), array([0, 0, 0]))
+    (array([0., 1., 0.]), array([0., 0., 0.]))
     """
-    return np.cross(a, b), np.cross(a, b_dual) + np.cross(a_dual, b)
+    named = [(as_float_array(x, name, (3,)), name, (3,))
+             for x, name in ((a, "a"), (a_dual, "a_dual"), (b, "b"), (b_dual, "b_dual"))]
+    try:
+        np.broadcast_shapes(*(x.shape for x, _, _ in named))
+    except ValueError:
+        shapes = ", ".join(f"{name} {x.shape}" for x, name, _ in named)
+        raise ValueError(f"a, a_dual, b and b_dual must broadcast together, got {shapes}") \
+            from None
+    with np.errstate(over="ignore", invalid="ignore"):
+        real, dual = _dual_cross(*(x for x, _, _ in named))
+    finite_or_raise(real + dual, *named)
+    return real, dual
 
 
 def _adjoint(Q, real, dual):
@@ -295,7 +315,7 @@ def _outwards(robot, q, qd, qdd, g_0):
         omega, v = _adjoint(Q_star[..., i, :], omega, v)
         omega, v = omega + s_real * qd_i, v + s_dual * qd_i
         omega_dot, v_dot = _adjoint(Q_star[..., i, :], omega_dot, v_dot)
-        turn, slide = dual_cross(omega, v, s_real * qd_i, s_dual * qd_i)
+        turn, slide = _dual_cross(omega, v, s_real * qd_i, s_dual * qd_i)
         omega_dot = omega_dot + s_real * qdd_i + turn
         v_dot = v_dot + s_dual * qdd_i + slide
         twists.append((omega, v, omega_dot, v_dot))
@@ -311,7 +331,7 @@ def _recursion(robot, inertias, q, qd, qdd, g_0, energy):
         # Newton-Euler for link i: the rate of its momentum h = M xi
         p, L = momentum(inertia.mass, inertia.com, inertia.tensor, omega, v)
         p_dot, L_dot = momentum(inertia.mass, inertia.com, inertia.tensor, omega_dot, v_dot)
-        carried_f, carried_n = dual_cross(omega, v, p, L)
+        carried_f, carried_n = _dual_cross(omega, v, p, L)
         wrenches.append((p_dot + carried_f, L_dot + carried_n))
         if energy:
             kinetic = kinetic + 0.5 * (np.sum(omega * L, axis=-1) + np.sum(v * p, axis=-1))
@@ -1022,7 +1042,7 @@ def _regressor(robot, q, qd, qdd, g_0):
     for omega, v, omega_dot, v_dot in twists:
         p, L = _momentum_per_parameter(omega, v)
         p_dot, L_dot = _momentum_per_parameter(omega_dot, v_dot)
-        carried_f, carried_n = dual_cross(omega[..., None, :], v[..., None, :], p, L)
+        carried_f, carried_n = _dual_cross(omega[..., None, :], v[..., None, :], p, L)
         columns.append((p_dot + carried_f, L_dot + carried_n))          # (..., 10, 3) each
     Y = np.zeros(lead + (n, 10 * n))
     f, m = np.zeros(lead + (0, 10, 3)), np.zeros(lead + (0, 10, 3))    # links i+1..n
@@ -1114,6 +1134,9 @@ def with_inertias(robot: Robot, inertias) -> Robot:
     """
     if not isinstance(robot, Robot):
         raise TypeError(f"robot must be a dqlab Robot, got {type(robot).__name__}")
+    if isinstance(inertias, (str, bytes)) or not hasattr(inertias, "__iter__"):
+        raise TypeError(f"inertias must be a sequence of {robot.n} LinkInertia (or None), "
+                        f"got {short_repr(inertias)}")
     inertias = list(inertias)
     if len(inertias) != robot.n:
         raise ValueError(f"inertias must hold {robot.n} entries, got {len(inertias)}")

@@ -27,7 +27,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._checks import as_float_array, real_array
+from .._checks import as_float_array, check_instance, is_boolean, real_array, short_repr
 from ..rotations import wrap_angle
 
 __all__ = ["closest_solution", "equivalent_solutions", "check_joint_limits",
@@ -212,6 +212,10 @@ def closest_solution(result, q_ref: ArrayLike, limits: ArrayLike | None = None, 
     >>> closest_solution(ur(robot, robot.fk(q)), q, limits)[2] < 0
     np.True_
     """
+    from .result import IKResult          # (result imports this module)
+    check_instance(result, IKResult, "result")
+    if not is_boolean(wrapped):
+        raise TypeError(f"wrapped must be True or False, got {short_repr(wrapped)}")
     solutions = np.asarray(result.solutions)
     valid = np.asarray(result.valid)
     k, n = solutions.shape[-2:]
@@ -368,9 +372,16 @@ def equivalent_solutions(q: ArrayLike, limits: ArrayLike = (-2 * np.pi, 2 * np.p
     if n > _MAX_EQUIVALENT_JOINTS:
         raise ValueError(f"equivalent_solutions lists 2**n candidates: at most "
                          f"{_MAX_EQUIVALENT_JOINTS} joints, got {n}")
+    rows = real_array(limits, "limits").shape
+    if len(rows) == 2 and rows[0] != n:
+        raise ValueError(f"q has {n} joints but limits has {rows[0]} rows: one (lo, hi) per "
+                         f"joint, or a single (lo, hi) for all")
     lo, hi = check_joint_limits(limits, n)
-    if np.any(hi - lo > 4 * np.pi + 1e-12):
-        raise ValueError("equivalent_solutions handles joint ranges of at most 4 pi")
+    wide = np.flatnonzero(hi - lo > 4 * np.pi + 1e-12)
+    if wide.size:
+        j = int(wide[0])
+        raise ValueError(f"limits: equivalent_solutions handles joint ranges of at most 4 pi, "
+                         f"joint {j + 1} has [{lo[j]:.6g}, {hi[j]:.6g}]")
     bits = (np.arange(2 ** n)[:, None] >> np.arange(n)) & 1          # (2**n, n)
     shift = np.where(q >= 0, -2 * np.pi, 2 * np.pi)[..., None, :]
     cands = q[..., None, :] + bits * shift

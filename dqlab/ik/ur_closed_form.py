@@ -113,7 +113,7 @@ import weakref
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._checks import check_instance, check_tolerance, real_array
+from .._checks import check_instance, check_scalar, check_tolerance, real_array
 from ..models import UR_SHAPE
 from ..robot import Robot
 from ..rotations import wrap_angle
@@ -413,6 +413,8 @@ def distinct_solutions(result: IKResult, atol: float = 1e-9) -> NDArray[np.bool_
     (``atol=1e-7``: at that pose the elbow is straight, and a rounding of the pose moves
     :math:`\theta_3` by up to :math:`\sqrt{\varepsilon}`.)
     """
+    check_instance(result, IKResult, "result")
+    atol = check_scalar(atol, "atol", minimum=0)
     sol = result.solutions
     valid = result.valid
     diff = np.abs(wrap_angle(sol[..., :, None, :] - sol[..., None, :, :]))

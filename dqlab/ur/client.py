@@ -99,9 +99,11 @@ def _units_hint(target, kind):
     if a.size != 6 or not np.all(np.isfinite(a)):
         return ""
     if kind == "pose":
-        if np.linalg.norm(a[:3]) > 5.0:
+        with np.errstate(over="ignore"):     # a norm beyond any float is inf: too large
+            position, rotation = np.linalg.norm(a[:3]), np.linalg.norm(a[3:])
+        if position > 5.0:
             return " (millimetres? poses are in metres: divide by 1000)"
-        if np.linalg.norm(a[3:]) > 2 * np.pi:
+        if rotation > 2 * np.pi:
             return " (degrees? the rotation vector is in radians: np.radians(...))"
     elif np.max(np.abs(a)) > 2 * np.pi:
         return " (degrees? joint targets are in radians: np.radians(...))"

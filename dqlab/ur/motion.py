@@ -714,7 +714,12 @@ def world_transform(robot, pose):
     >>> world_transform(robot, [0.2, 0, 0, 0, 0, 0])[:3, 3]
     array([1.2, 0. , 0. ])
     """
-    return robot.base @ transform_from_pose(pose)
+    X_0T = transform_from_pose(pose)
+    with np.errstate(over="ignore", invalid="ignore"):
+        X_WT = robot.base @ X_0T
+    if not np.isfinite(X_WT).all():
+        raise ValueError("pose is too far: its position in the world frame overflows a float")
+    return X_WT
 
 
 def plan_movel(robot, q_from, pose, a=MOVEL_A, v=MOVEL_V, t=0.0):
