@@ -212,6 +212,7 @@ add(M, "potential_energy", dynamics.potential_energy, robot=O(UR3, **ROBOT), q=A
     gravity=A(GRAVITY))
 add(M, "link_inertias", dynamics.link_inertias, robot=O(UR3, **ROBOT))
 add(M, "joint_twists", dynamics.joint_twists, robot=O(UR3))
+add(M, "inertial_parameters", dynamics.inertial_parameters, robot=O(UR3, **ROBOT))
 add(M, "dual_cross", dynamics.dual_cross, a=A([0.1, 0.2, 0.3]), a_dual=A([1.0, 0.0, 0.5]),
     b=A([0.0, 1.0, 0.0]), b_dual=A([0.3, 0.3, 0.0]))
 add(M, "with_payload", lambda **kw: dynamics.with_payload(**kw).links[-1].inertia,

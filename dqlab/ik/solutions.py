@@ -27,7 +27,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._checks import as_float_array, check_instance, is_boolean, real_array, short_repr
+from .._checks import as_float_array, is_boolean, real_array, short_repr
 from ..rotations import wrap_angle
 
 __all__ = ["closest_solution", "equivalent_solutions", "check_joint_limits",
@@ -212,8 +212,9 @@ def closest_solution(result, q_ref: ArrayLike, limits: ArrayLike | None = None, 
     >>> closest_solution(ur(robot, robot.fk(q)), q, limits)[2] < 0
     np.True_
     """
-    from .result import IKResult          # (result imports this module)
-    check_instance(result, IKResult, "result")
+    if not (hasattr(result, "solutions") and hasattr(result, "valid")):
+        raise TypeError(f"result must be an IKResult (a solver's answer), got "
+                        f"{short_repr(result)}")
     if not is_boolean(wrapped):
         raise TypeError(f"wrapped must be True or False, got {short_repr(wrapped)}")
     solutions = np.asarray(result.solutions)
