@@ -38,7 +38,7 @@ from ._checks import (
     components,
     stack_components,
 )
-from ._kernels import rotation_vector_from_matrix_entries
+from ._formulas import rotation_vector_from_matrix_entries
 from .robot import Link, Robot
 from .transforms import check_transform
 

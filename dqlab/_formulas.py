@@ -15,6 +15,7 @@ Conventions: quaternions ``(w, x, y, z)`` with the Hamilton product, dual quater
 """
 
 import math
+import sys
 
 import numpy as np
 
@@ -462,3 +463,10 @@ def norm_last_axis(a):
         safe = np.where(m > 0.0, m, 1.0)
         n[risky] = m * np.sqrt(np.sum((sub / safe[..., None]) ** 2, axis=-1))
     return n
+
+
+# --------------------------------------------------------------------------------------
+# The module's former name, ``dqlab._kernels``: the same module object, for the imports of
+# dqlab.ik and dqlab.dynamics that still use it (private: it goes when they no longer do).
+
+sys.modules.setdefault(__name__.rpartition(".")[0] + "._kernels", sys.modules[__name__])
