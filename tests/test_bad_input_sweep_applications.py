@@ -164,12 +164,13 @@ case(M, "robot_from_dh_parameters", lambda **kw: identify.robot_from_dh_paramete
     np.zeros(3)), robot=O(DESK), parameters=A(identify.dh_parameters(DESK) + 0.001))
 case(M, "identification_jacobian", identify.identification_jacobian, robot=O(DESK),
      q=A(Q_DESK[:2]), measure=O("pose"))
-case(M, "calibrate", identify.calibrate, robot=O(DESK), q=A(Q_DESK),
+case(M, "identify_dh_parameters", identify.identify_dh_parameters, robot=O(DESK), q=A(Q_DESK),
      measured=A(DESK.fk(Q_DESK)[:, :3, 3] + 1e-4), measure=O("position"),
      fixed=O(["theta1"], none_ok=True), rotation_scale=S(0.1), rank_tol=S(1e-8),
      max_condition=S(1e8, inf_ok=True), tol=S(1e-12), max_iter=Int(20))
-case(M, "calibrate(pose)", lambda **kw: identify.calibrate(DESK, Q_DESK, DESK.fk(Q_DESK),
-                                                            measure="pose", **kw),
+case(M, "identify_dh_parameters(pose)",
+     lambda **kw: identify.identify_dh_parameters(DESK, Q_DESK, DESK.fk(Q_DESK), measure="pose",
+                                                  **kw),
      rotation_scale=S(0.1), max_condition=S(1e12, inf_ok=True))
 case(M, "Identification.value", FIT.value, name=O("b"))
 case(M, "Identification.summary", FIT.summary, scale=S(1000.0), unit=T("mm"))
