@@ -158,7 +158,8 @@ def _a_valid_row(q, kwargs):
     return _within_limits(q, kwargs)
 
 
-#: The commands the uArm's firmware gets, each with an optional comment (tests/test_lab_arm).
+#: The commands the uArm's firmware gets, each with an optional comment
+#: (tests/test_desk_arm_firmware).
 _COMMAND = re.compile(r"(G0 X-?\d+\.\d\d Y-?\d+\.\d\d Z-?\d+\.\d\d F\d+|G2202 N3 V\d+\.\d\d"
                       r"|M2231 V[01]|G2004 P\d+)( ;[ -~]*)?")
 
