@@ -3,7 +3,7 @@
 Run with ``python benchmarks/bench_reachability.py`` (``--quick`` for a small map of 46 656
 poses; ``--save PATH`` to write the per-position result; ``--address tcp://host:8786`` to
 run on an existing dask cluster instead of the local ones). The map is
-``dqlab.scale.reachability_map``: every tool position of a 3D grid with every orientation of
+``dqlab.dask_arrays.reachability_map``: every tool position of a 3D grid with every orientation of
 a set, each pose scored by the number of valid branches of ``dqlab.ik.ur`` and the largest
 manipulability |det J| over them, reduced to statistics per position (the fraction of
 orientations reachable, the mean branch count, the median manipulability).
@@ -50,12 +50,12 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 import dqlab  # noqa: E402
+from dqlab.dask_arrays import reachability_map  # noqa: E402
 from dqlab.models import ur3  # noqa: E402
 from dqlab.reachability import (  # noqa: E402
     reachability_statistics,
     super_fibonacci_quaternions,
 )
-from dqlab.scale import reachability_map  # noqa: E402
 
 
 def grid(quick):

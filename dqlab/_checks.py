@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._kernels import functions_for, orthonormality
+from ._formulas import functions_for, orthonormality
 
 _FLOAT64 = np.dtype(np.float64)
 
@@ -423,7 +423,7 @@ def batched(kernel, inputs, out_trailing, chunk=CHUNK):
     return out.reshape(shape + tuple(out_trailing))
 
 
-# --- Checks on components (see dqlab._kernels) ------------------------------------------
+# --- Checks on components (see dqlab._formulas) ------------------------------------------
 
 
 def unit_quaternion_or_raise(parts, name, tol, subject=None):
@@ -498,7 +498,7 @@ def unit_dual_quaternion_or_raise(parts, name, tol):
 
 def rotation_or_raise(name, err, det, tol):
     """Raise unless ``err`` (largest entry of :math:`|R^T R - I|`, see
-    :func:`dqlab._kernels.orthonormality`) is within ``tol`` and ``det`` is positive.
+    :func:`dqlab._formulas.orthonormality`) is within ``tol`` and ``det`` is positive.
 
     >>> rotation_or_raise("R", 0.0, -1.0, 1e-9)
     Traceback (most recent call last):

@@ -33,7 +33,7 @@ from ._checks import (
     unit_dual_quaternion_or_raise,
     unit_quaternion_or_raise,
 )
-from ._kernels import (
+from ._formulas import (
     dual_quaternion_mul,
     matrix_entries_from_quaternion,
     norm_last_axis,

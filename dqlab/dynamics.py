@@ -96,8 +96,8 @@ from ._dynamics_compiled import ready as compiled_ready
 from ._dynamics_compiled import regressor_rows as compiled_regressor
 from ._dynamics_floats import constants as float_constants
 from ._dynamics_floats import inverse_dynamics as inverse_dynamics_on_floats
-from ._kernels import dual_cross as _dual_cross
-from ._kernels import dual_quaternion_mul, momentum
+from ._formulas import dual_cross as _dual_cross
+from ._formulas import dual_quaternion_mul, momentum
 from .dualquat import (
     dual_quaternion_apply,
     dual_quaternion_conjugate,

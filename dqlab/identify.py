@@ -6,10 +6,12 @@ Two problems, one result type (:class:`Identification`):
   linear in the unknown lengths for known joint angles, :math:`b = A(q)\,\ell`, stacking the
   equations of all poses gives an ordinary least-squares problem, solved by
   ``numpy.linalg.lstsq``. The desktop arm of the lab report is such a case.
-- **Nonlinear** (:func:`calibrate`). The flange position of a chain depends on its
-  Denavit--Hartenberg parameters through sines and cosines; Gauss--Newton with
-  Levenberg--Marquardt damping solves it, with the identification Jacobian
-  :math:`\partial p / \partial \pi` of :func:`identification_jacobian` derived from the chain.
+- **Nonlinear** (:func:`identify_dh_parameters`: a kinematic calibration). The flange
+  position of a chain depends on its Denavit--Hartenberg parameters through sines and
+  cosines; Gauss--Newton with Levenberg--Marquardt damping solves it, with the
+  identification Jacobian :math:`\partial p / \partial \pi` of
+  :func:`identification_jacobian` derived from the chain. (Reading the calibration a UR
+  controller holds is :mod:`dqlab.ur.calibration`'s work.)
 
 In both, the parameters that the measurements cannot separate are found from the singular
 values of the column-scaled regressor (or Jacobian), reported by name, and held at their
@@ -38,15 +40,19 @@ from ._checks import (
     components,
     stack_components,
 )
-from ._kernels import rotation_vector_from_matrix_entries
+from ._deprecated import renamed_attributes
+from ._formulas import rotation_vector_from_matrix_entries
 from .robot import Link, Robot
 from .transforms import check_transform
 
 __all__ = [
     "Identification", "IllConditionedWarning", "fit_linear", "DESK_ARM_PARAMETERS",
     "desk_arm_regressor", "identify_desk_arm", "dh_parameter_names", "dh_parameters",
-    "robot_from_dh_parameters", "identification_jacobian", "calibrate",
+    "robot_from_dh_parameters", "identification_jacobian", "identify_dh_parameters",
 ]
+
+__getattr__ = renamed_attributes(__name__,
+                                 {"calibrate": "dqlab.identify.identify_dh_parameters"})
 
 #: The desktop arm's lengths in the order of :func:`desk_arm_regressor`'s columns.
 DESK_ARM_PARAMETERS = ("l0", "l1", "l2", "l3", "l4")
@@ -112,7 +118,7 @@ class Identification:
         Gauss--Newton / Levenberg--Marquardt iterations (0 for a linear fit).
     converged : bool
     robot : Robot or None
-        For :func:`calibrate`: the chain with the estimated parameters.
+        For :func:`identify_dh_parameters`: the chain with the estimated parameters.
 
     Examples
     --------
@@ -454,7 +460,30 @@ def _warn_condition(cond, max_condition):
             f"ill-conditioned identification: condition number {cond:.3g} of the scaled "
             f"regressor exceeds {max_condition:.3g}; the estimate is poorly determined by "
             "these measurements (add poses that excite the parameters differently)",
-            IllConditionedWarning, stacklevel=3)
+            IllConditionedWarning, stacklevel=4)
+
+
+def _identification(names, estimate, J, kept, scales, residuals, info, max_condition, **more):
+    r"""The result of a fit, linear or not: :math:`\hat\sigma` from the residuals (with
+    :math:`k - r` degrees of freedom, :math:`k` the rows of the regressor or Jacobian ``J``),
+    the estimate checked finite, the condition number of the kept columns scaled by
+    ``scales`` (a warning above ``max_condition``) and their covariance, and the rank
+    analysis ``info``; ``more``: the iterations, convergence and robot of a calibration."""
+    p = estimate.size
+    sigma = _sigma(residuals, J.shape[0] - kept.size)
+    _finite_result(estimate, sigma)
+    cond = _kept_condition(J, kept, scales)
+    _warn_condition(cond, max_condition)
+    estimated = np.zeros(p, dtype=bool)
+    estimated[kept] = True
+    return Identification(
+        names=names, estimate=estimate, estimated=estimated,
+        scaled_unit_covariance=_scaled_unit_covariance(J, kept, scales, p),
+        column_scales=scales, sigma=sigma,
+        residuals=residuals, singular_values=info["singular_values"], rank=int(kept.size),
+        condition_number=cond, null_space=info["null_space"],
+        unidentifiable=info["unidentifiable"], identifiable_rows=info["identifiable_rows"],
+        identifiable=info["identifiable"], **more)
 
 
 # -- the linear problem -------------------------------------------------------------------------
@@ -547,19 +576,7 @@ def fit_linear(A, b, *, names=None, reference=None, rank_tol=1e-8, max_condition
         estimate = x0.copy()
         estimate[kept] = solution / scales[kept]
         residuals = b - A @ estimate
-    dof = k - kept.size
-    sigma = _sigma(residuals, dof)
-    _finite_result(estimate, sigma)
-    cond = _kept_condition(A, kept, scales)
-    _warn_condition(cond, max_condition)
-    return Identification(
-        names=names, estimate=estimate, estimated=estimated,
-        scaled_unit_covariance=_scaled_unit_covariance(A, kept, scales, p),
-        column_scales=scales, sigma=sigma,
-        residuals=residuals, singular_values=info["singular_values"], rank=int(kept.size),
-        condition_number=cond, null_space=info["null_space"],
-        unidentifiable=info["unidentifiable"], identifiable_rows=info["identifiable_rows"],
-        identifiable=info["identifiable"])
+    return _identification(names, estimate, A, kept, scales, residuals, info, max_condition)
 
 
 def desk_arm_regressor(q_lab):
@@ -845,8 +862,9 @@ def _stacked_jacobian(robot, q, measure, rotation_scale):
     return J.reshape(-1, J.shape[-1])
 
 
-def calibrate(robot, q, measured, *, measure="position", fixed=(), rotation_scale=0.1,
-              rank_tol=1e-8, max_condition=1e6, tol=1e-12, max_iter=100):
+def identify_dh_parameters(robot, q, measured, *, measure="position", fixed=(),
+                           rotation_scale=0.1, rank_tol=1e-8, max_condition=1e6, tol=1e-12,
+                           max_iter=100):
     r"""Kinematic calibration: the DH parameters that best explain measured TCP positions.
 
     Minimises :math:`\tfrac12\lVert r(\pi)\rVert^2`, the residuals
@@ -866,6 +884,9 @@ def calibrate(robot, q, measured, *, measure="position", fixed=(), rotation_scal
     10 (step rejected) otherwise; :math:`\lambda \to 0` is Gauss--Newton. The iteration stops
     when the scaled step :math:`\lVert D\delta\rVert` falls below ``tol`` (:math:`D` the
     column norms of :math:`J`).
+
+    Its former name, ``calibrate``, still finds it for one version, with a
+    :class:`DeprecationWarning`.
 
     Parameters
     ----------
@@ -917,7 +938,7 @@ def calibrate(robot, q, measured, *, measure="position", fixed=(), rotation_scal
     >>> params[dh_parameter_names(nominal).index("a2")] -= 0.001    # a2 is negative
     >>> real = robot_from_dh_parameters(nominal, params)
     >>> q = np.random.default_rng(0).uniform(-np.pi, np.pi, size=(12, 6))
-    >>> fit = calibrate(nominal, q, real.fk(q)[:, :3, 3])
+    >>> fit = identify_dh_parameters(nominal, q, real.fk(q)[:, :3, 3])
     >>> round(fit.value("a2"), 9), fit.rank
     (-0.24465, 18)
     >>> fit.unidentifiable
@@ -958,7 +979,6 @@ def calibrate(robot, q, measured, *, measure="position", fixed=(), rotation_scal
                          f"{', '.join(names)}")
     free = np.array([n not in fixed for n in names])
     x = dh_parameters(robot)
-    p = x.size
     J = _stacked_jacobian(robot, q, measure, rotation_scale)
     _check_equations(J.shape[0], int(free.sum()))
     info = _rank_analysis(J, names, free, rank_tol, zero_tol=rank_tol)
@@ -1010,19 +1030,5 @@ def calibrate(robot, q, measured, *, measure="position", fixed=(), rotation_scal
                       IllConditionedWarning, stacklevel=2)
     J_final = _stacked_jacobian(current, q, measure, rotation_scale)
     scales_final, _ = _column_scales(J_final, rank_tol)
-    dof = J_final.shape[0] - kept.size
-    sigma = _sigma(r, dof)
-    _finite_result(x, sigma)
-    cond = _kept_condition(J_final, kept, scales_final)
-    _warn_condition(cond, max_condition)
-    estimated = np.zeros(p, dtype=bool)
-    estimated[kept] = True
-    return Identification(
-        names=names, estimate=x, estimated=estimated,
-        scaled_unit_covariance=_scaled_unit_covariance(J_final, kept, scales_final, p),
-        column_scales=scales_final, sigma=sigma,
-        residuals=r, singular_values=info["singular_values"], rank=int(kept.size),
-        condition_number=cond, null_space=info["null_space"],
-        unidentifiable=info["unidentifiable"], identifiable_rows=info["identifiable_rows"],
-        identifiable=info["identifiable"], iterations=iterations, converged=converged,
-        robot=current)
+    return _identification(names, x, J_final, kept, scales_final, r, info, max_condition,
+                           iterations=iterations, converged=converged, robot=current)

@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._checks import as_float_array, check_scalar
-from ._kernels import momentum
+from ._formulas import momentum
 from .transforms import check_transform
 
 __all__ = ["LinkInertia"]

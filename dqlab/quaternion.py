@@ -29,7 +29,7 @@ from ._checks import (
     stack_components,
     unit_quaternion_or_raise,
 )
-from ._kernels import (
+from ._formulas import (
     matrix_entries_from_quaternion,
     norm_last_axis,
     orthonormality,

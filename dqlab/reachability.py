@@ -11,8 +11,8 @@ each tool pose, and how well conditioned the best of them is (chapter 11).
   (checked).
 
 Everything here needs numpy only. The same map on many processes or machines is
-:func:`dqlab.scale.reachability_map`, which runs :func:`reachability_statistics` on chunks of
-the grid with dask; chapter 11 plots a map of :math:`10^7` samples made that way by
+:func:`dqlab.dask_arrays.reachability_map`, which runs :func:`reachability_statistics` on
+chunks of the grid with dask; chapter 11 plots a map of :math:`10^7` samples made that way by
 ``benchmarks/bench_reachability.py``.
 """
 
@@ -187,10 +187,11 @@ def super_fibonacci_quaternions(k: int) -> NDArray[np.float64]:
 class ReachabilityMap:
     r"""Statistics of a UR arm's reach and dexterity per tool position.
 
-    Made by :func:`dqlab.scale.reachability_map` (dask) or :func:`reachability_statistics` (numpy)
-    from the :math:`M \times K` samples :math:`X_{mk} = (R(q_k), p_m)`: every position
-    :math:`p_m` with every orientation :math:`q_k`, each scored by :func:`pose_dexterity`
-    (:math:`c_{mk}` branches, manipulability :math:`w_{mk}`).
+    Made by :func:`dqlab.dask_arrays.reachability_map` (dask) or
+    :func:`reachability_statistics` (numpy) from the :math:`M \times K` samples
+    :math:`X_{mk} = (R(q_k), p_m)`: every position :math:`p_m` with every orientation
+    :math:`q_k`, each scored by :func:`pose_dexterity` (:math:`c_{mk}` branches,
+    manipulability :math:`w_{mk}`).
 
     Attributes
     ----------
@@ -423,7 +424,7 @@ def _statistics(robot, positions, R, block, options):
 def reachability_statistics(robot: Robot, positions: ArrayLike, orientations: ArrayLike, *,
                             block: int = BLOCK, **options) -> ReachabilityMap:
     r"""The reachability map with numpy, in this process (the reference of
-    :func:`dqlab.scale.reachability_map`, which runs it on chunks of ``positions``).
+    :func:`dqlab.dask_arrays.reachability_map`, which runs it on chunks of ``positions``).
 
     Scores every pose :math:`X_{mk} = (R(q_k), p_m)` -- the tool at position :math:`p_m`
     with orientation :math:`q_k` -- by :func:`pose_dexterity` and reduces over the

@@ -12,7 +12,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._checks import as_float_array, components, real_array, rotation_or_raise
-from ._kernels import functions_for, norm_last_axis, orthonormality
+from ._formulas import functions_for, norm_last_axis, orthonormality
 
 _PI = np.pi
 _TWO_PI = 2.0 * np.pi

@@ -1,5 +1,14 @@
-"""Helpers for checks: a reader's own function against dqlab, as the book's exercises do, and
-a silencer for compiled oracles that print."""
+r"""Assertions for tests of code that uses dqlab, and a silencer for oracles that print.
+
+A rotation has two unit quaternions, :math:`q` and :math:`-q`, and a rigid motion two unit
+dual quaternions, :math:`Q` and :math:`-Q` (chapters 3 and 5): two correct programs may
+return either. :func:`assert_quaternion_equal` and :func:`assert_dual_quaternion_equal`
+compare arrays of them item by item up to that sign, where
+``numpy.testing.assert_allclose`` would report half of the right answers as wrong.
+
+The exercises' checker, ``check_function``, is :func:`dqlab.exercises.check_function`
+(``dqlab.testing.check_function`` still finds it, with a :class:`DeprecationWarning`).
+"""
 
 import contextlib
 import os
@@ -7,66 +16,108 @@ import sys
 
 import numpy as np
 
+from ._checks import as_float_array, check_tolerance
+from ._deprecated import renamed_attributes
 
-def check_function(candidate, reference, sample, *, n=100, seed=0, atol=1e-9, name=None):
-    """Compare ``candidate`` with ``reference`` on ``n`` random inputs and report.
+__all__ = ["assert_quaternion_equal", "assert_dual_quaternion_equal", "quiet_stdout"]
+
+__getattr__ = renamed_attributes(__name__,
+                                 {"check_function": "dqlab.exercises.check_function"})
+
+
+def _assert_equal_up_to_sign(actual, desired, atol, size, what):
+    a = as_float_array(actual, "actual", (size,))
+    d = as_float_array(desired, "desired", (size,))
+    atol = check_tolerance(atol, "atol")
+    try:
+        shape = np.broadcast_shapes(a.shape, d.shape)
+    except ValueError:
+        raise ValueError(f"actual of shape {a.shape} and desired of shape {d.shape} do not "
+                         "broadcast together") from None
+    a, d = np.broadcast_to(a, shape), np.broadcast_to(d, shape)
+    with np.errstate(over="ignore"):
+        gap = np.minimum(np.abs(a - d).max(axis=-1), np.abs(a + d).max(axis=-1))
+    if gap.size == 0 or gap.max() <= atol:
+        return
+    worst = tuple(int(i) for i in np.unravel_index(np.argmax(gap), gap.shape))
+    where = f" at index {worst}" if worst else ""
+    raise AssertionError(
+        f"the {what}s differ by {gap[worst]:.3g} up to sign (atol {atol:.3g}){where}, "
+        f"{int((gap > atol).sum())} of {gap.size} items:\n"
+        f"actual  {_one_line(a[worst])}\ndesired {_one_line(d[worst])}")
+
+
+def _one_line(x):
+    return "[" + ", ".join(f"{v:.17g}" for v in x) + "]"
+
+
+def assert_quaternion_equal(actual, desired, *, atol=1e-12):
+    r"""Fail unless each quaternion of ``actual`` is that of ``desired`` or its negative.
+
+    Item by item over the leading axes (which broadcast):
+    :math:`\min(\lVert a - d\rVert_\infty, \lVert a + d\rVert_\infty) \le` ``atol``.
 
     Parameters
     ----------
-    candidate, reference : callable
-        The function to check and the function it must agree with. Both receive the same
-        positional arguments.
-    sample : callable
-        ``sample(rng)`` returns a tuple of positional arguments drawn with the generator
-        ``rng`` (a :class:`numpy.random.Generator`).
-    n : int
-        Number of random trials.
-    seed : int
-        Seed of the generator, so that a check is repeatable.
-    atol : float
-        Largest allowed absolute difference between the two outputs.
-    name : str, optional
-        Name printed in the report (defaults to ``candidate.__name__``).
-
-    Returns
-    -------
-    float
-        The largest absolute difference seen.
+    actual, desired : array_like, shape (..., 4)
+        Quaternions ``(w, x, y, z)``.
+    atol : float, optional
+        Largest allowed difference of one component.
 
     Raises
     ------
     AssertionError
-        With the first failing input, when the outputs differ by more than ``atol``.
+        Naming the worst item, its difference and the two quaternions.
+    ValueError
+        If an argument has the wrong shape, holds NaN or infinity, or the shapes do not
+        broadcast; if ``atol`` is negative or NaN.
 
     Examples
     --------
     >>> import numpy as np
-    >>> def my_norm(v):
-    ...     return sum(x * x for x in v) ** 0.5
-    >>> worst = check_function(my_norm, np.linalg.norm, lambda rng: (rng.normal(size=3),))
-    my_norm agrees with the reference on 100 random inputs (largest difference ...)
-    >>> worst < 1e-15
-    True
+    >>> assert_quaternion_equal([0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, -1.0])   # same rotation
+    >>> assert_quaternion_equal([1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0])
+    Traceback (most recent call last):
+    ...
+    AssertionError: the quaternions differ by 1 up to sign (atol 1e-12), 1 of 1 items:
+    ...
     """
-    rng = np.random.default_rng(seed)
-    label = name or getattr(candidate, "__name__", "candidate")
-    worst = 0.0
-    for _ in range(n):
-        args = sample(rng)
-        got = np.asarray(candidate(*args), dtype=float)
-        want = np.asarray(reference(*args), dtype=float)
-        if got.shape != want.shape:
-            raise AssertionError(
-                f"{label}{args!r} has shape {got.shape}, expected {want.shape}")
-        diff = float(np.max(np.abs(got - want), initial=0.0))
-        if not diff <= atol:
-            raise AssertionError(
-                f"{label} differs from the reference by {diff:.3g} for input {args!r}:\n"
-                f"got {got!r}\nexpected {want!r}")
-        worst = max(worst, diff)
-    print(f"{label} agrees with the reference on {n} random inputs "
-          f"(largest difference {worst:.2g})")
-    return worst
+    _assert_equal_up_to_sign(actual, desired, atol, 4, "quaternion")
+
+
+def assert_dual_quaternion_equal(actual, desired, *, atol=1e-12):
+    r"""Fail unless each dual quaternion of ``actual`` is that of ``desired`` or its negative.
+
+    Item by item over the leading axes (which broadcast), all eight numbers with one sign:
+    :math:`\min(\lVert A - D\rVert_\infty, \lVert A + D\rVert_\infty) \le` ``atol``.
+
+    Parameters
+    ----------
+    actual, desired : array_like, shape (..., 8)
+        Dual quaternions ``(q_r, q_d)``.
+    atol : float, optional
+        Largest allowed difference of one component.
+
+    Raises
+    ------
+    AssertionError
+        Naming the worst item, its difference and the two dual quaternions.
+    ValueError
+        If an argument has the wrong shape, holds NaN or infinity, or the shapes do not
+        broadcast; if ``atol`` is negative or NaN.
+
+    Examples
+    --------
+    The UR3 at rest, by its chain and by its transform, is one rigid motion:
+
+    >>> import numpy as np
+    >>> from dqlab import dual_quaternion_from_transform
+    >>> from dqlab.models import ur3
+    >>> robot = ur3()
+    >>> assert_dual_quaternion_equal(robot.fk_dq(np.zeros(6)),
+    ...                              -dual_quaternion_from_transform(robot.fk(np.zeros(6))))
+    """
+    _assert_equal_up_to_sign(actual, desired, atol, 8, "dual quaternion")
 
 
 @contextlib.contextmanager

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._checks import as_float_array, batch_shape, component_rows, rotation_or_raise
-from ._kernels import orthonormality, rigid_inverse
+from ._formulas import orthonormality, rigid_inverse
 from .rotations import check_rotation_matrix
 
 __all__ = [

@@ -7,6 +7,7 @@ import math
 import pkgutil
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -123,7 +124,9 @@ def test_the_core_imports_numpy_alone():
 def test_no_attribute_shadows_a_module_of_its_package(package):
     pkg = importlib.import_module(package)
     for info in pkgutil.iter_modules(pkg.__path__):
-        importlib.import_module(f"{package}.{info.name}")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", DeprecationWarning)     # a renamed module's alias
+            importlib.import_module(f"{package}.{info.name}")
         value = getattr(pkg, info.name, None)
         assert value is None or value is sys.modules[f"{package}.{info.name}"], (
             f"{package}.{info.name} is {value!r}, not the module of that name")
@@ -171,17 +174,17 @@ def float_switches(path):
 
 CORE = [p for p in SOURCES if (module_name(p) + ".").split(".")[1] in
         ("complex", "rotations", "quaternion", "transforms", "dualquat", "robot", "_chain",
-         "models", "jacobian", "ik", "_kernels", "_checks", "_wrapper")]
+         "models", "jacobian", "ik", "_formulas", "_checks", "_wrapper")]
 
 
 def test_the_core_tells_floats_from_arrays_in_one_place():
     """One switch between the float path and the array path of a formula: the mapping
-    dqlab._kernels.functions_for from the type of a number to its functions. No other
+    dqlab._formulas.functions_for from the type of a number to its functions. No other
     place of the core tests for a float, except where the test is not a choice of formula:
     wrap_angle and check_scalar, which skip their argument checks for a Python float, and
     the calibrated solver's _dot, which skips the entries that are the float 0.0 (the
     structural zeros of its Jacobian's entries)."""
-    from dqlab._kernels import functions_for
+    from dqlab._formulas import functions_for
 
     sites = {(module_name(p), name) for p in CORE for name, _ in float_switches(p)}
     assert sites == {("dqlab.rotations", "wrap_angle"), ("dqlab._checks", "check_scalar"),

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 import dqlab
-from dqlab import _files, lab_arm, ur
+from dqlab import _files, desk_arm_firmware, ur
 from dqlab import pick_place as pp
 from dqlab.models import desk_arm, ur3
 from dqlab.trajectory import joint_trajectory
@@ -67,8 +67,8 @@ def _viewer_copy(path, source):
 #: name -> (file name, good write(path, tmp), bad write(path, tmp) refused before opening or
 #: None: a trajectory and a scene are checked when they are made, and hold nothing to refuse)
 WRITERS = {
-    "write_gcode": ("task.gcode", lambda p, t: lab_arm.write_gcode(p, _plan()),
-                    lambda p, t: lab_arm.write_gcode(p, _plan(), name="Démo")),
+    "write_gcode": ("task.gcode", lambda p, t: desk_arm_firmware.write_gcode(p, _plan()),
+                    lambda p, t: desk_arm_firmware.write_gcode(p, _plan(), name="Démo")),
     "write_poses": ("poses.csv", lambda p, t: ur.write_poses(p, [POSE]),
                     lambda p, t: ur.write_poses(p, [POSE], robot="UR3\nkind: x")),
     "append_pose": ("poses.csv", lambda p, t: ur.append_pose(p, POSE),

@@ -12,10 +12,10 @@ import inspect
 
 import numpy as np
 import pytest
-from _sweep import Any, Arg, Registry, joints_reach_target, reaches_target, sweep_test
+from _sweep import Any, Arg, Registry, S, joints_reach_target, reaches_target, sweep_test
 
 import dqlab
-from dqlab import dynamics, ik, jacobian
+from dqlab import dynamics, ik, jacobian, testing
 from dqlab import dynamics_identification as dyn_id
 from dqlab.identify import dh_parameters, robot_from_dh_parameters
 from dqlab.models import desk_arm, scara_rsm5, ur3
@@ -220,6 +220,24 @@ for _name, (_f, _args) in OTHER_CALLS.items():
     CASES.add(_module, _name, _positional(_f, _names), check=CHECKS.get(_name),
               **{n: _arg(_f, v) for n, v in zip(_names, _args, strict=True)})
 
+
+def _holds(assertion):
+    """An assertion of dqlab.testing as a function: per item of the broadcast batch, 1.0
+    when it holds and 0.0 when it fails; a bad argument must still be refused by name."""
+    def verdict(actual, desired, atol):
+        try:
+            assertion(actual, desired, atol=atol)
+            held = 1.0
+        except AssertionError:
+            held = 0.0
+        items = np.broadcast(np.asarray(actual)[..., 0], np.asarray(desired)[..., 0]).shape
+        return np.full(items, held)
+    return verdict
+
+
+for _name, _good in (("assert_quaternion_equal", Q), ("assert_dual_quaternion_equal", D)):
+    CASES.add("testing", f"testing.{_name}", _holds(getattr(testing, _name)),
+              actual=Arg(_good), desired=Arg(-_good), atol=S(1e-12, inf_ok=True))
 
 
 @pytest.mark.sweep

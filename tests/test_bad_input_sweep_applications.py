@@ -1,6 +1,6 @@
 """Part III's bad-input sweep: every public callable of dqlab.trajectory, dqlab.identify,
 dqlab.pick_place (and its animation in dqlab.viz), dqlab.sim (but the UR back end),
-dqlab.reachability and dqlab.scale, every argument, every kind of bad value.
+dqlab.reachability and dqlab.dask_arrays, every argument, every kind of bad value.
 
 As in ``tests/test_bad_input_sweep.py`` for the core: for each callable a good call is
 given; each argument is then replaced, one at a time, by every bad value of its kind
@@ -164,12 +164,13 @@ case(M, "robot_from_dh_parameters", lambda **kw: identify.robot_from_dh_paramete
     np.zeros(3)), robot=O(DESK), parameters=A(identify.dh_parameters(DESK) + 0.001))
 case(M, "identification_jacobian", identify.identification_jacobian, robot=O(DESK),
      q=A(Q_DESK[:2]), measure=O("pose"))
-case(M, "calibrate", identify.calibrate, robot=O(DESK), q=A(Q_DESK),
+case(M, "identify_dh_parameters", identify.identify_dh_parameters, robot=O(DESK), q=A(Q_DESK),
      measured=A(DESK.fk(Q_DESK)[:, :3, 3] + 1e-4), measure=O("position"),
      fixed=O(["theta1"], none_ok=True), rotation_scale=S(0.1), rank_tol=S(1e-8),
      max_condition=S(1e8, inf_ok=True), tol=S(1e-12), max_iter=Int(20))
-case(M, "calibrate(pose)", lambda **kw: identify.calibrate(DESK, Q_DESK, DESK.fk(Q_DESK),
-                                                            measure="pose", **kw),
+case(M, "identify_dh_parameters(pose)",
+     lambda **kw: identify.identify_dh_parameters(DESK, Q_DESK, DESK.fk(Q_DESK), measure="pose",
+                                                  **kw),
      rotation_scale=S(0.1), max_condition=S(1e12, inf_ok=True))
 case(M, "Identification.value", FIT.value, name=O("b"))
 case(M, "Identification.summary", FIT.summary, scale=S(1000.0), unit=T("mm"))
@@ -199,7 +200,7 @@ def _animate(**kw):
 case(M, "viz.animate_pick_place", _animate, robot=O(DESK), plan=O(PLAN),
      size=A([0.06, 0.04, 0.004]), stride=Int(3))
 
-# -- dqlab.reachability and dqlab.scale ------------------------------------------------
+# -- dqlab.reachability and dqlab.dask_arrays ------------------------------------------------
 
 M = "reachability"
 case(M, "pose_dexterity", pose_dexterity, robot=O(UR3), poses=A(UR3.fk(Q6)))
@@ -224,28 +225,28 @@ def _computed(*arrays):
 
 
 def _fk_dask(**kw):
-    from dqlab.scale import fk_dask
+    from dqlab.dask_arrays import fk_dask
     return _computed(fk_dask(**kw))
 
 
 def _ik_ur_dask(**kw):
-    from dqlab.scale import ik_ur_dask
+    from dqlab.dask_arrays import ik_ur_dask
     result = ik_ur_dask(**kw)
     return _computed(result.solutions, result.position_error)
 
 
 def _dexterity_dask(**kw):
-    from dqlab.scale import dexterity_dask
+    from dqlab.dask_arrays import dexterity_dask
     return _computed(*dexterity_dask(**kw))
 
 
 def _reachability_map(**kw):
     pytest.importorskip("dask")
-    from dqlab.scale import reachability_map
+    from dqlab.dask_arrays import reachability_map
     return reachability_map(**kw)
 
 
-M = "scale"
+M = "dask_arrays"
 case(M, "fk_dask", _fk_dask, robot=O(UR3), q=A(np.stack([Q6, -Q6])))
 case(M, "ik_ur_dask", _ik_ur_dask, robot=O(UR3), poses=A(UR3.fk(np.stack([Q6, -Q6]))),
      tol=S(1e-9, inf_ok=True))

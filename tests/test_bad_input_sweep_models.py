@@ -4,8 +4,8 @@ calibration), the closed-form IK of calibrated arms and the closest solutions, r
 maker's table and their tools, the uArm's G-code and the URDF/MJCF exports.
 
 Every public callable of ``dqlab.dynamics``, ``dqlab.inertia``, ``dqlab.models``,
-``dqlab.lab_arm``, ``dqlab.sim.mjcf``, ``dqlab.sim.urdf``, ``dqlab.ur.calibration`` and the
-solution pickers of ``dqlab.ik`` is here or in another sweep (the last test checks it), each
+``dqlab.desk_arm_firmware``, ``dqlab.sim.mjcf``, ``dqlab.sim.urdf``, ``dqlab.ur.calibration``
+and the solution pickers of ``dqlab.ik`` is here or in another sweep (the last test checks it), each
 argument with every bad value of its kind (``tests/_sweep.py``) and the kinds these modules
 meet: far targets (1e100 to 1e300 m), limits that are not limits, booleans and numbers as
 text, integers beyond 32 or 64 bits, text that XML or G-code cannot carry, robots with a
@@ -43,7 +43,7 @@ from _sweep import (
 from test_ur_calibration import _conf_text, _deltas, dh_origins, ros_yaml
 
 import dqlab
-from dqlab import dynamics, ik, lab_arm, models
+from dqlab import desk_arm_firmware, dynamics, ik, models
 from dqlab import pick_place as pp
 from dqlab.inertia import LinkInertia
 from dqlab.robot import Link, Robot
@@ -158,7 +158,8 @@ def _a_valid_row(q, kwargs):
     return _within_limits(q, kwargs)
 
 
-#: The commands the uArm's firmware gets, each with an optional comment (tests/test_lab_arm).
+#: The commands the uArm's firmware gets, each with an optional comment
+#: (tests/test_desk_arm_firmware).
 _COMMAND = re.compile(r"(G0 X-?\d+\.\d\d Y-?\d+\.\d\d Z-?\d+\.\d\d F\d+|G2202 N3 V\d+\.\d\d"
                       r"|M2231 V[01]|G2004 P\d+)( ;[ -~]*)?")
 
@@ -179,7 +180,7 @@ def _firmware_program(text, kwargs=None):
 def _written_program(path, kwargs):
     written = open(path, encoding="ascii").read()
     options = {k: v for k, v in kwargs.items() if k not in ("path", "plan")}
-    if written != lab_arm.gcode_from_plan(kwargs["plan"], **options):
+    if written != desk_arm_firmware.gcode_from_plan(kwargs["plan"], **options):
         return "the file is not the program"
     return _firmware_program(written)
 
@@ -335,16 +336,16 @@ add(M, "distinct_solutions", ik.distinct_solutions, result=O(RESULT), atol=S(1e-
 add(M, "IKResult.best", RESULT.best, q_ref=A(Q6))
 add(M, "ur_parameters", ik.ur_parameters, robot=O(UR5E), atol=S(1e-12))
 
-M = "lab_arm"
+M = "desk_arm_firmware"
 _ROWS = [[228.66, 0, 174.12, 0, 0], [0, 170, 80, 0, 0], [0, 170, 30, 1, 0]]
 PLAN = pp.plan_pick_place(models.desk_arm(), pp.task_from_lab(_ROWS), dt=0.1)
-add(M, "motor_angles_from_lab", lab_arm.motor_angles_from_lab, q_lab=A([0.1, 1.2, 1.0]))
-add(M, "lab_angles_from_motor", lab_arm.lab_angles_from_motor, q_lab=A([1.5, 1.2, 1.0]))
-add(M, "motor_angles", lab_arm.motor_angles, positions=A([[0.0, 0.17, 0.03]]),
+add(M, "motor_angles_from_lab", desk_arm_firmware.motor_angles_from_lab, q_lab=A([0.1, 1.2, 1.0]))
+add(M, "lab_angles_from_motor", desk_arm_firmware.lab_angles_from_motor, q_lab=A([1.5, 1.2, 1.0]))
+add(M, "motor_angles", desk_arm_firmware.motor_angles, positions=A([[0.0, 0.17, 0.03]]),
     where=T("point", only=("none", "number", "list", "control", "newline", "long")))
-add(M, "gcode_from_plan", lab_arm.gcode_from_plan, plan=O(PLAN), name=Name("lab task"),
+add(M, "gcode_from_plan", desk_arm_firmware.gcode_from_plan, plan=O(PLAN), name=Name("lab task"),
     start_feed=S(3000.0), check=_firmware_program)
-add(M, "write_gcode", lab_arm.write_gcode, path=P("task.gcode"), plan=O(PLAN),
+add(M, "write_gcode", desk_arm_firmware.write_gcode, path=P("task.gcode"), plan=O(PLAN),
     name=Name("lab task"), start_feed=S(3000.0), writes="path", check=_written_program)
 
 M = "sim"
@@ -558,12 +559,12 @@ def test_bad_arguments_are_refused_by_name_or_give_a_correct_result(group, reque
 
 #: The modules whose public callables are swept (data -- tables, constants, shapes -- is not
 #: callable and has nothing to sweep).
-MODULES = ("dqlab.dynamics", "dqlab.inertia", "dqlab.models", "dqlab.lab_arm", "dqlab.sim.mjcf",
-           "dqlab.sim.urdf", "dqlab.ur.calibration", "dqlab.ik")
+MODULES = ("dqlab.dynamics", "dqlab.inertia", "dqlab.models", "dqlab.desk_arm_firmware",
+           "dqlab.sim.mjcf", "dqlab.sim.urdf", "dqlab.ur.calibration", "dqlab.ik")
 #: Public callables that take no input to sweep: exception types.
 NOT_SWEPT = {"CalibrationError"}
 #: Callables without arguments: nothing to sweep, each called once here.
-NO_ARGUMENTS = {"uarm_swift_pro"} | {n for n in models.__all__ if re.fullmatch(
+NO_ARGUMENTS = {"model"} | {n for n in models.__all__ if re.fullmatch(
     r"ur\d+\w*|ur3_mdh|desk_arm|scara_rsm5", n)}
 
 
@@ -586,6 +587,6 @@ def test_the_sweeps_cover_every_public_callable_of_these_modules():
             missing[module_name] = sorted(names - words)
     assert missing == {}
     for name in NO_ARGUMENTS:
-        robot = getattr(models, name, None) or getattr(lab_arm, name)
+        robot = getattr(models, name, None) or getattr(desk_arm_firmware, name)
         assert np.all(np.isfinite(robot().fk(np.zeros(robot().n)))), name
     assert math.isfinite(float(models.rod_link_inertias(UR3)[0].mass))

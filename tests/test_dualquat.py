@@ -41,6 +41,7 @@ from dqlab.quaternion import (
     quaternion_product,
     rotate_vector,
 )
+from dqlab.testing import assert_dual_quaternion_equal
 
 SEEDS = st.integers(0, 2**32 - 1)
 FAST = settings(max_examples=40, deadline=None)
@@ -55,13 +56,6 @@ def random_dq(rng, shape=()):
 def random_transform(rng):
     return pt.transform_from(matrix_from_quaternion(random_unit_quaternions(rng)),
                              rng.normal(size=3))
-
-
-def same_motion(A, B, atol=1e-12):
-    """Q and -Q are the same rigid motion."""
-    A, B = np.asarray(A), np.asarray(B)
-    sign = np.where(np.sum(A[..., :4] * B[..., :4], axis=-1, keepdims=True) < 0, -1.0, 1.0)
-    return np.allclose(A, sign * B, atol=atol, rtol=0)
 
 
 def qmul(*qs):
@@ -199,7 +193,8 @@ def test_transform_round_trip_near_0_and_pi(angle):
         q = quaternion_from_axis_angle(rng.normal(size=3), angle)
         T = pt.transform_from(matrix_from_quaternion(q), rng.normal(size=3))
         Q = dual_quaternion_from_transform(T)
-        assert same_motion(Q, dual_quaternion_from_rotation_translation(q, T[:3, 3]), 1e-14)
+        assert_dual_quaternion_equal(Q, dual_quaternion_from_rotation_translation(q, T[:3, 3]),
+                                     atol=1e-14)
         np.testing.assert_allclose(transform_from_dual_quaternion(Q), T, atol=1e-14)
 
 
@@ -257,7 +252,7 @@ def test_screw_round_trip(seed):
     assert 0 <= theta <= np.pi
     assert abs(np.linalg.norm(l) - 1) < 1e-14
     assert abs(l @ m) < 1e-12
-    assert same_motion(dual_quaternion_from_screw(l, m, theta, d), Q, atol=1e-12)
+    assert_dual_quaternion_equal(dual_quaternion_from_screw(l, m, theta, d), Q, atol=1e-12)
     # the screw axis is fixed by the rotation part and moved along itself by d
     c = np.cross(l, m)  # the point of the axis closest to the origin
     np.testing.assert_allclose(dual_quaternion_apply(Q, c), c + d * l, atol=1e-11)
@@ -284,15 +279,15 @@ def test_power_and_sclerp(seed):
     Q0, Q1 = random_dq(rng, (2,))
     np.testing.assert_allclose(dual_quaternion_power(Q0, 0), dual_quaternion_identity(),
                                atol=1e-14)
-    assert same_motion(dual_quaternion_power(Q0, 1), Q0)
+    assert_dual_quaternion_equal(dual_quaternion_power(Q0, 1), Q0)
     H = dual_quaternion_power(Q0, 0.5)
-    assert same_motion(dual_quaternion_product(H, H), Q0, atol=1e-12)
+    assert_dual_quaternion_equal(dual_quaternion_product(H, H), Q0, atol=1e-12)
     t = np.linspace(0, 1, 7)
     path = sclerp(Q0, Q1, t)
     np.testing.assert_allclose(path[0], Q0, atol=1e-13)
-    assert same_motion(path[-1], Q1, atol=1e-12)
+    assert_dual_quaternion_equal(path[-1], Q1, atol=1e-12)
     np.testing.assert_allclose(dual_quaternion_norm(path), np.tile([1, 0], (7, 1)), atol=1e-13)
-    assert same_motion(sclerp(Q0, -Q1, t), path, atol=1e-12)
+    assert_dual_quaternion_equal(sclerp(Q0, -Q1, t), path, atol=1e-12)
 
 
 # --- cross-checks against pytransform3d ---------------------------------------------------
@@ -304,7 +299,7 @@ def test_against_pytransform3d():
         T1, T2 = random_transform(rng), random_transform(rng)
         Q1, Q2 = dual_quaternion_from_transform(T1), dual_quaternion_from_transform(T2)
         # pytransform3d also stores (w, x, y, z) real then dual, translation after rotation
-        assert same_motion(Q1, pt.dual_quaternion_from_transform(T1))
+        assert_dual_quaternion_equal(Q1, pt.dual_quaternion_from_transform(T1))
         np.testing.assert_allclose(transform_from_dual_quaternion(Q1),
                                    pt.transform_from_dual_quaternion(Q1), atol=1e-12)
         np.testing.assert_allclose(dual_quaternion_product(Q1, Q2),
@@ -320,8 +315,9 @@ def test_against_pytransform3d():
         np.testing.assert_allclose(dual_quaternion_apply(Q1, p),
                                    pt.dq_prod_vector(Q1, p), atol=1e-12)
         t = rng.uniform()
-        assert same_motion(sclerp(Q1, Q2, t), pt.dual_quaternion_sclerp(Q1, Q2, t))
-        assert same_motion(dual_quaternion_power(Q1, t), pt.dual_quaternion_power(Q1, t))
+        assert_dual_quaternion_equal(sclerp(Q1, Q2, t), pt.dual_quaternion_sclerp(Q1, Q2, t))
+        assert_dual_quaternion_equal(dual_quaternion_power(Q1, t),
+                                     pt.dual_quaternion_power(Q1, t))
         # screw parameters: pytransform3d returns (point c, axis l, pitch h, angle theta)
         l, m, theta, d = screw_from_dual_quaternion(Q1)
         c, s, h, th = pt.screw_parameters_from_dual_quaternion(Q1)
@@ -331,8 +327,8 @@ def test_against_pytransform3d():
         assert abs(theta - th) < 1e-12
         assert abs(d - h * th) < 1e-12
         np.testing.assert_allclose(m, np.cross(c, s), atol=1e-12)
-        assert same_motion(dual_quaternion_from_screw(l, m, theta, d),
-                           pt.dual_quaternion_from_screw_parameters(c, s, h, th))
+        assert_dual_quaternion_equal(dual_quaternion_from_screw(l, m, theta, d),
+                                     pt.dual_quaternion_from_screw_parameters(c, s, h, th))
 
 
 def test_against_pytransform3d_batches():
@@ -342,8 +338,8 @@ def test_against_pytransform3d_batches():
     Qs = random_dq(rng, (50,))
     Ts = ptr.transforms_from_dual_quaternions(Qs)
     np.testing.assert_allclose(transform_from_dual_quaternion(Qs), Ts, atol=1e-12)
-    assert same_motion(dual_quaternion_from_transform(Ts),
-                       ptr.dual_quaternions_from_transforms(Ts))
+    assert_dual_quaternion_equal(dual_quaternion_from_transform(Ts),
+                                 ptr.dual_quaternions_from_transforms(Ts))
     Rs = random_dq(rng, (50,))
     np.testing.assert_allclose(dual_quaternion_product(Qs, Rs),
                                ptr.batch_concatenate_dual_quaternions(Qs, Rs), atol=1e-12)
@@ -521,10 +517,10 @@ def test_power_and_sclerp_accurate_for_nearly_pure_translations(angle):
         Q = dual_quaternion_from_rotation_translation(q, 10 * rng.normal(size=3))
         H = dual_quaternion_power(Q, 0.5)
         check_unit_dual_quaternion(H, tol=1e-14)
-        assert same_motion(dual_quaternion_product(H, H), Q, atol=1e-13)
+        assert_dual_quaternion_equal(dual_quaternion_product(H, H), Q, atol=1e-13)
         T = dual_quaternion_power(Q, 1 / 3)
-        assert same_motion(dual_quaternion_product(T, dual_quaternion_product(T, T)), Q,
-                           atol=1e-13)
+        assert_dual_quaternion_equal(dual_quaternion_product(T, dual_quaternion_product(T, T)),
+                                     Q, atol=1e-13)
         # ScLERP between poses of (almost) the same orientation: the position moves on
         # the straight line
         P0 = dual_quaternion_from_rotation_translation(q, [0, 0, 0])
@@ -543,7 +539,7 @@ def test_screw_round_trip_near_0_and_pi(angle, atol):
         Q = dual_quaternion_from_rotation_translation(q, rng.normal(size=3))
         l, m, theta, d = screw_from_dual_quaternion(Q)
         assert abs(theta - angle) < 1e-12
-        assert same_motion(dual_quaternion_from_screw(l, m, theta, d), Q, atol=atol)
+        assert_dual_quaternion_equal(dual_quaternion_from_screw(l, m, theta, d), Q, atol=atol)
 
 
 def test_fk_dq_multiplies_by_screws_as_the_general_product():
@@ -568,5 +564,5 @@ def test_fk_dq_multiplies_by_screws_as_the_general_product():
         for X in np.moveaxis(robot.link_transforms(q), -3, 0):
             expected = dual_quaternion_product(expected, dual_quaternion_from_transform(X))
         expected = dual_quaternion_product(expected, dual_quaternion_from_transform(tool))
-        assert same_motion(robot.fk_dq(q), expected, atol=1e-13)
-        assert same_motion(robot.fk_dq(q[7]), expected[7], atol=1e-13)
+        assert_dual_quaternion_equal(robot.fk_dq(q), expected, atol=1e-13)
+        assert_dual_quaternion_equal(robot.fk_dq(q[7]), expected[7], atol=1e-13)

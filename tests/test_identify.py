@@ -272,7 +272,7 @@ def test_identification_jacobian_broadcasts_over_leading_axes():
 def test_ur3_position_calibration_reports_the_unidentifiable_parameters():
     nominal = ur3()
     q = np.random.default_rng(10).uniform(-np.pi, np.pi, size=(25, 6))
-    fit = idf.calibrate(nominal, q, nominal.fk(q)[:, :3, 3])
+    fit = idf.identify_dh_parameters(nominal, q, nominal.fk(q)[:, :3, 3])
     assert fit.rank == 18
     assert fit.unidentifiable == ("d2 - d4", "d3 - d4", "theta5 + 0.0819 a5",
                                   "d5 - 12.21 alpha5", "theta6", "alpha6")
@@ -285,7 +285,7 @@ def test_ur3_position_calibration_reports_the_unidentifiable_parameters():
 def test_ur3_pose_calibration_identifies_the_wrist_too():
     nominal = ur3()
     q = np.random.default_rng(11).uniform(-np.pi, np.pi, size=(10, 6))
-    fit = idf.calibrate(nominal, q, nominal.fk(q), measure="pose")
+    fit = idf.identify_dh_parameters(nominal, q, nominal.fk(q), measure="pose")
     assert fit.rank == 22
     assert fit.unidentifiable == ("d2 - d4", "d3 - d4")
     assert fit.held == UR3_HELD_POSE
@@ -298,7 +298,7 @@ def test_exact_data_recover_the_ur3_parameters(measure, held):
     nominal, real, x_true = perturbed_ur3(rng, held, scale=2e-3)
     q = rng.uniform(-np.pi, np.pi, size=(30, 6))
     X = real.fk(q)
-    fit = idf.calibrate(nominal, q, X[:, :3, 3] if measure == "position" else X,
+    fit = idf.identify_dh_parameters(nominal, q, X[:, :3, 3] if measure == "position" else X,
                         measure=measure)
     assert fit.converged and fit.held == held
     assert np.abs(fit.estimate - x_true).max() <= 1e-9
@@ -309,9 +309,9 @@ def test_exact_data_recover_a_modified_dh_chain():
     rng = np.random.default_rng(13)
     nominal = ur3_mdh()
     q = rng.uniform(-np.pi, np.pi, size=(30, 6))
-    probe = idf.calibrate(nominal, q, nominal.fk(q)[:, :3, 3])
+    probe = idf.identify_dh_parameters(nominal, q, nominal.fk(q)[:, :3, 3])
     _, real, x_true = perturbed_ur3(rng, probe.held, nominal=nominal)
-    fit = idf.calibrate(nominal, q, real.fk(q)[:, :3, 3])
+    fit = idf.identify_dh_parameters(nominal, q, real.fk(q)[:, :3, 3])
     assert np.abs(fit.estimate - x_true).max() <= 1e-9
 
 
@@ -319,7 +319,7 @@ def test_fixed_parameters_stay_at_their_nominal_values():
     rng = np.random.default_rng(14)
     nominal, real, x_true = perturbed_ur3(rng, UR3_HELD_POSITION + ("theta1", "d1"))
     q = rng.uniform(-np.pi, np.pi, size=(20, 6))
-    fit = idf.calibrate(nominal, q, real.fk(q)[:, :3, 3], fixed=("theta1", "d1"))
+    fit = idf.identify_dh_parameters(nominal, q, real.fk(q)[:, :3, 3], fixed=("theta1", "d1"))
     assert fit.held == ("theta1", "d1") + UR3_HELD_POSITION
     assert np.abs(fit.estimate - x_true).max() <= 1e-9
 
@@ -333,10 +333,10 @@ def test_ur3_monte_carlo_spread_matches_the_standard_errors():
     q = rng.uniform(-np.pi, np.pi, size=(30, 6))
     exact = real.fk(q)[:, :3, 3]
     sigma = 1e-4
-    fits = [idf.calibrate(nominal, q, exact + rng.normal(0.0, sigma, exact.shape))
+    fits = [idf.identify_dh_parameters(nominal, q, exact + rng.normal(0.0, sigma, exact.shape))
             for _ in range(200)]
     estimates = np.array([f.estimate for f in fits])
-    reference = idf.calibrate(nominal, q, exact)
+    reference = idf.identify_dh_parameters(nominal, q, exact)
     kept = reference.estimated
     predicted = sigma * np.sqrt(np.diag(reference.unit_covariance))[kept]
     ratio = estimates[:, kept].std(axis=0, ddof=1) / predicted
@@ -358,7 +358,7 @@ def test_calibration_error_shrinks_with_poses_and_grows_with_noise():
         for _ in range(trials):
             q = rng.uniform(-np.pi, np.pi, size=(m, 6))
             p = real.fk(q)[:, :3, 3] + rng.normal(0.0, sigma, (m, 3))
-            fit = idf.calibrate(nominal, q, p)
+            fit = idf.identify_dh_parameters(nominal, q, p)
             e = fit.robot.fk(q_check)[:, :3, 3] - real.fk(q_check)[:, :3, 3]
             out.append(np.sqrt(np.mean(np.sum(e**2, axis=-1))))
         return np.mean(out)
@@ -377,7 +377,7 @@ def test_calibration_agrees_with_scipy_least_squares():
     nominal, real, _ = perturbed_ur3(rng, ())
     q = rng.uniform(-np.pi, np.pi, size=(20, 6))
     measured = real.fk(q)[:, :3, 3] + rng.normal(0.0, 2e-4, (20, 3))
-    fit = idf.calibrate(nominal, q, measured)
+    fit = idf.identify_dh_parameters(nominal, q, measured)
     x0 = idf.dh_parameters(nominal)
     kept = fit.estimated
 
@@ -391,38 +391,38 @@ def test_calibration_agrees_with_scipy_least_squares():
     assert np.allclose(fit.estimate[kept], reference.x, atol=1e-9)
 
 
-def test_calibrate_rejects_bad_input():
+def test_identify_dh_parameters_rejects_bad_input():
     robot = ur3()
     q = np.random.default_rng(18).uniform(-3, 3, size=(10, 6))
     p = robot.fk(q)[:, :3, 3]
     with pytest.raises(ValueError, match="q must have shape"):
-        idf.calibrate(robot, q[:, :5], p)
+        idf.identify_dh_parameters(robot, q[:, :5], p)
     with pytest.raises(ValueError, match=r"measured positions must have shape \(10, 3\)"):
-        idf.calibrate(robot, q, p[:9])
+        idf.identify_dh_parameters(robot, q, p[:9])
     with pytest.raises(ValueError, match=r"measured must have shape \(\.\.\., 4, 4\)"):
-        idf.calibrate(robot, q, p, measure="pose")
+        idf.identify_dh_parameters(robot, q, p, measure="pose")
     with pytest.raises(ValueError, match="measured contains NaN"):
-        idf.calibrate(robot, q, np.where(p > 0, np.nan, p))
+        idf.identify_dh_parameters(robot, q, np.where(p > 0, np.nan, p))
     q_nan = q.copy()
     q_nan[3, 2] = np.nan
     with pytest.raises(ValueError, match="q contains NaN"):
-        idf.calibrate(robot, q_nan, p)
+        idf.identify_dh_parameters(robot, q_nan, p)
     with pytest.raises(ValueError, match="too few measurements: 15 equations for 24 unknowns"):
-        idf.calibrate(robot, q[:5], p[:5])
+        idf.identify_dh_parameters(robot, q[:5], p[:5])
     with pytest.raises(ValueError, match="unknown parameters"):
-        idf.calibrate(robot, q, p, fixed=("d7",))
+        idf.identify_dh_parameters(robot, q, p, fixed=("d7",))
     with pytest.raises(ValueError, match="measure must be"):
-        idf.calibrate(robot, q, p, measure="orientation")
+        idf.identify_dh_parameters(robot, q, p, measure="orientation")
     sheared = robot.fk(q)
     sheared[:, 0, 1] += 0.1
     with pytest.raises(ValueError, match="measured"):
-        idf.calibrate(robot, q, sheared, measure="pose")
+        idf.identify_dh_parameters(robot, q, sheared, measure="pose")
 
 
 def test_fixed_accepts_a_single_name():
     robot = ur3()
     q = np.random.default_rng(22).uniform(-3, 3, size=(12, 6))
-    fit = idf.calibrate(robot, q, robot.fk(q)[:, :3, 3], fixed="d1")
+    fit = idf.identify_dh_parameters(robot, q, robot.fk(q)[:, :3, 3], fixed="d1")
     assert fit.held[0] == "d1" and not fit.estimated[1]
 
 
@@ -453,7 +453,7 @@ def test_poses_that_barely_differ_are_reported_as_ill_conditioned():
     rng = np.random.default_rng(19)
     q = np.array([0.3, -1.0, 1.2, -0.5, 0.8, 0.1]) + rng.normal(0.0, 1e-3, (20, 6))
     with pytest.warns(idf.IllConditionedWarning, match="ill-conditioned"):
-        fit = idf.calibrate(robot, q, robot.fk(q)[:, :3, 3])
+        fit = idf.identify_dh_parameters(robot, q, robot.fk(q)[:, :3, 3])
     assert fit.condition_number > 1e6
 
 
@@ -462,7 +462,7 @@ def test_well_posed_calibration_issues_no_warning():
     q = np.random.default_rng(20).uniform(-np.pi, np.pi, size=(15, 6))
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        fit = idf.calibrate(robot, q, robot.fk(q)[:, :3, 3])
+        fit = idf.identify_dh_parameters(robot, q, robot.fk(q)[:, :3, 3])
     assert fit.condition_number < 100
 
 
@@ -471,7 +471,7 @@ def test_non_convergence_is_reported():
     nominal, real, _ = perturbed_ur3(rng, UR3_HELD_POSITION, scale=0.05)
     q = rng.uniform(-np.pi, np.pi, size=(20, 6))
     with pytest.warns(idf.IllConditionedWarning, match="did not converge"):
-        fit = idf.calibrate(nominal, q, real.fk(q)[:, :3, 3], max_iter=1)
+        fit = idf.identify_dh_parameters(nominal, q, real.fk(q)[:, :3, 3], max_iter=1)
     assert not fit.converged and fit.iterations == 1
 
 
@@ -516,25 +516,25 @@ def test_rank_tol_must_be_a_relative_threshold(bad):
 
 
 @pytest.mark.parametrize("bad", [np.nan, 0.0, -0.1, np.inf, 1j])
-def test_calibrate_refuses_a_rotation_scale_that_is_not_a_positive_number(bad):
+def test_identify_dh_parameters_refuses_a_rotation_scale_that_is_not_a_positive_number(bad):
     robot = desk_arm()
     q = np.random.default_rng(2).uniform(0.2, 1.2, (8, 3))
     with pytest.raises(ValueError, match="^rotation_scale must be a finite number > 0"):
-        idf.calibrate(robot, q, robot.fk(q), measure="pose", rotation_scale=bad)
+        idf.identify_dh_parameters(robot, q, robot.fk(q), measure="pose", rotation_scale=bad)
 
 
 @pytest.mark.parametrize("name, bad", [("tol", np.inf), ("tol", -1.0), ("max_iter", 2.5),
                                         ("max_iter", 0), ("max_condition", np.nan)])
-def test_calibrate_refuses_bad_iteration_settings(name, bad):
+def test_identify_dh_parameters_refuses_bad_iteration_settings(name, bad):
     robot = desk_arm()
     q = np.random.default_rng(2).uniform(0.2, 1.2, (8, 3))
     with pytest.raises(ValueError, match=f"^{name} must be"):
-        idf.calibrate(robot, q, robot.fk(q)[:, :3, 3], **{name: bad})
+        idf.identify_dh_parameters(robot, q, robot.fk(q)[:, :3, 3], **{name: bad})
 
 
 def test_identification_functions_refuse_a_robot_that_is_none():
     for call in (lambda: idf.dh_parameter_names(None), lambda: idf.dh_parameters(None),
                  lambda: idf.identification_jacobian(None, np.zeros(3)),
-                 lambda: idf.calibrate(None, np.zeros((8, 3)), np.zeros((8, 3)))):
+                 lambda: idf.identify_dh_parameters(None, np.zeros((8, 3)), np.zeros((8, 3)))):
         with pytest.raises(TypeError, match="^robot must be a Robot, got None"):
             call()

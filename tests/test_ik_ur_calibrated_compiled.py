@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from test_ik_ur_calibrated import calibrated, physically_calibrated, singular_poses
 
-from dqlab._kernels import quaternion_from_matrix_entries
+from dqlab._formulas import quaternion_from_matrix_entries
 from dqlab.ik import _newton_compiled as compiled
 from dqlab.ik import ur
 from dqlab.ik import ur_calibrated as module

@@ -30,17 +30,11 @@ from dqlab.quaternion import (
     rotate_vector,
     slerp,
 )
+from dqlab.testing import assert_quaternion_equal
 
 SEEDS = st.integers(0, 2**32 - 1)
 FAST = settings(max_examples=40, deadline=None)
 
-
-
-def same_rotation(a, b, atol=1e-12):
-    """q and -q are the same rotation."""
-    a, b = np.asarray(a), np.asarray(b)
-    sign = np.where(np.sum(a * b, axis=-1, keepdims=True) < 0, -1.0, 1.0)
-    return np.allclose(a, sign * b, atol=atol, rtol=0)
 
 
 # --- the sources' worked examples ------------------------------------------------------
@@ -153,7 +147,7 @@ def test_matrix_round_trip_near_0_and_pi(angle):
         R = matrix_from_quaternion(q)
         q2 = quaternion_from_matrix(R)
         assert q2[0] >= 0
-        assert same_rotation(q2, q, atol=2e-15 * 4)
+        assert_quaternion_equal(q2, q, atol=2e-15 * 4)
         np.testing.assert_allclose(matrix_from_quaternion(q2), R, atol=1e-15 * 4)
         axis2, angle2 = axis_angle_from_quaternion(q2)
         assert abs(angle2 - angle) < 1e-14
@@ -170,7 +164,7 @@ def test_matrix_to_quaternion_exact_at_180_degrees():
     R = 2 * n[:, :, None] * n[:, None, :] - np.eye(3)
     q = quaternion_from_matrix(R)
     assert np.abs(q[:, 0]).max() < 1e-15
-    assert same_rotation(q, np.concatenate([np.zeros((200, 1)), n], axis=1), atol=1e-15)
+    assert_quaternion_equal(q, np.concatenate([np.zeros((200, 1)), n], axis=1), atol=1e-15)
 
 
 def test_matrix_to_quaternion_uses_active_convention():
@@ -230,7 +224,7 @@ def test_slerp_endpoints_unit_and_shortest(seed):
     path = slerp(q0, q1, t)
     np.testing.assert_allclose(np.linalg.norm(path, axis=-1), 1, atol=1e-14)
     np.testing.assert_allclose(path[0], q0, atol=1e-14)
-    assert same_rotation(path[-1], q1, atol=1e-14)
+    assert_quaternion_equal(path[-1], q1, atol=1e-14)
     # q1 and -q1 give the same path
     np.testing.assert_allclose(slerp(q0, -q1, t), path, atol=1e-14)
     # constant angular speed along the shortest arc
@@ -278,19 +272,19 @@ def test_against_pyquaternion():
         np.testing.assert_allclose(rotate_vector(u, v), pu.rotate(v), atol=1e-12)
         np.testing.assert_allclose(matrix_from_quaternion(u), pu.rotation_matrix, atol=1e-12)
         q = quaternion_from_matrix(pu.rotation_matrix)
-        assert same_rotation(q, PyQuaternion(matrix=pu.rotation_matrix).elements)
-        assert same_rotation(q, u)
+        assert_quaternion_equal(q, PyQuaternion(matrix=pu.rotation_matrix).elements)
+        assert_quaternion_equal(q, u)
         np.testing.assert_allclose(quaternion_inverse(a), PyQuaternion(a).inverse.elements,
                                    atol=1e-12)
         np.testing.assert_allclose(quaternion_exp(a), PyQuaternion.exp(PyQuaternion(a)).elements,
                                    rtol=1e-12, atol=1e-12)
         w = b / np.linalg.norm(b)
         t = rng.uniform()
-        assert same_rotation(slerp(u, w, t),
-                             PyQuaternion.slerp(pu, PyQuaternion(w), t).elements)
+        assert_quaternion_equal(slerp(u, w, t),
+                                PyQuaternion.slerp(pu, PyQuaternion(w), t).elements)
         axis, angle = axis_angle_from_quaternion(u)
         pq = PyQuaternion(axis=axis, angle=angle)
-        assert same_rotation(pq.elements, u)
+        assert_quaternion_equal(pq.elements, u)
 
 
 def test_pyquaternion_interop():

@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 from dqlab import dualquat
 from dqlab.models import desk_arm, scara_rsm5, six_r, ur3, ur3_mdh
 from dqlab.robot import Link, Robot
+from dqlab.testing import assert_dual_quaternion_equal
 
 MODELS = [ur3, ur3_mdh, desk_arm, scara_rsm5, six_r]
 
@@ -46,11 +47,6 @@ def random_transform(rng):
     T[:3, :3] = Q
     T[:3, 3] = rng.normal(size=3)
     return T
-
-
-def dq_close_up_to_sign(A, B):
-    s = np.where(np.sum(A * B, axis=-1) < 0, -1.0, 1.0)[..., None]
-    return np.abs(A - s * B).max()
 
 
 # -- Link and Robot description ---------------------------------------------------------
@@ -247,8 +243,8 @@ def test_matrix_fk_equals_both_dual_quaternion_constructions(model):
     assert Q_links.shape == Q_screws.shape == (1000, 8)
     np.testing.assert_allclose(dualquat.transform_from_dual_quaternion(Q_links), X, atol=1e-12)
     np.testing.assert_allclose(dualquat.transform_from_dual_quaternion(Q_screws), X, atol=1e-12)
-    assert dq_close_up_to_sign(Q_links, Q_screws) < 1e-12
-    assert dq_close_up_to_sign(Q_links, dualquat.dual_quaternion_from_transform(X)) < 1e-12
+    assert_dual_quaternion_equal(Q_links, Q_screws, atol=1e-12)
+    assert_dual_quaternion_equal(Q_links, dualquat.dual_quaternion_from_transform(X), atol=1e-12)
     np.testing.assert_allclose(np.linalg.norm(Q_links[:, :4], axis=-1), 1.0, atol=1e-13)
 
 

@@ -856,7 +856,7 @@ def _outputs(F, X_target, X, measures, errors):
 
 
 def _pose_errors(X, X_target, out):
-    """out (2,): ``dqlab._kernels.pose_error_entries`` of X and X_target (4, 4)."""
+    """out (2,): ``dqlab._formulas.pose_error_entries`` of X and X_target (4, 4)."""
     dx, dy, dz = X[0, 3] - X_target[0, 3], X[1, 3] - X_target[1, 3], X[2, 3] - X_target[2, 3]
     vx = _dot_rows(X, 1, X_target, 2) - _dot_rows(X, 2, X_target, 1)
     vy = _dot_rows(X, 2, X_target, 0) - _dot_rows(X, 0, X_target, 2)

@@ -36,7 +36,7 @@ from .._checks import (
     rigid_rows,
     unit_dual_quaternion_or_raise,
 )
-from .._kernels import (
+from .._formulas import (
     dual_quaternion_mul,
     quaternion_from_matrix_entries,
     quaternion_mul,

@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._checks import check_tolerance, components, rigid_rows, stack_components
-from .._kernels import pose_error_entries, rotation_vector_from_matrix_entries
+from .._formulas import pose_error_entries, rotation_vector_from_matrix_entries
 from ..robot import Robot
 from .result import IKResult, finish, target_reasons
 from .targets import RIGID_TOL, parse_targets, pose_errors

@@ -11,7 +11,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._checks import check_tolerance
-from .._kernels import norm_last_axis
+from .._formulas import norm_last_axis
 from ..models import DESK_ARM_SHAPE
 from ..robot import Robot
 from ..rotations import wrap_angle

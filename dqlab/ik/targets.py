@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._checks import as_float_array, check_tolerance, component_rows, components, real_array
-from .._kernels import pose_error_entries
+from .._formulas import pose_error_entries
 from ..dualquat import (
     check_unit_dual_quaternion,
     dual_quaternion_from_transform,

@@ -79,7 +79,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._checks import as_float_array, rigid_rows
-from .._kernels import quaternion_from_matrix_entries, rigid_inverse
+from .._formulas import quaternion_from_matrix_entries, rigid_inverse
 from ..dualquat import dual_quaternion_from_transform
 from ..models import UR_ALPHA, UR_SHAPE
 from ..robot import Link, Robot

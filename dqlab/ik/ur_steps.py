@@ -15,7 +15,7 @@ machinery of the private module ``dqlab.ik._ur_engine`` (tested equal, bit for b
 adds the checks, the flags and the choice at a wrist singularity.
 
 Each step is one formula for two kinds of numbers, told apart by one switch
-(``dqlab._kernels.functions_for``): Python floats, computed with ``math`` (one pose, one
+(``dqlab._formulas.functions_for``): Python floats, computed with ``math`` (one pose, one
 branch at a time), and numpy arrays of any shape (a batch, all branches at once). Angles
 are in radians, lengths in metres; UR's standard Denavit--Hartenberg values keep their
 published signs (:math:`a_2`, :math:`a_3` are negative).
@@ -42,7 +42,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._checks import components
-from .._kernels import functions_for, quaternion_from_matrix_entries, quaternion_mul
+from .._formulas import functions_for, quaternion_from_matrix_entries, quaternion_mul
 from ..rotations import wrap_angle
 from ..transforms import check_transform
 

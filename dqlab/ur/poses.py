@@ -35,7 +35,7 @@ unchanged *exactly* and :math:`|\mathbf r|` may exceed :math:`\pi` by at most
 import numpy as np
 
 from .._checks import as_float_array, check_tolerance, components, stack_components
-from .._kernels import (
+from .._formulas import (
     rotation_vector_from_matrix_entries,
     rotation_vector_from_quaternion_entries,
 )
@@ -216,7 +216,7 @@ def matrix_from_rotation_vector(r):
 
 def rotation_vector_from_matrix(R, *, tol=1e-9, half_turn_tol=1e-12):
     r"""Rotation vectors of rotation matrices (through Shepperd's quaternion: the kernel
-    ``dqlab._kernels.rotation_vector_from_matrix_entries``, shared with the rest of
+    ``dqlab._formulas.rotation_vector_from_matrix_entries``, shared with the rest of
     dqlab, and the half-turn rule of the module docstring).
 
     Parameters

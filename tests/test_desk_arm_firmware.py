@@ -1,11 +1,12 @@
-"""The lab's arm, a uArm Swift Pro: its model, its limits and the G-code of a plan."""
+"""The desktop arm's firmware (a uArm Swift Pro's): its model, its limits and the G-code of a
+plan."""
 
 import re
 
 import numpy as np
 import pytest
 
-from dqlab import lab_arm
+from dqlab import desk_arm_firmware
 from dqlab import pick_place as pp
 from dqlab.models import desk_arm, desk_arm_joints_from_lab
 
@@ -25,7 +26,7 @@ def plan():
 
 @pytest.fixture(scope="module")
 def program(plan):
-    return lab_arm.gcode_from_plan(plan, name="lab task")
+    return desk_arm_firmware.gcode_from_plan(plan, name="lab task")
 
 
 def commands(program):
@@ -39,7 +40,7 @@ def test_the_uarm_model_is_the_firmwares_forward_model():
     B, L, R = rng.uniform([0, 0, 0], [180, 135.6, 119.9], (400, 3)).T
     keep = (L + R >= 29) & (L + R <= 170)                     # the firmware's other limit
     B, L, R = B[keep], L[keep], R[keep]
-    p = lab_arm.UARM_SWIFT_PRO
+    p = desk_arm_firmware.LENGTHS
     stretch = (p["lower_arm"] * np.cos(np.radians(L)) + p["upper_arm"] * np.cos(np.radians(R))
                + p["l2"] + p["front"])
     firmware = np.column_stack([stretch * np.sin(np.radians(B)),
@@ -47,22 +48,23 @@ def test_the_uarm_model_is_the_firmwares_forward_model():
                                 p["lower_arm"] * np.sin(np.radians(L))
                                 - p["upper_arm"] * np.sin(np.radians(R)) + p["l1"]
                                 - p["height"]])
-    q_lab = lab_arm.lab_angles_from_motor(np.radians(np.column_stack([B, L, R])))
-    ours = lab_arm.uarm_swift_pro().fk(desk_arm_joints_from_lab(q_lab))[:, :3, 3]
+    q_lab = desk_arm_firmware.lab_angles_from_motor(np.radians(np.column_stack([B, L, R])))
+    ours = desk_arm_firmware.model().fk(desk_arm_joints_from_lab(q_lab))[:, :3, 3]
     assert np.allclose(ours, firmware, atol=1e-12)
     # and the motor angles of those points are the ones they came from
-    assert np.allclose(lab_arm.motor_angles(firmware), np.column_stack([B, L, R]), atol=1e-9)
+    assert np.allclose(desk_arm_firmware.motor_angles(firmware), np.column_stack([B, L, R]),
+                       atol=1e-9)
 
 
 def test_motor_angles_refuse_what_the_firmware_refuses():
     with pytest.raises(ValueError, match=r"point 0 \(positions\[0\]\): .* needs R = -1\.4\d deg"):
-        lab_arm.motor_angles([[0.2288, 0.0, 0.1781]])          # the lab's own start point
+        desk_arm_firmware.motor_angles([[0.2288, 0.0, 0.1781]])          # the lab's own start point
     with pytest.raises(ValueError, match=r"point 1 \(positions\[1\]\): .* needs B = "):
-        lab_arm.motor_angles([[0.2, 0.0, 0.1], [-0.1, 0.15, 0.05]])    # behind the arm
+        desk_arm_firmware.motor_angles([[0.2, 0.0, 0.1], [-0.1, 0.15, 0.05]])    # behind the arm
     with pytest.raises(ValueError, match="out of the uArm Swift Pro's reach"):
-        lab_arm.motor_angles([[0.0, 0.4, 0.05]])
+        desk_arm_firmware.motor_angles([[0.0, 0.4, 0.05]])
     with pytest.raises(ValueError, match="positions"):
-        lab_arm.motor_angles([[0.1, np.nan, 0.1]])
+        desk_arm_firmware.motor_angles([[0.1, np.nan, 0.1]])
 
 
 def test_the_program_has_only_firmware_commands(program):
@@ -112,12 +114,13 @@ def test_the_comments_give_the_plans_and_the_firmwares_angles(plan, program):
     rows = re.findall(r"; step (\d): plan \(([^)]*)\), firmware \(([^)]*)\) deg", program)
     assert [int(k) for k, _, _ in rows] == list(range(len(ROWS)))
     firmware = np.array([[float(v) for v in m.split(",")] for _, _, m in rows])
-    assert np.allclose(firmware, lab_arm.motor_angles(np.array(ROWS)[:, :3] / 1000), atol=0.005)
+    assert np.allclose(firmware, desk_arm_firmware.motor_angles(np.array(ROWS)[:, :3] / 1000),
+                       atol=0.005)
     assert np.allclose(firmware[2], [180.0, 78.7, 62.9], atol=0.05)      # p_m
 
 
 def test_write_gcode_writes_the_program(tmp_path, plan, program):
-    path = lab_arm.write_gcode(tmp_path / "task.gcode", plan, name="lab task")
+    path = desk_arm_firmware.write_gcode(tmp_path / "task.gcode", plan, name="lab task")
     assert path.read_text(encoding="ascii") == program
 
 
@@ -125,13 +128,13 @@ def test_a_plan_the_firmware_cannot_play_is_refused_by_step():
     rows = [[228.8, 0, 178.1, 0, 0], [0, 170, 80, 0, 0]]       # the lab's own start point
     plan = pp.plan_pick_place(desk_arm(), pp.task_from_lab(rows))
     with pytest.raises(ValueError, match=r"^step 0: \(228\.8, .*, 178\.1\) mm needs R ="):
-        lab_arm.gcode_from_plan(plan)
+        desk_arm_firmware.gcode_from_plan(plan)
     rows = [REST_MM + [0, 0], [0, 170, 80, 0, -30]]
     plan = pp.plan_pick_place(desk_arm(), pp.task_from_lab(rows))
     with pytest.raises(ValueError, match="step 1: wrist angle -30 deg is outside"):
-        lab_arm.gcode_from_plan(plan)
+        desk_arm_firmware.gcode_from_plan(plan)
     with pytest.raises(ValueError, match="start_feed"):
-        lab_arm.gcode_from_plan(plan, start_feed=float("nan"))
+        desk_arm_firmware.gcode_from_plan(plan, start_feed=float("nan"))
 
 
 NAMES_REFUSED = [
@@ -150,29 +153,29 @@ def test_a_name_that_would_reach_the_firmware_is_refused(plan):
     comment (Grbl 0.9's serial interrupt): none of them may reach the program."""
     for name, message in NAMES_REFUSED:
         with pytest.raises(ValueError, match=message):
-            lab_arm.gcode_from_plan(plan, name=name)
+            desk_arm_firmware.gcode_from_plan(plan, name=name)
     with pytest.raises(TypeError, match="^name must be text"):
-        lab_arm.gcode_from_plan(plan, name=b"lab task")
+        desk_arm_firmware.gcode_from_plan(plan, name=b"lab task")
 
 
 def test_a_name_with_g_code_letters_stays_in_its_comment(plan):
     name = "G0 X0 Y0 Z0 F1 M2231 V1 (lab) ; $RST=* #1"
-    program = lab_arm.gcode_from_plan(plan, name=name)
+    program = desk_arm_firmware.gcode_from_plan(plan, name=name)
     assert program.splitlines()[0].startswith(f"; {name}: 8 steps")
     assert all(COMMAND.match(line) for line in commands(program))
-    assert commands(program) == commands(lab_arm.gcode_from_plan(plan, name="lab task"))
+    assert commands(program) == commands(desk_arm_firmware.gcode_from_plan(plan, name="lab task"))
 
 
 def test_the_start_feed_is_a_number_in_range_written_rounded(plan):
     for start_feed, word in [(3000, "F3000"), (np.int64(3000), "F3000"), (1.9, "F2"),
-                             (2500.4, "F2500"), (lab_arm.MAX_FEED, "F100000")]:
-        moves = [line for line in commands(lab_arm.gcode_from_plan(plan, start_feed=start_feed))
-                 if line.startswith("G0 ")]
+                             (2500.4, "F2500"), (desk_arm_firmware.MAX_FEED, "F100000")]:
+        program = desk_arm_firmware.gcode_from_plan(plan, start_feed=start_feed)
+        moves = [line for line in commands(program) if line.startswith("G0 ")]
         assert moves[0].endswith(" " + word), (start_feed, moves[0])
     for start_feed in [True, "3000", 0.5, 1e30, 100_001, float("inf"), None]:
         with pytest.raises(ValueError, match=r"^start_feed must be a finite number >= 1 and "
                                              r"<= 100000, got "):
-            lab_arm.gcode_from_plan(plan, start_feed=start_feed)
+            desk_arm_firmware.gcode_from_plan(plan, start_feed=start_feed)
 
 
 def test_a_plan_too_fast_for_the_firmware_is_refused_by_step():
@@ -181,13 +184,13 @@ def test_a_plan_too_fast_for_the_firmware_is_refused_by_step():
                               dt=1e-4)
     with pytest.raises(ValueError, match=r"^step 1: the plan moves .* above the firmware's "
                                          r"maximum 100000 mm/min"):
-        lab_arm.gcode_from_plan(plan)
+        desk_arm_firmware.gcode_from_plan(plan)
 
 
 def test_a_long_dwell_is_split_into_waits_a_16_bit_word_holds():
     rows = [REST_MM + [0, 0], [0, 170, 80, 0, 0], [0, 170, 30, 1, 0]]
     plan = pp.plan_pick_place(desk_arm(), pp.task_from_lab(rows), dwell=65.0, dt=0.5)
-    lines = commands(lab_arm.gcode_from_plan(plan))
+    lines = commands(desk_arm_firmware.gcode_from_plan(plan))
     on = lines.index("M2231 V1")
     assert lines[on + 1:on + 4] == ["G2004 P30000", "G2004 P30000", "G2004 P5000"]
     assert all(int(w[7:]) <= 32767 for w in lines if w.startswith("G2004 P"))
@@ -197,9 +200,9 @@ def test_write_gcode_refuses_before_opening_and_keeps_an_old_file(tmp_path, plan
     path = tmp_path / "task.gcode"
     path.write_text("; the old program\n")
     with pytest.raises(ValueError, match="^name must be ASCII"):
-        lab_arm.write_gcode(path, plan, name="Démo")
+        desk_arm_firmware.write_gcode(path, plan, name="Démo")
     with pytest.raises(TypeError, match="^plan must be a PickPlacePlan, got a str"):
-        lab_arm.write_gcode(path, "plan")
+        desk_arm_firmware.write_gcode(path, "plan")
     assert path.read_text() == "; the old program\n"
     with pytest.raises(ValueError, match="is a directory"):
-        lab_arm.write_gcode(tmp_path, plan)
+        desk_arm_firmware.write_gcode(tmp_path, plan)

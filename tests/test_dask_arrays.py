@@ -1,5 +1,5 @@
-"""dqlab.scale and dqlab.reachability: the batch functions on dask arrays equal the numpy ones
-number for number, on any chunking and scheduler; the reachability map against a direct
+"""dqlab.dask_arrays and dqlab.reachability: the batch functions on dask arrays equal the numpy
+ones number for number, on any chunking and scheduler; the reachability map against a direct
 computation; the message without dask. Tests that need dask skip one by one when the extra
 ``scale`` is absent."""
 
@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from dqlab import transform_from
+from dqlab.dask_arrays import dexterity_dask, fk_dask, ik_ur_dask, reachability_map
 from dqlab.dualquat import dual_quaternion_from_transform
 from dqlab.ik import ur
 from dqlab.jacobian import manipulability
@@ -22,7 +23,6 @@ from dqlab.reachability import (
     reachability_statistics,
     super_fibonacci_quaternions,
 )
-from dqlab.scale import dexterity_dask, fk_dask, ik_ur_dask, reachability_map
 
 ROOT = Path(__file__).resolve().parents[1]
 ROBOT = ur3()
@@ -380,9 +380,9 @@ def test_an_address_without_distributed_names_the_extra(monkeypatch):
         reachability_map(ROBOT, GRID, QUATS, scheduler="tcp://127.0.0.1:8786")
 
 
-def test_importing_dqlab_scale_does_not_import_dask():
-    code = ("import sys, numpy as np, dqlab.scale, dqlab.reachability as s, dqlab.models as m; "
-            "r = m.ur3(); s.pose_dexterity(r, r.fk(np.zeros(6))); "
+def test_importing_dqlab_dask_arrays_does_not_import_dask():
+    code = ("import sys, numpy as np, dqlab.dask_arrays, dqlab.reachability as s; "
+            "import dqlab.models as m; r = m.ur3(); s.pose_dexterity(r, r.fk(np.zeros(6))); "
             "print(sorted(k for k in ('dask', 'distributed') if k in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, cwd=ROOT)
