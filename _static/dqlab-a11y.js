@@ -24,3 +24,24 @@ document.addEventListener("DOMContentLoaded", function () {
                          "Pages of " + (entry ? entry.textContent.trim() : "this entry"));
   });
 });
+
+// The chapter's "Run in your browser" buttons (one in the top bar on a wide screen, one in
+// the chapter header on a narrow one; tools/run_in_browser.py) are described by the note
+// under the chapter's title, which says what runs in the browser and what is skipped.
+document.addEventListener("DOMContentLoaded", function () {
+  if (!document.getElementById("dqlab-run-note")) {
+    return;
+  }
+  document.querySelectorAll(".btn-run-in-browser, .dqlab-run-wide").forEach(function (link) {
+    link.setAttribute("aria-describedby", "dqlab-run-note");
+  });
+});
+
+// The theme's search buttons show "Search" and the shortcut (Ctrl + K) but are named
+// "Search" only: a speech-input user who says what they see would miss them (WCAG 2.5.3,
+// label in name). Without the narrower aria-label, the name is the visible text.
+document.addEventListener("DOMContentLoaded", function () {
+  document.querySelectorAll("button.search-button-field[aria-label]").forEach(function (button) {
+    button.removeAttribute("aria-label");
+  });
+});

@@ -12,40 +12,30 @@ For each page generated from a notebook or a Markdown file of ``book/`` it check
 
 Run it after building the book (``jb build .``): it reads ``_build/html`` (or the folder in
 the environment variable ``DQLAB_BOOK_HTML``). Screenshots go to ``test-artifacts/browser/``.
-It drives the system Chromium (``/usr/bin/chromium``, or the one named by ``DQLAB_CHROMIUM``)
-and never downloads a browser. Without Chromium the check is skipped, except under
-``CI=true`` where it fails.
+The Chromium and the server are the session's (``chromium.py``): the system Chromium, never
+a downloaded one, with every host but the local server unresolvable. Without Chromium the
+check is skipped, except under ``CI=true`` where it fails.
 """
 
 import base64
-import functools
-import http.server
 import io
 import os
 import re
-import shutil
-import threading
 from pathlib import Path
 
 import numpy as np
 import pytest
+from chromium import (  # noqa: F401  (browser and site are fixtures)
+    ARTIFACTS,
+    HTML,
+    ROOT,
+    browser,
+    site,
+)
 
 pytestmark = pytest.mark.browser
 
-ROOT = Path(__file__).resolve().parents[1]
 BOOK = ROOT / "book"
-HTML = Path(os.environ.get("DQLAB_BOOK_HTML", ROOT / "_build" / "html"))
-ARTIFACTS = ROOT / "test-artifacts" / "browser"
-SKIP_MESSAGE = "browser check skipped: install chromium (apt-get install chromium) to enable it"
-
-CHROMIUM_ARGS = [
-    "--headless=new", "--no-sandbox",
-    # WebGL without a GPU: ANGLE on SwiftShader, Chromium's software renderer.
-    "--use-gl=angle", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
-    # The book must work offline, and the machine may have no network at all.
-    "--disable-background-networking", "--disable-component-update", "--disable-sync",
-    "--no-first-run", "--disable-quic",
-]
 
 # A page (its scenes' frames included) must load and typeset within this: generous, since
 # the check is that it renders, not how fast, and the machine may be busy.
@@ -73,66 +63,6 @@ def _pages():
         if (HTML / page).exists():
             pages.append(page.as_posix())
     return pages
-
-
-def _chromium():
-    """The Chromium to drive: ``DQLAB_CHROMIUM`` if set (and only it), else the system one."""
-    if os.environ.get("DQLAB_CHROMIUM"):
-        candidates = [os.environ["DQLAB_CHROMIUM"]]
-    else:
-        candidates = ["/usr/bin/chromium", shutil.which("chromium"),
-                      shutil.which("chromium-browser"), shutil.which("google-chrome")]
-    for candidate in candidates:
-        if candidate and Path(candidate).exists():
-            return candidate
-    return None
-
-
-def _unavailable(reason):
-    if os.environ.get("CI", "").lower() == "true":
-        pytest.fail(f"{reason}, and CI=true requires the browser check: "
-                    f"install it (apt-get install chromium)")
-    pytest.skip(SKIP_MESSAGE)
-
-
-class _QuietHandler(http.server.SimpleHTTPRequestHandler):
-    def log_message(self, *args):
-        pass
-
-
-@pytest.fixture(scope="module")
-def site():
-    """An HTTP server on 127.0.0.1 serving the built book, stopped after the tests."""
-    if not (HTML / "index.html").exists():
-        pytest.fail(f"no built book in {HTML}: build it first (jb build . or "
-                    f"'python3 tasks.py book'), then run the browser check")
-    handler = functools.partial(_QuietHandler, directory=str(HTML))
-    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
-    thread = threading.Thread(target=server.serve_forever, daemon=True)
-    thread.start()
-    try:
-        yield f"http://127.0.0.1:{server.server_address[1]}"
-    finally:
-        server.shutdown()
-        server.server_close()
-        thread.join(timeout=10)
-
-
-@pytest.fixture(scope="module")
-def browser():
-    executable = _chromium()
-    if executable is None:
-        _unavailable("Chromium is not installed")
-    try:
-        from playwright.sync_api import sync_playwright
-    except ImportError:
-        _unavailable("the Python package playwright is not installed")
-    with sync_playwright() as playwright:
-        chromium = playwright.chromium.launch(executable_path=executable, args=CHROMIUM_ARGS)
-        try:
-            yield chromium
-        finally:
-            chromium.close()
 
 
 def test_book_is_built():
@@ -223,7 +153,7 @@ def _check_scenes(page, name, problems):
 
 
 @pytest.mark.parametrize("page_path", _pages() or ["(no built pages)"])
-def test_page_renders(page_path, site, browser):
+def test_page_renders(page_path, site, browser):  # noqa: F811
     if page_path == "(no built pages)":
         pytest.fail(f"no built chapter pages in {HTML}: build the book first")
     ARTIFACTS.mkdir(parents=True, exist_ok=True)
@@ -291,7 +221,7 @@ def _changed_fraction(png_a, png_b):
     return float(np.mean(np.abs(a - b).sum(axis=-1) > 60))
 
 
-def test_joint_sliders_move_the_arm_and_its_jacobian(browser):
+def test_joint_sliders_move_the_arm_and_its_jacobian(browser):  # noqa: F811
     """The static joint-slider view: six controls; moving one moves the picture, and the
     redrawn Jacobian columns are robot.jacobian at the new joint vector."""
     from dqlab.models import ur3
@@ -338,7 +268,7 @@ SINGLE = Path(os.environ.get("DQLAB_BOOK_SINGLEHTML", ROOT / "_build" / "singleh
 MIN_PDF_PAGES = 100
 
 
-def test_equations_scroll_inside_their_box_on_a_phone(site, browser):
+def test_equations_scroll_inside_their_box_on_a_phone(site, browser):  # noqa: F811
     """On a 390 px wide screen a wide equation scrolls sideways inside its own box; the
     page itself does not get wider than the screen."""
     page = browser.new_page(viewport={"width": 390, "height": 844})
@@ -362,7 +292,7 @@ def test_equations_scroll_inside_their_box_on_a_phone(site, browser):
     assert report["page"] <= 391, f"the page is {report['page']} px wide on a 390 px screen"
 
 
-def test_download_menu_offers_the_book_pdf(site, browser):
+def test_download_menu_offers_the_book_pdf(site, browser):  # noqa: F811
     page = browser.new_page(viewport={"width": 1280, "height": 900})
     try:
         page.goto(f"{site}/book/05-dual-quaternions.html", wait_until="load", timeout=PAGE_LOAD_MS)
@@ -374,7 +304,7 @@ def test_download_menu_offers_the_book_pdf(site, browser):
     assert href.endswith("dqlab.pdf") and (HTML / "book").exists()
 
 
-def test_the_whole_book_prints_to_a_pdf(browser):
+def test_the_whole_book_prints_to_a_pdf(browser):  # noqa: F811
     """The single-page build, printed by Chromium: many pages, every equation typeset.
 
     Without a single-page build (``python3 tasks.py pdf`` makes one) the test makes it; the
