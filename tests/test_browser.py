@@ -268,6 +268,108 @@ SINGLE = Path(os.environ.get("DQLAB_BOOK_SINGLEHTML", ROOT / "_build" / "singleh
 MIN_PDF_PAGES = 100
 
 
+#: The chapter page the keyboard and phone checks look at.
+CHAPTER_PAGE = "book/03-quaternions.html"
+
+#: Where the keyboard focus is, and whether it is seen: an outline or a ring of box-shadow
+#: at least 2 px wide, not transparent.
+_FOCUS = """() => { const e = document.activeElement;
+  if (!e || e === document.body) return null;
+  const s = getComputedStyle(e), r = e.getBoundingClientRect();
+  const outline = s.outlineStyle !== 'none' && parseFloat(s.outlineWidth) >= 2
+                  && !/rgba\\(.*, 0\\)$/.test(s.outlineColor);
+  const shadow = /\\d+px \\d+px \\d+px [2-9]|\\d+px \\d+px \\d+px \\d\\d/.test(s.boxShadow)
+                 && !/^rgba\\([^)]*, 0\\)/.test(s.boxShadow);
+  return {tag: e.tagName.toLowerCase(), cls: String(e.className.baseVal ?? e.className),
+          name: (e.getAttribute('aria-label') || e.innerText || e.title || '').trim()
+                  .split('\\n')[0].slice(0, 60),
+          ring: outline || shadow, shown: r.width > 0 && r.height > 0,
+          math: Boolean(e.closest('mjx-container')),
+          run: e.matches('.dqlab-run-wide, .btn-run-in-browser')}; }"""
+
+#: The page's search controls that are displayed (or would be, in the folded sidebar).
+_SEARCHES = """() => Array.from(document.querySelectorAll(
+    '.search-button-field, .search-button__button, form.bd-search:not(dialog *)'))
+  .filter(e => { for (let n = e; n && n !== document.body; n = n.parentElement)
+                   if (getComputedStyle(n).display === 'none') return false;
+                 return true; })
+  .map(e => e.className)"""
+
+
+def _tab_through(page, limit=400):
+    """Every Tab stop of the page from its top, in order, until the focus comes back."""
+    stops = []
+    for _ in range(limit):
+        page.keyboard.press("Tab")
+        stop = page.evaluate(_FOCUS)
+        if stop is None or (stops and stop == stops[0] and len(stops) > 1):
+            break
+        stops.append(stop)
+    return stops
+
+
+@pytest.mark.parametrize("width", [1280, 390])
+def test_a_keyboard_reaches_the_run_button_early_and_always_sees_the_focus(site, browser,  # noqa: F811
+                                                                           width):
+    """Tab from the top of a chapter page: "Run in your browser" within the first three stops
+    (after "Skip to main content"), on a wide screen and on a phone; every stop shows a focus
+    ring (WCAG 2.4.7) and is on screen; no formula is a Tab stop; one search control."""
+    page = browser.new_page(viewport={"width": width, "height": 900 if width > 500 else 844})
+    try:
+        page.goto(f"{site}/{CHAPTER_PAGE}", wait_until="load", timeout=PAGE_LOAD_MS)
+        page.wait_for_function(_MATHJAX_DONE, timeout=PAGE_LOAD_MS)
+        page.wait_for_timeout(500)
+        searches = page.evaluate(_SEARCHES)
+        stops = _tab_through(page)
+    finally:
+        page.close()
+    run = [k for k, stop in enumerate(stops, start=1) if stop["run"]]
+    print(f"\n{CHAPTER_PAGE} at {width} px: {len(stops)} Tab stops; "
+          f"'Run in your browser' is stop {run[0] if run else None}")
+    assert run and run[0] <= 3, [s["name"] for s in stops[:8]]
+    assert len(run) == 1
+    assert not [s for s in stops if s["math"]], "formulas are Tab stops"
+    unseen = [f"{s['tag']}.{s['cls'][:40]} {s['name']!r}" for s in stops
+              if not (s["ring"] and s["shown"])]
+    assert not unseen, f"Tab stops without a visible focus ring: {unseen[:10]}"
+    assert len(searches) == 1, f"{len(searches)} search controls: {searches}"
+
+
+def test_the_chapter_header_fits_a_phone(site, browser):  # noqa: F811
+    """At 390 px: no sideways scrolling, the chapter header's buttons on one row inside the
+    header (the button's label on one line), and the note on what runs in the browser."""
+    page = browser.new_page(viewport={"width": 390, "height": 844})
+    try:
+        page.goto(f"{site}/{CHAPTER_PAGE}", wait_until="load", timeout=PAGE_LOAD_MS)
+        page.wait_for_function(_MATHJAX_DONE, timeout=PAGE_LOAD_MS)
+        report = page.evaluate("""() => {
+          const header = document.querySelector('.bd-header-article').getBoundingClientRect();
+          const buttons = Array.from(document.querySelectorAll(
+              '.bd-header-article .btn, .bd-header-article .dropdown-toggle'))
+            .filter(b => b.getBoundingClientRect().width > 0)
+            .map(b => { const r = b.getBoundingClientRect();
+                        return {name: b.innerText.trim() || b.title || b.className,
+                                top: r.top, bottom: r.bottom, left: r.left, right: r.right}; });
+          const note = document.getElementById('dqlab-run-note');
+          return {page: document.documentElement.scrollWidth, header: [header.top, header.bottom],
+                  buttons: buttons, note: note ? note.getBoundingClientRect().width : 0}; }""")
+        ARTIFACTS.mkdir(parents=True, exist_ok=True)
+        page.screenshot(path=str(ARTIFACTS / "phone-390-chapter3-header.png"))
+    finally:
+        page.close()
+    assert report["page"] <= 390, f"the page is {report['page']} px wide on a 390 px screen"
+    top, bottom = report["header"]
+    buttons = report["buttons"]
+    assert any("Run in your browser" in b["name"] for b in buttons)
+    for b in buttons:
+        assert top - 1 <= b["top"] and b["bottom"] <= bottom + 1, (b, report["header"])
+        assert 0 <= b["left"] and b["right"] <= 390, b
+    tops = {round(b["top"] / 4) for b in buttons}
+    assert max(b["bottom"] - b["top"] for b in buttons) < 48, "a button takes two lines"
+    assert len(tops) <= 2, f"the header's buttons are on several rows: {buttons}"
+    assert 0 < report["note"] <= 390
+
+
 def test_equations_scroll_inside_their_box_on_a_phone(site, browser):  # noqa: F811
     """On a 390 px wide screen a wide equation scrolls sideways inside its own box; the
     page itself does not get wider than the screen."""

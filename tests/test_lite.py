@@ -31,6 +31,7 @@ from test_browser import _drawn_fraction
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tools"))
 import lite  # noqa: E402
+import teaching_facts  # noqa: E402
 
 LITE = HTML / "lite"
 NOTEBOOKS = lite.toc_notebooks(ROOT)
@@ -264,6 +265,43 @@ def test_the_cells_skipped_in_the_browser_are_said_before_the_click():
     assert not sentences["03-quaternions"]
 
 
+_NODE_CHECK = r"""
+globalThis.self = globalThis;
+require(process.argv[1]);
+const {importsModule, plan} = self.dqlabLite;
+const cases = JSON.parse(process.argv[2]);
+const manifest = {kernel: {skip: ["ssl", "jedi"]}, default: {packages: ["numpy"], modules: [],
+                  bytes: 1}, notebooks: {"a.ipynb": {packages: ["numpy", "meshcat"],
+                  modules: ["dqlab.viz"], bytes: 2}}};
+console.log(JSON.stringify({
+  found: cases.map(c => importsModule(c, "dqlab.viz")),
+  known: plan(manifest, "a.ipynb", ["ipython", "ssl", "jedi", "numpy"]),
+  unknown: plan(manifest, null, ["ipython", "ssl"])}));
+"""
+
+
+def test_the_start_script_plans_the_start_and_sees_imports_in_any_form():
+    """The start script's two decisions, run in Node: which packages to load (the kernel's
+    less the unused, then the chapter's) and whether a cell imports ``dqlab.viz``."""
+    import shutil
+
+    if shutil.which("node") is None:
+        pytest.skip("Node is not installed")
+    cases = {"from dqlab import viz": True, "from dqlab import (\n  models,\n  viz,\n)": True,
+             "import dqlab.viz as v": True, "from dqlab.viz import Scene": True,
+             "x = 1\nfrom dqlab import ik, viz": True, "import dqlab": False,
+             "from dqlab import models": False, "from dqlab import vizzy": False,
+             "# from dqlab import models\nviz = 1": False}
+    result = subprocess.run(["node", "-e", _NODE_CHECK, str(lite.SITE_FILES / "dqlab-pyodide.js"),
+                             json.dumps(list(cases))], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    out = json.loads(result.stdout)
+    assert out["found"] == list(cases.values())
+    assert out["known"] == {"packages": ["ipython", "numpy", "meshcat"],
+                            "modules": ["dqlab.viz"], "bytes": 2}
+    assert out["unknown"] == {"packages": ["ipython", "numpy"], "modules": [], "bytes": 1}
+
+
 # --- downloads are checked; a bad file stops the build in one line ------------------------
 
 
@@ -425,7 +463,7 @@ def test_the_book_says_where_the_files_come_from():
     assert f"Pyodide {lite.PYODIDE_VERSION}" in page
     assert f"`pyodide@{lite.PYODIDE_VERSION}`" in page
     assert f"`{package}=={version}`" in page
-    for name in lite.PURE_WHEELS:
+    for name in (*lite.PURE_WHEELS, *lite.KERNEL_WHEELS):
         assert name in page
     assert "book/running-in-the-browser" in (ROOT / "_toc.yml").read_text(encoding="utf-8")
 
@@ -676,8 +714,20 @@ def check_chapter(page, path, cells, problems):
 
 
 def _record(timings):
+    """Print the times and write them to :data:`TIMINGS`; with ``DQLAB_LITE_RECORD`` set and
+    every chapter timed, also to the teaching guide's record (tools/browser_times.json)."""
     ARTIFACTS.mkdir(parents=True, exist_ok=True)
     TIMINGS.write_text(json.dumps(timings, indent=1) + "\n", encoding="utf-8")
+    chapters = timings["chapters"]
+    if os.environ.get("DQLAB_LITE_RECORD") and all(
+            {"cold", "warm"} <= set(chapters.get(p.stem, {})) for p, n in NOTEBOOKS if n):
+        record = {"cores": timings["cores"], "date": time.strftime("%Y-%m-%d"),
+                  "chapters": {name: {"cold_first": round(v["cold"]["first"], 1),
+                                      "warm_first": round(v["warm"]["first"], 1),
+                                      "warm_run_all": round(v["warm"]["run_all"], 1)}
+                               for name, v in chapters.items()}}
+        teaching_facts.BROWSER_TIMES.write_text(json.dumps(record, indent=1) + "\n",
+                                                encoding="utf-8")
     nan = float("nan")
     lines = [f"{'chapter':<40} {'visit':<5} {'notebook':>8} {'first':>6} {'run all':>8}"]
     for name, visits in timings["chapters"].items():
@@ -730,7 +780,7 @@ def test_chapters_run_in_the_browser(site, browser):  # noqa: F811
                 profiles.append(fresh)
                 page, visits["cold"] = open_from_book(fresh, path)
                 page.close()
-            alone = path == order[-1] and path != student
+            alone = path == order[-1] and path != student and not every
             page, visit = open_from_book(profile, path, run_first=not alone)
             try:
                 visit["run_all"], cells = run_all(page, path)

@@ -28,8 +28,15 @@ Downloads are kept in a cache outside the repository (``$DQLAB_LITE_CACHE``, by 
 The notebooks are the book's chapters, read from ``_toc.yml``, made readable in JupyterLite:
 MyST directives and roles become plain Markdown (exercises as bold headings, solutions as
 ``<details>`` blocks or collapsed cells, equations numbered), cells tagged ``native-only``
-(they need a package with no WebAssembly build, such as MuJoCo or Ruckig) become a one-line
-note, and cells the book never runs (``skip-execution``) are shown as code, not run.
+(they need a package that has no build for Pyodide, such as MuJoCo or Ruckig, or a separate
+process) become a one-line note, cells the book never runs (``skip-execution``) are shown as
+code, not run, and a first code cell prints that Python is ready.
+
+The kernel's start is the site's own (``tools/lite_site``, put into the site by
+:func:`add_start_and_status`): the kernel starts when a notebook opens, loads Pyodide with
+its own packages and the chapter's at once (:func:`chapter_start`), imports the chapter's
+modules, keeps what it downloaded in the browser's cache, and the notebook page shows what
+is loading, how much and how far, then that Python is ready.
 """
 
 import base64
@@ -122,9 +129,11 @@ LITE_SETTINGS = {
         "disabledExtensions": ["@jupyterlab/apputils-extension:announcements"],
     },
 }
-#: JupyterLab settings of the site: every cell of a chapter stays rendered (no windowing), so
-#: that a reader's search and a test's look at the page see the whole notebook.
-LITE_OVERRIDES = {"@jupyterlab/notebook-extension:tracker": {"windowingMode": "none"}}
+#: JupyterLab settings of the site: a notebook draws the cells on screen only (JupyterLab's
+#: "full" windowing): drawing a whole chapter (its formulas typeset, hundreds of them) keeps a
+#: small computer's main thread busy for many seconds, and the kernel cannot start before
+#: it is done. JupyterLab's search (Ctrl+F) still searches the whole notebook.
+LITE_OVERRIDES = {"@jupyterlab/notebook-extension:tracker": {"windowingMode": "full"}}
 #: jupyter lite build's configuration: no source maps (they would double the site's size),
 #: and of the JupyterLab extensions installed in the environment only the Pyodide kernel
 #: (named by :func:`build`; jupytext's and the widgets' are of no use here).
@@ -590,6 +599,8 @@ def _directive(name, arg, options, body):
     return _blockquote(arg or name.capitalize(), body)
 
 
+#: What a skipped cell needs when it names none of :data:`NATIVE_NEEDS`.
+NO_BROWSER_BUILD = "a package that has no build for Pyodide"
 #: Packages whose mention in a native-only cell names what it needs.
 NATIVE_NEEDS = {"mujoco": "MuJoCo", "ruckig": "Ruckig", "pybullet": "PyBullet",
                 "ControllerStandIn": "a controller stand-in process"}
@@ -607,11 +618,11 @@ def native_note(cells, fallback=()):
     earlier skipped ones name what the notebook's first skipped cells need (``fallback``).
     """
     needs = _needs(cells) or list(fallback)
-    what = " and ".join(needs) if needs else "a package with no WebAssembly build"
+    what = " and ".join(needs) if needs else NO_BROWSER_BUILD
     many = "cells" if len(cells) > 1 else "cell"
     return (f"*Skipped in the browser: {len(cells)} {many} here need{'s' * (len(cells) == 1)} "
-            f"{what}, which cannot run in the browser; run the chapter in a local Jupyter "
-            f"to see {'them' if len(cells) > 1 else 'it'}.*")
+            f"{what}, which the browser's Python (Pyodide) cannot run; run the chapter in a "
+            f"local Jupyter to see {'them' if len(cells) > 1 else 'it'}.*")
 
 
 #: The first code cell of every in-browser copy: its output shows that Python runs.
@@ -648,10 +659,12 @@ def skipped_sentence(nb):
     count, needs = skipped_cells(nb)
     if not count:
         return ""
-    what = " and ".join(needs) if needs else "a package with no WebAssembly build"
+    what = " and ".join(needs) if needs else NO_BROWSER_BUILD
     if count == 1:
-        return f"1 code cell needs {what}, which cannot run in a browser: it is skipped."
-    return f"{count} code cells need {what}, which cannot run in a browser: they are skipped."
+        return (f"1 code cell needs {what}, which the browser's Python (Pyodide) cannot run: "
+                f"it is skipped.")
+    return (f"{count} code cells need {what}, which the browser's Python (Pyodide) cannot "
+            f"run: they are skipped.")
 
 
 def browser_notebook(nb, index, name, number=None):

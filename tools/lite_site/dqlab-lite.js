@@ -14,6 +14,7 @@
   "use strict";
 
   const TAG = "dqlabLite";
+  const READY_SHOWN_MS = 20000;                       // how long "ready" stays on screen
   const started = performance.now();
   const notebook = new URLSearchParams(window.location.search).get("path");
   const state = { phase: "app", total: 0, loaded: 0, warm: false, manifest: null,
@@ -78,8 +79,13 @@
       show("Starting Python in your browser — " + where, state.total ?
            state.loaded / state.total : null, megabytes(state.loaded) + " of " + size);
     } else if (state.phase === "imports") {
-      const modules = info ? info.modules.filter(function (m) { return !m.includes("."); })
-        : ["numpy", "matplotlib", "dqlab"];
+      const modules = [];
+      for (const name of info ? info.modules : ["numpy", "matplotlib", "dqlab"]) {
+        const top = name.split(".")[0];
+        if (!modules.includes(top)) {
+          modules.push(top);
+        }
+      }
       show("Importing " + words(modules) + "…", 1, "");
     } else if (state.phase === "error") {
       show("Python could not start in this browser: " + state.error + ". Reloading the page " +
@@ -161,6 +167,16 @@
       state.readyAfter = seconds();
       document.documentElement.dataset.dqlabKernel = "ready";
       update();
+      // the line steps aside after a while (the notebook's own kernel indicator stays);
+      // not while the reader is on it
+      const box = element("dqlab-lite-status");
+      setTimeout(function hide() {
+        if (box.matches(":hover, :focus-within")) {
+          setTimeout(hide, 5000);
+        } else {
+          box.hidden = true;
+        }
+      }, READY_SHOWN_MS);
       return;
     }
     setTimeout(waitForKernel, 200);

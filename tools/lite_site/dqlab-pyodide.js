@@ -254,6 +254,9 @@ for name in ["pyodide_kernel", *MODULES]:
 failed
 `;
 
+  // for the site's tests (tests/test_lite.py), which run these two in Node
+  self.dqlabLite = { importsModule: importsModule, plan: plan };
+
   self.loadPyodide = async function (options) {
     try {
       return await start(options);
