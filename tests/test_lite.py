@@ -627,6 +627,11 @@ def open_from_book(profile, path, shots=None, run_first=True):
             status = page.evaluate(_STATUS)
             if status and status["phase"] not in phases:
                 phases.append(status["phase"])
+        dialog = page.locator(".jp-Dialog .jp-Dialog-button.jp-mod-accept")
+        if dialog.count():                # e.g. "Select Kernel": accepted, as a student would
+            timings.setdefault("dialogs", []).append(
+                page.locator(".jp-Dialog-header").first.inner_text()[:60])
+            dialog.first.click()
         if first is None and page.evaluate(_APP_READY):
             first = page.evaluate(_RUN_FIRST) if run_first else -1
             timings["notebook"] = time.time() - clicked

@@ -133,7 +133,10 @@ LITE_SETTINGS = {
 #: "full" windowing): drawing a whole chapter (its formulas typeset, hundreds of them) keeps a
 #: small computer's main thread busy for many seconds, and the kernel cannot start before
 #: it is done. JupyterLab's search (Ctrl+F) still searches the whole notebook.
-LITE_OVERRIDES = {"@jupyterlab/notebook-extension:tracker": {"windowingMode": "full"}}
+#: The notebook's own kernel (Python in Pyodide) starts with no question asked, even when a
+#: cell is run before the kernel is there (JupyterLab would ask which kernel to start).
+LITE_OVERRIDES = {"@jupyterlab/notebook-extension:tracker": {"windowingMode": "full",
+                                                             "autoStartDefaultKernel": True}}
 #: jupyter lite build's configuration: no source maps (they would double the site's size),
 #: and of the JupyterLab extensions installed in the environment only the Pyodide kernel
 #: (named by :func:`build`; jupytext's and the widgets' are of no use here).

@@ -60,14 +60,23 @@ def set_theme_options(app, config):
     config.templates_path.append(str(Path(__file__).resolve().parent / "templates"))
 
 
-def add_button(app, pagename, templatename, context, doctree):
+def set_run_link(app, pagename, templatename, context, doctree):
+    """``dqlab_run`` for the top bar's template: the link to the page's notebook (None on a
+    page not built from a notebook). Set before the theme drops the templates that render
+    nothing."""
     source = app.env.doc2path(pagename, base=False) if pagename in app.env.all_docs else None
     context["dqlab_run"] = None
-    if source is None or not str(source).endswith(".ipynb") or "header_buttons" not in context:
+    if source is None or not str(source).endswith(".ipynb"):
         return
     notebook = PurePosixPath(str(source).replace("\\", "/")).name
     url = context["pathto"](LITE_NOTEBOOK_PAGE, 1) + "?path=" + quote(notebook)
     context["dqlab_run"] = {"url": url, "label": LABEL, "note_id": NOTE_ID}
+
+
+def add_button(app, pagename, templatename, context, doctree):
+    if not context.get("dqlab_run") or "header_buttons" not in context:
+        return
+    url = context["dqlab_run"]["url"]
     context["header_buttons"].insert(0, {
         "type": "link",
         "url": url,
@@ -85,6 +94,8 @@ def add_button(app, pagename, templatename, context, doctree):
 
 def setup(app):
     app.connect("config-inited", set_theme_options)
-    # after the theme has made its header buttons (sphinx-book-theme connects at 501)
+    # before pydata-sphinx-theme drops empty templates (500), after sphinx-book-theme has
+    # made its header buttons (501)
+    app.connect("html-page-context", set_run_link, priority=400)
     app.connect("html-page-context", add_button, priority=600)
     return {"parallel_read_safe": True, "parallel_write_safe": True}

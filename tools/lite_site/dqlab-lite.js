@@ -110,10 +110,15 @@
     if (!data) {
       return;
     }
-    if (data.event === "hello") {
+    if (data.event === "hello") {                      // a kernel starts (or restarts)
       worker.postMessage({ [TAG]: { notebook: notebook } });
       state.phase = "runtime";
       state.imported = state.ready = false;
+      state.loaded = 0;
+      const box = element("dqlab-lite-status");
+      if (box) {
+        box.hidden = false;
+      }
     } else if (data.event === "phase" && data.phase === "runtime") {
       state.phase = "runtime";
       state.total = data.total;
@@ -173,7 +178,7 @@
       setTimeout(function hide() {
         if (box.matches(":hover, :focus-within")) {
           setTimeout(hide, 5000);
-        } else {
+        } else if (state.ready) {                     // not if the kernel restarts meanwhile
           box.hidden = true;
         }
       }, READY_SHOWN_MS);

@@ -301,10 +301,12 @@ failed
     tell({ event: "phase", phase: "imports", modules: todo.modules,
            seconds: (Date.now() - started) / 1000 });
     const restored = await restoreFontList(pyodide, cache, base);
-    const failed = await pyodide.runPythonAsync(
-      IMPORTS.replace("MODULES", JSON.stringify(todo.modules)));
+    const namespace = pyodide.toPy({});               // no name left in the reader's
+    const failed = await pyodide.runPythonAsync(      // namespace; the modules stay imported
+      IMPORTS.replace("MODULES", JSON.stringify(todo.modules)), { globals: namespace });
     const problems = failed.toJs();
     failed.destroy();
+    namespace.destroy();
     await keepFontList(pyodide, cache, base, restored);
     tell({ event: "phase", phase: "imported", problems: problems,
            seconds: (Date.now() - started) / 1000, loaded: progress.loaded,
