@@ -45,3 +45,58 @@ document.addEventListener("DOMContentLoaded", function () {
     button.removeAttribute("aria-label");
   });
 });
+
+// The theme's colour-mode button shows the icon of the current mode, whose title ("Light",
+// "Dark", "System Settings") is its visible text, but is named "Color mode" only (WCAG 2.5.3):
+// its name says the mode too, and follows it when the reader changes it.
+function dqlabLabelColourMode() {
+  const mode = document.documentElement.dataset.mode || "auto";
+  document.querySelectorAll(".theme-switch-button").forEach(function (button) {
+    const icon = button.querySelector('[data-mode="' + mode + '"]');
+    const title = icon && (icon.getAttribute("title") ||
+                           (icon.querySelector("title") || {}).textContent || "");
+    button.setAttribute("aria-label", title ? "Color mode: " + title.trim() : "Color mode");
+  });
+}
+document.addEventListener("DOMContentLoaded", function () {
+  dqlabLabelColourMode();
+  new MutationObserver(dqlabLabelColourMode).observe(document.documentElement,
+    { attributes: true, attributeFilter: ["data-mode"] });
+  // the icons become SVG images a moment after the page loads
+  document.querySelectorAll(".theme-switch-button").forEach(function (button) {
+    new MutationObserver(dqlabLabelColourMode).observe(button, { childList: true });
+  });
+});
+
+// Display equations scroll sideways when they are wider than the page (dqlab-book.css): one
+// that does is a Tab stop, so that a keyboard can scroll it (WCAG 2.1.1), with the focus ring
+// of the book; one that fits is not (browsers make any scrollable box a Tab stop, and a box
+// can be scrollable by a pixel of rounding). MathJax's own menu does not put formulas in the
+// Tab order (_config.yml).
+function dqlabEquationStops() {
+  document.querySelectorAll('mjx-container[display="true"]').forEach(function (math) {
+    const scrolls = math.scrollWidth > math.clientWidth + 2;
+    math.setAttribute("tabindex", scrolls ? "0" : "-1");
+    if (scrolls) {
+      math.setAttribute("role", "region");
+      math.setAttribute("aria-label", "Equation, scrolls sideways");
+    } else if (math.getAttribute("role") === "region") {
+      math.removeAttribute("role");
+      math.removeAttribute("aria-label");
+    }
+  });
+}
+document.addEventListener("DOMContentLoaded", function () {
+  (function whenTypeset(tries) {             // MathJax loads after the page (async script)
+    if (window.MathJax && MathJax.startup && MathJax.startup.promise) {
+      MathJax.startup.promise.then(dqlabEquationStops);
+    } else if (tries > 0 && document.querySelector(".math")) {
+      setTimeout(function () { whenTypeset(tries - 1); }, 200);
+    }
+  })(600);
+  let pending = null;
+  window.addEventListener("resize", function () {
+    clearTimeout(pending);
+    pending = setTimeout(dqlabEquationStops, 250);
+  });
+});

@@ -302,6 +302,28 @@ def test_the_start_script_plans_the_start_and_sees_imports_in_any_form():
     assert out["unknown"] == {"packages": ["ipython", "numpy"], "modules": [], "bytes": 1}
 
 
+def test_the_teaching_guides_browser_times_are_those_of_the_books_chapters():
+    """The in-browser times of the teaching guide's table (tools/browser_times.json, written
+    by ``DQLAB_LITE_CHAPTERS=all DQLAB_LITE_RECORD=1 pytest tests/test_lite.py -m browser``)
+    name chapters of the book, each with its three times; a chapter without times shows
+    dashes there (and is listed here)."""
+    record = json.loads(teaching_facts.BROWSER_TIMES.read_text(encoding="utf-8"))
+    chapters = {p.stem for p, n in NOTEBOOKS if n}
+    assert set(record["chapters"]) <= chapters
+    assert record["cores"] >= 1 and re.fullmatch(r"\d{4}-\d\d-\d\d", record["date"])
+    for name, times in record["chapters"].items():
+        assert set(times) == {"cold_first", "warm_first", "warm_run_all"}, name
+        assert all(0 < t < 600 for t in times.values()), name
+    table = teaching_facts.browser_table()
+    for name, times in record["chapters"].items():
+        row = next(line for line in table.splitlines() if f"`{name}`" in line)
+        assert row.endswith(f"| {times['cold_first']:.0f} s / {times['warm_first']:.0f} s | "
+                            f"{times['warm_run_all']:.0f} s |"), row
+    missing = sorted(chapters - set(record["chapters"]))
+    if missing:
+        print(f"chapters without in-browser times: {missing}")
+
+
 # --- downloads are checked; a bad file stops the build in one line ------------------------
 
 
@@ -517,10 +539,13 @@ def _chapters_to_run():
     return [(p, n) for p, n in numbered if n in numbers]
 
 
+#: The notebook shows its cells, and its session has a kernel (starting or started): what a
+#: student sees before pressing Shift+Enter.
 _APP_READY = """() => { const app = window.jupyterapp;
   const panel = app && app.shell && app.shell.currentWidget;
   return Boolean(panel && panel.content && panel.content.widgets
-                 && panel.content.widgets.length); }"""
+                 && panel.content.widgets.length && panel.sessionContext
+                 && panel.sessionContext.session && panel.sessionContext.session.kernel); }"""
 
 #: Runs the notebook's first code cell (as a student pressing Shift+Enter on it at once);
 #: window.__dqlabFirst.done is set when it has run.
@@ -596,7 +621,7 @@ class OfflineProfile:
         self.context.close()
 
 
-def open_from_book(profile, path, shots=None, run_first=True):
+def open_from_book(profile, path, shots=None, run_first=True, timeout=600):
     """Open a chapter's page, press its "Run in your browser" button and run the first code
     cell as soon as the notebook shows; return ``(page, timings)``.
 
@@ -619,7 +644,7 @@ def open_from_book(profile, path, shots=None, run_first=True):
     page.on("pageerror", lambda error: profile.errors.append(f"JavaScript error: {error}"))
     timings, phases, pending = {}, [], list(SCREENSHOT_SECONDS if shots else [])
     first = None
-    while time.time() - clicked < 600:
+    while time.time() - clicked < timeout:
         now = time.time() - clicked
         if pending and now >= pending[0]:
             page.screenshot(path=str(ARTIFACTS / f"{shots}-{pending.pop(0)}s.png"))
@@ -646,7 +671,7 @@ def open_from_book(profile, path, shots=None, run_first=True):
     else:
         page.screenshot(path=str(ARTIFACTS / f"lite-{path.stem}-failed.png"))
         raise AssertionError(f"{path.name}: the first cell did not run (or the kernel was "
-                             f"not ready) within 600 s")
+                             f"not ready) within {timeout} s")
     timings["text"] = page.evaluate("() => window.__dqlabFirst.text || ''")
     if shots:
         timings["phases"] = phases

@@ -245,13 +245,16 @@ import importlib, os
 # the backend the kernel sets when it starts, set before matplotlib is imported
 os.environ.setdefault("MPLBACKEND", "module://matplotlib_inline.backend_inline")
 os.environ.setdefault("MPLCONFIGDIR", "${MPL_CACHE}")
-failed = []
+import time
+failed, seconds = [], []
 for name in ["pyodide_kernel", *MODULES]:
+    start = time.perf_counter()
     try:
         importlib.import_module(name)
     except Exception as error:
         failed.append(f"{name}: {type(error).__name__}: {error}"[:300])
-failed
+    seconds.append(f"{name} {time.perf_counter() - start:.2f} s")
+failed, seconds
 `;
 
   // for the site's tests (tests/test_lite.py), which run these two in Node
@@ -304,11 +307,12 @@ failed
     const namespace = pyodide.toPy({});               // no name left in the reader's
     const failed = await pyodide.runPythonAsync(      // namespace; the modules stay imported
       IMPORTS.replace("MODULES", JSON.stringify(todo.modules)), { globals: namespace });
-    const problems = failed.toJs();
+    const [problems, seconds] = failed.toJs();
     failed.destroy();
     namespace.destroy();
+    console.log("dqlab: imported in " + seconds.join(", "));
     await keepFontList(pyodide, cache, base, restored);
-    tell({ event: "phase", phase: "imported", problems: problems,
+    tell({ event: "phase", phase: "imported", problems: problems, imports: seconds,
            seconds: (Date.now() - started) / 1000, loaded: progress.loaded,
            fetched: progress.fetched, cached: progress.cached });
     return pyodide;
