@@ -100,3 +100,11 @@ document.addEventListener("DOMContentLoaded", function () {
     pending = setTimeout(dqlabEquationStops, 250);
   });
 });
+
+// The toggles of hidden code cells ("Show code cell source") are named "Toggle hidden
+// content", which is not what they show (WCAG 2.5.3): without that name, they are named by
+// the words they show.
+document.addEventListener("DOMContentLoaded", function () {
+  document.querySelectorAll('details.hide > summary[aria-label="Toggle hidden content"]')
+    .forEach(function (summary) { summary.removeAttribute("aria-label"); });
+});

@@ -297,12 +297,17 @@ _SEARCHES = """() => Array.from(document.querySelectorAll(
   .map(e => e.className)"""
 
 
-def _tab_through(page, limit=400):
-    """Every Tab stop of the page from its top, in order, until the focus comes back."""
+def _tab_through(page, limit=600):
+    """Every Tab stop of the page from its top, in order, until the focus comes back; a stop
+    inside a 3D view (its viewer's controls) is looked at in the view's document."""
     stops = []
     for _ in range(limit):
         page.keyboard.press("Tab")
         stop = page.evaluate(_FOCUS)
+        if stop is not None and stop["tag"] == "iframe":
+            frame = page.evaluate_handle("() => document.activeElement").as_element()
+            inner = frame.content_frame().evaluate(_FOCUS)
+            stop = {**(inner or stop), "view": stop["name"]}
         if stop is None or (stops and stop == stops[0] and len(stops) > 1):
             break
         stops.append(stop)
@@ -326,15 +331,17 @@ def test_a_keyboard_reaches_the_run_button_early_and_always_sees_the_focus(site,
     finally:
         page.close()
     run = [k for k, stop in enumerate(stops, start=1) if stop["run"]]
-    print(f"\n{CHAPTER_PAGE} at {width} px: {len(stops)} Tab stops; "
-          f"'Run in your browser' is stop {run[0] if run else None}")
+    in_views = sum("view" in s for s in stops)
+    print(f"\n{CHAPTER_PAGE} at {width} px: {len(stops)} Tab stops ({in_views} of them the "
+          f"controls inside 3D views); 'Run in your browser' is stop {run[0] if run else None}")
     assert run and run[0] <= 3, [s["name"] for s in stops[:8]]
     assert len(run) == 1
     equations = [s for s in stops if s["math"]]
     print(f"  {len(equations)} of them are equations wider than the screen, which scroll")
     assert all(s["scrolls"] for s in equations), "formulas that need no scrolling are Tab stops"
-    unseen = [f"{s['tag']}.{s['cls'][:40]} {s['name']!r}" for s in stops
-              if not (s["ring"] and s["shown"])]
+    unseen = [f"{s['tag']}.{s['cls'][:40]} {s['name']!r}" + (f" in {s['view']!r}" if "view" in s
+                                                               else "")
+              for s in stops if not (s["ring"] and s["shown"])]
     assert not unseen, f"Tab stops without a visible focus ring: {unseen[:10]}"
     assert len(searches) == 1, f"{len(searches)} search controls: {searches}"
 
