@@ -653,6 +653,7 @@ def open_from_book(profile, path, shots=None, run_first=True, timeout=600):
             status = page.evaluate(_STATUS)
             if status and status["phase"] not in phases:
                 phases.append(status["phase"])
+                timings[f"phase {status['phase']}"] = round(now, 1)
         dialog = page.locator(".jp-Dialog .jp-Dialog-button.jp-mod-accept")
         if dialog.count():                # e.g. "Select Kernel": accepted, as a student would
             timings.setdefault("dialogs", []).append(

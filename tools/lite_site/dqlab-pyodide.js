@@ -298,8 +298,12 @@ failed, seconds
     tell({ event: "phase", phase: "runtime", total: todo.bytes, warm: warm,
            notebook: notebook });
     const pyodide = await runtime;
+    const interpreter = (Date.now() - started) / 1000;
     await pyodide.loadPackage(todo.packages);
     report(true);
+    console.log("dqlab: Python started in " + interpreter + " s, its packages loaded in " +
+                ((Date.now() - started) / 1000) + " s (" + progress.fetched + " bytes downloaded, " +
+                progress.cached + " from the cache)");
     loadAlsoOnImport(pyodide, manifest.on_import || {});
     tell({ event: "phase", phase: "imports", modules: todo.modules,
            seconds: (Date.now() - started) / 1000 });
