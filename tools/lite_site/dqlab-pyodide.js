@@ -127,12 +127,20 @@
       }
       const key = url.origin + url.pathname;
       const hit = cache ? await cache.match(key) : undefined;
-      const buffer = hit ? await hit.arrayBuffer() : null;
-      if (hit && await intact(buffer, init && init.integrity)) {
-        progress.loaded += buffer.byteLength;
-        progress.cached += buffer.byteLength;
-        report(false);
-        return new Response(buffer, { status: 200, headers: hit.headers });
+      if (hit) {
+        // the cached response itself (not a copy), so that the browser can reuse what it
+        // compiled from it (the interpreter's WebAssembly) on an earlier visit
+        const integrity = init && init.integrity;
+        const length = Number(hit.headers.get("Content-Length"));
+        const size = integrity || !length ? (await hit.clone().arrayBuffer()) : length;
+        const ok = !integrity || await intact(size, integrity);
+        if (ok) {
+          const bytes = typeof size === "number" ? size : size.byteLength;
+          progress.loaded += bytes;
+          progress.cached += bytes;
+          report(false);
+          return hit;
+        }
       }
       const response = await realFetch(input, init);   // checks the integrity it is given
       if (!response.ok) {
@@ -141,6 +149,8 @@
       const fresh = await counted(response);
       progress.fetched += fresh.byteLength;
       const headers = new Headers(response.headers);
+      headers.set("Content-Length", String(fresh.byteLength));   // the bytes kept, decoded
+      headers.delete("Content-Encoding");
       if (cache) {
         cache.put(key, new Response(fresh.slice(0), { status: 200, headers: headers }))
           .catch(function () { /* a full disk only means no cache */ });
