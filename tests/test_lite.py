@@ -676,7 +676,15 @@ def open_from_book(profile, path, shots=None, run_first=True, timeout=600):
         raise AssertionError(f"{path.name}: the first cell did not run (or the kernel was "
                              f"not ready) within {timeout} s")
     timings["text"] = page.evaluate("() => window.__dqlabFirst.text || ''")
-    if shots:
+    if shots:                     # the status line says "ready" once the kernel reports back
+        try:
+            page.wait_for_function("() => document.documentElement.dataset.dqlabKernel "
+                                   "=== 'ready'", timeout=10_000, polling=100)
+        except Exception:
+            pass                  # reported below, with what the line says
+        status = page.evaluate(_STATUS)
+        if status and status["phase"] not in phases:
+            phases.append(status["phase"])
         timings["phases"] = phases
         timings["status"] = page.evaluate(_STATUS)
     return page, timings

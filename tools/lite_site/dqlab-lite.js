@@ -152,8 +152,9 @@
     };
   }
 
-  // The kernel is ready when the application says it is idle (or, if the application is
-  // not exposed to the page, when the worker has imported the chapter's modules).
+  // The kernel is ready when the application says it is up, idle or already running a cell
+  // (or, if the application is not exposed to the page, when the worker has imported the
+  // chapter's modules).
   function kernelStatus() {
     const app = window.jupyterapp;
     if (!app || !app.shell) {
@@ -166,7 +167,7 @@
 
   function waitForKernel() {
     const status = kernelStatus();
-    if (status === "idle" || (status === undefined && state.imported)) {
+    if (status === "idle" || status === "busy" || (status === undefined && state.imported)) {
       state.phase = "ready";
       state.ready = true;
       state.readyAfter = seconds();
