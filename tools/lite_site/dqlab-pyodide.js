@@ -119,6 +119,34 @@
     return "sha256-" + btoa(binary) === integrity;
   }
 
+  // The interpreter (pyodide.asm.wasm) is fetched as the browser fetches it, so that its
+  // HTTP cache keeps, beside the file, the machine code it compiled from it, which the next
+  // visit reuses (seconds on a small computer). A copy goes to Cache Storage for a visit
+  // without network.
+  async function interpreter(input, init, cache, key) {
+    let response = null;
+    try {
+      response = await realFetch(input, init);
+    } catch (error) {
+      response = null;                                  // offline: the kept copy
+    }
+    if (response && response.ok) {
+      if (cache && !(await cache.match(key))) {
+        cache.put(key, response.clone()).catch(function () { /* no room */ });
+      }
+    } else {
+      response = (cache && await cache.match(key)) || response;
+    }
+    if (!response) {
+      throw new Error("the Python interpreter cannot be loaded: no network, and this browser " +
+                      "has not kept it from an earlier visit");
+    }
+    const length = Number(response && response.headers.get("Content-Length")) || 0;
+    progress.loaded += length;
+    report(false);
+    return response;
+  }
+
   function cachingFetch(cache, base) {
     return async function (input, init) {
       const url = new URL(input instanceof Request ? input.url : String(input), self.location.href);
@@ -126,6 +154,9 @@
         return realFetch(input, init);
       }
       const key = url.origin + url.pathname;
+      if (url.pathname.endsWith(".wasm")) {
+        return interpreter(input, init, cache, key);
+      }
       const hit = cache ? await cache.match(key) : undefined;
       if (hit) {
         // the cached response itself (not a copy), so that the browser can reuse what it
