@@ -118,6 +118,20 @@ def _drawn_fraction(png):
     return float(np.mean(differs & coloured))
 
 
+def _view_frame(view, label):
+    """A 3D view scrolled into sight and its document once it has loaded: ``(frame, None)``,
+    or ``(frame, problem)`` if it is still loading after 30 s."""
+    view.scroll_into_view_if_needed()
+    handle = view.element_handle() if hasattr(view, "element_handle") else view  # a locator
+    frame = handle.content_frame()
+    try:
+        frame.wait_for_function("() => window.dqlab && dqlab.status !== 'loading'",
+                                timeout=30_000)
+    except Exception:
+        return frame, f"{label}: still loading after 30 s"
+    return frame, None
+
+
 def _check_scenes(page, name, problems):
     views = page.query_selector_all("iframe.dqlab-scene")
     for k, view in enumerate(views):
@@ -128,13 +142,9 @@ def _check_scenes(page, name, problems):
             problems.append(f"{label} carries the viewer script itself ({size // 1024} KB): "
                             f"build with the Sphinx extension dqlab.viz.sphinxext, after "
                             f"'jb clean --all' if the execution cache predates it")
-        view.scroll_into_view_if_needed()
-        frame = view.content_frame()
-        try:
-            frame.wait_for_function("() => window.dqlab && dqlab.status !== 'loading'",
-                                    timeout=30_000)
-        except Exception:
-            problems.append(f"{label}: still loading after 30 s")
+        frame, late = _view_frame(view, label)
+        if late:
+            problems.append(late)
             continue
         status = frame.evaluate("() => ({status: dqlab.status, commands: dqlab.commands})")
         page.wait_for_timeout(300)  # let the first frame render

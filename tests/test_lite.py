@@ -27,7 +27,7 @@ from pathlib import Path
 
 import pytest
 from chromium import ARTIFACTS, HTML, browser, site  # noqa: F401  (fixtures)
-from test_browser import _drawn_fraction
+from test_browser import _drawn_fraction, _view_frame
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tools"))
@@ -711,13 +711,9 @@ def _scene_status(page, name, cells):
         for n, view in enumerate(page.locator(f'[data-dqlab-cell="{index}"] iframe.dqlab-scene')
                                  .all()):
             label = f"3D view of cell {index} ({n + 1})"
-            view.scroll_into_view_if_needed()
-            frame = view.element_handle().content_frame()
-            try:
-                frame.wait_for_function("() => window.dqlab && dqlab.status !== 'loading'",
-                                        timeout=30_000)
-            except Exception:
-                problems.append(f"{label}: still loading after 30 s")
+            frame, late = _view_frame(view, label)
+            if late:
+                problems.append(late)
                 continue
             status = frame.evaluate("() => dqlab.status")
             if status != "ok":
