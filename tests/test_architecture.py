@@ -5,6 +5,7 @@ import ast
 import importlib
 import math
 import pkgutil
+import re
 import subprocess
 import sys
 import warnings
@@ -142,14 +143,46 @@ def test_the_ik_solvers_are_functions_and_no_module_alias_is_left():
             importlib.import_module(old)
 
 
-# The speed machinery sits behind one public front each: only that front imports it.
-ENGINES = {"dqlab._chain": {"dqlab.robot"}, "dqlab.ik._ur_engine": {"dqlab.ik.ur_closed_form"}}
+# The speed twins: machinery that makes a readable path fast. Each sits behind one front,
+# the only module that imports it, and is registered here beside the test that holds it equal
+# to the readable path it speeds up (or, for generated code, to its generator's output).
+ENGINES = {
+    "dqlab._chain": ({"dqlab.robot"}, "test_robot.py::"
+                     "test_fk_is_the_product_of_link_transforms_with_base_and_tool"),
+    "dqlab.ik._ur_engine": ({"dqlab.ik.ur_closed_form"},
+                            "test_ik_ur.py::test_single_pose_path_equals_the_batch_path"),
+    "dqlab.ik._newton_compiled": (
+        {"dqlab.ik.ur_calibrated"}, "test_ik_ur_calibrated_compiled.py::"
+        "test_results_are_the_same_with_and_without_the_compiled_kernels"),
+    "dqlab.ik._newton_lanes": ({"dqlab.ik._newton_compiled"},
+                               "test_ik_ur_calibrated_compiled.py::"
+                               "test_the_generated_lanes_are_those_of_the_generator"),
+    "dqlab._dynamics_floats": ({"dqlab.dynamics"},
+                               "test_dynamics.py::test_the_float_path_equals_the_readable_path"),
+    "dqlab._dynamics_compiled": ({"dqlab.dynamics"}, "test_dynamics_compiled.py::"
+                                 "test_the_compiled_kernels_equal_the_numpy_path"),
+}
 
 
 @pytest.mark.parametrize("engine", sorted(ENGINES))
 def test_each_engine_is_reached_through_its_front_only(engine):
     users = {name for name, path in MODULES.items() if engine in set(dqlab_edges(path))}
-    assert users == ENGINES[engine]
+    assert users == ENGINES[engine][0]
+
+
+@pytest.mark.parametrize("engine", sorted(ENGINES))
+def test_each_engine_has_its_equality_test(engine):
+    file, test = ENGINES[engine][1].split("::")
+    source = (Path(__file__).parent / file).read_text(encoding="utf-8")
+    assert f"def {test}(" in source, f"{file} has no {test}"
+
+
+def test_every_private_twin_module_is_registered():
+    """A private module of compiled, float-only or unrolled twins is in ENGINES."""
+    twins = {name for name in MODULES if re.search(
+        r"\._\w*(compiled|floats|engine|lanes|chain)$", name)}
+    twins.discard("dqlab._compiled")        # the switch of the compiled paths, not a twin
+    assert twins == set(ENGINES)
 
 
 def float_switches(path):
