@@ -120,8 +120,12 @@ def _drawn_fraction(png):
 
 def _view_frame(view, label):
     """A 3D view scrolled into sight and its document once it has loaded: ``(frame, None)``,
-    or ``(frame, problem)`` if it is still loading after 30 s."""
-    view.scroll_into_view_if_needed()
+    or ``(frame, problem)`` if it is still loading after 30 s, ``(None, problem)`` if it
+    cannot be scrolled into sight."""
+    try:
+        view.scroll_into_view_if_needed(timeout=30_000)
+    except Exception as exc:
+        return None, f"{label}: not visible ({type(exc).__name__})"
     handle = view.element_handle() if hasattr(view, "element_handle") else view  # a locator
     frame = handle.content_frame()
     try:

@@ -827,6 +827,9 @@ def test_chapters_run_in_the_browser(site, browser):  # noqa: F811
                                                                          found))
                 problems.extend(f"{path.name}: {p}" for p in found)
                 page.screenshot(path=str(ARTIFACTS / f"lite-{path.stem}.png"))
+            except Exception as exc:             # this chapter's problem; the others still run
+                problems.append(f"{path.name}: {type(exc).__name__}: {str(exc)[:300]}")
+                page.screenshot(path=str(ARTIFACTS / f"lite-{path.stem}-failed.png"))
             finally:
                 page.close()
     finally:
