@@ -662,7 +662,8 @@ def open_from_book(profile, path, shots=None, run_first=True, timeout=600):
         if first is None and page.evaluate(_APP_READY):
             first = page.evaluate(_RUN_FIRST) if run_first else -1
             timings["notebook"] = time.time() - clicked
-        if not run_first and page.evaluate(_STATUS)["kernel"] == "ready":
+        status = None if run_first else page.evaluate(_STATUS)   # None before the line shows
+        if status and status["kernel"] == "ready":
             timings["ready"] = time.time() - clicked
             return page, timings
         if run_first and first is not None and page.evaluate(
