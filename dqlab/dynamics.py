@@ -85,8 +85,14 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._checks import (as_float_array, check_instance, components, finite_or_raise, short_repr,
-                      stack_components)
+from ._checks import (
+    as_float_array,
+    check_instance,
+    components,
+    finite_or_raise,
+    short_repr,
+    stack_components,
+)
 from ._dynamics_compiled import constants as compiled_constants
 from ._dynamics_compiled import forward as compiled_forward
 from ._dynamics_compiled import inverse as compiled_inverse

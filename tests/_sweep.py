@@ -454,8 +454,8 @@ def run(case, folder):
                     bad = arg.extra[kind]
                     bad = bad.value if isinstance(bad, Fine) else bad
                     kwargs[label] = bad(folder) if callable(bad) else bad
-                elif arg.kind in ("object", "text", "name", "path", "flag") or kind in OBJECT_KINDS + (
-                        "directory",) and arg.kind == "file":
+                elif arg.kind in ("object", "text", "name", "path", "flag") or (
+                        kind in OBJECT_KINDS + ("directory",) and arg.kind == "file"):
                     kwargs[label] = bad_object(kind, folder)
                 elif arg.kind == "file":
                     kwargs[label] = bad_file(kind, folder / arg.value, folder)
