@@ -188,6 +188,7 @@ def test_the_bundle_holds_what_the_platform_runs(built):
     assert f"{a.points:g} points are graded automatically;" in text
 
 
+@pytest.mark.slow           # otter grades real notebooks: tens of seconds
 def test_correct_blank_and_wrong_submissions(built, monkeypatch, capsys):
     out, made = built
     jobs, kinds = [], []
@@ -231,6 +232,7 @@ def test_correct_blank_and_wrong_submissions(built, monkeypatch, capsys):
         print("\n" + "\n".join(report))
 
 
+@pytest.mark.slow           # otter grades real notebooks: tens of seconds
 def test_grading_a_folder_end_to_end(built, tmp_path, monkeypatch):
     monkeypatch.setenv("PYTHONPATH", str(ROOT))
     monkeypatch.setenv("MPLBACKEND", "Agg")
