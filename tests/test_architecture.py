@@ -149,7 +149,9 @@ def test_the_ik_solvers_are_functions_and_no_module_alias_is_left():
 ENGINES = {
     "dqlab._chain": ({"dqlab.robot"}, "test_robot.py::"
                      "test_fk_is_the_product_of_link_transforms_with_base_and_tool"),
-    "dqlab.ik._ur_engine": ({"dqlab.ik.ur_closed_form"},
+    # the calibrated solver starts from the closed form of the nearest exact UR: it calls
+    # the engine directly, its arguments checked already, instead of dqlab.ik.ur
+    "dqlab.ik._ur_engine": ({"dqlab.ik.ur_closed_form", "dqlab.ik.ur_calibrated"},
                             "test_ik_ur.py::test_single_pose_path_equals_the_batch_path"),
     "dqlab.ik._newton_compiled": (
         {"dqlab.ik.ur_calibrated"}, "test_ik_ur_calibrated_compiled.py::"

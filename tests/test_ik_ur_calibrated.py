@@ -176,6 +176,22 @@ def test_found_near_singularities(kind):
 # The contract
 
 
+def test_the_default_closed_form_is_that_of_dqlab_ik_ur():
+    """Without a closed_form, calibrated_ur calls dqlab.ik.ur's engine directly: the same
+    result, bit for bit, as with dqlab.ik.ur passed (one pose and a batch); it checks its
+    tolerances itself."""
+    robot = calibrated(3)
+    T = robot.fk(np.random.default_rng(7).uniform(-np.pi, np.pi, (20, 6)))
+    for X in (T[0], T):
+        own, given = calibrated_ur(robot, X), calibrated_ur(robot, X, ur)
+        for name in ("solutions", "valid", "position_error", "rotation_error", "reason"):
+            np.testing.assert_array_equal(getattr(own, name), getattr(given, name))
+        for name, flag in own.flags.items():
+            np.testing.assert_array_equal(flag, given.flags[name])
+    with pytest.raises(ValueError, match="near_tol must be a number >= 0"):
+        calibrated_ur(robot, T[0], near_tol=-1.0)
+
+
 def test_an_exact_ur_gives_the_closed_forms_solutions():
     """Called on an exact UR (which dqlab.ik.ur solves in closed form), the Newton route
     finds the same valid rows and solutions."""

@@ -311,7 +311,7 @@ def test_compiled_closed_forms_equal_the_batch_closed_form(make):
                        [-3e16, 3e16, 3e16], [1e10, 0.0, 0.0]]          # far beyond reach
     handed_over = []
     for tol in (1e-9, 2 * nominal.position_gap, 20 * nominal.position_gap):
-        fast = module._exact_poses(nominal, X, tol, 5e-7, 1e-2, ur)
+        fast = module._exact_poses(nominal, X, tol, 5e-7, 1e-2, module._closed_form)
         batch = ur(nominal.robot, X, tol=tol)
         R = X[:, :3, :3].reshape(-1, 9).T
         done = compiled.closed_forms(np.stack(quaternion_from_matrix_entries(*R), axis=-1),

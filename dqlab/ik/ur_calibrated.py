@@ -78,7 +78,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._checks import as_float_array, rigid_rows
+from .._checks import as_float_array, check_tolerance, rigid_rows
 from .._formulas import quaternion_from_matrix_entries, rigid_inverse
 from ..dualquat import dual_quaternion_from_transform
 from ..models import UR_ALPHA, UR_SHAPE
@@ -96,6 +96,7 @@ from ._newton_compiled import ready as compiled_ready
 from ._newton_compiled import refresh as compiled_refresh
 from ._newton_compiled import smallest as compiled_smallest
 from ._newton_compiled import unique as compiled_unique
+from ._ur_engine import solve as exact_solve
 from .result import IKResult, finish
 from .targets import RIGID_TOL, parse_targets, pose_errors
 from .ur_steps import NEAR_SINGULAR, NEAR_WRIST
@@ -137,13 +138,14 @@ class _Nominal:
     """What a calibrated robot's solves need, computed once per robot: the nearest exact UR
     (bare), the largest position and rotation differences between the two arms on sample
     configurations, the calibrated chain's constants for the Newton kernels and the exact
-    arm's for its compiled closed form."""
+    arm's for its closed form (compiled, and :func:`dqlab.ik.ur_parameters`' dict)."""
 
     robot: Robot
     position_gap: float
     rotation_gap: float
     links: np.ndarray     # (6, 5): per link (cos alpha, sin alpha, a, d, theta offset)
     exact: np.ndarray     # (12,): d1, a2, a3, d4, d5, d6 and the six offsets of the exact arm
+    parameters: dict = field(compare=False)   # the exact arm's, as ur_parameters gives them
     matrix_chains: dict = field(default_factory=dict, compare=False)   # _matrix_chain's
 
 
@@ -241,7 +243,11 @@ def _nominal(robot):
                           for lk in links])
     exact_constants = np.array([d[0], a2, a3, d[3], d[4], d[5], *offsets], dtype=float)
     constants.flags.writeable = exact_constants.flags.writeable = False
-    nominal = _Nominal(exact, position_gap, rotation_gap, constants, exact_constants)
+    L = exact.links                                      # (UR_SHAPE checked above)
+    parameters = {"d1": L[0].d, "a2": L[1].a, "a3": L[2].a, "d4": L[3].d, "d5": L[4].d,
+                  "d6": L[5].d, "offsets": [lk.theta_offset for lk in L]}
+    nominal = _Nominal(exact, position_gap, rotation_gap, constants, exact_constants,
+                       parameters)
     _NOMINAL[robot] = nominal
     return nominal
 
@@ -251,16 +257,16 @@ def _angle_about(u, v, n):
     return float(math.atan2(np.cross(u, v) @ n, u @ v - (u @ n) * (v @ n)))
 
 
-def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 1e-9,
+def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: float = 1e-9,
                   tool: ArrayLike | None = None, q_ref: ArrayLike | None = None,
                   singular_tol: float = 5e-7, pose_tol: float = 1e-9,
                   residuals: str = "equations", max_iter: int = 16,
                   near_tol: float = NEAR_SINGULAR) -> IKResult:
     r"""Every inverse-kinematics solution of a calibrated UR: ``dqlab.ik.ur`` for such a robot.
 
-    ``dqlab.ik.ur`` calls this when its robot has not the exact UR shape; call that instead.
-    The steps are the module's: the closed form of :func:`nominal_ur`, then Newton steps on
-    the calibrated chain from every branch.
+    ``dqlab.ik.ur`` calls this when its robot is a calibrated UR; call that instead. The
+    steps are the module's: the closed form of :func:`nominal_ur`, then Newton steps on the
+    calibrated chain from every branch.
 
     Parameters
     ----------
@@ -268,9 +274,10 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
         A calibrated UR (see :func:`nominal_ur`); its base and tool are taken into account.
     target : array_like, shape (..., 4, 4) or (..., 8)
         TCP poses in the world frame (transforms or unit dual quaternions).
-    closed_form : callable
-        The closed-form solver of an exact UR, ``dqlab.ik.ur`` itself (it passes itself, which
-        keeps the imports between the two modules one-way).
+    closed_form : callable, optional
+        The closed-form solver of the exact UR, called as ``closed_form(robot, X, tol=...,
+        q_ref=..., singular_tol=..., near_tol=...)``; by default ``dqlab.ik.ur``'s engine,
+        called directly (the same results as passing ``dqlab.ik.ur``).
     tol, tool, q_ref, singular_tol, pose_tol, near_tol
         As for ``dqlab.ik.ur``. ``q_ref`` (one per pose, or one for all) reaches the closed
         form (the member of a wrist family it starts from); ``singular_tol`` applies to the
@@ -322,8 +329,16 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
     """
     compiled_refresh()                                  # DQLAB_COMPILED, read once a call
     nominal = _nominal(robot)
+    tol = check_tolerance(tol, "tol")
+    singular_tol = check_tolerance(singular_tol, "singular_tol")
+    near_tol = check_tolerance(near_tol, "near_tol")
+    pose_tol = check_tolerance(pose_tol, "pose_tol")
     if residuals not in ("fk", "equations"):
         raise ValueError(f"residuals must be 'fk' or 'equations', got {residuals!r}")
+    if closed_form is None:
+        closed_form = _closed_form
+    else:                                               # a solver of the exact robot
+        closed_form = _solver_of_robot(closed_form)
     if _plain_pose(target, pose_tol):                  # one transform, checked on floats
         batch, X_W = (), target[None]
     else:
@@ -362,7 +377,7 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
         elif ref is None and pose_tol <= RIGID_TOL and compiled_ready():
             # (the targets are checked at least as strictly as the closed form checks them)
             return _exact_poses(nominal, X, tol, singular_tol, near_tol, closed_form)
-        return closed_form(nominal.robot, X, tol=tol, q_ref=ref, singular_tol=singular_tol,
+        return closed_form(nominal, X, tol=tol, q_ref=ref, singular_tol=singular_tol,
                            near_tol=near_tol)
 
     start = exact_solutions(X_06)
@@ -418,6 +433,24 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form, *, tol: float = 
                   pe.reshape(batch + (8,)), re.reshape(batch + (8,)),
                   {name: f.reshape(batch) for name, f in flags.items()},
                   reason.reshape(batch))
+
+
+def _closed_form(nominal, X_06, *, tol, q_ref=None, singular_tol=5e-7,
+                 near_tol=NEAR_SINGULAR):
+    """``dqlab.ik.ur`` of the exact arm ``nominal.robot`` for the flange poses ``X_06``, its
+    tolerances checked already: the engine's :func:`~dqlab.ik._ur_engine.solve` with ``ur``'s
+    defaults (``pose_tol`` :data:`~dqlab.ik.targets.RIGID_TOL`, no tool, the residuals of
+    the solved equations)."""
+    return exact_solve(nominal.robot, nominal.parameters, X_06, tol, singular_tol, RIGID_TOL,
+                       None, q_ref, "equations", near_tol)
+
+
+def _solver_of_robot(closed_form):
+    """A ``closed_form(robot, X, **options)`` given to :func:`calibrated_ur`, called as
+    :func:`_closed_form` is, with the :class:`_Nominal`."""
+    def solver(nominal, X_06, **options):
+        return closed_form(nominal.robot, X_06, **options)
+    return solver
 
 
 def _references(q_ref, batch):
@@ -509,7 +542,7 @@ def _exact_poses(nominal, X_06, tol, singular_tol, near_tol, closed_form):
     reason = np.full(done.shape, "", dtype=object)
     rest = np.flatnonzero(~done)
     if rest.size:
-        other = closed_form(nominal.robot, X_06[rest], tol=tol, singular_tol=singular_tol,
+        other = closed_form(nominal, X_06[rest], tol=tol, singular_tol=singular_tol,
                             near_tol=near_tol)
         solutions[rest], valid[rest] = other.solutions, other.valid
         errors[rest], rotation_errors[rest] = other.position_error, other.rotation_error
@@ -738,7 +771,7 @@ def _family(chain, nominal, polished, X_06, X_0T, closed_form, tol, max_iter):
         return
     references = np.zeros((poses.size, _FAMILY, 6))
     references[..., 5] = -np.pi + 2.0 * np.pi / _FAMILY * np.arange(_FAMILY)
-    members = closed_form(nominal.robot, np.repeat(X_06[poses], _FAMILY, axis=0), tol=0.5,
+    members = closed_form(nominal, np.repeat(X_06[poses], _FAMILY, axis=0), tol=0.5,
                           q_ref=references.reshape(-1, 6))
     solutions = _off_the_edge(nominal.robot, members.solutions, members.valid,
                               members.position_error, tol).reshape(-1, 6)

@@ -23,8 +23,11 @@ term. The route has four steps, each a small function of :mod:`dqlab.ik.ur_steps
 order of the book's chapter 8, readably; :func:`ur` returns the same rows, bit for bit, from
 the private engine ``dqlab.ik._ur_engine`` (one pose on Python floats, a batch with all
 branches as arrays, in blocks), which also checks every row, sets the flags and, at a wrist
-singularity, chooses a member of the family. :func:`ur` itself only checks its arguments and
-the robot's UR shape (:func:`ur_parameters`), in one place.
+singularity, chooses a member of the family. :func:`ur` itself tells the
+robot's kind once: the exact UR shape (:func:`ur_parameters`; then it checks its arguments
+and calls the engine), or a calibrated UR (handed to
+:func:`dqlab.ik.ur_calibrated.calibrated_ur`, which checks them and starts from the
+engine's solutions of the nearest exact UR).
 
 A candidate is valid when it reproduces the pose to ``tol`` (1e-9 m and 1e-9 rad by
 default; the thesis filters by forward kinematics with ``np.allclose(..., atol=1e-3)``). Its
@@ -142,26 +145,36 @@ SOLUTION_ORDER = tuple(
 #: :class:`~dqlab.ik.result.IKResult` of :func:`ur` prints them.
 ROW_NAMES = tuple(" ".join(branch) for branch in SOLUTION_ORDER)
 
-_CHECKED = weakref.WeakKeyDictionary()    # robot -> its parameters (links are immutable)
+_EXACT, _CALIBRATED = "exact UR", "calibrated UR"
+_KINDS = weakref.WeakKeyDictionary()      # robot -> its kind (links are immutable)
 
 
-def _parameters(robot):
-    """:func:`ur_parameters` of a robot, checked once per robot (the ValueError of a robot
-    without the UR shape is remembered too, and raised again)."""
+def _classify(robot):
+    """The kind of a robot, decided once per robot: ``(_EXACT, ur_parameters(robot))`` for
+    the exact UR shape, ``(_CALIBRATED, nominal_ur(robot))`` for a calibrated UR; for neither
+    a ValueError naming both reasons (remembered too, and raised again)."""
     try:
-        prm = _CHECKED[robot]
+        kind = _KINDS[robot]
     except (KeyError, TypeError):
+        kind = _kind(robot)
         try:
-            prm = ur_parameters(robot)
-        except ValueError as exc:
-            prm = exc
-        try:
-            _CHECKED[robot] = prm
+            _KINDS[robot] = kind
         except TypeError:                       # not weakly referenceable: not remembered
             pass
-    if isinstance(prm, ValueError):
-        raise ValueError(str(prm))
-    return prm
+    if isinstance(kind, ValueError):
+        raise ValueError(str(kind))
+    return kind
+
+
+def _kind(robot):
+    """:func:`_classify`'s answer, computed (a ValueError is returned, not raised)."""
+    try:
+        return _EXACT, ur_parameters(robot)
+    except ValueError as exc:
+        try:
+            return _CALIBRATED, nominal_ur(robot)
+        except ValueError as why:
+            return ValueError(f"{exc}; nor is it a calibrated UR: {why}")
 
 
 def ur_parameters(robot: Robot, *, atol: float = 1e-12) -> dict:
@@ -362,23 +375,18 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     unreachable [False False]
     not_converged [False False]
     """
-    tol = check_tolerance(tol, "tol")
-    singular_tol = check_tolerance(singular_tol, "singular_tol")
-    near_tol = check_tolerance(near_tol, "near_tol")
-    pose_tol = check_tolerance(pose_tol, "pose_tol")
-    if residuals not in ("fk", "equations"):
-        raise ValueError(f"residuals must be 'fk' or 'equations', got {residuals!r}")
-    try:
-        prm = _parameters(robot)
-    except ValueError as exc:                   # not the exact UR shape: a calibrated UR?
-        try:
-            nominal_ur(robot)
-        except ValueError as why:
-            raise ValueError(f"{exc}; nor is it a calibrated UR: {why}") from None
-        result = calibrated_ur(robot, target, ur, tol=tol, tool=tool, q_ref=q_ref,
+    kind, prm = _classify(robot)
+    if kind is _CALIBRATED:                     # (which checks its own arguments)
+        result = calibrated_ur(robot, target, tol=tol, tool=tool, q_ref=q_ref,
                                singular_tol=singular_tol, pose_tol=pose_tol,
                                residuals=residuals, near_tol=near_tol)
     else:
+        tol = check_tolerance(tol, "tol")
+        singular_tol = check_tolerance(singular_tol, "singular_tol")
+        near_tol = check_tolerance(near_tol, "near_tol")
+        pose_tol = check_tolerance(pose_tol, "pose_tol")
+        if residuals not in ("fk", "equations"):
+            raise ValueError(f"residuals must be 'fk' or 'equations', got {residuals!r}")
         result = solve(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref,
                        residuals, near_tol)
     result.row_names = ROW_NAMES
@@ -590,11 +598,8 @@ def ur_branch(robot: Robot, q: ArrayLike) -> NDArray[np.int64]:
     """
     check_instance(robot, Robot, "robot")
     q = robot.check_joints(q)
-    try:
-        _parameters(robot)
-        exact = robot
-    except ValueError:
-        exact = nominal_ur(robot)
+    kind, nominal = _classify(robot)
+    exact = robot if kind is _EXACT else nominal
     t = q + np.array([lk.theta_offset for lk in exact.links])
     a2, a3, d5 = exact.links[1].a, exact.links[2].a, exact.links[4].d
     h = (a2 * np.cos(t[..., 1]) + a3 * np.cos(t[..., 1] + t[..., 2])
