@@ -17,7 +17,8 @@ What they share lives in a few small modules: :mod:`dqlab.ik.targets` parses and
 the targets once (:func:`~dqlab.ik.targets.parse_targets`) and measures the errors of a pose
 (:func:`~dqlab.ik.targets.pose_errors`); :mod:`dqlab.ik.result` holds the result type and
 how a solver finishes it (:func:`~dqlab.ik.result.finish`,
-:func:`~dqlab.ik.result.target_reasons`); :mod:`dqlab.ik.two_link` solves the planar
+:func:`~dqlab.ik.result.target_reasons`; the UR solvers' options are checked by
+:func:`~dqlab.ik.result.check_ur_options`); :mod:`dqlab.ik.two_link` solves the planar
 two-link arm. A closed-form solver checks the robot against its
 :class:`dqlab.models.ChainShape`. A new closed-form solver is one new module built from
 these pieces.

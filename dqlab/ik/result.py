@@ -4,6 +4,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._checks import check_tolerance
+
 
 @dataclass(repr=False)
 class IKResult:
@@ -220,6 +222,32 @@ def finish(solutions: np.ndarray, valid: np.ndarray, position_error: np.ndarray,
             solutions[~valid] = 0.0
     return IKResult(solutions=solutions, valid=valid, position_error=position_error,
                     rotation_error=rotation_error, flags=flags, reason=reason)
+
+
+def check_ur_options(tol, singular_tol, near_tol, pose_tol, residuals) -> tuple:
+    """The options of the UR solvers (``dqlab.ik.ur``, and ``calibrated_ur`` called
+    directly), checked: the four tolerances as floats >= 0, ``residuals`` one of
+    ``"equations"``, ``"fk"``.
+
+    Returns
+    -------
+    tuple
+        ``(tol, singular_tol, near_tol, pose_tol)``.
+
+    Examples
+    --------
+    >>> check_ur_options(1e-9, 5e-7, 0.01, 1e-9, "equations")
+    (1e-09, 5e-07, 0.01, 1e-09)
+    >>> check_ur_options(1e-9, 5e-7, 0.01, 1e-9, "eqs")
+    Traceback (most recent call last):
+    ...
+    ValueError: residuals must be 'fk' or 'equations', got 'eqs'
+    """
+    checked = (check_tolerance(tol, "tol"), check_tolerance(singular_tol, "singular_tol"),
+               check_tolerance(near_tol, "near_tol"), check_tolerance(pose_tol, "pose_tol"))
+    if residuals not in ("fk", "equations"):
+        raise ValueError(f"residuals must be 'fk' or 'equations', got {residuals!r}")
+    return checked
 
 
 def target_reasons(failed: np.ndarray, explain) -> np.ndarray:

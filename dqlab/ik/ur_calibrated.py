@@ -78,7 +78,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._checks import as_float_array, check_tolerance, rigid_rows
+from .._checks import as_float_array, rigid_rows
 from .._formulas import quaternion_from_matrix_entries, rigid_inverse
 from ..dualquat import dual_quaternion_from_transform
 from ..models import UR_ALPHA, UR_SHAPE
@@ -97,7 +97,7 @@ from ._newton_compiled import refresh as compiled_refresh
 from ._newton_compiled import smallest as compiled_smallest
 from ._newton_compiled import unique as compiled_unique
 from ._ur_engine import solve as exact_solve
-from .result import IKResult, finish
+from .result import IKResult, check_ur_options, finish
 from .targets import RIGID_TOL, parse_targets, pose_errors
 from .ur_steps import NEAR_SINGULAR, NEAR_WRIST
 
@@ -329,12 +329,8 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
     """
     compiled_refresh()                                  # DQLAB_COMPILED, read once a call
     nominal = _nominal(robot)
-    tol = check_tolerance(tol, "tol")
-    singular_tol = check_tolerance(singular_tol, "singular_tol")
-    near_tol = check_tolerance(near_tol, "near_tol")
-    pose_tol = check_tolerance(pose_tol, "pose_tol")
-    if residuals not in ("fk", "equations"):
-        raise ValueError(f"residuals must be 'fk' or 'equations', got {residuals!r}")
+    tol, singular_tol, near_tol, pose_tol = check_ur_options(tol, singular_tol, near_tol,
+                                                             pose_tol, residuals)
     if closed_form is None:
         closed_form = _closed_form
     else:                                               # a solver of the exact robot

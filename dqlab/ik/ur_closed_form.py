@@ -116,7 +116,7 @@ import weakref
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._checks import check_instance, check_scalar, check_tolerance, real_array
+from .._checks import check_instance, check_scalar, real_array
 from ..models import UR_SHAPE
 from ..robot import Robot
 from ..rotations import wrap_angle
@@ -129,7 +129,7 @@ from ._ur_engine import (  # noqa: F401  (the reasons, re-exported)
     REASON_TOL,
     solve,
 )
-from .result import IKResult
+from .result import IKResult, check_ur_options
 from .solutions import check_joint_limits, check_reference, closest_solution
 from .ur_calibrated import calibrated_ur, nominal_ur
 from .ur_steps import NEAR_SINGULAR
@@ -381,12 +381,8 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
                                singular_tol=singular_tol, pose_tol=pose_tol,
                                residuals=residuals, near_tol=near_tol)
     else:
-        tol = check_tolerance(tol, "tol")
-        singular_tol = check_tolerance(singular_tol, "singular_tol")
-        near_tol = check_tolerance(near_tol, "near_tol")
-        pose_tol = check_tolerance(pose_tol, "pose_tol")
-        if residuals not in ("fk", "equations"):
-            raise ValueError(f"residuals must be 'fk' or 'equations', got {residuals!r}")
+        tol, singular_tol, near_tol, pose_tol = check_ur_options(tol, singular_tol,
+                                                                 near_tol, pose_tol, residuals)
         result = solve(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref,
                        residuals, near_tol)
     result.row_names = ROW_NAMES
