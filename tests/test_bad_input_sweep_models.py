@@ -335,6 +335,10 @@ add(M, "equivalent_solutions", ik.equivalent_solutions, q=A(Q6), limits=A(LIMITS
 add(M, "distinct_solutions", ik.distinct_solutions, result=O(RESULT), atol=S(1e-9))
 add(M, "IKResult.best", RESULT.best, q_ref=A(Q6))
 add(M, "ur_parameters", ik.ur_parameters, robot=O(UR5E), atol=S(1e-12))
+add(M, "check_ur_options",               # which tolerances are off (inf is a valid one)
+    lambda **kw: np.isinf(ik.result.check_ur_options(**kw)), tol=S(1e-9, inf_ok=True),
+    singular_tol=S(5e-7, inf_ok=True), near_tol=S(0.01, inf_ok=True),
+    pose_tol=S(1e-9, inf_ok=True), residuals=O("equations"))
 
 M = "desk_arm_firmware"
 _ROWS = [[228.66, 0, 174.12, 0, 0], [0, 170, 80, 0, 0], [0, 170, 30, 1, 0]]

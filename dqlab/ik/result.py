@@ -4,7 +4,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._checks import check_tolerance
+from .._checks import check_tolerance, short_repr
 
 
 @dataclass(repr=False)
@@ -245,8 +245,8 @@ def check_ur_options(tol, singular_tol, near_tol, pose_tol, residuals) -> tuple:
     """
     checked = (check_tolerance(tol, "tol"), check_tolerance(singular_tol, "singular_tol"),
                check_tolerance(near_tol, "near_tol"), check_tolerance(pose_tol, "pose_tol"))
-    if residuals not in ("fk", "equations"):
-        raise ValueError(f"residuals must be 'fk' or 'equations', got {residuals!r}")
+    if not (isinstance(residuals, str) and residuals in ("fk", "equations")):
+        raise ValueError(f"residuals must be 'fk' or 'equations', got {short_repr(residuals)}")
     return checked
 
 
