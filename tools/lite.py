@@ -605,8 +605,8 @@ def _directive(name, arg, options, body):
 #: What a skipped cell needs when it names none of :data:`NATIVE_NEEDS`.
 NO_BROWSER_BUILD = "a package that has no build for Pyodide"
 #: Packages whose mention in a native-only cell names what it needs.
-NATIVE_NEEDS = {"mujoco": "MuJoCo", "ruckig": "Ruckig", "pybullet": "PyBullet",
-                "ControllerStandIn": "a controller stand-in process"}
+NATIVE_NEEDS = {"mujoco": "MuJoCo", "ArmSimulation": "MuJoCo", "ruckig": "Ruckig",
+                "pybullet": "PyBullet", "ControllerStandIn": "a controller stand-in process"}
 
 
 def _needs(cells):
