@@ -22,11 +22,11 @@ imports, and the environment does not say ``DQLAB_COMPILED=0``. The first compil
 seconds, and is cached on disk for the next processes.
 """
 
-import importlib.util
 import math
-import os
 
 import numpy as np
+
+from ._compiled import compile_in_place, compiled_allowed
 
 _COMPILED = []     # the kernels below, compiled in place by ready()
 _READY = None      # whether numba imported and the kernels compiled (once known)
@@ -38,9 +38,9 @@ WIDTH = 22
 
 
 def switched_on():
-    """Whether the environment lets compiled kernels run: ``DQLAB_COMPILED`` is not ``"0"``.
-    Read at every call, so that a test or a session can switch them off."""
-    return os.environ.get("DQLAB_COMPILED", "1").strip() != "0"
+    """Whether ``DQLAB_COMPILED`` lets compiled kernels run (:mod:`dqlab._compiled`). Read at
+    every call, so that a test or a session can switch them off."""
+    return compiled_allowed()
 
 
 def ready():
@@ -51,16 +51,7 @@ def ready():
     if not switched_on():
         return False
     if _READY is None:
-        _READY = False
-        if importlib.util.find_spec("numba") is not None:
-            try:
-                import numba
-            except ImportError:                         # e.g. a numpy it does not support
-                return False
-            jit = numba.njit(cache=True, nogil=True, error_model="numpy")
-            for name in _COMPILED:
-                globals()[name] = jit(globals()[name])
-            _READY = True
+        _READY = compile_in_place(globals(), _COMPILED)
     return _READY
 
 

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from test_ik_ur_calibrated import calibrated, physically_calibrated, singular_poses
 
+from dqlab import _compiled as dqlab_compiled
 from dqlab._formulas import quaternion_from_matrix_entries
 from dqlab.ik import _newton_compiled as compiled
 from dqlab.ik import ur
@@ -161,7 +162,7 @@ def test_the_environment_variable_switches_the_compiled_paths(monkeypatch):
 def test_ready_without_numba(monkeypatch):
     """Without numba (as in the browser), ready() says so and the numpy path is used."""
     monkeypatch.setattr(compiled, "_READY", None)
-    monkeypatch.setattr(compiled.importlib.util, "find_spec", lambda name: None)
+    monkeypatch.setattr(dqlab_compiled.importlib.util, "find_spec", lambda name: None)
     assert compiled.ready() is False
     robot = calibrated(47)
     q = np.array([0.3, -1.2, 1.1, -0.4, 0.9, 0.2])

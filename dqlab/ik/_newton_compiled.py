@@ -36,12 +36,11 @@ where the two smallest eigenvalues of :math:`J^\mathsf{T} J` are apart, tested; 
 are not, neither direction is better defined than the other).
 """
 
-import importlib.util
 import math
 
 import numpy as np
 
-from .._compiled import compiled_allowed
+from .._compiled import compile_in_place, compiled_allowed
 from ._newton_lanes import INDEX, NV, W
 from ._newton_lanes import angles as lane_angles
 from ._newton_lanes import frames as lane_frames
@@ -75,16 +74,7 @@ def ready():
     if not _ALLOWED:
         return False
     if _READY is None:
-        _READY = False
-        if importlib.util.find_spec("numba") is not None:
-            try:
-                import numba
-            except ImportError:                         # e.g. a numpy it does not support
-                return False
-            jit = numba.njit(cache=True, nogil=True, error_model="numpy")
-            for name in _COMPILED:
-                globals()[name] = jit(globals()[name])
-            _READY = True
+        _READY = compile_in_place(globals(), _COMPILED)
     return _READY
 
 
