@@ -44,16 +44,18 @@ MOVES = (0.05, -0.05, 0.3, -0.3)               # deflation starts along the sing
 
 
 def newton_step(arm: Robot, q: ArrayLike, X_target: ArrayLike) -> tuple[np.ndarray, float]:
-    r"""One damped Newton step of ``arm`` from ``q`` (6,) towards the pose ``X_target``.
+    r"""One damped Newton step of ``arm`` from ``q`` (n,) towards the pose ``X_target``
+    (4, 4), both in the world frame.
 
     .. math::
 
        \delta = (J^\mathsf{T} J + \lambda I)^{-1} J^\mathsf{T} e,\quad
        e = \begin{pmatrix} p^\ast - p \\ \tfrac12 (R^\ast R^\mathsf{T}
            - R R^{\ast\mathsf{T}})^\vee \end{pmatrix},\quad
-       \lambda = 10^{-12}\,\operatorname{tr}(J^\mathsf{T}J)/6,
+       \lambda = 10^{-12}\,\operatorname{tr}(J^\mathsf{T}J)/n,
 
-    shortened to half a radian on its largest joint.
+    with :math:`J` the geometric Jacobian at the TCP, shortened to half a radian on its
+    largest joint.
 
     Returns
     -------
@@ -61,12 +63,17 @@ def newton_step(arm: Robot, q: ArrayLike, X_target: ArrayLike) -> tuple[np.ndarr
     error : float
         The larger of :math:`\lVert e_p\rVert` and :math:`\lVert e_R\rVert` at ``q``.
     """
+    q = arm.check_joints(q)
+    X_target = parse_targets(X_target, name="X_target").transforms
+    if q.shape != (arm.n,) or X_target.shape != (4, 4):
+        raise ValueError(f"newton_step takes one joint vector q ({arm.n},) and one pose "
+                         f"X_target (4, 4), got {q.shape} and {X_target.shape}")
     X, J = arm.fk_with_jacobian(q)
     E = X_target[:3, :3] @ X[:3, :3].T
     e = np.concatenate([X_target[:3, 3] - X[:3, 3],
                         0.5 * np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]])])
     H = J.T @ J
-    step = np.linalg.solve(H + 1e-12 * np.trace(H) / 6 * np.eye(6), J.T @ e)
+    step = np.linalg.solve(H + 1e-12 * np.trace(H) / q.size * np.eye(q.size), J.T @ e)
     step *= min(1.0, 0.5 / max(np.abs(step).max(), 1e-300))
     return step, max(np.linalg.norm(e[:3]), np.linalg.norm(e[3:]))
 
@@ -129,8 +136,8 @@ def calibrated_ur_reference(robot: Robot, target: ArrayLike, *, tol: float = 1e-
     exact = nominal_ur(robot)
     tol, singular_tol, near_tol, _ = check_ur_options(tol, singular_tol, near_tol, 1e-9, "fk")
     arm = Robot(robot.links, convention="dh", tool=robot.tool)       # the chain in frame 0
-    position_gap, rotation_gap = (e.max() for e in pose_errors(exact.fk(SAMPLES), arm.fk(SAMPLES)))
-    wide, near_tol = max(tol, 2 * position_gap), max(near_tol, 4 * rotation_gap)
+    gap_p, gap_r = (e.max() for e in pose_errors(exact.fk(SAMPLES), arm.fk(SAMPLES)))
+    wide, near_tol = max(tol, 2 * gap_p), max(near_tol, 4 * gap_r)     # the arms' gap
     targets = parse_targets(target)
     X_0T = np.linalg.inv(robot.base) @ targets.transforms.reshape(-1, 4, 4)
     n = X_0T.shape[0]
@@ -159,12 +166,11 @@ def solve_pose(arm, exact, X_0T, tol, wide, singular_tol, near_tol):
     rotation errors, flags and reason."""
     X_06 = X_0T @ np.linalg.inv(arm.tool)
     start = ur(exact, X_06, tol=wide, singular_tol=singular_tol, near_tol=near_tol)
-    starts, found = start.solutions.copy(), start.valid
-    near = ~found & (start.position_error <= 10 * wide)   # missed by a little more
-    if near.any():
+    starts, found, started = start.solutions.copy(), start.valid, start.valid.copy()
+    near = ~found & (start.position_error <= 10 * wide)
+    if near.any():                      # a row missed by a little more: ten gaps wide
         again = ur(exact, X_06, tol=10 * wide)
-        starts[near] = again.solutions[near]
-    started = found | (near & again.valid if near.any() else near)
+        starts[near], started[near] = again.solutions[near], again.valid[near]
     starts = off_the_edge(exact, starts, started, start.position_error, tol)
     q, converged = starts.copy(), np.zeros(8, dtype=bool)
     # step 2: Newton from each branch, in order, then from the rows the exact arm missed
@@ -222,8 +228,9 @@ def repair(arm, exact, X_06, X_0T, q, converged, started, tol):
         missing = started & ~converged
         if not missing.any():
             return
-        q_end, _ = newton(arm, q_start, X_0T, tol, 10, known) if len(known) else (q_start, 0)
-        q_end, ok = newton(arm, q_end, X_0T, tol, 10)
+        if len(known):                  # deflated steps away from the known solutions
+            q_start, _ = newton(arm, q_start, X_0T, tol, 10, known)
+        q_end, ok = newton(arm, q_start, X_0T, tol, 10)   # then plain ones
         if ok and is_new(q_end, q[converged]):
             k = int(ur_branch(exact, q_end))
             k = k if missing[k] else int(np.flatnonzero(missing)[0])
@@ -239,7 +246,7 @@ def singularity_flags(arm, q, valid, d4, singular_tol, near_tol):
                               F[:, 3, :3, 0], F[:, 5, :3, 3])
     wrist = np.linalg.norm(np.cross(z3, z5), axis=-1)
     elbow = np.linalg.norm(np.cross(x2, x3), axis=-1)
-    shoulder = np.abs(z1[:, 0] * o5[:, 1] - z1[:, 1] * o5[:, 0]) / np.hypot(z1[:, 0], z1[:, 1]) / d4
+    shoulder = np.abs(z1[:, 0] * o5[:, 1] - z1[:, 1] * o5[:, 0]) / np.hypot(*z1[:, :2].T) / d4
     measures = {"wrist_singular": wrist, "shoulder_singular": shoulder, "elbow_singular": elbow,
                 "near_singular": np.minimum(np.minimum(wrist, elbow), shoulder)}
     limit = {name: singular_tol for name in measures} | {"near_singular": near_tol}
