@@ -63,6 +63,8 @@ def newton_step(arm: Robot, q: ArrayLike, X_target: ArrayLike) -> tuple[np.ndarr
     error : float
         The larger of :math:`\lVert e_p\rVert` and :math:`\lVert e_R\rVert` at ``q``.
     """
+    if not isinstance(arm, Robot):
+        raise TypeError(f"arm must be a dqlab.robot.Robot, got {type(arm).__name__}")
     q = arm.check_joints(q)
     X_target = parse_targets(X_target, name="X_target").transforms
     if q.shape != (arm.n,) or X_target.shape != (4, 4):
@@ -73,9 +75,13 @@ def newton_step(arm: Robot, q: ArrayLike, X_target: ArrayLike) -> tuple[np.ndarr
     e = np.concatenate([X_target[:3, 3] - X[:3, 3],
                         0.5 * np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]])])
     H = J.T @ J
-    step = np.linalg.solve(H + 1e-12 * np.trace(H) / q.size * np.eye(q.size), J.T @ e)
+    with np.errstate(over="ignore", invalid="ignore"):
+        step = np.linalg.solve(H + 1e-12 * np.trace(H) / q.size * np.eye(q.size), J.T @ e)
+        error = max(np.linalg.norm(e[:3]), np.linalg.norm(e[3:]))
+    if not (np.isfinite(step).all() and np.isfinite(error)):
+        raise ValueError("X_target is so far from the arm that the Newton step overflows")
     step *= min(1.0, 0.5 / max(np.abs(step).max(), 1e-300))
-    return step, max(np.linalg.norm(e[:3]), np.linalg.norm(e[3:]))
+    return step, error
 
 
 def newton(arm, q, X_target, tol, max_iter=MAX_ITER, known=()):
@@ -121,6 +127,11 @@ def calibrated_ur_reference(robot: Robot, target: ArrayLike, *, tol: float = 1e-
         As :func:`~dqlab.ik.ur_calibrated.calibrated_ur`'s: eight rows per pose in the exact
         arm's branch order, its flags and reasons.
 
+    Raises
+    ------
+    ValueError
+        For a robot that is not a calibrated UR, a bad target or tolerance.
+
     Examples
     --------
     >>> import numpy as np
@@ -133,7 +144,10 @@ def calibrated_ur_reference(robot: Robot, target: ArrayLike, *, tol: float = 1e-
     >>> int(result.count), bool(np.abs(result.solutions - q).max(axis=-1).min() < 1e-9)
     (8, True)
     """
-    exact = nominal_ur(robot)
+    try:
+        exact = nominal_ur(robot)                  # step 1's arm
+    except ValueError as error:
+        raise ValueError(f"robot: {error}") from None
     tol, singular_tol, near_tol, _ = check_ur_options(tol, singular_tol, near_tol, 1e-9, "fk")
     arm = Robot(robot.links, convention="dh", tool=robot.tool)       # the chain in frame 0
     gap_p, gap_r = (e.max() for e in pose_errors(exact.fk(SAMPLES), arm.fk(SAMPLES)))
