@@ -19,9 +19,12 @@ Newton step (:func:`newton_step`):
    Newton from the solutions found, moved along the most singular direction of
    :math:`J^\mathsf{T} J`.
 
-It is the reference the fast solver is tested against (``tests/test_ik_ur_calibrated_
-reference.py``): the same valid solutions, except at a few poses within the two arms' gap of
-a singularity, where the two repairs' different starts find different solutions.
+It is the reference the fast solver is tested against, on six real calibrations: the same
+valid solutions on 179 of 180 random poses (the rows to 2e-9 rad, what Newton's stop
+leaves) and on 98 of 108 poses within a milliradian of a singularity. Where they differ the
+pose has more solutions than the eight rows, or solutions that do not follow the exact
+arm's branches, and the two repairs start from different points (flagged
+``"near_singular"``). Chapter 12 shows this module.
 """
 
 import numpy as np
