@@ -7,7 +7,8 @@ Newton step (:func:`newton_step`):
 
 1. **The closed form of the nearest exact UR** (:func:`~dqlab.ik.ur_calibrated.nominal_ur`)
    gives a start for each of the eight branches, with the tolerance widened to twice the
-   gap between the two arms (ten gaps for a row it misses by a little more).
+   gap between the two arms (ten gaps for a row it misses by a little more; a start on the
+   elbow singularity is bent off it).
 2. **Newton on the calibrated chain** from each start,
    :math:`q \leftarrow q + (J^\mathsf{T} J + \lambda I)^{-1} J^\mathsf{T} e(q)`,
    :math:`\lambda = 10^{-12}\operatorname{tr}(J^\mathsf{T}J)/6`, a step longer than half a
@@ -19,12 +20,10 @@ Newton step (:func:`newton_step`):
    Newton from the solutions found, moved along the most singular direction of
    :math:`J^\mathsf{T} J`.
 
-It is the reference the fast solver is tested against, on six real calibrations: the same
-valid solutions on 179 of 180 random poses (the rows to 2e-9 rad, what Newton's stop
-leaves) and on 98 of 108 poses within a milliradian of a singularity. Where they differ the
-pose has more solutions than the eight rows, or solutions that do not follow the exact
-arm's branches, and the two repairs start from different points (flagged
-``"near_singular"``). Chapter 12 shows this module.
+The fast solver is tested against it on six real calibrations: the same solutions on 179
+of 180 random poses (to 2e-9 rad, what Newton's stop leaves) and on 98 of 108 poses within
+a milliradian of a singularity, where a pose may have more solutions than the eight rows
+hold and the two repairs, started from different points, may find different ones.
 """
 
 import numpy as np
@@ -62,17 +61,11 @@ def newton_step(arm: Robot, q: ArrayLike, X_target: ArrayLike) -> tuple[np.ndarr
 
     Returns
     -------
-    step : ndarray, shape (6,)
+    step : ndarray, shape (n,)
     error : float
         The larger of :math:`\lVert e_p\rVert` and :math:`\lVert e_R\rVert` at ``q``.
     """
-    if not isinstance(arm, Robot):
-        raise TypeError(f"arm must be a dqlab.robot.Robot, got {type(arm).__name__}")
-    q = arm.check_joints(q)
-    X_target = parse_targets(X_target, name="X_target").transforms
-    if q.shape != (arm.n,) or X_target.shape != (4, 4):
-        raise ValueError(f"newton_step takes one joint vector q ({arm.n},) and one pose "
-                         f"X_target (4, 4), got {q.shape} and {X_target.shape}")
+    q, X_target = _one_joint_vector_and_pose(arm, q, X_target)
     X, J = arm.fk_with_jacobian(q)
     E = X_target[:3, :3] @ X[:3, :3].T
     e = np.concatenate([X_target[:3, 3] - X[:3, 3],
@@ -85,6 +78,17 @@ def newton_step(arm: Robot, q: ArrayLike, X_target: ArrayLike) -> tuple[np.ndarr
         raise ValueError("X_target is so far from the arm that the Newton step overflows")
     step *= min(1.0, 0.5 / max(np.abs(step).max(), 1e-300))
     return step, error
+
+
+def _one_joint_vector_and_pose(arm, q, X_target):
+    """``q`` (n,) and ``X_target`` (4, 4) for :func:`newton_step`, checked."""
+    if not isinstance(arm, Robot):
+        raise TypeError(f"arm must be a dqlab.robot.Robot, got {type(arm).__name__}")
+    q, X_target = arm.check_joints(q), parse_targets(X_target, name="X_target").transforms
+    if q.shape != (arm.n,) or X_target.shape != (4, 4):
+        raise ValueError(f"newton_step takes one joint vector q ({arm.n},) and one pose "
+                         f"X_target (4, 4), got {q.shape} and {X_target.shape}")
+    return q, X_target
 
 
 def newton(arm, q, X_target, tol, max_iter=MAX_ITER, known=()):
@@ -181,7 +185,7 @@ FLAG_NAMES = ("wrist_singular", "shoulder_singular", "elbow_singular", "near_sin
 def solve_pose(arm, exact, X_0T, tol, wide, singular_tol, near_tol):
     """Steps 1-3 for one target ``X_0T`` in frame 0: the rows (8, 6), valid, position and
     rotation errors, flags and reason."""
-    X_06 = X_0T @ np.linalg.inv(arm.tool)
+    X_06 = X_0T @ np.linalg.inv(arm.tool)        # step 1: the exact arm's closed form
     start = ur(exact, X_06, tol=wide, singular_tol=singular_tol, near_tol=near_tol)
     starts, found, started = start.solutions.copy(), start.valid, start.valid.copy()
     near = ~found & (start.position_error <= 10 * wide)
