@@ -10,7 +10,8 @@ the fast path as installed, compiled or not, which are tested equal elsewhere):
 - random poses: 179 of 180 have the same valid solutions in both, 176 the same rows branch
   by branch (the others: the same solutions under other branch labels); rows agree to
   1.8e-9 rad, what Newton's stop leaves (errors below tol / 10 = 1e-10; the fast path's
-  three unconditional first steps polish further). The one pose whose solutions differ has
+  three unconditional first steps polish further; 4.7e-8 at worst on 900 poses of another
+  seed, with the same rates otherwise). The one pose whose solutions differ has
   a solution near a singularity (flagged ``near_singular`` by both): the reference misses
   one of its eight. Both find the configuration each target came from, every time.
 - near-singular configurations (within a milliradian of theta_5 = 0, pi or theta_3 = 0): 98
@@ -23,7 +24,7 @@ the fast path as installed, compiled or not, which are tested equal elsewhere):
 
 The test asserts what holds, with a margin: every valid row of both is a solution; the same
 sets on all but two random poses, which both flag near_singular, and on 85 % of the poses
-near a singularity; rows within 1e-8 rad (random) and 1e-6 rad; the same flags where the
+near a singularity; rows within 1e-7 rad (random) and 1e-6 rad; the same flags where the
 rows are the same; the generating configuration on every random pose.
 """
 
@@ -100,7 +101,7 @@ def test_the_reference_and_the_fast_solver_give_the_same_solutions(solved):
     assert same_sets >= poses - 2 and same_rows >= 0.95 * poses
     poses, same_rows, same_sets = counts["near"]
     assert same_sets >= 0.85 * poses and same_rows >= 0.6 * poses
-    assert largest_gap["random"] < 1e-8 and largest_gap["near"] < SAME
+    assert largest_gap["random"] < 1e-7 and largest_gap["near"] < SAME
 
 
 def test_the_reference_finds_the_generating_configuration(solved):
