@@ -12,16 +12,16 @@ Newton step (:func:`newton_step`):
 2. **Newton on the calibrated chain** from each start,
    :math:`q \leftarrow q + (J^\mathsf{T} J + \lambda I)^{-1} J^\mathsf{T} e(q)`,
    :math:`\lambda = 10^{-12}\operatorname{tr}(J^\mathsf{T}J)/6`, a step longer than half a
-   radian shortened; a branch stops below a tenth of ``tol``, or when after eight steps it
-   no longer halves its error in two. It is valid when it reaches the target to ``tol``
-   and repeats no branch before it.
+   radian shortened; a branch stops below a tenth of ``tol`` (after three steps at least),
+   or when after eight steps it no longer halves its error in two. It is valid when it
+   reaches the target to ``tol`` and repeats no branch before it.
 3. **The repair of the branches still missing** (near a singularity, two starts may lead
    to one solution): members of the exact arm's wrist family as starts, and deflated
    Newton from the solutions found, moved along the most singular direction of
    :math:`J^\mathsf{T} J`.
 
 The fast solver is tested against it on six real calibrations: the same solutions on 179
-of 180 random poses (to 2e-9 rad, what Newton's stop leaves) and on 98 of 108 poses within
+of 180 random poses (to 4e-10 rad) and on 98 of 108 poses within
 a milliradian of a singularity, where a pose may have more solutions than the eight rows
 hold and the two repairs, started from different points, may find different ones.
 """
@@ -92,8 +92,9 @@ def _one_joint_vector_and_pose(arm, q, X_target):
 
 
 def newton(arm, q, X_target, tol, max_iter=MAX_ITER, known=()):
-    r"""Newton steps from ``q`` until the error is below ``tol / 10`` (returns ``q, True``)
-    or, after eight steps, no longer halves in two steps, or ``max_iter`` steps.
+    r"""Newton steps from ``q``, at least three (from millimetres away, three steps of
+    quadratic convergence reach the rounding), until the error is below ``tol / 10``
+    (returns ``q, True``) or, after eight steps, no longer halves in two, or ``max_iter``.
 
     With ``known`` solutions :math:`q_k`, the steps are deflated: :math:`\delta / (1 -
     \nabla\log m\cdot\delta)`, :math:`m(q) = \prod_k (\lVert q - q_k\rVert^{-2} + 1)`, so
@@ -103,7 +104,8 @@ def newton(arm, q, X_target, tol, max_iter=MAX_ITER, known=()):
     for i in range(max_iter + 1):
         step, error = newton_step(arm, q, X_target)
         errors.append(error)
-        if not error > tol / 10 or i == max_iter or (i >= 8 and error >= 0.5 * errors[-3]):
+        done = not error > tol / 10 and (i >= 3 or len(known))   # (deflated: no minimum)
+        if done or i == max_iter or (i >= 8 and error >= 0.5 * errors[-3]):
             return q, bool(error <= tol / 10)
         if len(known):                          # grad log m = sum -2 d / (|d|^2 (1 + |d|^2))
             d = wrap_angle(q - known)
