@@ -40,6 +40,7 @@ from .ur_steps import NEAR_SINGULAR
 __all__ = ["calibrated_ur_reference", "newton_step"]
 
 MAX_ITER = 16                                  # Newton steps per branch at most
+RESTART_ITER = 10                              # ... and per start of the repair
 SAMPLES = np.random.default_rng(20260531).uniform(-np.pi, np.pi, (64, 6))   # the arms' gap
 FAMILY = -np.pi + 2 * np.pi / 6 * np.arange(6)   # theta_6 of the wrist family's members
 MOVES = (0.05, -0.05, 0.3, -0.3)               # deflation starts along the singular direction
@@ -252,8 +253,8 @@ def repair(arm, exact, X_06, X_0T, q, converged, started, tol):
         if not missing.any():
             return
         if len(known):                  # deflated steps away from the known solutions
-            q_start, _ = newton(arm, q_start, X_0T, tol, 10, known)
-        q_end, ok = newton(arm, q_start, X_0T, tol, 10)   # then plain ones
+            q_start, _ = newton(arm, q_start, X_0T, tol, RESTART_ITER, known)
+        q_end, ok = newton(arm, q_start, X_0T, tol, RESTART_ITER)   # then plain ones
         if ok and is_new(q_end, q[converged]):
             k = int(ur_branch(exact, q_end))
             k = k if missing[k] else int(np.flatnonzero(missing)[0])
