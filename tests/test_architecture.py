@@ -187,6 +187,29 @@ def test_every_private_twin_module_is_registered():
     assert twins == set(ENGINES)
 
 
+# The readable references: a fast public solver, the public module written to be read that
+# a chapter shows in its place, and the test that holds the two equal. A reference reaches
+# no speed twin, directly or through the fast solver's private helpers.
+REFERENCES = {
+    "dqlab.ik.ur_calibrated": ("dqlab.ik.ur_calibrated_reference",
+                               "test_ik_ur_calibrated_reference.py::"
+                               "test_the_reference_and_the_fast_solver_give_the_same_solutions"),
+}
+
+
+@pytest.mark.parametrize("fast", sorted(REFERENCES))
+def test_each_fast_solver_has_a_reference_held_equal_to_it(fast):
+    reference, test = REFERENCES[fast]
+    file, name = test.split("::")
+    source = (Path(__file__).parent / file).read_text(encoding="utf-8")
+    assert f"def {name}(" in source, f"{file} has no {name}"
+    assert fast in MODULES and not set(dqlab_edges(MODULES[reference])) & set(ENGINES)
+    tree = ast.parse(MODULES[reference].read_text())
+    private = [node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)
+               for alias in node.names if alias.name.startswith("_")]
+    assert private == [], f"{reference} imports private names from {private}"
+
+
 def float_switches(path):
     """The places of ``path`` that tell a Python float from an array: ``type(x) is float``
     (or ``is not``) and ``isinstance(x, np.ndarray)``, as (function, line) pairs."""

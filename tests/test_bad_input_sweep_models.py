@@ -4,15 +4,16 @@ calibration), the closed-form IK of calibrated arms and the closest solutions, r
 maker's table and their tools, the uArm's G-code and the URDF/MJCF exports.
 
 Every public callable of ``dqlab.dynamics``, ``dqlab.inertia``, ``dqlab.models``,
-``dqlab.desk_arm_firmware``, ``dqlab.sim.mjcf``, ``dqlab.sim.urdf``, ``dqlab.ur.calibration``
-and the solution pickers of ``dqlab.ik`` is here or in another sweep (the last test checks it), each
-argument with every bad value of its kind (``tests/_sweep.py``) and the kinds these modules
-meet: far targets (1e100 to 1e300 m), limits that are not limits, booleans and numbers as
-text, integers beyond 32 or 64 bits, text that XML or G-code cannot carry, robots with a
-massless or point-mass link, corrupt, huge, deeply nested or self-referencing files, and a
-failed write over an existing file. What a call returns is checked, not only its finiteness:
-IK rows marked valid reach their target, chosen joints lie within the limits, G-code holds
-only firmware commands, URDF parses and MJCF loads in MuJoCo.
+``dqlab.desk_arm_firmware``, ``dqlab.sim.mjcf``, ``dqlab.sim.urdf``, ``dqlab.ur.calibration``,
+the solution pickers of ``dqlab.ik`` and ``dqlab.ik.ur_calibrated_reference`` is here or in
+another sweep (the last test checks it), each argument with every bad value of its kind
+(``tests/_sweep.py``) and the kinds these modules meet: far targets (1e100 to 1e300 m),
+limits that are not limits, booleans and numbers as text, integers beyond 32 or 64 bits,
+text that XML or G-code cannot carry, robots with a massless or point-mass link, corrupt,
+huge, deeply nested or self-referencing files, and a failed write over an existing file.
+What a call returns is checked, not only its finiteness: IK rows marked valid reach their
+target, chosen joints lie within the limits, G-code holds only firmware commands, URDF
+parses and MJCF loads in MuJoCo.
 """
 
 import math
@@ -45,6 +46,7 @@ from test_ur_calibration import _conf_text, _deltas, dh_origins, ros_yaml
 import dqlab
 from dqlab import desk_arm_firmware, dynamics, ik, models
 from dqlab import pick_place as pp
+from dqlab.ik.ur_calibrated_reference import calibrated_ur_reference, newton_step
 from dqlab.inertia import LinkInertia
 from dqlab.robot import Link, Robot
 from dqlab.sim import mjcf, urdf
@@ -319,6 +321,13 @@ add(M, "ik.ur", ik.ur, robot=O(UR5E, names=ROBOT_NAMES, extra={"calibrated UR3":
 add(M, "ik.ur(calibrated)", ik.ur, robot=O(CALIBRATED), target=A(X_CALIBRATED, extra={
     "at 1e200 m": Fine(X_CALIBRATED + np.pad([[0, 0, 0, 1e200]], ((0, 3), (0, 0))))}),
     tol=S(1e-9, inf_ok=True), q_ref=A(Q6, none_ok=True), check=reaches_target())
+add(M, "calibrated_ur_reference", calibrated_ur_reference, robot=O(CALIBRATED, extra={
+    "an exact UR5e": Fine(UR5E), "the 6R": models.six_r()}), target=A(X_CALIBRATED, extra={
+        "at 1e200 m": Fine(X_CALIBRATED + np.pad([[0, 0, 0, 1e200]], ((0, 3), (0, 0))))}),
+    tol=S(1e-9, inf_ok=True), singular_tol=S(5e-7, inf_ok=True),
+    near_tol=S(0.01, inf_ok=True), check=reaches_target())
+add(M, "newton_step", lambda **kw: newton_step(**kw)[0], arm=O(CALIBRATED), q=A(Q6 + 1e-3),
+    X_target=A(X_CALIBRATED))
 add(M, "closest_solution", ik.closest_solution, result=O(RESULT), q_ref=A(Q6),
     limits=A(LIMITS, none_ok=True, extra={
         "(-inf, -inf)": [-np.inf, -np.inf], "(inf, inf)": [np.inf, np.inf],
@@ -564,7 +573,8 @@ def test_bad_arguments_are_refused_by_name_or_give_a_correct_result(group, reque
 #: The modules whose public callables are swept (data -- tables, constants, shapes -- is not
 #: callable and has nothing to sweep).
 MODULES = ("dqlab.dynamics", "dqlab.inertia", "dqlab.models", "dqlab.desk_arm_firmware",
-           "dqlab.sim.mjcf", "dqlab.sim.urdf", "dqlab.ur.calibration", "dqlab.ik")
+           "dqlab.sim.mjcf", "dqlab.sim.urdf", "dqlab.ur.calibration", "dqlab.ik",
+           "dqlab.ik.ur_calibrated_reference")
 #: Public callables that take no input to sweep: exception types.
 NOT_SWEPT = {"CalibrationError"}
 #: Callables without arguments: nothing to sweep, each called once here.
