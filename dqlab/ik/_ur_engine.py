@@ -62,6 +62,8 @@ __all__ = ["solve", "solve_single", "solve_batch", "Block", "CHUNK", "REASON_SHO
 CHUNK = 2048                     # poses per block: temporaries of 128 kB at most (L2-sized)
 _FLOAT64 = np.dtype(np.float64)
 _EPSILON = float(np.finfo(np.float64).eps)
+_TWO_PI = 2.0 * math.pi
+_ONE_TURN = 1.0 / _TWO_PI
 #: The flags of a result, in order: the calibrated solver's too, whose last one, a branch
 #: that did not converge, an exact arm's closed form never sets.
 _FLAGS = ("wrist_singular", "shoulder_singular", "elbow_singular", "near_singular",
@@ -210,7 +212,7 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
     a3_m = a3 / m
     atan2, sqrt, pi = math.atan2, math.sqrt, math.pi
     solutions, errors = [0.0] * 48, [0.0] * 8     # (8, 6) row by row; rows not valid stay 0
-    any_valid = wrist_singular = elbow_singular = near = False
+    any_valid = wrist_singular = elbow_singular = near = clipped = False
     for s in (0, 1):
         hpm = h if s == 0 else -h                  # shoulder_angles: sign h
         num_c = x5 * hpm - y5d4
@@ -248,8 +250,11 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
                 sin234, cos234 = -sin234, -cos234
             theta234 = half_sum + half_diff
             theta6 = half_sum - half_diff
-            if not -pi < theta6 <= pi:
-                theta6 = wrap_angle(theta6)
+            if not -pi < theta6 <= pi:             # wrap_angle, as on a float
+                theta6 -= _TWO_PI * round(theta6 * _ONE_TURN)
+                if not abs(theta6) < pi:
+                    theta6 = (theta6 - _TWO_PI if theta6 > pi
+                              else theta6 + _TWO_PI if theta6 <= -pi else theta6)
             u4, v4 = u5 - d5 * sin234, v5 + d5 * cos234        # wrist1_point
             rho2 = u4 * u4 + v4 * v4               # elbow_triangle
             rho = sqrt(rho2)
@@ -264,6 +269,7 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
             # the residual of the rows: the clipping of the elbow, if any (h2 >= 0: no
             # shoulder gap); margins >= 0 mean the wrist-1 point is within reach, gap 0
             if outer < 0.0 or inner < 0.0:
+                clipped = True
                 error = errors[4 * s + w] = errors[4 * s + 2 + w] = steps.reach_gap(
                     u4, v4, a2, a3)
                 if error > tol:                 # both rows stay zero, as finish() writes them
@@ -278,8 +284,11 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
                     theta3 = -angle3 if angle3 != pi else angle3  # never -pi
                     theta2 = atan2(vk1 + uk2 + 0.0, uk1 - vk2)
                 theta4 = theta234 - theta2 - theta3
-                if not -pi < theta4 <= pi:
-                    theta4 = wrap_angle(theta4)
+                if not -pi < theta4 <= pi:         # wrap_angle, as on a float
+                    theta4 -= _TWO_PI * round(theta4 * _ONE_TURN)
+                    if not abs(theta4) < pi:
+                        theta4 = (theta4 - _TWO_PI if theta4 > pi
+                                  else theta4 + _TWO_PI if theta4 <= -pi else theta4)
                 row = [theta1, theta2, theta3, theta4, theta5, theta6]
                 if offsets is not None:
                     row = [t - o for t, o in zip(row, offsets, strict=True)]
@@ -295,15 +304,19 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
             near = near or sin5 < near_tol
     if not any_valid:
         return None
-    numbers = np.fromiter(solutions + errors, float, 56)    # (8, 6) solutions, 8 errors
-    errors = numbers[48:]
+    if clipped:
+        numbers = np.fromiter(solutions + errors, float, 56)    # (8, 6) solutions, 8 errors
+        solutions, errors = numbers[:48].reshape(8, 6), numbers[48:]
+        valid = errors <= tol
+    else:                                       # nothing clipped: every row valid, exact
+        solutions = np.fromiter(solutions, float, 48).reshape(8, 6)
+        errors, valid = np.zeros(8), np.ones(8, dtype=bool)
     flags = {"wrist_singular": np.array(wrist_singular),
              "shoulder_singular": np.array(h < singular_tol * d4),
              "elbow_singular": np.array(elbow_singular),
              "near_singular": np.array(near or h < near_tol * d4),
              "unreachable": np.array(False), "not_converged": np.array(False)}
-    return IKResult(numbers[:48].reshape(8, 6), errors <= tol, errors, np.zeros(8), flags,
-                    np.array("", dtype=object))
+    return IKResult(solutions, valid, errors, np.zeros(8), flags, np.array("", dtype=object))
 
 
 # --------------------------------------------------------------------------------------
