@@ -276,25 +276,24 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
                     continue
             k1, k2 = a2 + a3_m * cos_num, a3_m * kk             # elbow_angles
             vk1, uk2, uk1, vk2 = v4 * k1, u4 * k2, u4 * k1, v4 * k2
-            for e in (0, 1):                       # row k = 4 s + 2 e + w
-                if e == 0:                         # elbow = 1
-                    theta3 = angle3
-                    theta2 = atan2(vk1 - uk2 + 0.0, uk1 + vk2)
-                else:                              # elbow = -1
-                    theta3 = -angle3 if angle3 != pi else angle3  # never -pi
-                    theta2 = atan2(vk1 + uk2 + 0.0, uk1 - vk2)
+            up = 24 * s + 6 * w                    # row k = 4 s + 2 e + w, elbow e = 0
+            for first, theta2, theta3 in (
+                    (up, atan2(vk1 - uk2 + 0.0, uk1 + vk2), angle3),           # elbow = 1
+                    (up + 12, atan2(vk1 + uk2 + 0.0, uk1 - vk2),                # elbow = -1
+                     -angle3 if angle3 != pi else angle3)):                    # (never -pi)
                 theta4 = theta234 - theta2 - theta3
                 if not -pi < theta4 <= pi:         # wrap_angle, as on a float
                     theta4 -= _TWO_PI * round(theta4 * _ONE_TURN)
                     if not abs(theta4) < pi:
                         theta4 = (theta4 - _TWO_PI if theta4 > pi
                                   else theta4 + _TWO_PI if theta4 <= -pi else theta4)
-                row = [theta1, theta2, theta3, theta4, theta5, theta6]
-                if offsets is not None:
-                    row = [t - o for t, o in zip(row, offsets, strict=True)]
-                    if not (min(row) > -pi and max(row) <= pi):   # else wrap them
-                        row = [wrap_angle(t) for t in row]
-                first = 24 * s + 12 * e + 6 * w
+                if offsets is None:
+                    solutions[first:first + 6] = theta1, theta2, theta3, theta4, theta5, theta6
+                    continue
+                row = [t - o for t, o in zip((theta1, theta2, theta3, theta4, theta5, theta6),
+                                             offsets, strict=True)]
+                if not (min(row) > -pi and max(row) <= pi):   # else wrap them
+                    row = [wrap_angle(t) for t in row]
                 solutions[first:first + 6] = row
             sin3 = kk / m
             elbow_singular = elbow_singular or sin3 < singular_tol
