@@ -243,11 +243,6 @@ def check_ur_options(tol, singular_tol, near_tol, pose_tol, residuals) -> tuple:
     ...
     ValueError: residuals must be 'fk' or 'equations', got 'eqs'
     """
-    if (type(tol) is float and type(singular_tol) is float and type(near_tol) is float
-            and type(pose_tol) is float and 0.0 <= tol and 0.0 <= singular_tol
-            and 0.0 <= near_tol and 0.0 <= pose_tol
-            and (residuals == "equations" or residuals == "fk") and type(residuals) is str):
-        return tol, singular_tol, near_tol, pose_tol       # floats >= 0 (inf too): as given
     checked = (check_tolerance(tol, "tol"), check_tolerance(singular_tol, "singular_tol"),
                check_tolerance(near_tol, "near_tol"), check_tolerance(pose_tol, "pose_tol"))
     if not (isinstance(residuals, str) and residuals in ("fk", "equations")):
