@@ -56,8 +56,9 @@ from .result import IKResult, finish
 from .targets import RIGID_TOL, parse_targets, pose_errors
 from .ur_steps import NEAR_SINGULAR
 
-__all__ = ["solve", "solve_single", "solve_batch", "Block", "CHUNK", "REASON_SHOULDER",
-           "REASON_OUTER", "REASON_INNER", "REASON_REACH", "REASON_TOL", "REASON_FAR"]
+__all__ = ["solve", "solve_single", "arm_constants", "solve_batch", "Block", "CHUNK",
+           "REASON_SHOULDER", "REASON_OUTER", "REASON_INNER", "REASON_REACH", "REASON_TOL",
+           "REASON_FAR"]
 
 CHUNK = 2048                     # poses per block: temporaries of 128 kB at most (L2-sized)
 _FLOAT64 = np.dtype(np.float64)
@@ -161,6 +162,23 @@ def _conjugate(Q):
     return rw, -rx, -ry, -rz, dw, -dx, -dy, -dz
 
 
+def arm_constants(prm):
+    """What :func:`solve_single` reads of an arm, from its parameters ``prm``
+    (:func:`~dqlab.ik.ur_closed_form.ur_parameters`), as the steps compute them: ``d1, a2,
+    a3, d4, d5, d6``, the joint offsets (None when all are 0), the distance of a wrist
+    centre from the shoulder beyond which it is far (:func:`~dqlab.ik.ur_steps.far_wrist`),
+    ``|a2 + a3|``, ``|a2 - a3|``, ``a2^2 + a3^2`` and ``a2 a3 < 0``
+    (:func:`~dqlab.ik.ur_steps.elbow_triangle`), ``m = 2 |a2 a3|`` and ``a3 / m``
+    (:func:`~dqlab.ik.ur_steps.elbow_angles`). The solver of an exact arm computes them once
+    per robot and hands them over in ``prm["one pose"]``."""
+    d1, a2, a3, d4, d5, d6 = prm["d1"], prm["a2"], prm["a3"], prm["d4"], prm["d5"], prm["d6"]
+    offsets = prm["offsets"] if any(prm["offsets"]) else None
+    far = math.sqrt(d4 * d4 + (abs(a2) + abs(a3) + abs(d5)) ** 2) / _EPSILON
+    m = 2.0 * abs(a2 * a3)
+    return (d1, a2, a3, d4, d5, d6, offsets, far, abs(a2 + a3), abs(a2 - a3),
+            a2 * a2 + a3 * a3, a2 * a3 < 0, m, a3 / m)
+
+
 def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=None,
                  near_tol=NEAR_SINGULAR):
     """One pose on Python floats: the loop of :func:`~dqlab.ik.ur_steps.candidate_solutions`
@@ -189,15 +207,13 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
                                   and math.isfinite(math.fsum(q_ref.tolist()))):
         theta6_reference(q_ref, ())                # checked; it matters only at the wrist
     q, p, z6 = flange
-    d1, a2, a3, d4, d5, d6 = prm["d1"], prm["a2"], prm["a3"], prm["d4"], prm["d5"], prm["d6"]
-    offsets = prm["offsets"] if any(prm["offsets"]) else None
+    (d1, a2, a3, d4, d5, d6, offsets, far, r_out, r_in, sum_sq, turned, m,
+     a3_m) = prm.get("one pose") or arm_constants(prm)
     family_tol = wrist_family_tol(tol, d6)
     rw, rx, ry, rz = steps.target_rotation(q)
     x5, y5, z5 = steps.wrist_center(p, z6, d6)
-    # far_wrist: out of reach by far (or not finite) goes to the batch path
-    if not abs(x5) + abs(y5) + abs(z5 - d1) <= math.sqrt(
-            d4 * d4 + (abs(a2) + abs(a3) + abs(d5)) ** 2) / _EPSILON:
-        return None
+    if not abs(x5) + abs(y5) + abs(z5 - d1) <= far:   # far_wrist (or not finite): the batch
+        return None                                  # path
     # shoulder_angles, the part shared by both shoulders
     h2 = x5 * x5 + y5 * y5 - d4 * d4
     if h2 < 0.0:                                   # inside the shoulder cylinder
@@ -205,11 +221,6 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
     h = math.sqrt(h2) if h2 > 0.0 else 0.0         # (clip0: never -0.0)
     y5d4, x5d4 = y5 * d4, x5 * d4
     v5 = z5 - d1                                   # arm_plane_wrist's v5
-    # elbow_triangle's and elbow_angles' constants
-    r_out, r_in, sum_sq = abs(a2 + a3), abs(a2 - a3), a2 * a2 + a3 * a3
-    turned = a2 * a3 < 0
-    m = 2.0 * abs(a2 * a3)
-    a3_m = a3 / m
     atan2, sqrt, pi = math.atan2, math.sqrt, math.pi
     solutions, errors = [0.0] * 48, [0.0] * 8     # (8, 6) row by row; rows not valid stay 0
     any_valid = wrist_singular = elbow_singular = near = clipped = False

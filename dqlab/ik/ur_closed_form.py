@@ -128,6 +128,7 @@ from ._ur_engine import (  # noqa: F401  (the reasons, re-exported)
     REASON_REACH,
     REASON_SHOULDER,
     REASON_TOL,
+    arm_constants,
     solve,
 )
 from .result import IKResult, check_ur_options
@@ -160,6 +161,7 @@ def _exact_parameters(robot):
     except (KeyError, TypeError):
         try:
             prm = ur_parameters(robot)
+            prm["one pose"] = arm_constants(prm)      # (this dict is not handed out)
         except ValueError as exc:
             prm = ValueError(f"{exc} (a calibrated UR is solved by dqlab.ik.ur)")
         try:
