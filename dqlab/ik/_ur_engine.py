@@ -70,6 +70,7 @@ _ONE_TURN = 1.0 / _TWO_PI
 _FLAGS = ("wrist_singular", "shoulder_singular", "elbow_singular", "near_singular",
           "unreachable", "not_converged")
 _EYE_BYTES = np.eye(4).tobytes()
+_EIGHT_TRUE = np.ones(8, dtype=bool)      # (copied: np.ones runs Python code)
 _DQ_IDENTITY = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
 _SHOULDER = np.array([[1.0], [-1.0]])     # h+- = +h, -h: axis 0 of (s, n)
 _SIGMA = np.array([[1.0], [-1.0]])        # wrist branch w = 0, 1, axis -2 of (s, w, n)
@@ -320,7 +321,7 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
         valid = errors <= tol
     else:                                       # nothing clipped: every row valid, exact
         solutions = np.fromiter(solutions, float, 48).reshape(8, 6)
-        errors, valid = np.zeros(8), np.ones(8, dtype=bool)
+        errors, valid = np.zeros(8), _EIGHT_TRUE.copy()
     flags = {"wrist_singular": np.array(wrist_singular),
              "shoulder_singular": np.array(h < singular_tol * d4),
              "elbow_singular": np.array(elbow_singular),
