@@ -75,6 +75,10 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     :func:`~dqlab.ik.ur_closed_form.exact_ur`, which gives the route, the order of the eight
     rows and the meaning of every option.
 
+    Its former name, ``dqlab.ik.ur_closed_form.ur``, still finds it for one version, with a
+    :class:`DeprecationWarning` (as do ``closest_ur_solution`` and ``ur_branch``, now here
+    too).
+
     Parameters
     ----------
     robot : dqlab.robot.Robot
