@@ -9,7 +9,7 @@ general form of ``dask.array.map_blocks``) and return lazy dask arrays -- hence 
 ``_dask`` in their names:
 
 - :func:`fk_dask` is :meth:`dqlab.robot.Robot.fk`, :func:`ik_ur_dask` is
-  :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>` and :func:`dexterity_dask` is
+  :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>` and :func:`dexterity_dask` is
   :func:`dqlab.reachability.pose_dexterity`, chunk by chunk, and their results are those
   of the numpy call on the whole batch, number for number;
 - :func:`reachability_map` runs :func:`dqlab.reachability.reachability_statistics` on
@@ -174,7 +174,7 @@ class IKArrays:
     Every field is a view of one array of records per chunk, so computing several of them
     together (``dask.compute(result.solutions, result.valid)``) solves each chunk once.
     ``reason`` (text) is not carried: solve the few poses of interest again with
-    :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>` to read it.
+    :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>` to read it.
 
     Attributes
     ----------
@@ -212,19 +212,19 @@ def _ik_block(robot, options, dtype, poses):
 def ik_ur_dask(robot: Robot, poses, **options) -> IKArrays:
     r"""Every closed-form UR solution of a dask array of poses, chunk by chunk.
 
-    :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>` on every chunk of ``poses``; the arrays of its
+    :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>` on every chunk of ``poses``; the arrays of its
     :class:`~dqlab.ik.result.IKResult` come back as dask arrays with the chunks of
     ``poses`` on the leading axes.
 
     Parameters
     ----------
     robot : dqlab.robot.Robot
-        A UR-family arm (see :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>`).
+        A UR-family arm (see :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>`).
     poses : dask.array.Array or array_like, shape (..., 4, 4) or (..., 8)
         Target poses as rigid transforms or unit dual quaternions, chunked along the leading
         axes (the trailing axes are brought into one chunk).
     **options
-        Passed to :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>` (``tol``, ``tool``,
+        Passed to :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>` (``tol``, ``tool``,
         ``singular_tol``, ``pose_tol``, ``residuals``, ``q_ref``); ``q_ref`` must be one
         joint vector, shape (6,).
 
@@ -298,7 +298,7 @@ def dexterity_dask(robot: Robot, poses, **options):
     poses : dask.array.Array or array_like, shape (..., 4, 4) or (..., 8)
         Chunked along the leading axes.
     **options
-        Passed to :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>` (``q_ref`` must have shape (6,)).
+        Passed to :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>` (``q_ref`` must have shape (6,)).
 
     Returns
     -------
@@ -362,7 +362,7 @@ def reachability_map(robot: Robot, positions: ArrayLike, orientations: ArrayLike
     For every tool position :math:`p_m` (``positions``, any grid) and orientation
     :math:`q_k` (``orientations``), the pose :math:`X_{mk} = (R(q_k), p_m)` is scored by
     :func:`~dqlab.reachability.pose_dexterity`: :math:`c_{mk}`, the number of valid
-    inverse-kinematics branches of :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>` (0 to 8),
+    inverse-kinematics branches of :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>` (0 to 8),
     and :math:`w_{mk}`, the largest manipulability :math:`\lvert\det J\rvert` over them
     (:math:`\mathrm m^3`, 0 when :math:`c_{mk} = 0`). Each position is then summarised over
     the :math:`K` orientations (:class:`~dqlab.reachability.ReachabilityMap`):
@@ -401,7 +401,7 @@ def reachability_map(robot: Robot, positions: ArrayLike, orientations: ArrayLike
     block : int
         Poses per numpy call inside a task.
     **options
-        Passed to :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>`.
+        Passed to :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>`.
 
     Returns
     -------

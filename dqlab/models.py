@@ -1424,7 +1424,7 @@ class ChainShape:
         return ""
 
 
-#: The UR family (UR3, UR5, UR10, e-series) for :func:`dqlab.ik.ur_closed_form.ur`.
+#: The UR family (UR3, UR5, UR10, e-series) for :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>`.
 UR_SHAPE = ChainShape(
     "ur()", "a UR-family arm like dqlab.models.ur3() (standard DH, six revolute joints, "
     "alpha = (pi/2, 0, 0, pi/2, -pi/2, 0), a1 = a4 = a5 = a6 = 0, d2 = d3 = 0, nonzero a2, "

@@ -2,7 +2,7 @@ r"""The reachability and dexterity map of a UR arm: how many inverse-kinematics 
 each tool pose, and how well conditioned the best of them is (chapter 11).
 
 - :func:`pose_dexterity` scores poses: :math:`c(X)`, the number of valid branches of
-  :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>`, and :math:`w(X)`, the best
+  :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>`, and :math:`w(X)`, the best
   manipulability :math:`\lvert\det J\rvert` among them;
 - :func:`super_fibonacci_quaternions` spreads orientations evenly over the rotations;
 - :func:`reachability_statistics` scores a grid of positions with a set of orientations and
@@ -67,16 +67,16 @@ def pose_dexterity(robot: Robot, poses: ArrayLike, **options
     measures the best way the arm can hold the pose.
 
     Branches that coincide at a singularity are counted once per row, as ``IKResult.count``
-    does (see :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>`).
+    does (see :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>`).
 
     Parameters
     ----------
     robot : dqlab.robot.Robot
         A UR-family arm.
     poses : array_like, shape (..., 4, 4) or (..., 8)
-        Target poses (see :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>`).
+        Target poses (see :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>`).
     **options
-        Passed to :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>`.
+        Passed to :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>`.
 
     Returns
     -------
@@ -123,7 +123,7 @@ def _probe_pose(robot, kind):
 
 def check_ik_options(robot, options, kind=(4, 4)):
     """Solve one pose of ``robot`` with the options of :func:`dqlab.ik.ur
-    <dqlab.ik.ur_closed_form.ur>`, to refuse a wrong robot or option before a long
+    <dqlab.ik.ur_solver.ur>`, to refuse a wrong robot or option before a long
     computation (raising what the solver raises); ``q_ref`` must be one joint vector, the
     same for every pose. ``kind`` is the form of the poses, ``(4, 4)`` or ``(8,)``.
 
@@ -430,7 +430,7 @@ def reachability_statistics(robot: Robot, positions: ArrayLike, orientations: Ar
     with orientation :math:`q_k` -- by :func:`pose_dexterity` and reduces over the
     orientations: see :class:`ReachabilityMap`. The poses are built as 4x4 transforms with
     :func:`dqlab.quaternion.matrix_from_quaternion`, ``block`` of them per call of
-    :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>`.
+    :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>`.
 
     Parameters
     ----------
@@ -444,7 +444,7 @@ def reachability_statistics(robot: Robot, positions: ArrayLike, orientations: Ar
     block : int
         Poses per call (memory: about 3 kB each).
     **options
-        Passed to :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>`.
+        Passed to :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>`.
 
     Returns
     -------

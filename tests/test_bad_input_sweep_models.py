@@ -318,6 +318,9 @@ add(M, "ik.ur", ik.ur, robot=O(UR5E, names=ROBOT_NAMES, extra={"calibrated UR3":
     target=_IK_TARGET, tol=S(1e-9, inf_ok=True), tool=A(TOOL, none_ok=True),
     q_ref=A(Q6, none_ok=True), singular_tol=S(5e-7, inf_ok=True), pose_tol=S(1e-9, inf_ok=True),
     residuals=O("equations"), check=reaches_target())
+add(M, "ik.ur_closed_form.exact_ur", ik.ur_closed_form.exact_ur, robot=O(UR5E, names=ROBOT_NAMES,
+    extra={"calibrated UR3": CALIBRATED}), target=_IK_TARGET, tol=S(1e-9, inf_ok=True),
+    q_ref=A(Q6, none_ok=True), check=reaches_target())
 add(M, "ik.ur(calibrated)", ik.ur, robot=O(CALIBRATED), target=A(X_CALIBRATED, extra={
     "at 1e200 m": Fine(X_CALIBRATED + np.pad([[0, 0, 0, 1e200]], ((0, 3), (0, 0))))}),
     tol=S(1e-9, inf_ok=True), q_ref=A(Q6, none_ok=True), check=reaches_target())

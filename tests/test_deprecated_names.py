@@ -17,7 +17,11 @@ ROOT = Path(__file__).resolve().parents[1]
 
 #: (module, former name, new dotted name) of renamed functions.
 RENAMED = [("dqlab.testing", "check_function", "dqlab.exercises.check_function"),
-           ("dqlab.identify", "calibrate", "dqlab.identify.identify_dh_parameters")]
+           ("dqlab.identify", "calibrate", "dqlab.identify.identify_dh_parameters"),
+           ("dqlab.ik.ur_closed_form", "ur", "dqlab.ik.ur_solver.ur"),
+           ("dqlab.ik.ur_closed_form", "closest_ur_solution",
+            "dqlab.ik.ur_solver.closest_ur_solution"),
+           ("dqlab.ik.ur_closed_form", "ur_branch", "dqlab.ik.ur_solver.ur_branch")]
 #: Renamed modules: former name -> (new module, {former attribute: new attribute}).
 MODULES = {
     "dqlab.scale": (dqlab.dask_arrays, {n: n for n in dqlab.dask_arrays.__all__}),
@@ -28,7 +32,8 @@ MODULES = {
 #: The former names as they would be written in code or prose.
 FORMER = re.compile(r"dqlab\.scale\b|from dqlab import [^\n]*\bscale\b|\blab_arm\b|"
                     r"uarm_swift_pro|UARM_SWIFT_PRO|\bcalibrate\(|testing import check_function|"
-                    r"testing\.check_function")
+                    r"testing\.check_function|"
+                    r"ur_closed_form(\.| import [^\n]*\b)(ur|closest_ur_solution|ur_branch)\b")
 
 
 def _new(dotted):

@@ -1093,3 +1093,28 @@ def test_no_missed_solution_near_the_wrist_and_elbow_singularities_together(robo
               & (np.abs(wrapped(fixed - q_fixed[:, None])) < 1e-6))
     assert (exact | family).any(-1).all()
     assert_reproduces(robot, result, T, tol=1e-9)
+
+
+def test_ur_calls_the_solver_of_the_arms_kind():
+    """dqlab.ik.ur (dqlab.ik.ur_solver) solves an exact UR by the closed form exact_ur, the
+    same result to the last bit, and a calibrated UR by calibrated_ur; exact_ur refuses a
+    calibrated arm (each time: the refusal is remembered) and says where it is solved."""
+    from dqlab.identify import dh_parameters, robot_from_dh_parameters
+    from dqlab.ik.ur_calibrated import calibrated_ur
+
+    robot = ur3()
+    q = np.array([0.3, -1.2, 1.1, -0.4, 0.9, 0.2])
+    T = robot.fk(np.stack([q, -q]))
+    for target in (T[0], T):
+        a, b = ur(robot, target), urmod.exact_ur(robot, target)
+        for name in ("solutions", "valid", "position_error", "rotation_error", "reason"):
+            np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+        assert a.row_names == b.row_names == urmod.ROW_NAMES
+    calibrated = robot_from_dh_parameters(robot, dh_parameters(robot) + 1e-3)
+    X = calibrated.fk(q)
+    for _ in range(2):
+        with pytest.raises(ValueError, match=r"a calibrated UR is solved by dqlab\.ik\.ur"):
+            urmod.exact_ur(calibrated, X)
+    a, b = ur(calibrated, X), calibrated_ur(calibrated, X)
+    np.testing.assert_array_equal(a.solutions, b.solutions)
+    assert a.row_names == urmod.ROW_NAMES and recovery_error(a, q) < 1e-9

@@ -3,9 +3,11 @@ r"""Inverse kinematics: closed-form solvers and a numerical solver, one contract
 Every solver is called ``solver(robot, target, *, tol, ...)`` and returns an
 :class:`~dqlab.ik.result.IKResult` (the numerical solver also takes its start ``q0``):
 
-- ``dqlab.ik.ur`` (:func:`dqlab.ik.ur_closed_form.ur`) -- every closed-form solution of
-  a UR-family arm, by dual quaternions; its steps, and their assembly into the eight rows
-  as chapter 8 derives them, are :mod:`dqlab.ik.ur_steps`;
+- ``dqlab.ik.ur`` (:func:`dqlab.ik.ur_solver.ur`) -- every solution of a UR-family arm:
+  of the exact UR shape in closed form, by dual quaternions
+  (:func:`dqlab.ik.ur_closed_form.exact_ur`; its steps, and their assembly into the eight
+  rows as chapter 8 derives them, are :mod:`dqlab.ik.ur_steps`), of a calibrated UR from
+  the closed form of its nearest exact arm (:func:`dqlab.ik.ur_calibrated.calibrated_ur`);
 - ``dqlab.ik.desk_arm`` (:func:`dqlab.ik.desk_arm_closed_form.desk_arm`) -- the 3-DOF
   desktop arm in closed form (the robot itself is :func:`dqlab.models.desk_arm`);
 - ``dqlab.ik.scara`` (:func:`dqlab.ik.scara_closed_form.scara`) -- the SCARA RSM-5 in
@@ -39,14 +41,8 @@ from .result import IKResult
 from .scara_closed_form import scara
 from .solutions import closest_solution, equivalent_solutions
 from .targets import pose_errors
-from .ur_closed_form import (
-    SOLUTION_ORDER,
-    closest_ur_solution,
-    distinct_solutions,
-    ur,
-    ur_branch,
-    ur_parameters,
-)
+from .ur_closed_form import SOLUTION_ORDER, distinct_solutions, ur_parameters
+from .ur_solver import closest_ur_solution, ur, ur_branch
 
 __all__ = [
     "IKResult", "SOLUTION_ORDER", "closest_solution", "closest_ur_solution", "desk_arm",

@@ -56,16 +56,21 @@ from .result import IKResult, finish
 from .targets import RIGID_TOL, parse_targets, pose_errors
 from .ur_steps import NEAR_SINGULAR
 
-__all__ = ["solve", "solve_single", "solve_batch", "Block", "CHUNK", "REASON_SHOULDER",
-           "REASON_OUTER", "REASON_INNER", "REASON_REACH", "REASON_TOL", "REASON_FAR"]
+__all__ = ["solve", "solve_single", "arm_constants", "solve_batch", "Block", "CHUNK",
+           "REASON_SHOULDER", "REASON_OUTER", "REASON_INNER", "REASON_REACH", "REASON_TOL",
+           "REASON_FAR"]
 
 CHUNK = 2048                     # poses per block: temporaries of 128 kB at most (L2-sized)
 _FLOAT64 = np.dtype(np.float64)
+_EPSILON = float(np.finfo(np.float64).eps)
+_TWO_PI = 2.0 * math.pi
+_ONE_TURN = 1.0 / _TWO_PI
 #: The flags of a result, in order: the calibrated solver's too, whose last one, a branch
 #: that did not converge, an exact arm's closed form never sets.
 _FLAGS = ("wrist_singular", "shoulder_singular", "elbow_singular", "near_singular",
           "unreachable", "not_converged")
 _EYE_BYTES = np.eye(4).tobytes()
+_EIGHT_TRUE = np.ones(8, dtype=bool)      # (copied: np.ones runs Python code)
 _DQ_IDENTITY = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
 _SHOULDER = np.array([[1.0], [-1.0]])     # h+- = +h, -h: axis 0 of (s, n)
 _SIGMA = np.array([[1.0], [-1.0]])        # wrist branch w = 0, 1, axis -2 of (s, w, n)
@@ -158,6 +163,23 @@ def _conjugate(Q):
     return rw, -rx, -ry, -rz, dw, -dx, -dy, -dz
 
 
+def arm_constants(prm):
+    """What :func:`solve_single` reads of an arm, from its parameters ``prm``
+    (:func:`~dqlab.ik.ur_closed_form.ur_parameters`), as the steps compute them: ``d1, a2,
+    a3, d4, d5, d6``, the joint offsets (None when all are 0), the distance of a wrist
+    centre from the shoulder beyond which it is far (:func:`~dqlab.ik.ur_steps.far_wrist`),
+    ``|a2 + a3|``, ``|a2 - a3|``, ``a2^2 + a3^2`` and ``a2 a3 < 0``
+    (:func:`~dqlab.ik.ur_steps.elbow_triangle`), ``m = 2 |a2 a3|`` and ``a3 / m``
+    (:func:`~dqlab.ik.ur_steps.elbow_angles`). The solver of an exact arm computes them once
+    per robot and hands them over in ``prm["one pose"]``."""
+    d1, a2, a3, d4, d5, d6 = prm["d1"], prm["a2"], prm["a3"], prm["d4"], prm["d5"], prm["d6"]
+    offsets = prm["offsets"] if any(prm["offsets"]) else None
+    far = math.sqrt(d4 * d4 + (abs(a2) + abs(a3) + abs(d5)) ** 2) / _EPSILON
+    m = 2.0 * abs(a2 * a3)
+    return (d1, a2, a3, d4, d5, d6, offsets, far, abs(a2 + a3), abs(a2 - a3),
+            a2 * a2 + a3 * a3, a2 * a3 < 0, m, a3 / m)
+
+
 def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=None,
                  near_tol=NEAR_SINGULAR):
     """One pose on Python floats: the loop of :func:`~dqlab.ik.ur_steps.candidate_solutions`
@@ -169,6 +191,14 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
     family, :func:`wrist_family_tol`), a wrist centre inside the shoulder cylinder or no
     valid row (the reasons), or a target that fails its check (the error message). A base
     and a tool (``tool``, else the robot's) are taken off the target first, on floats.
+
+    Each step of :mod:`dqlab.ik.ur_steps` is written out in place (its name beside it), on
+    ``math`` and plain arithmetic: a function call per step and branch would cost as much as
+    the arithmetic itself. The values that do not depend on the branch (the shoulder's
+    ``h``, the arm's lengths combined) are computed once, and a step with a sign argument
+    ``sigma`` or ``elbow`` of 1 or -1 is written with the sign applied (exact: a product by
+    -1 is a negation, and ``a - (-b)`` is ``a + b``), so that every row is, bit for bit,
+    the steps' row (``tests/test_ik_ur.py::test_engine_equals_the_readable_path``).
     """
     flange = _single_flange(robot, target, pose_tol, tool)
     if flange is None:
@@ -178,70 +208,126 @@ def solve_single(robot, prm, target, tol, singular_tol, pose_tol, q_ref, tool=No
                                   and math.isfinite(math.fsum(q_ref.tolist()))):
         theta6_reference(q_ref, ())                # checked; it matters only at the wrist
     q, p, z6 = flange
-    d1, a2, a3, d4, d5 = prm["d1"], prm["a2"], prm["a3"], prm["d4"], prm["d5"]
-    family_tol = wrist_family_tol(tol, prm["d6"])
-    offsets = prm["offsets"] if any(prm["offsets"]) else None
-    r_D = steps.target_rotation(q)
-    p5 = steps.wrist_center(p, z6, prm["d6"])
-    if steps.far_wrist(p5, d1, a2, a3, d4, d5):      # out of reach by far: the batch path
+    (d1, a2, a3, d4, d5, d6, offsets, far, r_out, r_in, sum_sq, turned, m,
+     a3_m) = prm.get("one pose") or arm_constants(prm)
+    family_tol = wrist_family_tol(tol, d6)
+    rw, rx, ry, rz = steps.target_rotation(q)
+    x5, y5, z5 = steps.wrist_center(p, z6, d6)
+    if not abs(x5) + abs(y5) + abs(z5 - d1) <= far:   # far_wrist (or not finite): the batch
+        return None                                  # path
+    # shoulder_angles, the part shared by both shoulders
+    h2 = x5 * x5 + y5 * y5 - d4 * d4
+    if h2 < 0.0:                                   # inside the shoulder cylinder
         return None
+    h = math.sqrt(h2) if h2 > 0.0 else 0.0         # (clip0: never -0.0)
+    y5d4, x5d4 = y5 * d4, x5 * d4
+    v5 = z5 - d1                                   # arm_plane_wrist's v5
+    atan2, sqrt, pi = math.atan2, math.sqrt, math.pi
     solutions, errors = [0.0] * 48, [0.0] * 8     # (8, 6) row by row; rows not valid stay 0
-    any_valid = wrist_singular = elbow_singular = near = False
-    for s, shoulder in enumerate((1.0, -1.0)):
-        theta1, c1, s1, h, h2 = steps.shoulder_angles(p5[0], p5[1], d4, shoulder)
-        if h2 < 0.0:
-            return None
-        L = steps.relative_rotation_coefficients(r_D, steps.half_angle_cos_sin(c1, s1))
-        u5, v5 = steps.arm_plane_wrist(p5, c1, s1, d1)
-        theta5, half_sum, half_diff, c5bar, s5bar = steps.wrist_angles(L, 1.0)
+    any_valid = wrist_singular = elbow_singular = near = clipped = False
+    for s in (0, 1):
+        hpm = h if s == 0 else -h                  # shoulder_angles: sign h
+        num_c = x5 * hpm - y5d4
+        num_s = y5 * hpm + x5d4
+        theta1 = atan2(num_s + 0.0, num_c)
+        r = sqrt(num_c * num_c + num_s * num_s)
+        c1, s1 = (num_c / r, num_s / r) if r > 0.0 else (1.0, 0.0)
+        big = sqrt(0.5 + 0.5 * abs(c1))            # half_angle_cos_sin
+        other = 0.5 * s1 / big
+        if c1 >= 0.0:
+            hc, hs = big, other
+        else:
+            hc, hs = abs(other), (-big if s1 < 0.0 else big)
+        Lw, Lx = hc * rw + hs * rz, hc * rx + hs * ry          # relative_rotation_
+        Ly, Lz = hc * ry - hs * rx, hc * rz - hs * rw          # coefficients
+        u5 = c1 * x5 + s1 * y5                     # arm_plane_wrist
+        c5bar = sqrt(Lw * Lw + Ly * Ly)            # wrist_angles (sigma = 1)
+        s5bar = sqrt(Lx * Lx + Lz * Lz)
         sin5 = 2.0 * s5bar * c5bar
         if sin5 < steps.NEAR_WRIST or min(s5bar, c5bar) <= family_tol:
             return None
-        sin234, cos234 = steps.theta234_sine_cosine(L, 1.0, c5bar, s5bar)
-        for w, sigma in enumerate((1.0, -1.0)):
-            if w == 1:
+        theta5 = 2.0 * atan2(s5bar, c5bar)         # in [0, pi]: never -pi
+        half_sum = atan2(-Ly, Lw)
+        k = 1.0 / (c5bar * s5bar)                  # theta234_sine_cosine (sigma = 1)
+        sin234, cos234 = k * (Lw * Lx + Ly * Lz), k * (Lx * Ly - Lw * Lz)
+        for w in (0, 1):
+            if w == 0:
+                half_diff = atan2(Lx, -Lz)         # half_difference, sigma = 1
+            else:
                 # the flipped wrist, sigma = -1, from the sigma = +1 values: wrist_angles'
                 # theta5 and theta234_sine_cosine's k = sigma / (c5bar s5bar) change sign
                 # exactly; the half difference is computed anew
-                theta5 = -theta5 if theta5 != math.pi else theta5      # never -pi
-                half_diff = steps.half_difference(L, sigma)
+                theta5 = -theta5 if theta5 != pi else theta5      # never -pi
+                half_diff = atan2(-Lx, Lz)         # half_difference, sigma = -1
                 sin234, cos234 = -sin234, -cos234
             theta234 = half_sum + half_diff
-            theta6 = wrap_angle(half_sum - half_diff)
-            u4, v4 = steps.wrist1_point(u5, v5, sin234, cos234, d5)
-            triangle = steps.elbow_triangle(u4, v4, a2, a3)
+            theta6 = half_sum - half_diff
+            if not -pi < theta6 <= pi:             # wrap_angle, as on a float
+                theta6 -= _TWO_PI * round(theta6 * _ONE_TURN)
+                if not abs(theta6) < pi:
+                    theta6 = (theta6 - _TWO_PI if theta6 > pi
+                              else theta6 + _TWO_PI if theta6 <= -pi else theta6)
+            u4, v4 = u5 - d5 * sin234, v5 + d5 * cos234        # wrist1_point
+            rho2 = u4 * u4 + v4 * v4               # elbow_triangle
+            rho = sqrt(rho2)
+            outer = (r_out - rho) * (r_out + rho)
+            inner = (rho - r_in) * (rho + r_in)
+            kk = outer * inner
+            kk = sqrt(kk) if kk > 0.0 else 0.0
+            cos_num = rho2 - sum_sq
+            if turned:
+                cos_num = -cos_num
+            angle3 = atan2(kk, cos_num)            # in [0, pi]
             # the residual of the rows: the clipping of the elbow, if any (h2 >= 0: no
             # shoulder gap); margins >= 0 mean the wrist-1 point is within reach, gap 0
-            if triangle[2] < 0.0 or triangle[3] < 0.0:
+            if outer < 0.0 or inner < 0.0:
+                clipped = True
                 error = errors[4 * s + w] = errors[4 * s + 2 + w] = steps.reach_gap(
                     u4, v4, a2, a3)
                 if error > tol:                 # both rows stay zero, as finish() writes them
                     continue
-            for k, elbow in ((4 * s + w, 1.0), (4 * s + 2 + w, -1.0)):   # k = 4 s + 2 e + w
-                theta2, theta3, _, _, sin3 = steps.elbow_angles(u4, v4, a2, a3, elbow, triangle)
-                row = [theta1, theta2, theta3, wrap_angle(theta234 - theta2 - theta3),
-                       theta5, theta6]
-                if offsets is not None:
-                    row = [t - o for t, o in zip(row, offsets, strict=True)]
-                    if not (min(row) > -math.pi and max(row) <= math.pi):   # else wrap them
-                        row = [wrap_angle(t) for t in row]
-                solutions[6 * k:6 * k + 6] = row
-                elbow_singular = elbow_singular or sin3 < singular_tol
-                near = near or sin3 < near_tol
+            k1, k2 = a2 + a3_m * cos_num, a3_m * kk             # elbow_angles
+            vk1, uk2, uk1, vk2 = v4 * k1, u4 * k2, u4 * k1, v4 * k2
+            up = 24 * s + 6 * w                    # row k = 4 s + 2 e + w, elbow e = 0
+            for first, theta2, theta3 in (
+                    (up, atan2(vk1 - uk2 + 0.0, uk1 + vk2), angle3),           # elbow = 1
+                    (up + 12, atan2(vk1 + uk2 + 0.0, uk1 - vk2),                # elbow = -1
+                     -angle3 if angle3 != pi else angle3)):                    # (never -pi)
+                theta4 = theta234 - theta2 - theta3
+                if not -pi < theta4 <= pi:         # wrap_angle, as on a float
+                    theta4 -= _TWO_PI * round(theta4 * _ONE_TURN)
+                    if not abs(theta4) < pi:
+                        theta4 = (theta4 - _TWO_PI if theta4 > pi
+                                  else theta4 + _TWO_PI if theta4 <= -pi else theta4)
+                if offsets is None:
+                    solutions[first:first + 6] = theta1, theta2, theta3, theta4, theta5, theta6
+                    continue
+                row = [t - o for t, o in zip((theta1, theta2, theta3, theta4, theta5, theta6),
+                                             offsets, strict=True)]
+                if not (min(row) > -pi and max(row) <= pi):   # else wrap them
+                    row = [wrap_angle(t) for t in row]
+                solutions[first:first + 6] = row
+            sin3 = kk / m
+            elbow_singular = elbow_singular or sin3 < singular_tol
+            near = near or sin3 < near_tol
             any_valid = True
             wrist_singular = wrist_singular or sin5 < singular_tol
             near = near or sin5 < near_tol
     if not any_valid:
         return None
-    numbers = np.fromiter(solutions + errors, float, 56)    # (8, 6) solutions, 8 errors
-    errors = numbers[48:]
+    if clipped:
+        numbers = np.fromiter(solutions + errors, float, 56)    # (8, 6) solutions, 8 errors
+        solutions, errors = numbers[:48].reshape(8, 6), numbers[48:]
+        valid = errors <= tol
+    else:                                       # nothing clipped: every row valid, exact
+        solutions = np.fromiter(solutions, float, 48).reshape(8, 6)
+        errors, valid = np.zeros(8), _EIGHT_TRUE.copy()
     flags = {"wrist_singular": np.array(wrist_singular),
              "shoulder_singular": np.array(h < singular_tol * d4),
              "elbow_singular": np.array(elbow_singular),
              "near_singular": np.array(near or h < near_tol * d4),
              "unreachable": np.array(False), "not_converged": np.array(False)}
-    return IKResult(numbers[:48].reshape(8, 6), errors <= tol, errors, np.zeros(8), flags,
-                    np.array("", dtype=object))
+    return IKResult(solutions, valid, errors, np.zeros(8), flags, np.array("", dtype=object))
 
 
 # --------------------------------------------------------------------------------------

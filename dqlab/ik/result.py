@@ -30,7 +30,7 @@ class IKResult:
         What an iterative solver records per iteration when asked (see
         :func:`dqlab.ik.damped_least_squares.numerical`); None otherwise.
     row_names : tuple of str, optional
-        What each of the ``k`` rows stands for (for :func:`dqlab.ik.ur_closed_form.ur`, the
+        What each of the ``k`` rows stands for (for :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>`, the
         branches of :data:`~dqlab.ik.ur_closed_form.SOLUTION_ORDER`, such as
         ``"left up noflip"``); printed by ``repr``.
 

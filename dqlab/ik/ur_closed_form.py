@@ -1,10 +1,11 @@
 r"""Closed-form inverse kinematics of the Universal Robots arms, by dual quaternions.
 
-:func:`ur` returns every solution of a UR-family arm (UR3, UR5, UR10 and the e-series share
-the structure) for one pose or a batch, following the route of the thesis (section 4.3):
-write the pose as the product of the joint dual quaternions :math:`Q_1 \cdots Q_6` and
-equate the products :math:`M_i = Q_i M_{i+1}` with :math:`N_{i+1} = Q_i^{-1} N_i` term by
-term. The route has four steps, each a small function of :mod:`dqlab.ik.ur_steps`:
+:func:`exact_ur` returns every solution of an exact UR-family arm (UR3, UR5, UR10 and the
+e-series share the structure) for one pose or a batch, following the route of the thesis
+(section 4.3): write the pose as the product of the joint dual quaternions
+:math:`Q_1 \cdots Q_6` and equate the products :math:`M_i = Q_i M_{i+1}` with
+:math:`N_{i+1} = Q_i^{-1} N_i` term by term. The route has four steps, each a small
+function of :mod:`dqlab.ik.ur_steps`:
 
 1. :math:`\theta_1` from the translation of :math:`M_5 = N_5`: the wrist centre
    :math:`p_5 = p_6 - d_6 z_6` satisfies :math:`\sin\theta_1 x_5 - \cos\theta_1 y_5 = d_4`,
@@ -20,14 +21,13 @@ term. The route has four steps, each a small function of :mod:`dqlab.ik.ur_steps
    (:func:`~dqlab.ik.ur_steps.elbow_angles`).
 
 :func:`~dqlab.ik.ur_steps.candidate_solutions` assembles the steps into the eight rows in the
-order of the book's chapter 8, readably; :func:`ur` returns the same rows, bit for bit, from
-the private engine ``dqlab.ik._ur_engine`` (one pose on Python floats, a batch with all
-branches as arrays, in blocks), which also checks every row, sets the flags and, at a wrist
-singularity, chooses a member of the family. :func:`ur` itself tells the
-robot's kind once: the exact UR shape (:func:`ur_parameters`; then it checks its arguments
-and calls the engine), or a calibrated UR (handed to
-:func:`dqlab.ik.ur_calibrated.calibrated_ur`, which checks them and starts from the
-engine's solutions of the nearest exact UR).
+order of the book's chapter 8, readably; :func:`exact_ur` returns the same rows, bit for
+bit, from the private engine ``dqlab.ik._ur_engine`` (one pose on Python floats, a batch
+with all branches as arrays, in blocks), which also checks every row, sets the flags and, at
+a wrist singularity, chooses a member of the family. The arm must have the exact UR shape
+(:func:`ur_parameters`); ``dqlab.ik.ur`` (:func:`dqlab.ik.ur_solver.ur`) solves any UR,
+exact (here) or calibrated (:func:`dqlab.ik.ur_calibrated.calibrated_ur`, which starts from
+the engine's solutions of the nearest exact UR).
 
 A candidate is valid when it reproduces the pose to ``tol`` (1e-9 m and 1e-9 rad by
 default; the thesis filters by forward kinematics with ``np.allclose(..., atol=1e-3)``). Its
@@ -116,7 +116,8 @@ import weakref
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._checks import check_instance, check_scalar, real_array
+from .._checks import check_instance, check_scalar
+from .._deprecated import renamed_attributes
 from ..models import UR_SHAPE
 from ..robot import Robot
 from ..rotations import wrap_angle
@@ -127,54 +128,49 @@ from ._ur_engine import (  # noqa: F401  (the reasons, re-exported)
     REASON_REACH,
     REASON_SHOULDER,
     REASON_TOL,
+    arm_constants,
     solve,
 )
 from .result import IKResult, check_ur_options
-from .solutions import check_joint_limits, check_reference, closest_solution
-from .ur_calibrated import calibrated_ur, nominal_ur
 from .ur_steps import NEAR_SINGULAR
 
-__all__ = ["ur", "ur_parameters", "distinct_solutions", "closest_ur_solution", "ur_branch",
-           "SOLUTION_ORDER", "ROW_NAMES"]
+__all__ = ["exact_ur", "ur_parameters", "distinct_solutions", "SOLUTION_ORDER", "ROW_NAMES"]
+
+#: Former names of this module, which solve any UR (exact or calibrated): now in
+#: :mod:`dqlab.ik.ur_solver`.
+__getattr__ = renamed_attributes(__name__, {
+    name: f"dqlab.ik.ur_solver.{name}" for name in ("ur", "closest_ur_solution", "ur_branch")})
 
 #: ``(shoulder, elbow, wrist)`` labels of the eight rows, in order ``k = 4 s + 2 e + w``.
 SOLUTION_ORDER = tuple(
     (s, e, w) for s in ("left", "right") for e in ("up", "down") for w in ("noflip", "flip"))
 
 #: The names of the eight rows, ``"shoulder elbow wrist"`` (``"left up noflip"``, ...), as an
-#: :class:`~dqlab.ik.result.IKResult` of :func:`ur` prints them.
+#: :class:`~dqlab.ik.result.IKResult` of :func:`exact_ur` prints them.
 ROW_NAMES = tuple(" ".join(branch) for branch in SOLUTION_ORDER)
 
-_EXACT, _CALIBRATED = "exact UR", "calibrated UR"
-_KINDS = weakref.WeakKeyDictionary()      # robot -> its kind (links are immutable)
+_PARAMETERS = weakref.WeakKeyDictionary()  # robot -> ur_parameters or its error (links are
+#                                            immutable)
 
 
-def _classify(robot):
-    """The kind of a robot, decided once per robot: ``(_EXACT, ur_parameters(robot))`` for
-    the exact UR shape, ``(_CALIBRATED, nominal_ur(robot))`` for a calibrated UR; for neither
-    a ValueError naming both reasons (remembered too, and raised again)."""
+def _exact_parameters(robot):
+    """:func:`ur_parameters` of a robot, computed once per robot (an error too: remembered,
+    and raised again, with a pointer to the solver of calibrated arms)."""
     try:
-        kind = _KINDS[robot]
+        prm = _PARAMETERS[robot]
     except (KeyError, TypeError):
-        kind = _kind(robot)
         try:
-            _KINDS[robot] = kind
+            prm = ur_parameters(robot)
+            prm["one pose"] = arm_constants(prm)      # (this dict is not handed out)
+        except ValueError as exc:
+            prm = ValueError(f"{exc} (a calibrated UR is solved by dqlab.ik.ur)")
+        try:
+            _PARAMETERS[robot] = prm
         except TypeError:                       # not weakly referenceable: not remembered
             pass
-    if isinstance(kind, ValueError):
-        raise ValueError(str(kind))
-    return kind
-
-
-def _kind(robot):
-    """:func:`_classify`'s answer, computed (a ValueError is returned, not raised)."""
-    try:
-        return _EXACT, ur_parameters(robot)
-    except ValueError as exc:
-        try:
-            return _CALIBRATED, nominal_ur(robot)
-        except ValueError as why:
-            return ValueError(f"{exc}; nor is it a calibrated UR: {why}")
+    if isinstance(prm, ValueError):
+        raise ValueError(str(prm))
+    return prm
 
 
 def ur_parameters(robot: Robot, *, atol: float = 1e-12) -> dict:
@@ -213,10 +209,11 @@ def ur_parameters(robot: Robot, *, atol: float = 1e-12) -> dict:
             "offsets": [lk.theta_offset for lk in links]}
 
 
-def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | None = None,
-       q_ref: ArrayLike | None = None, singular_tol: float = 5e-7, pose_tol: float = 1e-9,
-       residuals: str = "equations", near_tol: float = NEAR_SINGULAR) -> IKResult:
-    r"""Every closed-form inverse-kinematics solution of a UR-family arm.
+def exact_ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9,
+             tool: ArrayLike | None = None, q_ref: ArrayLike | None = None,
+             singular_tol: float = 5e-7, pose_tol: float = 1e-9, residuals: str = "equations",
+             near_tol: float = NEAR_SINGULAR) -> IKResult:
+    r"""Every closed-form inverse-kinematics solution of an exact UR-family arm.
 
     Solves :math:`X_{W0}\, X_{06}(q)\, X_{6T} = X` for the joint vector :math:`q` by the
     dual-quaternion route of the thesis (section 4.3), corrected (see the module's
@@ -229,8 +226,8 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     robot : dqlab.robot.Robot
         A UR-family arm in standard DH (for example :func:`dqlab.models.ur3`); its base
         transform and tool are taken into account, and joint offsets are honoured. A
-        calibrated UR (parameters millimetres off the exact shape) is solved by
-        :func:`dqlab.ik.ur_calibrated.calibrated_ur`, with the same result.
+        calibrated UR (parameters millimetres off the exact shape) is refused here:
+        ``dqlab.ik.ur`` (:func:`dqlab.ik.ur_solver.ur`) solves it, with the same result.
     target : array_like, shape (..., 4, 4) or (..., 8)
         Target pose(s) of the TCP in the world frame, as rigid transforms or unit dual
         quaternions ``(q_r, q_d)`` (told apart by the trailing shape; see
@@ -349,10 +346,9 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     --------
     >>> import numpy as np
     >>> from dqlab.models import ur3
-    >>> from dqlab.ik import ur
     >>> robot = ur3()
     >>> q = np.array([0.3, -1.2, 1.1, -0.4, 0.9, 0.2])
-    >>> result = ur(robot, robot.fk(q))
+    >>> result = exact_ur(robot, robot.fk(q))
     >>> result.solutions.shape, int(result.count)
     ((8, 6), 8)
     >>> bool(np.any(np.all(np.abs(result.solutions - q) < 1e-12, axis=-1)))
@@ -363,7 +359,7 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     A batch: a regular pose and the thesis's test pose (every singularity at once):
 
     >>> poses = robot.fk(np.array([q, [0, -np.pi / 2, 0, -np.pi / 2, 0, 0]]))
-    >>> result = ur(robot, poses)
+    >>> result = exact_ur(robot, poses)
     >>> result.count
     array([8, 8])
     >>> for name, flag in result.flags.items():
@@ -375,16 +371,11 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     unreachable [False False]
     not_converged [False False]
     """
-    kind, prm = _classify(robot)
-    if kind is _CALIBRATED:                     # (which checks its own arguments)
-        result = calibrated_ur(robot, target, tol=tol, tool=tool, q_ref=q_ref,
-                               singular_tol=singular_tol, pose_tol=pose_tol,
-                               residuals=residuals, near_tol=near_tol)
-    else:
-        tol, singular_tol, near_tol, pose_tol = check_ur_options(tol, singular_tol,
-                                                                 near_tol, pose_tol, residuals)
-        result = solve(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref,
-                       residuals, near_tol)
+    prm = _exact_parameters(robot)
+    tol, singular_tol, near_tol, pose_tol = check_ur_options(tol, singular_tol, near_tol,
+                                                             pose_tol, residuals)
+    result = solve(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals,
+                   near_tol)
     result.row_names = ROW_NAMES
     return result
 
@@ -395,7 +386,7 @@ def distinct_solutions(result: IKResult, atol: float = 1e-9) -> NDArray[np.bool_
     Parameters
     ----------
     result : IKResult
-        As returned by :func:`ur`.
+        As returned by :func:`exact_ur` or ``dqlab.ik.ur``.
     atol : float
         Two rows are equal when every joint differs by at most ``atol`` (mod :math:`2\pi`).
 
@@ -426,178 +417,3 @@ def distinct_solutions(result: IKResult, atol: float = 1e-9) -> NDArray[np.bool_
     k = sol.shape[-2]
     earlier = np.tril(np.ones((k, k), dtype=bool), -1)
     return valid & ~np.any(same & earlier, axis=-1)
-
-
-
-def closest_ur_solution(robot: Robot, target: ArrayLike, q_now: ArrayLike, *,
-                        limits: ArrayLike | None = None, tol: float = 1e-9,
-                        weights: ArrayLike | None = None, keep_branch: bool = False,
-                        **options) -> NDArray[np.float64]:
-    r"""The joints to send a UR standing at ``q_now`` to reach ``target``: one call.
-
-    Every solution of :func:`ur` (the robot's tool and base included; a calibrated UR
-    too), every :math:`2\pi`-equivalent of it within the joint limits (a UR joint turns
-    :math:`\pm 2\pi`, so each joint has two candidates), and among them the joint vector
-    nearest ``q_now``: :func:`~dqlab.ik.solutions.closest_solution` of :func:`ur`, with
-    ``q_now`` also as the reference at a wrist singularity.
-
-    "Nearest" is the plain joint distance by default, which weighs a turn of the base as
-    much as a turn of the wrist: when the wrist cannot follow within its limits (a tool
-    twist with wrist 3 near :math:`2\pi`), the nearest solution may be on another branch,
-    the shoulder or the wrist flipped. ``weights`` makes the big joints dearer;
-    ``keep_branch=True`` keeps the arm on the branch it is on (shoulder, elbow, wrist of
-    ``q_now``, :func:`ur_branch`), and refuses a target it cannot reach on it.
-
-    Parameters
-    ----------
-    robot : dqlab.robot.Robot
-        A UR-family arm, with its tool (:meth:`~dqlab.robot.Robot.with_tool`).
-    target : array_like, shape (..., 4, 4) or (..., 8)
-        The TCP pose(s) in the world frame (as for :func:`ur`).
-    q_now : array_like, shape (6,) or (..., 6)
-        The robot's current joints, radians; within the joint limits.
-    limits : array_like, shape (2,) or (6, 2), optional
-        Joint limits; default ``robot.limits``.
-    tol : float
-        As for :func:`ur`.
-    weights : array_like, shape (6,), optional
-        Joint weights of the distance, :math:`\sum_j w_j (q_j - q_{now,j})^2` (default all
-        1), for example ``(10, 10, 5, 1, 1, 1)`` to move the wrist rather than the arm.
-    keep_branch : bool
-        Choose only among the solutions on the branch of ``q_now``.
-    **options
-        Further keywords of :func:`ur` (``singular_tol``, ``pose_tol``, ``tool``,
-        ``near_tol``).
-
-    Returns
-    -------
-    ndarray, shape (..., 6)
-
-    Raises
-    ------
-    ValueError
-        If a target has no solution (the message gives the solver's reason) or, with
-        ``keep_branch``, none on the branch of ``q_now``, no solution is within the limits,
-        ``q_now`` is outside the limits (a hint if it looks like degrees) or the weights
-        are not positive, besides the errors of :func:`ur`.
-
-    Examples
-    --------
-    A UR5e with a gripper whose TCP is 0.15 m along the flange's z axis, at ``q_now``, sent
-    to a pose 5 cm lower:
-
-    >>> import numpy as np
-    >>> from dqlab.models import ur5e
-    >>> robot = ur5e().with_tool(z=0.15)
-    >>> q_now = np.array([0.3, -1.2, 1.1, -0.4, 0.9, 0.2])
-    >>> X = robot.fk(q_now)
-    >>> X[2, 3] -= 0.05
-    >>> q = closest_ur_solution(robot, X, q_now)
-    >>> q.round(3)
-    array([ 0.3  , -1.205,  1.234, -0.529,  0.9  ,  0.2  ])
-    >>> bool(np.allclose(robot.fk(q), X, atol=1e-12))
-    True
-
-    Wrist 3 at 5.9 rad and the tool to be turned by 0.5 rad more, beyond its limit of
-    :math:`2\pi`: the nearest solution flips the wrist (joints 4 to 6 move by up to
-    2.8 rad); on the same branch, wrist 3 turns back by 5.8 rad instead:
-
-    >>> from dqlab.rotations import rot_z
-    >>> q_now = np.array([0.3, -1.2, 1.1, -0.4, 0.9, 5.9])
-    >>> twist = np.eye(4)
-    >>> twist[:3, :3] = rot_z(0.5)
-    >>> X = robot.fk(q_now) @ twist
-    >>> (closest_ur_solution(robot, X, q_now) - q_now).round(2) + 0.0     # (no -0.)
-    array([ 0.  ,  0.27,  0.03,  2.84, -1.8 , -2.64])
-    >>> (closest_ur_solution(robot, X, q_now, keep_branch=True) - q_now).round(2) + 0.0
-    array([ 0.  ,  0.  ,  0.  ,  0.  ,  0.  , -5.78])
-    """
-    limits = robot.limits if limits is None else limits
-    lo, hi = check_joint_limits(limits, 6)
-    q_now = check_reference(q_now, 6, "q_now")
-    if q_now.shape == (6,):                 # one joint vector: on floats
-        outside = any(not a <= v <= b for v, a, b in zip(q_now.tolist(), lo.tolist(),
-                                                         hi.tolist(), strict=True))
-    else:
-        outside = not ((q_now >= lo) & (q_now <= hi)).all()
-    if outside:
-        first = tuple(np.argwhere((q_now < lo) | (q_now > hi))[0])
-        j, value = int(first[-1]), float(q_now[first])
-        hint = (" (joint angles are radians: degrees? convert with np.radians)"
-                if abs(value) > 4 * np.pi else "")     # beyond two turns
-        raise ValueError(f"q_now: joint {j + 1} = {value:.6g} is outside its limits "
-                         f"[{lo[j]:.6g}, {hi[j]:.6g}]{hint}")
-    if type(target) is not np.ndarray:
-        target = real_array(target, "target")
-    shape = target.shape
-    trailing = shape[-2:] if shape[-2:] == (4, 4) else shape[-1:]
-    leading = shape[:len(shape) - len(trailing)]
-    if q_now.shape[:-1] != leading:          # one q_now for many targets, or the other way
-        try:
-            batch = np.broadcast_shapes(leading, q_now.shape[:-1])
-        except ValueError:
-            raise ValueError(f"q_now of shape {q_now.shape} does not broadcast against the "
-                             f"targets' leading shape {leading}") from None
-        target = np.broadcast_to(target, batch + trailing)
-        q_now = np.broadcast_to(q_now, batch + (6,))
-    result = ur(robot, target, tol=tol, q_ref=q_now, **options)
-    if not result.valid.any(axis=-1).all():
-        failed = ~result.valid.any(axis=-1)
-        where = tuple(int(i) for i in np.argwhere(failed)[0]) if failed.ndim else ()
-        which = f"target {where}" if where else "the target"
-        raise ValueError(f"{which} has no solution: {result.reason[where]}")
-    if keep_branch:
-        branch = np.broadcast_to(ur_branch(robot, q_now), result.valid.shape[:-1])
-        on = result.valid & (np.arange(8) == branch[..., None])
-        if not on.any(axis=-1).all():
-            where = tuple(int(i) for i in np.argwhere(~on.any(axis=-1))[0])
-            which = f"target {where}" if where else "the target"
-            raise ValueError(f"{which} has no solution on the branch of q_now "
-                             f"({ROW_NAMES[int(branch[where])]}), which keep_branch=True "
-                             f"keeps; valid rows: "
-                             f"{np.flatnonzero(result.valid[where]).tolist()}")
-        result = IKResult(result.solutions, on, result.position_error, result.rotation_error,
-                          result.flags, result.reason)
-    return closest_solution(result, q_now, limits, weights=weights)
-
-
-def ur_branch(robot: Robot, q: ArrayLike) -> NDArray[np.int64]:
-    r"""The branch of joint vectors of a UR: the row ``4 s + 2 e + w`` of :func:`ur`'s
-    solutions (:data:`SOLUTION_ORDER`) that a pose reached with them is solved in.
-
-    With :math:`\theta = q + \theta^0` (the joint offsets): shoulder :math:`s = 1`
-    ("right") when the wrist centre lies behind the base axis along :math:`x_1`,
-    :math:`h = a_2 \cos\theta_2 + a_3 \cos(\theta_2 + \theta_3) + d_5
-    \sin\theta_{234} < 0`; elbow :math:`e = 1` ("down") when :math:`\sin\theta_3 < 0`;
-    wrist :math:`w = 1` ("flip") when :math:`\sin\theta_5 < 0`. On a calibrated UR, those
-    of its nearest exact UR (:func:`~dqlab.ik.ur_calibrated.nominal_ur`); exactly at a
-    singularity the two branches it separates are one, and either is returned.
-
-    Parameters
-    ----------
-    robot : dqlab.robot.Robot
-        A UR-family arm (exact or calibrated).
-    q : array_like, shape (..., 6)
-        Joint vectors, radians.
-
-    Returns
-    -------
-    ndarray of int, shape (...)
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from dqlab.models import ur5e
-    >>> q = np.array([0.3, -1.2, 1.1, -0.4, 0.9, 0.2])
-    >>> int(ur_branch(ur5e(), q)), ROW_NAMES[int(ur_branch(ur5e(), q))]
-    (4, 'right up noflip')
-    """
-    check_instance(robot, Robot, "robot")
-    q = robot.check_joints(q)
-    kind, nominal = _classify(robot)
-    exact = robot if kind is _EXACT else nominal
-    t = q + np.array([lk.theta_offset for lk in exact.links])
-    a2, a3, d5 = exact.links[1].a, exact.links[2].a, exact.links[4].d
-    h = (a2 * np.cos(t[..., 1]) + a3 * np.cos(t[..., 1] + t[..., 2])
-         + d5 * np.sin(t[..., 1] + t[..., 2] + t[..., 3]))
-    return 4 * (h < 0) + 2 * (np.sin(t[..., 2]) < 0) + (np.sin(t[..., 4]) < 0)

@@ -10,7 +10,7 @@ coefficients :math:`L` and the wrist angles (:func:`relative_rotation_coefficien
 :math:`(u_4, v_4)` of the wrist-1 point (:func:`arm_plane_wrist`, :func:`wrist1_point`) and
 the planar two-link arm (:func:`elbow_angles`). :func:`candidate_solutions` runs them in the
 chapter's order and is what the chapter shows.
-:func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>` computes the same rows with the speed
+:func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>` computes the same rows with the speed
 machinery of the private module ``dqlab.ik._ur_engine`` (tested equal, bit for bit) and
 adds the checks, the flags and the choice at a wrist singularity.
 
@@ -64,7 +64,7 @@ _EPSILON = float(np.finfo(float).eps)
 #: row the forearm cannot reach moves within its wrist family (``dqlab.ik.ur``).
 NEAR_WRIST = 1e-3
 
-#: The default ``near_tol`` of :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>`: a valid row
+#: The default ``near_tol`` of :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>`: a valid row
 #: whose :math:`|\sin\theta_5|`, :math:`|\sin\theta_3|` or :math:`h / d_4` is below it
 #: (about 0.57 degrees, or 1 % of :math:`d_4`) is near a singularity, where its joints are
 #: sensitive to the pose.
@@ -428,7 +428,7 @@ def theta234_sine_cosine(L: tuple, sigma: ArrayLike, c5bar: Array, s5bar: Array
     (the two numerators have the squared sum :math:`\bar c_5^2 \bar s_5^2`). Undefined at
     the wrist singularity, :math:`\bar c_5 \bar s_5 = 0`, where only
     :math:`\theta_{234} \pm \theta_6` is determined and
-    :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>` chooses :math:`\theta_{234}` from its family
+    :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>` chooses :math:`\theta_{234}` from its family
     (:func:`feasible_theta234`).
 
     Examples
@@ -760,7 +760,7 @@ def candidate_solutions(X: ArrayLike, d1: float, a2: float, a3: float, d4: float
 
     Row :math:`k = 4s + 2e + w` holds :math:`(\theta_1, \dots, \theta_6)`, each in
     :math:`(-\pi, \pi]`. These are candidates: a step that has no exact solution (a target out
-    of reach) clips, and :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>` keeps a row only if it
+    of reach) clips, and :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>` keeps a row only if it
     reproduces the pose. It returns these same rows, bit for bit, for every row it marks
     valid away from a wrist singularity. At a wrist singularity
     (:math:`\bar c_5 \bar s_5 = 0`) only :math:`\theta_{234} \pm \theta_6` is fixed and

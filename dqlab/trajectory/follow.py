@@ -2,7 +2,7 @@ r"""Following a Cartesian path with a robot: joint positions, speeds and acceler
 
 Two ways, as chapter 11 of the book compares them:
 
-- :func:`follow_path_ur` -- the closed-form UR solver (:func:`dqlab.ik.ur_closed_form.ur`) on
+- :func:`follow_path_ur` -- the closed-form UR solver (:func:`dqlab.ik.ur_solver.ur`) on
   the whole path at once, with **branch tracking**: keep the same shoulder/elbow/wrist row along the
   path, take for each joint the :math:`2\pi`-equivalent nearest the previous point, and
   report every place where the row must change (a singularity crossed, or a jump);
@@ -112,7 +112,7 @@ def ur_singularity_margins(robot, q):
       in metres, the distance of the wrist centre :math:`p_5` (base frame) from the
       cylinder about the base axis where the shoulder is singular; :math:`h = c_1 x_5 +
       s_1 y_5 = a_2 c_2 + a_3 c_{23} + d_5 s_{234}` is the wrist centre's coordinate along
-      the arm, the quantity :func:`dqlab.ik.ur_closed_form.ur` tests.
+      the arm, the quantity :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>` tests.
 
     All four come from the joint angles, without forward kinematics, and from the UR's
     standard DH lengths: those of the robot, or for a calibrated UR (whose table holds far
@@ -277,7 +277,7 @@ def singular_passes(margins, qd, t, d4, near_tol=NEAR_SINGULAR):
     near_tol : float
         The threshold of the measures (default
         :data:`dqlab.ik.ur_steps.NEAR_SINGULAR`, 0.01), as ``near_tol`` of
-        :func:`dqlab.ik.ur <dqlab.ik.ur_closed_form.ur>`.
+        :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>`.
 
     Returns
     -------
@@ -340,7 +340,7 @@ class FollowReport:
         Distance (m) and angle (rad) between each point's solution and its target, as the
         solver measures them: the numerical method by the forward kinematics; the closed
         form by the residual of its equations (the clipping of its steps, the default
-        ``residuals="equations"`` of :func:`dqlab.ik.ur_closed_form.ur`), which is exactly 0
+        ``residuals="equations"`` of :func:`dqlab.ik.ur_solver.ur`), which is exactly 0
         when no step was clipped, so an independent check takes ``robot.fk`` of the joints. The
         rotation error is 0 when only positions were followed.
     max_step : ndarray, shape (N - 1,)
@@ -408,7 +408,7 @@ def _acceptance_tolerance(tol):
 def track_branches(result, *, q_start=None, branch=None, max_step=0.1, t=None):
     r"""Follow one solution branch through a batch of closed-form IK results.
 
-    Given the eight rows of :func:`dqlab.ik.ur_closed_form.ur` at consecutive points of a path,
+    Given the eight rows of :func:`dqlab.ik.ur_solver.ur` at consecutive points of a path,
     keep the starting row, unwrap its angles (each joint takes the :math:`2\pi`-equivalent nearest
     its previous value, :math:`q_k = q_{k-1} + \operatorname{wrap}(\theta_k - q_{k-1})`),
     and where that row is invalid or would move a joint by more than ``max_step``, continue
@@ -418,7 +418,7 @@ def track_branches(result, *, q_start=None, branch=None, max_step=0.1, t=None):
     Parameters
     ----------
     result : IKResult
-        Of :func:`dqlab.ik.ur_closed_form.ur` for N consecutive poses: ``solutions`` (N, 8, 6).
+        Of :func:`dqlab.ik.ur_solver.ur` for N consecutive poses: ``solutions`` (N, 8, 6).
     q_start : array_like, shape (6,), optional
         Where the arm starts: picks the starting row (nearest modulo :math:`2\pi`) and the
         equivalents of the first point.
@@ -522,7 +522,7 @@ def follow_path_ur(robot, path, *, q_start=None, branch=None, max_step=0.1, damp
                    tol=1e-9, near_tol=NEAR_SINGULAR):
     r"""Follow a Cartesian path with the closed-form UR solver and branch tracking.
 
-    1. Every pose of the path is solved at once by :func:`dqlab.ik.ur_closed_form.ur` (all
+    1. Every pose of the path is solved at once by :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>` (all
        eight rows).
     2. The starting row is ``branch``, or the valid row nearest ``q_start`` (modulo
        :math:`2\pi`), or the first valid row.
@@ -560,7 +560,7 @@ def follow_path_ur(robot, path, *, q_start=None, branch=None, max_step=0.1, damp
     damping : float
         :math:`\lambda` of :func:`joint_velocities` (0: the exact inverse).
     tol : float
-        Passed to :func:`dqlab.ik.ur_closed_form.ur`: every point reproduces its pose to ``tol``.
+        Passed to :func:`dqlab.ik.ur_solver.ur`: every point reproduces its pose to ``tol``.
     near_tol : float
         A stretch of the path where :math:`|\sin\theta_5|`, :math:`|\sin\theta_3|` or
         :math:`h / d_4` is below it passes a singularity: it is reported

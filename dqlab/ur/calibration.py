@@ -34,7 +34,7 @@ millimetre, without them the tool is off by millimetres. They can be read in thr
    standard DH, the conventions of :func:`dqlab.models.ur3`. Nearly parallel axes (joints 2,
    3, 4) have their common normals far away, so :math:`d_2, d_3, d_4` may read hundreds of
    metres and :math:`\theta_2, \theta_3, \theta_4` tenths of a radian: the arm is the same,
-   and :func:`dqlab.ik.ur_closed_form.ur` solves it (:mod:`dqlab.ik.ur_calibrated`).
+   and :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>` solves it (:mod:`dqlab.ik.ur_calibrated`).
    :func:`read_kinematics_info` reads the package from a controller (or the controller
    stand-in, which serves one), :func:`kinematics_info_from_message` decodes it and
    :func:`message_from_kinematics_info` encodes it.
