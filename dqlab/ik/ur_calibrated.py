@@ -3,7 +3,7 @@ r"""Inverse kinematics of a calibrated UR: the closed form of the nearest exact 
 Every UR leaves the factory with its own kinematic calibration: its :math:`\theta_i, a_i,
 d_i, \alpha_i` differ from the published ones by millimetres and milliradians (read them with
 :mod:`dqlab.ur.calibration`). The calibrated chain no longer has the exact UR shape the closed
-form of :func:`dqlab.ik.ur_closed_form.ur` needs (axes 2, 3, 4 exactly parallel, the others
+form of :func:`dqlab.ik.ur_closed_form.exact_ur` needs (axes 2, 3, 4 exactly parallel, the others
 exactly perpendicular), so ``dqlab.ik.ur`` hands such a robot to :func:`calibrated_ur`, which
 keeps its contract (every branch, flags, reasons, batches) in three steps:
 

@@ -34,7 +34,8 @@ from ..rotations import wrap_angle
 from .result import IKResult, check_ur_options, finish
 from .targets import parse_targets, pose_errors
 from .ur_calibrated import REASON_NOT_CONVERGED, nominal_ur
-from .ur_closed_form import ROW_NAMES, ur, ur_branch
+from .ur_closed_form import ROW_NAMES, exact_ur
+from .ur_solver import ur_branch
 from .ur_steps import NEAR_SINGULAR
 
 __all__ = ["calibrated_ur_reference", "newton_step"]
@@ -189,11 +190,11 @@ def solve_pose(arm, exact, X_0T, tol, wide, singular_tol, near_tol):
     """Steps 1-3 for one target ``X_0T`` in frame 0: the rows (8, 6), valid, position and
     rotation errors, flags and reason."""
     X_06 = X_0T @ np.linalg.inv(arm.tool)        # step 1: the exact arm's closed form
-    start = ur(exact, X_06, tol=wide, singular_tol=singular_tol, near_tol=near_tol)
+    start = exact_ur(exact, X_06, tol=wide, singular_tol=singular_tol, near_tol=near_tol)
     starts, found, started = start.solutions.copy(), start.valid, start.valid.copy()
     near = ~found & (start.position_error <= 10 * wide)
     if near.any():                      # a row missed by a little more: ten gaps wide
-        again = ur(exact, X_06, tol=10 * wide)
+        again = exact_ur(exact, X_06, tol=10 * wide)
         starts[near], started[near] = again.solutions[near], again.valid[near]
     starts = off_the_edge(exact, starts, started, start.position_error, tol)
     q, converged = starts.copy(), np.zeros(8, dtype=bool)
@@ -238,8 +239,8 @@ def repair(arm, exact, X_06, X_0T, q, converged, started, tol):
     family (the closed form with a loose tolerance and :math:`\\theta_6` references) and
     from deflated Newton started near each solution found, along its most singular
     direction. A start that converges to a new solution takes the missing row of its own
-    branch (:func:`~dqlab.ik.ur_closed_form.ur_branch`), or else the first missing row."""
-    family = [ur(exact, X_06, tol=0.5, q_ref=[0, 0, 0, 0, 0, t]) for t in FAMILY]
+    branch (:func:`~dqlab.ik.ur_solver.ur_branch`), or else the first missing row."""
+    family = [exact_ur(exact, X_06, tol=0.5, q_ref=[0, 0, 0, 0, 0, t]) for t in FAMILY]
     candidates = [(s, ()) for member in family for s in member.solutions[member.valid]]
     for q_k in q[converged]:
         J = arm.fk_with_jacobian(q_k)[1]
