@@ -777,6 +777,7 @@ def _record(timings):
 
 
 @pytest.mark.browser
+@pytest.mark.long
 def test_chapters_run_in_the_browser(site, browser):  # noqa: F811
     """The student's path, cold then warm, on chapter 3; then each chapter to run, whole.
 
