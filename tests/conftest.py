@@ -31,13 +31,16 @@ _PAGE_TEST = re.compile(r"::(test_page_renders|test_page_is_accessible)\[(?P<pag
 
 
 def pytest_xdist_make_scheduler(config, log):
-    """``--dist loadgroup``, with the tests of one page in one group.
+    """``--dist loadgroup``, with the tests of one page in one group, in the order collected.
 
     They carry the mark ``xdist_group("page <page>")``, but pytest-xdist 3.8 adds the group to
     a test's id in a way pytest 9 no longer sees; this names the same groups from the ids.
+    The groups are handed out in the order collected (the tests marked ``long`` first), not
+    the largest group first as xdist would, which would leave the long tests to the end.
     """
     if config.getvalue("dist") != "loadgroup":
         return None
+    config.option.loadscopereorder = False
     from xdist.scheduler import LoadGroupScheduling
 
     class PageGroups(LoadGroupScheduling):

@@ -14,7 +14,8 @@ Each page is loaded once for these checks and for the accessibility checks of
 ``test_accessibility.py`` (:func:`page_report`, in the worker that asks first: both tests
 of a page share an xdist group). Run it after building the book (``jb build .``): it reads
 ``_build/html`` (or the folder in the environment variable ``DQLAB_BOOK_HTML``).
-Screenshots go to ``test-artifacts/browser/``.
+Screenshots go to ``test-artifacts/browser/``: every 3D view, and the whole page of a page
+with a problem.
 The Chromium and the server are the session's (``chromium.py``): the system Chromium, never
 a downloaded one, with every host but the local server unresolvable. Without Chromium the
 check is skipped, except under ``CI=true`` where it fails.
@@ -280,7 +281,8 @@ def _load_and_check(page_path, site, browser, axe):  # noqa: F811
         problems.extend(f"image not loaded: {src}" for src in broken)
 
         _check_scenes(page, name, problems)
-        page.screenshot(path=str(ARTIFACTS / f"{name}.png"), full_page=True)
+        if problems:      # the whole page, photographed where it is to be looked at
+            page.screenshot(path=str(ARTIFACTS / f"{name}.png"), full_page=True)
         report["problems"] = list(problems)       # what the page did up to here
 
         if axe is not None:
