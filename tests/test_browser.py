@@ -224,13 +224,14 @@ def page_report(page_path, site, browser, axe):  # noqa: F811
     problems (:func:`test_page_renders`), then what axe-core found once the page rendered
     and its 3D views loaded, and the page's images and views with their descriptions
     (``test_accessibility.py``); the last two are None without axe-core (``axe`` None). A
-    page that fails to load raises, here and in every later test that asks for it.
+    page that cannot be loaded and checked raises, here and in every later test that asks
+    for it.
     """
     if page_path not in _REPORTS:
         try:
             _REPORTS[page_path] = _load_and_check(page_path, site, browser, axe)
         except Exception as exc:
-            _REPORTS[page_path] = f"{page_path} did not load: {type(exc).__name__}: {exc}"
+            _REPORTS[page_path] = f"{page_path} could not be checked: {type(exc).__name__}: {exc}"
             raise
     report = _REPORTS[page_path]
     if isinstance(report, str):
