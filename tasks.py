@@ -103,6 +103,9 @@ def task_book():
 #: pytest on every core; the cells of one notebook (and the tests of one file) stay on one
 #: worker, in order. PYTEST_XDIST_AUTO_NUM_WORKERS=N sets the number of workers.
 PARALLEL = ("-n", "auto", "--dist", "loadfile")
+#: The browser checks on every core, test by test, but the tests of one page together (an
+#: xdist group: the page is loaded once for its rendering and its accessibility checks).
+PARALLEL_BROWSER = ("-n", "auto", "--dist", "loadgroup")
 #: Where the notebook tests leave the chapters they executed, for the book build.
 EXECUTED = BUILD / "executed-chapters"
 #: What the inner loop runs of each sweep (tests marked ``sweep``): a seeded sample.
@@ -126,7 +129,7 @@ def task_test():
     build_lite()
     times["in-browser site"] = time.time() - start - sum(times.values())
     say("the browser checks of the built book and of the chapters run in the in-browser site")
-    run(PYTHON, "-m", "pytest", *PARALLEL, "-m", "browser", "tests")
+    run(PYTHON, "-m", "pytest", *PARALLEL_BROWSER, "-m", "browser", "tests")
     times["browser checks"] = time.time() - start - sum(times.values())
     say(f"all checks passed in {time.time() - start:.0f} s ("
         + ", ".join(f"{name} {seconds:.0f} s" for name, seconds in times.items()) + ")")

@@ -2,10 +2,14 @@
 
 ``test_browser.py`` (the built pages), ``test_accessibility.py`` (axe-core), ``test_pdf.py``
 (the printed book) and ``test_lite.py`` (the chapters in the in-browser site) import the
-fixtures ``browser`` and ``site`` from here. Whichever module asks first starts them; they
-stop when the last one is done, before the session ends (no process is left behind).
+fixtures ``browser``, ``site`` and ``axe`` from here. Whichever module asks first starts
+them; they stop when the last one is done, before the session ends (no process is left
+behind).
 
 * ``site``: the built book (``_build/html``, or ``DQLAB_BOOK_HTML``), served on 127.0.0.1.
+* ``axe``: the script of axe-core :data:`AXE_VERSION`, installed with npm on first use into a
+  cache outside the repository (``~/.cache/dqlab/axe-core/<version>``, or the folder named by
+  ``DQLAB_AXE_CACHE``); None without npm or network.
 * ``browser``: the system Chromium (``/usr/bin/chromium``, or ``DQLAB_CHROMIUM``), never a
   downloaded one, with every host but 127.0.0.1 unresolvable: the book and its in-browser
   chapters must work offline, and a request elsewhere fails where it would leave the site.
@@ -18,6 +22,7 @@ import functools
 import http.server
 import os
 import shutil
+import subprocess
 import threading
 from pathlib import Path
 
@@ -26,6 +31,11 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 HTML = Path(os.environ.get("DQLAB_BOOK_HTML", ROOT / "_build" / "html"))
 ARTIFACTS = ROOT / "test-artifacts" / "browser"
+#: axe-core's release the accessibility check runs: the current one when it was last looked up
+#: (``npm view axe-core version``), to be moved on with the releases: a newer release runs
+#: checks an older one did not (4.10.3 did not check WCAG 2.5.3, "label in name"; 4.14 does).
+#: ``DQLAB_AXE_VERSION`` runs another release (installed into the cache like this one).
+AXE_VERSION = os.environ.get("DQLAB_AXE_VERSION", "4.14.1")
 SKIP_MESSAGE = "browser check skipped: install chromium (apt-get install chromium) to enable it"
 
 CHROMIUM_ARGS = [
@@ -59,6 +69,28 @@ def unavailable(reason):
         pytest.fail(f"{reason}, and CI=true requires the browser check: "
                     f"install it (apt-get install chromium)")
     pytest.skip(SKIP_MESSAGE)
+
+
+def axe_cache():
+    """Where axe-core is installed: ``DQLAB_AXE_CACHE``, else ``~/.cache/dqlab/axe-core``."""
+    base = os.environ.get("DQLAB_AXE_CACHE")
+    return Path(base) if base else Path.home() / ".cache" / "dqlab" / "axe-core"
+
+
+def axe_script_path():
+    """axe-core's ``axe.min.js`` in the cache, installed with npm on first use (or None)."""
+    folder = axe_cache() / AXE_VERSION
+    script = folder / "node_modules" / "axe-core" / "axe.min.js"
+    if script.exists():
+        return script
+    npm = shutil.which("npm")
+    if npm is None:
+        return None
+    folder.mkdir(parents=True, exist_ok=True)
+    result = subprocess.run([npm, "install", "--no-audit", "--no-fund", "--no-save",
+                             "--prefix", str(folder), f"axe-core@{AXE_VERSION}"],
+                            capture_output=True, text=True, timeout=600)
+    return script if result.returncode == 0 and script.exists() else None
 
 
 class _QuietHandler(http.server.SimpleHTTPRequestHandler):
@@ -141,3 +173,11 @@ def site():
         yield address
     finally:
         _SHARED.release("site")
+
+
+@pytest.fixture(scope="session")
+def axe():
+    """axe-core's script (its text), or None if it is not in the cache and npm could not
+    install it (the accessibility check then says so, and fails under ``CI=true``)."""
+    script = axe_script_path()
+    return None if script is None else script.read_text(encoding="utf-8")

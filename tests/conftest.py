@@ -1,4 +1,7 @@
-"""Shared test set-up: a non-interactive matplotlib backend and deterministic hypothesis."""
+"""Shared test set-up: a non-interactive matplotlib backend, deterministic hypothesis, and
+the tests marked ``long`` first."""
+
+import re
 
 import matplotlib
 from hypothesis import settings
@@ -9,6 +12,43 @@ matplotlib.use("Agg")
 # because the first call of a numpy function can be slow on a loaded machine.
 settings.register_profile("dqlab", derandomize=True, deadline=None, max_examples=100)
 settings.load_profile("dqlab")
+
+
+def pytest_configure(config):
+    config.addinivalue_line(
+        "markers", "long: takes minutes on its own; run first, so that on several workers the "
+        "short tests fill the other workers meanwhile instead of waiting for it at the end")
+
+
+def pytest_collection_modifyitems(items):
+    """The tests marked ``long`` first, the others in their order (a stable sort)."""
+    items.sort(key=lambda item: item.get_closest_marker("long") is None)
+
+
+#: The tests of one built page, parametrized by the page: under ``--dist loadgroup`` they run
+#: in one worker, which loads the page once for all of them (``test_browser.page_report``).
+_PAGE_TEST = re.compile(r"::(test_page_renders|test_page_is_accessible)\[(?P<page>[^\]@]+)\]$")
+
+
+def pytest_xdist_make_scheduler(config, log):
+    """``--dist loadgroup``, with the tests of one page in one group, in the order collected.
+
+    They carry the mark ``xdist_group("page <page>")``, but pytest-xdist 3.8 adds the group to
+    a test's id in a way pytest 9 no longer sees; this names the same groups from the ids.
+    The groups are handed out in the order collected (the tests marked ``long`` first), not
+    the largest group first as xdist would, which would leave the long tests to the end.
+    """
+    if config.getvalue("dist") != "loadgroup":
+        return None
+    config.option.loadscopereorder = False
+    from xdist.scheduler import LoadGroupScheduling
+
+    class PageGroups(LoadGroupScheduling):
+        def _split_scope(self, nodeid):
+            match = _PAGE_TEST.search(nodeid)
+            return f"page {match['page']}" if match else super()._split_scope(nodeid)
+
+    return PageGroups(config, log)
 
 
 def pytest_terminal_summary(terminalreporter):

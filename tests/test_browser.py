@@ -10,8 +10,12 @@ For each page generated from a notebook or a Markdown file of ``book/`` it check
   ships once), replayed all its commands, and its WebGL canvas shows something besides the
   background.
 
-Run it after building the book (``jb build .``): it reads ``_build/html`` (or the folder in
-the environment variable ``DQLAB_BOOK_HTML``). Screenshots go to ``test-artifacts/browser/``.
+Each page is loaded once for these checks and for the accessibility checks of
+``test_accessibility.py`` (:func:`page_report`, in the worker that asks first: both tests
+of a page share an xdist group). Run it after building the book (``jb build .``): it reads
+``_build/html`` (or the folder in the environment variable ``DQLAB_BOOK_HTML``).
+Screenshots go to ``test-artifacts/browser/``: every 3D view, and the whole page of a page
+with a problem.
 The Chromium and the server are the session's (``chromium.py``): the system Chromium, never
 a downloaded one, with every host but the local server unresolvable. Without Chromium the
 check is skipped, except under ``CI=true`` where it fails.
@@ -25,10 +29,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from chromium import (  # noqa: F401  (browser and site are fixtures)
+from chromium import (  # noqa: F401  (axe, browser and site are fixtures)
     ARTIFACTS,
     HTML,
     ROOT,
+    axe,
     browser,
     site,
 )
@@ -102,6 +107,11 @@ _IMAGES = """async () => {
 }"""
 
 
+#: Resolves once the document has drawn two animation frames (the viewer draws in each).
+_TWO_FRAMES = """() => new Promise(done => requestAnimationFrame(
+  () => requestAnimationFrame(() => done(true))))"""
+
+
 def _drawn_fraction(png):
     """Share of pixels showing a coloured object in front of the background.
 
@@ -151,7 +161,7 @@ def _check_scenes(page, name, problems):
             problems.append(late)
             continue
         status = frame.evaluate("() => ({status: dqlab.status, commands: dqlab.commands})")
-        page.wait_for_timeout(300)  # let the first frame render
+        frame.evaluate(_TWO_FRAMES)  # the viewer's loop has drawn, for the screenshot
         view.screenshot(path=str(ARTIFACTS / f"{name}--view{k + 1}.png"))
         if status["status"] != "ok":
             problems.append(f"{label}: {status['status']}")
@@ -166,10 +176,70 @@ def _check_scenes(page, name, problems):
             problems.append(f"{label}: the WebGL canvas is blank ({drawn:.2%} of it drawn)")
 
 
-@pytest.mark.parametrize("page_path", _pages() or ["(no built pages)"])
-def test_page_renders(page_path, site, browser):  # noqa: F811
-    if page_path == "(no built pages)":
-        pytest.fail(f"no built chapter pages in {HTML}: build the book first")
+def page_params():
+    """The pages as test parameters, each in an xdist group of its own: the tests of one page
+    (its rendering here, its accessibility in ``test_accessibility.py``) run in one worker,
+    which loads the page once for both (``pytest -n 2 --dist loadgroup``)."""
+    return [pytest.param(p, marks=pytest.mark.xdist_group(f"page {p}"))
+            for p in _pages()] or ["(no built pages)"]
+
+
+#: The report of each page this process has loaded (:func:`page_report`).
+_REPORTS = {}
+
+#: axe-core's WCAG 2.1 A and AA run, on the page and inside its frames (the 3D views).
+_RUN_AXE = """async (tags) => {
+  const result = await axe.run(document, {
+    runOnly: {type: "tag", values: tags},
+    resultTypes: ["violations"],
+    iframes: true,
+  });
+  return result.violations.map(v => ({
+    id: v.id, impact: v.impact, help: v.help, tags: v.tags,
+    nodes: v.nodes.map(n => ({target: n.target, html: n.html.slice(0, 300),
+                              summary: (n.failureSummary || "").slice(0, 400)}))}));
+}"""
+WCAG_TAGS = ["wcag2a", "wcag2aa", "wcag21a", "wcag21aa"]
+
+#: The page's images and 3D views, with what describes them.
+_FIGURES = """() => ({
+  images: Array.from(document.querySelectorAll("main img")).map(
+    img => ({src: img.getAttribute("src") || "", alt: img.getAttribute("alt")})),
+  views: Array.from(document.querySelectorAll("iframe.dqlab-scene")).map(f => {
+    const id = f.getAttribute("aria-describedby");
+    const described = id ? document.getElementById(id) : null;
+    return {title: f.getAttribute("title") || "",
+            description: described ? described.textContent.trim() : ""};
+  }),
+})"""
+
+_VIEWS_LOADED = """() => Array.from(document.querySelectorAll('iframe.dqlab-scene')).every(
+  f => f.contentWindow && f.contentWindow.dqlab && f.contentWindow.dqlab.status !== 'loading')"""
+
+
+def page_report(page_path, site, browser, axe):  # noqa: F811
+    """One load of a built page and every check made on it, remembered for the session.
+
+    Returns ``{"problems": [...], "violations": [...], "figures": {...}}``: the rendering
+    problems (:func:`test_page_renders`), then what axe-core found once the page rendered
+    and its 3D views loaded, and the page's images and views with their descriptions
+    (``test_accessibility.py``); the last two are None without axe-core (``axe`` None). A
+    page that cannot be loaded and checked raises, here and in every later test that asks
+    for it.
+    """
+    if page_path not in _REPORTS:
+        try:
+            _REPORTS[page_path] = _load_and_check(page_path, site, browser, axe)
+        except Exception as exc:
+            _REPORTS[page_path] = f"{page_path} could not be checked: {type(exc).__name__}: {exc}"
+            raise
+    report = _REPORTS[page_path]
+    if isinstance(report, str):
+        pytest.fail(report)
+    return report
+
+
+def _load_and_check(page_path, site, browser, axe):  # noqa: F811
     ARTIFACTS.mkdir(parents=True, exist_ok=True)
     name = page_path.replace("/", "_").removesuffix(".html")
     problems = []
@@ -190,6 +260,7 @@ def test_page_renders(page_path, site, browser):  # noqa: F811
     page.on("requestfailed", lambda request: problems.append(
         f"request failed: {request.url[:200]} ({request.failure})"))
     page.on("response", on_response)
+    report = {"problems": problems, "violations": None, "figures": None}
     try:
         page.goto(f"{site}/{page_path}", wait_until="load", timeout=PAGE_LOAD_MS)
         page.wait_for_function(_MATHJAX_DONE, timeout=PAGE_LOAD_MS)
@@ -211,9 +282,26 @@ def test_page_renders(page_path, site, browser):  # noqa: F811
         problems.extend(f"image not loaded: {src}" for src in broken)
 
         _check_scenes(page, name, problems)
-        page.screenshot(path=str(ARTIFACTS / f"{name}.png"), full_page=True)
+        if problems:      # the whole page, photographed where it is to be looked at
+            page.screenshot(path=str(ARTIFACTS / f"{name}.png"), full_page=True)
+        report["problems"] = list(problems)       # what the page did up to here
+
+        if axe is not None:
+            page.wait_for_function(_VIEWS_LOADED, timeout=PAGE_LOAD_MS)
+            for frame in page.frames:      # axe in every frame: the 3D views are checked too
+                frame.evaluate(axe)
+            report["violations"] = page.evaluate(_RUN_AXE, WCAG_TAGS)
+            report["figures"] = page.evaluate(_FIGURES)
     finally:
         page.close()
+    return report
+
+
+@pytest.mark.parametrize("page_path", page_params())
+def test_page_renders(page_path, site, browser, axe):  # noqa: F811
+    if page_path == "(no built pages)":
+        pytest.fail(f"no built chapter pages in {HTML}: build the book first")
+    problems = page_report(page_path, site, browser, axe)["problems"]
     assert not problems, f"{page_path}:\n  " + "\n  ".join(problems)
 
 

@@ -28,6 +28,7 @@ def test_the_printed_text_block_is_a4_less_its_margins():
     assert pdf.PRINT_WIDTH_PX == round((210 - 24) / 25.4 * 96) == 703
 
 
+@pytest.mark.long
 def test_the_pdf_has_a_title_page_and_clips_nothing(browser):  # noqa: F811
     if not (SINGLE / "index.html").exists():
         if SINGLE != pdf.SINGLE:
