@@ -502,8 +502,8 @@ def test_near_singular_flag():
     with pytest.raises(ValueError, match="near_tol"):
         ur(robot, robot.fk(q), near_tol=-1.0)
     cal = calibrated(95)
-    from dqlab.ik.ur_calibrated import _NEAR_GAPS, _nominal
-    limit = max(1e-2, _NEAR_GAPS * _nominal(cal).rotation_gap)
+    from dqlab.ik.ur_calibrated import _NEAR_GAPS, _nearest_exact
+    limit = max(1e-2, _NEAR_GAPS * _nearest_exact(cal).rotation_gap)
     q = np.array([0.3, -1.2, 1.1, -0.4, 0.5 * limit, 0.2])
     assert ur(cal, cal.fk(q)).flags["near_singular"]
     q[4] = 3.0 * limit

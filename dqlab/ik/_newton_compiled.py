@@ -18,10 +18,10 @@ that module, compiled; :func:`one_pose` is its ``_one_pose`` after the closed fo
 :func:`accept` its ``_accept`` (which restarts replace a row), :func:`gram` the
 :math:`J^\mathsf{T} J` of its ``_near_singular`` and :func:`smallest` that function's test
 and direction by inverse iteration wherever they are certain (``eigh`` answers elsewhere,
-and is what the numpy path uses). :func:`closed_form` is the nearest exact
+and is what the numpy path uses). :func:`exact_one_pose` is the nearest exact
 arm's closed form of one pose that the one-pose path starts from: the loop of
 ``dqlab.ik._ur_engine.solve_single`` over the steps of ``dqlab.ik.ur_steps``, written out on
-floats (tested equal to it bit for bit), and :func:`closed_forms` the same for a batch of
+floats (tested equal to it bit for bit), and :func:`exact_poses` the same for a batch of
 poses, which the batch path starts from (the poses it does not solve go to the closed form's
 own batch path); :func:`deflated` the deflated Newton steps of its ``_deflate``.
 :func:`ready` says whether numba is there and the environment variable ``DQLAB_COMPILED``
@@ -48,7 +48,7 @@ from ._newton_lanes import size as lane_size
 from ._newton_lanes import step as lane_step
 from .ur_steps import NEAR_SINGULAR
 
-__all__ = ["ready", "refresh", "newton", "one_pose", "closed_form", "closed_forms", "unique",
+__all__ = ["ready", "refresh", "newton", "one_pose", "exact_one_pose", "exact_poses", "unique",
            "are_new", "accept", "gram", "smallest", "deflated"]
 
 _COMPILED = []     # the functions below the wrappers, compiled in place by ready()
@@ -197,7 +197,7 @@ def deflated(links, tool, q, X_target, known, steps, *, stop, give_up_after, dam
     return out
 
 
-def closed_form(flange, constants, tol, singular_tol, near_wrist, near_tol=NEAR_SINGULAR):
+def exact_one_pose(flange, constants, tol, singular_tol, near_wrist, near_tol=NEAR_SINGULAR):
     """``dqlab.ik._ur_engine.solve_single`` after the flange, compiled: the closed form of the
     exact UR of ``constants`` (12,) (``d1, a2, a3, d4, d5, d6`` and the six joint offsets)
     for the flange ``(q, p, z6)`` (rotation quaternion, position, z axis). The solutions (8, 6),
@@ -210,33 +210,33 @@ def closed_form(flange, constants, tol, singular_tol, near_wrist, near_tol=NEAR_
     q, p, z6 = flange
     solutions, errors = np.zeros((8, 6)), np.zeros(8)
     flags = np.zeros(4, dtype=np.bool_)
-    done = _closed_form(q[0], q[1], q[2], q[3], p[0], p[1], p[2], z6[0], z6[1], z6[2],
+    done = _exact_one_pose(q[0], q[1], q[2], q[3], p[0], p[1], p[2], z6[0], z6[1], z6[2],
                         constants, float(tol), float(singular_tol), float(near_wrist),
                         float(near_tol), solutions, errors, flags)
     return (solutions, errors <= tol, errors, flags) if done else None
 
 
-def closed_forms(Q, P, Z, constants, tol, singular_tol, near_wrist, near_tol=NEAR_SINGULAR):
-    """:func:`closed_form` of n flanges at once, pose by pose in compiled code: rotation
+def exact_poses(Q, P, Z, constants, tol, singular_tol, near_wrist, near_tol=NEAR_SINGULAR):
+    """:func:`exact_one_pose` of n flanges at once, pose by pose in compiled code: rotation
     quaternions ``Q`` (n, 4), positions ``P`` (n, 3) and z axes ``Z`` (n, 3). The solutions
     (n, 8, 6), ``valid`` (n, 8), the errors (n, 8), the flags (n, 4) and ``done`` (n,):
-    False where :func:`closed_form` returns None (those poses' other arrays are zeros)."""
+    False where :func:`exact_one_pose` returns None (those poses' other arrays are zeros)."""
     n = Q.shape[0]
     solutions, errors = np.zeros((n, 8, 6)), np.zeros((n, 8))
     flags, done = np.zeros((n, 4), dtype=np.bool_), np.zeros(n, dtype=np.bool_)
-    _closed_forms(np.ascontiguousarray(Q, dtype=float), np.ascontiguousarray(P, dtype=float),
+    _exact_poses(np.ascontiguousarray(Q, dtype=float), np.ascontiguousarray(P, dtype=float),
                   np.ascontiguousarray(Z, dtype=float), constants, float(tol),
                   float(singular_tol), float(near_wrist), float(near_tol), solutions, errors,
                   flags, done)
     return solutions, done[:, None] & (errors <= tol), errors, flags, done
 
 
-def _closed_forms(Q, P, Z, constants, tol, singular_tol, near_wrist, near_tol, solutions,
+def _exact_poses(Q, P, Z, constants, tol, singular_tol, near_wrist, near_tol, solutions,
                   errors, flags, done):
-    """:func:`closed_forms`' work: :func:`_closed_form` of each pose, a pose it does not
+    """:func:`exact_poses`' work: :func:`_exact_one_pose` of each pose, a pose it does not
     solve cleared again."""
     for i in range(Q.shape[0]):
-        done[i] = _closed_form(Q[i, 0], Q[i, 1], Q[i, 2], Q[i, 3], P[i, 0], P[i, 1], P[i, 2],
+        done[i] = _exact_one_pose(Q[i, 0], Q[i, 1], Q[i, 2], Q[i, 3], P[i, 0], P[i, 1], P[i, 2],
                                Z[i, 0], Z[i, 1], Z[i, 2], constants, tol, singular_tol,
                                near_wrist, near_tol, solutions[i], errors[i], flags[i])
         if not done[i]:
@@ -571,9 +571,9 @@ def _wrap(theta):
     return w
 
 
-def _closed_form(qw, qx, qy, qz, px, py, pz, zx, zy, zz, constants, tol, singular_tol,
+def _exact_one_pose(qw, qx, qy, qz, px, py, pz, zx, zy, zz, constants, tol, singular_tol,
                  near_wrist, near_tol, solutions, errors, flags):
-    """:func:`closed_form`'s work: ``solve_single``'s loop, each line the step of
+    """:func:`exact_one_pose`'s work: ``solve_single``'s loop, each line the step of
     ``dqlab.ik.ur_steps`` named beside it; False where that function returns None."""
     d1, a2, a3, d4, d5, d6 = (constants[0], constants[1], constants[2], constants[3],
                               constants[4], constants[5])
@@ -865,7 +865,7 @@ def _dot_rows(A, i, B, j):
 _Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE = (
     INDEX[name] for name in ("q0", "c0", "s0", "t00", "tp0", "F0", "x0", "act", "size"))
 _COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_size", "_same", "_unique",
-              "_wrap", "_closed_form", "_closed_forms", "_one_pose", "_accept", "_gram",
+              "_wrap", "_exact_one_pose", "_exact_poses", "_one_pose", "_accept", "_gram",
               "_smallest", "_largest_diagonal_column", "_times", "_rayleigh", "_are_new",
               "_load", "_recompute", "_kernel", "_outputs", "_pose_errors", "_dot_rows",
               "_deflated", "_cholesky"]
