@@ -130,6 +130,7 @@ _NEAR_GAPS = 4.0       # near_singular on a calibrated arm: at least this many r
 _NEAR_MEASURE = 0.1    # a singularity measure below which a pose's missing branches are sought
 _FAMILY = 6            # members of the exact arm's wrist family taken as starts
 _DEFLATION_WAYS = np.array([0.05, -0.05, 0.3, -0.3])   # the moves of a deflation's starts
+_POLISH_NEAR = 0.04    # a valid row this near a singularity of the exact arm is polished
 _SAMPLES = np.random.default_rng(20260531).uniform(-np.pi, np.pi, (64, 6))
 
 
@@ -416,6 +417,8 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
     re = start.rotation_error.reshape(n * 8).copy()
     pe[done], re[done] = polished.errors[:, done]
     valid = polished.converged & (pe <= tol) & (re <= tol)
+    solutions = _polish(nearest, X_6T, wrap_angle(polished.q), valid, pe, re,
+                        X_0T[np.arange(8 * n) // 8], tol)
     flags = _flags(polished.measures, valid, singular_tol, nearest.robot.links[3].d,
                    near_limit)
     flags["near_singular"] |= start.flags["near_singular"].reshape(n)   # the exact arm's
@@ -425,7 +428,7 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
     started = start.valid.reshape(n, 8).any(axis=1)
     reason[none & started] = REASON_NOT_CONVERGED
     reason[none & ~started] = start.reason.reshape(n)[none & ~started]
-    return finish(wrap_angle(polished.q).reshape(batch + (8, 6)), valid.reshape(batch + (8,)),
+    return finish(solutions.reshape(batch + (8, 6)), valid.reshape(batch + (8,)),
                   pe.reshape(batch + (8,)), re.reshape(batch + (8,)),
                   {name: f.reshape(batch) for name, f in flags.items()},
                   reason.reshape(batch))
@@ -586,10 +589,45 @@ def _one_pose(nearest, start, X_0T, tool, tol, singular_tol, max_iter, wide, nea
         solutions = wrap_angle(Q)
         flags = _flags(M, valid, singular_tol, d4, near)
         flags["not_converged"] = (exact & ~valid).any()
+    solutions = _polish(nearest, tool, solutions, valid, pe, re,
+                        np.broadcast_to(X_0T, (8, 4, 4)), tol)
     flags["near_singular"] = flags["near_singular"] | start.flags["near_singular"]
     flags = {name: np.array(flag, dtype=bool).reshape(()) for name, flag in flags.items()}
     return finish(solutions, valid, pe, re, flags,
                   np.array(REASON_NOT_CONVERGED if flags["unreachable"] else "", dtype=object))
+
+
+def _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol):
+    r"""The valid rows ``solutions`` (m, 6) (wrapped) near a singularity of the exact arm
+    (:math:`|\sin\theta_3|`, :math:`|\sin\theta_5|` or the wrist centre's distance
+    :math:`h` of :func:`_branches` over :math:`|a_2|` below :data:`_POLISH_NEAR`) taken
+    ``_PLAIN_STEPS`` Newton steps further towards their targets ``X_0T`` (m, 4, 4).
+
+    A row stops once its errors are below a tenth of ``tol``; near a singularity, where
+    the smallest singular value :math:`\sigma` of :math:`J` is small, that leaves the
+    joints :math:`10^{-10}/\sigma` from the solution (1e-5 rad at :math:`\sigma \approx
+    10^{-5}`), and a solution that a singularity nearly pairs with another is not told
+    apart from it. The steps further bring such a row to the solution (quadratic
+    convergence). The errors ``pe``, ``re`` (m,) of a row polished are updated in place;
+    returns the solutions, wrapped (``solutions`` itself if no row moves)."""
+    exact = nearest.robot
+    t = solutions + nearest.exact[6:]
+    L = exact.links
+    h = (L[1].a * np.cos(t[:, 1]) + L[2].a * np.cos(t[:, 1] + t[:, 2])
+         + L[4].d * np.sin(t[:, 1] + t[:, 2] + t[:, 3]))
+    near = (np.minimum(np.minimum(np.abs(np.sin(t[:, 2])), np.abs(np.sin(t[:, 4]))),
+                       np.abs(h) / abs(L[1].a)) < _POLISH_NEAR)
+    rows = np.flatnonzero(valid & near)
+    if not rows.size:
+        return solutions
+    q, _, _, _, errors = _newton(nearest.links, tool, solutions[rows], X_0T[rows], tol,
+                                 _PLAIN_STEPS)
+    better = (errors <= tol).all(axis=0) & np.isfinite(q).all(axis=1)
+    rows, q = rows[better], q[better]
+    solutions = solutions.copy()
+    solutions[rows] = wrap_angle(q)
+    pe[rows], re[rows] = errors[:, better]
+    return solutions
 
 
 @dataclass
