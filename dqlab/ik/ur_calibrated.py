@@ -129,6 +129,8 @@ _WAYS = np.array([0.05, -0.05, 0.2, -0.2, 0.6, -0.6])
 _NEAR_GAPS = 4.0       # near_singular on a calibrated arm: at least this many rotation gaps
 _NEAR_MEASURE = 0.1    # a singularity measure below which a pose's missing branches are sought
 _FAMILY = 6            # members of the exact arm's wrist family taken as starts
+_FEW_BRANCHES = 2      # a pose with this many branches or fewer ...
+_FEW_WRIST = 0.2       # ... none with |sin theta_5| above this, takes the family's starts
 _DEFLATION_WAYS = np.array([0.05, -0.05, 0.3, -0.3])   # the moves of a deflation's starts
 _POLISH_NEAR = 0.04    # a valid row this near a singularity of the exact arm is polished
 _SAMPLES = np.random.default_rng(20260531).uniform(-np.pi, np.pi, (64, 6))
@@ -790,7 +792,11 @@ def _family(chain, nearest, polished, X_06, X_0T, closed_form, tol, max_iter):
     it, the calibrated arm's solutions of a shoulder and elbow lie near that family, some
     far along it from the exact arm's two branches (one pose has up to four such
     solutions, not two). A pose with a branch missing and a solution whose
-    :math:`|\sin\theta_5|` is below :data:`_NEAR_MEASURE` takes :data:`_FAMILY` members
+    :math:`|\sin\theta_5|` is below :data:`_NEAR_MEASURE`, or with at most
+    :data:`_FEW_BRANCHES` solutions none of which has :math:`|\sin\theta_5|` above
+    :data:`_FEW_WRIST` (or none at all: within the gap of the wrist singularity the exact
+    arm's closed form may miss a whole shoulder of the calibrated arm's, or every branch),
+    takes :data:`_FAMILY` members
     of the family as starts: the exact arm's closed form with a tolerance of 0.5 (which
     makes every pose within :math:`|\theta_5| \lesssim 0.1` a family, and clipped rows
     valid) and references :math:`\theta_6 = -\pi + 2\pi j / 6`. Each start is offered to
@@ -799,8 +805,12 @@ def _family(chain, nearest, polished, X_06, X_0T, closed_form, tol, max_iter):
     unique = polished.unique()
     missing = ~unique.reshape(-1, 8)
     theta5 = polished.q[:, 4] + nearest.robot.links[4].theta_offset
-    wrist = (polished.done & (np.abs(np.sin(theta5)) < _NEAR_MEASURE)).reshape(-1, 8)
-    poses = np.flatnonzero(missing.any(axis=1) & wrist.any(axis=1))
+    sin5 = np.abs(np.sin(theta5))
+    wrist = (polished.done & (sin5 < _NEAR_MEASURE)).reshape(-1, 8)
+    have = unique.reshape(-1, 8)                        # few branches, none far from the
+    few = ((have.sum(axis=1) <= _FEW_BRANCHES)          # wrist singularity (or none at all)
+           & ~(have & (sin5.reshape(-1, 8) >= _FEW_WRIST)).any(axis=1))
+    poses = np.flatnonzero(missing.any(axis=1) & (wrist.any(axis=1) | few))
     if not poses.size:
         return
     references = np.zeros((poses.size, _FAMILY, 6))
