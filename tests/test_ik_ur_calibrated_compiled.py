@@ -437,3 +437,19 @@ def test_compiled_deflation_equals_the_numpy_path(numpy_path):
     gap = np.abs(np.angle(np.exp(1j * (fast - plain)))).max(axis=1)
     assert gap[converged].max() < 1e-8
     assert np.mean(gap < 1e-6) > 0.9
+
+
+def test_compiled_near_rows_equal_the_numpy_path():
+    """The valid rows _polish steps further (within _POLISH_NEAR of a singularity of the
+    exact arm), picked in compiled code, are those of the numpy formula, on random rows and
+    rows at each singularity."""
+    robot = calibrated(3)
+    nearest = module._nearest_exact(robot)
+    q = np.random.default_rng(4).uniform(-np.pi, np.pi, (400, 6))
+    q[:50, 2] = -nearest.exact[8] + np.linspace(-0.1, 0.1, 50)       # elbow
+    q[50:100, 4] = -nearest.exact[10] + np.linspace(-0.1, 0.1, 50)   # wrist
+    valid = np.random.default_rng(5).random(400) < 0.8
+    near = compiled.near_rows(q, valid, nearest.exact, module._POLISH_NEAR)
+    expected = valid & module._near_rows(nearest.robot, q, module._POLISH_NEAR)
+    np.testing.assert_array_equal(near, expected)
+    assert 40 < near.sum() < 200

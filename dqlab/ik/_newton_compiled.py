@@ -15,7 +15,8 @@ in-browser chapters run without it).
 
 :func:`unique` and :func:`are_new` are ``_Polished.unique`` and ``_Polished.are_new`` of
 that module, compiled; :func:`one_pose` is its ``_one_pose`` after the closed form,
-:func:`accept` its ``_accept`` (which restarts replace a row), :func:`gram` the
+:func:`accept` its ``_accept`` (which restarts replace a row), :func:`near_rows` its
+``_near_rows`` (which valid rows ``_polish`` steps further), :func:`gram` the
 :math:`J^\mathsf{T} J` of its ``_near_singular`` and :func:`smallest` that function's test
 and direction by inverse iteration wherever they are certain (``eigh`` answers elsewhere,
 and is what the numpy path uses). :func:`exact_one_pose` is the nearest exact
@@ -49,7 +50,7 @@ from ._newton_lanes import step as lane_step
 from .ur_steps import NEAR_SINGULAR
 
 __all__ = ["ready", "refresh", "newton", "one_pose", "exact_one_pose", "exact_poses", "unique",
-           "are_new", "accept", "gram", "smallest", "deflated"]
+           "are_new", "accept", "near_rows", "gram", "smallest", "deflated"]
 
 _COMPILED = []     # the functions below the wrappers, compiled in place by ready()
 _READY = None      # whether numba is there (the kernels compiled), once known
@@ -148,6 +149,32 @@ def accept(owners, converged, q_starts, q, unique):
     k = _accept(np.ascontiguousarray(owners, dtype=np.int64), np.ascontiguousarray(converged),
                 np.ascontiguousarray(q_starts, dtype=float), q, unique, taken)
     return taken[:k]
+
+
+def near_rows(solutions, valid, constants, threshold):
+    r"""``dqlab.ik.ur_calibrated._near_rows`` compiled: which valid rows of ``solutions``
+    (m, 6) are within ``threshold`` of a singularity of the exact arm of ``constants``
+    (``_NearestExact.exact``): :math:`|\sin\theta_3|`, :math:`|\sin\theta_5|` or
+    :math:`|h| / |a_2|` below it."""
+    near = np.zeros(solutions.shape[0], dtype=np.bool_)
+    _near_rows(np.ascontiguousarray(solutions, dtype=float), np.ascontiguousarray(valid),
+               np.asarray(constants, dtype=float), float(threshold), near)
+    return near
+
+
+def _near_rows(solutions, valid, constants, threshold, near):
+    """:func:`near_rows`' work."""
+    a2, a3, d5 = constants[1], constants[2], constants[4]
+    for r in range(solutions.shape[0]):
+        if not valid[r]:
+            continue
+        t2 = solutions[r, 1] + constants[7]
+        t3 = solutions[r, 2] + constants[8]
+        t4 = solutions[r, 3] + constants[9]
+        t5 = solutions[r, 4] + constants[10]
+        h = a2 * math.cos(t2) + a3 * math.cos(t2 + t3) + d5 * math.sin(t2 + t3 + t4)
+        near[r] = (abs(math.sin(t3)) < threshold or abs(math.sin(t5)) < threshold
+                   or abs(h) < threshold * abs(a2))
 
 
 def gram(links, tool, q):
@@ -868,4 +895,4 @@ _COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_size", "_same", "
               "_wrap", "_exact_one_pose", "_exact_poses", "_one_pose", "_accept", "_gram",
               "_smallest", "_largest_diagonal_column", "_times", "_rayleigh", "_are_new",
               "_load", "_recompute", "_kernel", "_outputs", "_pose_errors", "_dot_rows",
-              "_deflated", "_cholesky"]
+              "_deflated", "_cholesky", "_near_rows"]

@@ -48,8 +48,14 @@ keeps its contract (every branch, flags, reasons, batches) in three steps:
    finished with a few calls (``_one_pose``, tested equal to the array path); the others go
    on to the restarts of ``_repair``.
 4. **The branches still missing**, near a singularity: members of the exact arm's wrist
-   family as starts (``_family``), and Newton steps deflated so that they cannot return to
-   a solution the pose already has (``_deflate``).
+   family as starts (``_family``, also for a pose with at most two branches near the wrist
+   singularity, or none, where the exact arm's closed form may miss a whole shoulder), and
+   Newton steps deflated so that they cannot return to a solution the pose already has
+   (``_deflate``).
+5. **The valid rows near a singularity** of the exact arm take three Newton steps more
+   (``_polish``): there a row stopped at a tenth of ``tol`` may lie 1e-5 rad from its
+   solution (the smallest singular value of :math:`J` is small), and the steps bring the
+   joints, not only the pose, to it.
 
 Why step 4. A real calibration is not a few millimetres from an exact UR in every
 direction: the controllers' parameters put joint axes 2, 3 and 4 out of parallel by 3 to
@@ -90,6 +96,7 @@ from ._newton_compiled import deflated as compiled_deflated
 from ._newton_compiled import exact_one_pose as compiled_exact_one_pose
 from ._newton_compiled import exact_poses as compiled_exact_poses
 from ._newton_compiled import gram as compiled_gram
+from ._newton_compiled import near_rows as compiled_near_rows
 from ._newton_compiled import newton as compiled_newton
 from ._newton_compiled import one_pose as compiled_one_pose
 from ._newton_compiled import ready as compiled_ready
@@ -419,8 +426,7 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
     re = start.rotation_error.reshape(n * 8).copy()
     pe[done], re[done] = polished.errors[:, done]
     valid = polished.converged & (pe <= tol) & (re <= tol)
-    solutions = _polish(nearest, X_6T, wrap_angle(polished.q), valid, pe, re,
-                        X_0T[np.arange(8 * n) // 8], tol)
+    solutions = _polish(nearest, X_6T, wrap_angle(polished.q), valid, pe, re, X_0T, tol)
     flags = _flags(polished.measures, valid, singular_tol, nearest.robot.links[3].d,
                    near_limit)
     flags["near_singular"] |= start.flags["near_singular"].reshape(n)   # the exact arm's
@@ -591,8 +597,7 @@ def _one_pose(nearest, start, X_0T, tool, tol, singular_tol, max_iter, wide, nea
         solutions = wrap_angle(Q)
         flags = _flags(M, valid, singular_tol, d4, near)
         flags["not_converged"] = (exact & ~valid).any()
-    solutions = _polish(nearest, tool, solutions, valid, pe, re,
-                        np.broadcast_to(X_0T, (8, 4, 4)), tol)
+    solutions = _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol)
     flags["near_singular"] = flags["near_singular"] | start.flags["near_singular"]
     flags = {name: np.array(flag, dtype=bool).reshape(()) for name, flag in flags.items()}
     return finish(solutions, valid, pe, re, flags,
@@ -603,7 +608,7 @@ def _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol):
     r"""The valid rows ``solutions`` (m, 6) (wrapped) near a singularity of the exact arm
     (:math:`|\sin\theta_3|`, :math:`|\sin\theta_5|` or the wrist centre's distance
     :math:`h` of :func:`_branches` over :math:`|a_2|` below :data:`_POLISH_NEAR`) taken
-    ``_PLAIN_STEPS`` Newton steps further towards their targets ``X_0T`` (m, 4, 4).
+    ``_PLAIN_STEPS`` Newton steps further towards their targets ``X_0T``.
 
     A row stops once its errors are below a tenth of ``tol``; near a singularity, where
     the smallest singular value :math:`\sigma` of :math:`J` is small, that leaves the
@@ -611,25 +616,37 @@ def _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol):
     10^{-5}`), and a solution that a singularity nearly pairs with another is not told
     apart from it. The steps further bring such a row to the solution (quadratic
     convergence). The errors ``pe``, ``re`` (m,) of a row polished are updated in place;
-    returns the solutions, wrapped (``solutions`` itself if no row moves)."""
-    exact = nearest.robot
-    t = solutions + nearest.exact[6:]
-    L = exact.links
-    h = (L[1].a * np.cos(t[:, 1]) + L[2].a * np.cos(t[:, 1] + t[:, 2])
-         + L[4].d * np.sin(t[:, 1] + t[:, 2] + t[:, 3]))
-    near = (np.minimum(np.minimum(np.abs(np.sin(t[:, 2])), np.abs(np.sin(t[:, 4]))),
-                       np.abs(h) / abs(L[1].a)) < _POLISH_NEAR)
-    rows = np.flatnonzero(valid & near)
+    returns the solutions, wrapped (``solutions`` itself if no row moves). ``X_0T`` holds
+    the targets of the poses whose rows are ``solutions``, eight each. With numba, the rows
+    near a singularity are picked in compiled code
+    (``dqlab.ik._newton_compiled.near_rows``, tested equal)."""
+    if compiled_ready():
+        near = compiled_near_rows(solutions, valid, nearest.exact, _POLISH_NEAR)
+    else:
+        near = valid & _near_rows(nearest.robot, solutions, _POLISH_NEAR)
+    rows = np.flatnonzero(near)
     if not rows.size:
         return solutions
-    q, _, _, _, errors = _newton(nearest.links, tool, solutions[rows], X_0T[rows], tol,
-                                 _PLAIN_STEPS)
+    q, _, _, _, errors = _newton(nearest.links, tool, solutions[rows],
+                                 X_0T.reshape(-1, 4, 4)[rows // 8], tol, _PLAIN_STEPS)
     better = (errors <= tol).all(axis=0) & np.isfinite(q).all(axis=1)
     rows, q = rows[better], q[better]
     solutions = solutions.copy()
     solutions[rows] = wrap_angle(q)
     pe[rows], re[rows] = errors[:, better]
     return solutions
+
+
+def _near_rows(exact, q, threshold):
+    r"""Which joint vectors q (m, 6) are within ``threshold`` of a singularity of the exact
+    arm: :math:`|\sin\theta_3|`, :math:`|\sin\theta_5|` or the wrist centre's distance
+    :math:`h` of :func:`_branches` over :math:`|a_2|` below it."""
+    t = q + np.array([lk.theta_offset for lk in exact.links])
+    L = exact.links
+    h = (L[1].a * np.cos(t[:, 1]) + L[2].a * np.cos(t[:, 1] + t[:, 2])
+         + L[4].d * np.sin(t[:, 1] + t[:, 2] + t[:, 3]))
+    return ((np.abs(np.sin(t[:, 2])) < threshold) | (np.abs(np.sin(t[:, 4])) < threshold)
+            | (np.abs(h) < threshold * abs(L[1].a)))
 
 
 @dataclass
