@@ -502,9 +502,42 @@ def test_near_singular_flag():
     with pytest.raises(ValueError, match="near_tol"):
         ur(robot, robot.fk(q), near_tol=-1.0)
     cal = calibrated(95)
-    from dqlab.ik.ur_calibrated import _NEAR_GAPS, _nominal
-    limit = max(1e-2, _NEAR_GAPS * _nominal(cal).rotation_gap)
+    from dqlab.ik.ur_calibrated import _NEAR_GAPS, _nearest_exact
+    limit = max(1e-2, _NEAR_GAPS * _nearest_exact(cal).rotation_gap)
     q = np.array([0.3, -1.2, 1.1, -0.4, 0.5 * limit, 0.2])
     assert ur(cal, cal.fk(q)).flags["near_singular"]
     q[4] = 3.0 * limit
     assert not ur(cal, cal.fk(q)).flags["near_singular"]
+
+
+@pytest.mark.parametrize("compiled_kernels", [True, False])
+def test_hard_poses_of_real_calibrations(compiled_kernels, monkeypatch):
+    """Poses of the real calibrations whose generating configuration a solve once missed
+    (tests/data/real_calibrations/hard_poses.json): near a singularity of the nearest exact
+    UR, where a row stopped at 1e-10 of pose error lies up to 1e-4 rad from its solution
+    (the valid rows near a singularity are polished further), and near the wrist
+    singularity with a whole shoulder missed by the exact arm's closed form (such a pose
+    takes the wrist family's starts). Each is found, in a batch and one pose at a time,
+    every valid row reproducing its pose to 1e-10 (independent forward kinematics)."""
+    import json
+    from pathlib import Path
+
+    from real_calibrations import real_calibrations
+
+    if compiled_kernels:
+        pytest.importorskip("numba")
+    else:
+        monkeypatch.setenv("DQLAB_COMPILED", "0")
+    path = Path(__file__).parent / "data" / "real_calibrations" / "hard_poses.json"
+    stored = json.loads(path.read_text(encoding="utf-8"))["configurations"]
+    robots = real_calibrations()
+    assert len(stored) >= 4 and sum(len(qs) for qs in stored.values()) >= 15
+    for name, qs in stored.items():
+        robot, q = robots[name], np.array(qs)
+        T = robot.fk(q)
+        result = ur(robot, T)
+        assert max(e.max() for e in errors(robot, result, T)) <= 1e-10, name
+        assert (distance_to(result, q) < 1e-6).all(), (name, distance_to(result, q))
+        for i in range(len(q)):
+            one = ur(robot, T[i])
+            assert distance_to(one, q[i]) < 1e-6, (name, i)

@@ -51,10 +51,10 @@ def chain_and_starts(robot, seed, n):
     tool = np.eye(4)
     tool[:3, :3], tool[:3, 3] = rot_x(0.3), (0.02, -0.01, 0.12)
     robot.tool = tool
-    nominal = module._nominal(robot)
+    nearest = module._nearest_exact(robot)
     rng = np.random.default_rng(seed)
     X = robot.fk(rng.uniform(-np.pi, np.pi, (n, 6)))
-    start = ur(nominal.robot, X @ np.linalg.inv(tool), tol=2 * nominal.position_gap)
+    start = ur(nearest.robot, X @ np.linalg.inv(tool), tol=2 * nearest.position_gap)
     q0 = start.solutions.reshape(-1, 6)[start.valid.reshape(-1)]
     targets = np.repeat(X, 8, axis=0)[start.valid.reshape(-1)]
     far = rng.uniform(-np.pi, np.pi, (50, 6))
@@ -62,7 +62,7 @@ def chain_and_starts(robot, seed, n):
     odd = np.array([[np.nan, 0.0, 0.0, 0.0, 0.0, 0.0]])
     q0 = np.concatenate([q0, far, singular, odd])
     targets = np.concatenate([targets, targets[:50], targets[:1], targets[:1]])
-    return (nominal.links, tool), q0, targets
+    return (nearest.links, tool), q0, targets
 
 
 @pytest.mark.parametrize("make", [calibrated, physically_calibrated])
@@ -217,9 +217,9 @@ def test_compiled_gram_and_acceptance_equal_the_numpy_path(numpy_path):
     J = kernel.jacobian(kernel.frames(q))
     np.testing.assert_allclose(compiled.gram(*chain, q), np.swapaxes(J, -1, -2) @ J,
                                rtol=0, atol=1e-13)
-    nominal = module._nominal(robot)
-    near, direction = module._near_singular(nominal, chain[1], q)
-    near_n, direction_n = numpy_path(module._near_singular, nominal, chain[1], q)
+    nearest = module._nearest_exact(robot)
+    near, direction = module._near_singular(nearest, chain[1], q)
+    near_n, direction_n = numpy_path(module._near_singular, nearest, chain[1], q)
     np.testing.assert_array_equal(near, near_n)
     assert near.any() and not near.all()
     np.testing.assert_allclose(direction, direction_n, rtol=0, atol=1e-9)
@@ -258,7 +258,7 @@ def poses_of_every_kind(robot, seed, random, near):
 
 
 @pytest.mark.parametrize("make", [calibrated, physically_calibrated])
-def test_compiled_closed_form_equals_the_one_pose_closed_form(make):
+def test_compiled_exact_one_pose_equals_the_one_pose_closed_form(make):
     """The exact arm's closed form of one pose, compiled (module._exact_one_pose), is the
     IKResult of the closed form's one-pose path on floats (dqlab.ik._ur_engine.solve_single)
     bit for bit: solutions (joint offsets subtracted and wrapped), valid rows, errors and
@@ -268,17 +268,17 @@ def test_compiled_closed_form_equals_the_one_pose_closed_form(make):
     from dqlab.ik import _ur_engine, ur_parameters
     assert compiled.ready()
     robot = make(51)
-    nominal = module._nominal(robot)
-    assert any(nominal.exact[6:])                       # offsets to subtract
+    nearest = module._nearest_exact(robot)
+    assert any(nearest.exact[6:])                       # offsets to subtract
     X = poses_of_every_kind(robot, 52, 150, 15)
     X[:10, :3, 3] *= 3.0                                 # out of reach
-    prm = ur_parameters(nominal.robot)
-    wide = 2 * nominal.position_gap
+    prm = ur_parameters(nearest.robot)
+    wide = 2 * nearest.position_gap
     handed_over = compared = 0
     for tol in (1e-9, wide, 10 * wide):
         for T in X:
-            fast = module._exact_one_pose(nominal, T, tol, 5e-7, 1e-2)
-            floats = _ur_engine.solve_single(nominal.robot, prm, T, tol, 5e-7, 1e-9, None)
+            fast = module._exact_one_pose(nearest, T, tol, 5e-7, 1e-2)
+            floats = _ur_engine.solve_single(nearest.robot, prm, T, tol, 5e-7, 1e-9, None)
             assert (fast is None) == (floats is None)
             if fast is None:
                 handed_over += 1
@@ -293,7 +293,7 @@ def test_compiled_closed_form_equals_the_one_pose_closed_form(make):
 
 
 @pytest.mark.parametrize("make", [calibrated, physically_calibrated])
-def test_compiled_closed_forms_equal_the_batch_closed_form(make):
+def test_compiled_exact_poses_equal_the_batch_closed_form(make):
     """The exact arm's closed form of a batch, compiled pose by pose with the poses it does
     not solve handed to the closed form (module._exact_poses, what the batch path starts
     from), is the closed form's own IKResult of the batch, at the three tolerances the
@@ -304,19 +304,19 @@ def test_compiled_closed_forms_equal_the_batch_closed_form(make):
     numpy's atan2 may differ."""
     assert compiled.ready()
     robot = make(54)
-    nominal = module._nominal(robot)
+    nearest = module._nearest_exact(robot)
     X = poses_of_every_kind(robot, 55, 1500, 50)
     X[:20, :3, 3] *= 5.0                                 # out of reach
     X[20:30, :3, 3] = [0.0, 0.0, 0.3]                    # wrist centre near the axis
     X[30:35, :3, 3] = [[1e100, 0.0, 0.0], [0.0, -1e200, 0.0], [0.0, 0.0, 1e300],
                        [-3e16, 3e16, 3e16], [1e10, 0.0, 0.0]]          # far beyond reach
     handed_over = []
-    for tol in (1e-9, 2 * nominal.position_gap, 20 * nominal.position_gap):
-        fast = module._exact_poses(nominal, X, tol, 5e-7, 1e-2, module._closed_form)
-        batch = ur(nominal.robot, X, tol=tol)
+    for tol in (1e-9, 2 * nearest.position_gap, 20 * nearest.position_gap):
+        fast = module._exact_poses(nearest, X, tol, 5e-7, 1e-2, module._closed_form)
+        batch = ur(nearest.robot, X, tol=tol)
         R = X[:, :3, :3].reshape(-1, 9).T
-        done = compiled.closed_forms(np.stack(quaternion_from_matrix_entries(*R), axis=-1),
-                                     X[:, :3, 3], X[:, :3, 2], nominal.exact, tol, 5e-7,
+        done = compiled.exact_poses(np.stack(quaternion_from_matrix_entries(*R), axis=-1),
+                                     X[:, :3, 3], X[:, :3, 2], nearest.exact, tol, 5e-7,
                                      NEAR_WRIST)[-1]
         handed_over.append(int((~done).sum()))
         for name in ("valid", "reason"):
@@ -381,11 +381,11 @@ def test_restarts_step_a_shared_start_once(numpy_path):
     vectors, errors and marks as the same start given once per row (fewer than _FEW_ROWS
     starts either way: the numpy path's kernel is the same one)."""
     robot = calibrated(53)
-    nominal = module._nominal(robot)
-    chain = (nominal.links, np.eye(4))
+    nearest = module._nearest_exact(robot)
+    chain = (nearest.links, np.eye(4))
     rng = np.random.default_rng(54)
     X = robot.fk(rng.uniform(-np.pi, np.pi, (20, 6)))
-    start = ur(nominal.robot, X, tol=2 * nominal.position_gap)
+    start = ur(nearest.robot, X, tol=2 * nearest.position_gap)
     rows = np.flatnonzero(start.valid.reshape(-1))
     X_0T = X
     owners = np.repeat(rows[::3], 3)                            # rows to restart, each from
@@ -437,3 +437,19 @@ def test_compiled_deflation_equals_the_numpy_path(numpy_path):
     gap = np.abs(np.angle(np.exp(1j * (fast - plain)))).max(axis=1)
     assert gap[converged].max() < 1e-8
     assert np.mean(gap < 1e-6) > 0.9
+
+
+def test_compiled_near_rows_equal_the_numpy_path():
+    """The valid rows _polish steps further (within _POLISH_NEAR of a singularity of the
+    exact arm), picked in compiled code, are those of the numpy formula, on random rows and
+    rows at each singularity."""
+    robot = calibrated(3)
+    nearest = module._nearest_exact(robot)
+    q = np.random.default_rng(4).uniform(-np.pi, np.pi, (400, 6))
+    q[:50, 2] = -nearest.exact[8] + np.linspace(-0.1, 0.1, 50)       # elbow
+    q[50:100, 4] = -nearest.exact[10] + np.linspace(-0.1, 0.1, 50)   # wrist
+    valid = np.random.default_rng(5).random(400) < 0.8
+    near = compiled.near_rows(q, valid, nearest.exact, module._POLISH_NEAR)
+    expected = valid & module._near_rows(nearest.robot, q, module._POLISH_NEAR)
+    np.testing.assert_array_equal(near, expected)
+    assert 40 < near.sum() < 200

@@ -15,13 +15,14 @@ in-browser chapters run without it).
 
 :func:`unique` and :func:`are_new` are ``_Polished.unique`` and ``_Polished.are_new`` of
 that module, compiled; :func:`one_pose` is its ``_one_pose`` after the closed form,
-:func:`accept` its ``_accept`` (which restarts replace a row), :func:`gram` the
+:func:`accept` its ``_accept`` (which restarts replace a row), :func:`near_rows` its
+``_near_rows`` (which valid rows ``_polish`` steps further), :func:`gram` the
 :math:`J^\mathsf{T} J` of its ``_near_singular`` and :func:`smallest` that function's test
 and direction by inverse iteration wherever they are certain (``eigh`` answers elsewhere,
-and is what the numpy path uses). :func:`closed_form` is the nearest exact
+and is what the numpy path uses). :func:`exact_one_pose` is the nearest exact
 arm's closed form of one pose that the one-pose path starts from: the loop of
 ``dqlab.ik._ur_engine.solve_single`` over the steps of ``dqlab.ik.ur_steps``, written out on
-floats (tested equal to it bit for bit), and :func:`closed_forms` the same for a batch of
+floats (tested equal to it bit for bit), and :func:`exact_poses` the same for a batch of
 poses, which the batch path starts from (the poses it does not solve go to the closed form's
 own batch path); :func:`deflated` the deflated Newton steps of its ``_deflate``.
 :func:`ready` says whether numba is there and the environment variable ``DQLAB_COMPILED``
@@ -48,8 +49,8 @@ from ._newton_lanes import size as lane_size
 from ._newton_lanes import step as lane_step
 from .ur_steps import NEAR_SINGULAR
 
-__all__ = ["ready", "refresh", "newton", "one_pose", "closed_form", "closed_forms", "unique",
-           "are_new", "accept", "gram", "smallest", "deflated"]
+__all__ = ["ready", "refresh", "newton", "one_pose", "exact_one_pose", "exact_poses", "unique",
+           "are_new", "accept", "near_rows", "gram", "smallest", "deflated"]
 
 _COMPILED = []     # the functions below the wrappers, compiled in place by ready()
 _READY = None      # whether numba is there (the kernels compiled), once known
@@ -150,6 +151,32 @@ def accept(owners, converged, q_starts, q, unique):
     return taken[:k]
 
 
+def near_rows(solutions, valid, constants, threshold):
+    r"""``dqlab.ik.ur_calibrated._near_rows`` compiled: which valid rows of ``solutions``
+    (m, 6) are within ``threshold`` of a singularity of the exact arm of ``constants``
+    (``_NearestExact.exact``): :math:`|\sin\theta_3|`, :math:`|\sin\theta_5|` or
+    :math:`|h| / |a_2|` below it."""
+    near = np.zeros(solutions.shape[0], dtype=np.bool_)
+    _near_rows(np.ascontiguousarray(solutions, dtype=float), np.ascontiguousarray(valid),
+               np.asarray(constants, dtype=float), float(threshold), near)
+    return near
+
+
+def _near_rows(solutions, valid, constants, threshold, near):
+    """:func:`near_rows`' work."""
+    a2, a3, d5 = constants[1], constants[2], constants[4]
+    for r in range(solutions.shape[0]):
+        if not valid[r]:
+            continue
+        t2 = solutions[r, 1] + constants[7]
+        t3 = solutions[r, 2] + constants[8]
+        t4 = solutions[r, 3] + constants[9]
+        t5 = solutions[r, 4] + constants[10]
+        h = a2 * math.cos(t2) + a3 * math.cos(t2 + t3) + d5 * math.sin(t2 + t3 + t4)
+        near[r] = (abs(math.sin(t3)) < threshold or abs(math.sin(t5)) < threshold
+                   or abs(h) < threshold * abs(a2))
+
+
 def gram(links, tool, q):
     r""":math:`J^\mathsf{T} J` (m, 6, 6) of the calibrated chain (links, tool) at the joint
     vectors q (m, 6), J the Jacobian at the TCP of ``_MatrixChain.jacobian``: the lanes'
@@ -197,7 +224,7 @@ def deflated(links, tool, q, X_target, known, steps, *, stop, give_up_after, dam
     return out
 
 
-def closed_form(flange, constants, tol, singular_tol, near_wrist, near_tol=NEAR_SINGULAR):
+def exact_one_pose(flange, constants, tol, singular_tol, near_wrist, near_tol=NEAR_SINGULAR):
     """``dqlab.ik._ur_engine.solve_single`` after the flange, compiled: the closed form of the
     exact UR of ``constants`` (12,) (``d1, a2, a3, d4, d5, d6`` and the six joint offsets)
     for the flange ``(q, p, z6)`` (rotation quaternion, position, z axis). The solutions (8, 6),
@@ -210,33 +237,33 @@ def closed_form(flange, constants, tol, singular_tol, near_wrist, near_tol=NEAR_
     q, p, z6 = flange
     solutions, errors = np.zeros((8, 6)), np.zeros(8)
     flags = np.zeros(4, dtype=np.bool_)
-    done = _closed_form(q[0], q[1], q[2], q[3], p[0], p[1], p[2], z6[0], z6[1], z6[2],
+    done = _exact_one_pose(q[0], q[1], q[2], q[3], p[0], p[1], p[2], z6[0], z6[1], z6[2],
                         constants, float(tol), float(singular_tol), float(near_wrist),
                         float(near_tol), solutions, errors, flags)
     return (solutions, errors <= tol, errors, flags) if done else None
 
 
-def closed_forms(Q, P, Z, constants, tol, singular_tol, near_wrist, near_tol=NEAR_SINGULAR):
-    """:func:`closed_form` of n flanges at once, pose by pose in compiled code: rotation
+def exact_poses(Q, P, Z, constants, tol, singular_tol, near_wrist, near_tol=NEAR_SINGULAR):
+    """:func:`exact_one_pose` of n flanges at once, pose by pose in compiled code: rotation
     quaternions ``Q`` (n, 4), positions ``P`` (n, 3) and z axes ``Z`` (n, 3). The solutions
     (n, 8, 6), ``valid`` (n, 8), the errors (n, 8), the flags (n, 4) and ``done`` (n,):
-    False where :func:`closed_form` returns None (those poses' other arrays are zeros)."""
+    False where :func:`exact_one_pose` returns None (those poses' other arrays are zeros)."""
     n = Q.shape[0]
     solutions, errors = np.zeros((n, 8, 6)), np.zeros((n, 8))
     flags, done = np.zeros((n, 4), dtype=np.bool_), np.zeros(n, dtype=np.bool_)
-    _closed_forms(np.ascontiguousarray(Q, dtype=float), np.ascontiguousarray(P, dtype=float),
+    _exact_poses(np.ascontiguousarray(Q, dtype=float), np.ascontiguousarray(P, dtype=float),
                   np.ascontiguousarray(Z, dtype=float), constants, float(tol),
                   float(singular_tol), float(near_wrist), float(near_tol), solutions, errors,
                   flags, done)
     return solutions, done[:, None] & (errors <= tol), errors, flags, done
 
 
-def _closed_forms(Q, P, Z, constants, tol, singular_tol, near_wrist, near_tol, solutions,
+def _exact_poses(Q, P, Z, constants, tol, singular_tol, near_wrist, near_tol, solutions,
                   errors, flags, done):
-    """:func:`closed_forms`' work: :func:`_closed_form` of each pose, a pose it does not
+    """:func:`exact_poses`' work: :func:`_exact_one_pose` of each pose, a pose it does not
     solve cleared again."""
     for i in range(Q.shape[0]):
-        done[i] = _closed_form(Q[i, 0], Q[i, 1], Q[i, 2], Q[i, 3], P[i, 0], P[i, 1], P[i, 2],
+        done[i] = _exact_one_pose(Q[i, 0], Q[i, 1], Q[i, 2], Q[i, 3], P[i, 0], P[i, 1], P[i, 2],
                                Z[i, 0], Z[i, 1], Z[i, 2], constants, tol, singular_tol,
                                near_wrist, near_tol, solutions[i], errors[i], flags[i])
         if not done[i]:
@@ -571,9 +598,9 @@ def _wrap(theta):
     return w
 
 
-def _closed_form(qw, qx, qy, qz, px, py, pz, zx, zy, zz, constants, tol, singular_tol,
+def _exact_one_pose(qw, qx, qy, qz, px, py, pz, zx, zy, zz, constants, tol, singular_tol,
                  near_wrist, near_tol, solutions, errors, flags):
-    """:func:`closed_form`'s work: ``solve_single``'s loop, each line the step of
+    """:func:`exact_one_pose`'s work: ``solve_single``'s loop, each line the step of
     ``dqlab.ik.ur_steps`` named beside it; False where that function returns None."""
     d1, a2, a3, d4, d5, d6 = (constants[0], constants[1], constants[2], constants[3],
                               constants[4], constants[5])
@@ -865,7 +892,7 @@ def _dot_rows(A, i, B, j):
 _Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE = (
     INDEX[name] for name in ("q0", "c0", "s0", "t00", "tp0", "F0", "x0", "act", "size"))
 _COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_size", "_same", "_unique",
-              "_wrap", "_closed_form", "_closed_forms", "_one_pose", "_accept", "_gram",
+              "_wrap", "_exact_one_pose", "_exact_poses", "_one_pose", "_accept", "_gram",
               "_smallest", "_largest_diagonal_column", "_times", "_rayleigh", "_are_new",
               "_load", "_recompute", "_kernel", "_outputs", "_pose_errors", "_dot_rows",
-              "_deflated", "_cholesky"]
+              "_deflated", "_cholesky", "_near_rows"]

@@ -48,8 +48,14 @@ keeps its contract (every branch, flags, reasons, batches) in three steps:
    finished with a few calls (``_one_pose``, tested equal to the array path); the others go
    on to the restarts of ``_repair``.
 4. **The branches still missing**, near a singularity: members of the exact arm's wrist
-   family as starts (``_family``), and Newton steps deflated so that they cannot return to
-   a solution the pose already has (``_deflate``).
+   family as starts (``_family``, also for a pose with at most two branches near the wrist
+   singularity, or none, where the exact arm's closed form may miss a whole shoulder), and
+   Newton steps deflated so that they cannot return to a solution the pose already has
+   (``_deflate``).
+5. **The valid rows near a singularity** of the exact arm take three Newton steps more
+   (``_polish``): there a row stopped at a tenth of ``tol`` may lie 1e-5 rad from its
+   solution (the smallest singular value of :math:`J` is small), and the steps bring the
+   joints, not only the pose, to it.
 
 Why step 4. A real calibration is not a few millimetres from an exact UR in every
 direction: the controllers' parameters put joint axes 2, 3 and 4 out of parallel by 3 to
@@ -63,8 +69,9 @@ to one solution and the other is missed; the exact arm clips a row at the edge o
 that the calibrated arm reaches (``_off_the_edge`` moves such a start off the elbow
 singularity, where Newton cannot start); near the wrist singularity a shoulder and elbow
 may have four solutions along the exact arm's wrist family, not two. Steps 1-3 alone found
-the generating configuration of 99.75-99.88 % of random poses of those arms; with step 4,
-99.86-99.98 % (``benchmarks/bench_ik_ur_calibrated.py``). What remains is mostly poses with
+the generating configuration of 99.75-99.88 % of random poses of those arms; with steps 4
+and 5, 99.91-99.99 % of 10,000 (``benchmarks/bench_ik_ur_calibrated.py``; 99.88-99.98 %
+on each of two other sets of 10,000). What remains is mostly poses with
 more solutions than the eight rows (a general 6R arm has up to 16): near a singularity of
 the exact arm the calibrated one may have ten or twelve, and a row holds one of them. Such
 poses are flagged ``"near_singular"`` (the threshold is at least four times the arms'
@@ -86,10 +93,11 @@ from ..robot import Link, Robot
 from ..rotations import wrap_angle
 from ._newton_compiled import accept as compiled_accept
 from ._newton_compiled import are_new as compiled_are_new
-from ._newton_compiled import closed_form as compiled_closed_form
-from ._newton_compiled import closed_forms as compiled_closed_forms
 from ._newton_compiled import deflated as compiled_deflated
+from ._newton_compiled import exact_one_pose as compiled_exact_one_pose
+from ._newton_compiled import exact_poses as compiled_exact_poses
 from ._newton_compiled import gram as compiled_gram
+from ._newton_compiled import near_rows as compiled_near_rows
 from ._newton_compiled import newton as compiled_newton
 from ._newton_compiled import one_pose as compiled_one_pose
 from ._newton_compiled import ready as compiled_ready
@@ -129,12 +137,15 @@ _WAYS = np.array([0.05, -0.05, 0.2, -0.2, 0.6, -0.6])
 _NEAR_GAPS = 4.0       # near_singular on a calibrated arm: at least this many rotation gaps
 _NEAR_MEASURE = 0.1    # a singularity measure below which a pose's missing branches are sought
 _FAMILY = 6            # members of the exact arm's wrist family taken as starts
+_FEW_BRANCHES = 2      # a pose with this many branches or fewer ...
+_FEW_WRIST = 0.2       # ... none with |sin theta_5| above this, takes the family's starts
 _DEFLATION_WAYS = np.array([0.05, -0.05, 0.3, -0.3])   # the moves of a deflation's starts
+_POLISH_NEAR = 0.04    # a valid row this near a singularity of the exact arm is polished
 _SAMPLES = np.random.default_rng(20260531).uniform(-np.pi, np.pi, (64, 6))
 
 
 @dataclass(frozen=True)
-class _Nominal:
+class _NearestExact:
     """What a calibrated robot's solves need, computed once per robot: the nearest exact UR
     (bare), the largest position and rotation differences between the two arms on sample
     configurations, the calibrated chain's constants for the Newton kernels and the exact
@@ -149,7 +160,7 @@ class _Nominal:
     matrix_chains: dict = field(default_factory=dict, compare=False)   # _matrix_chain's
 
 
-_NOMINAL = weakref.WeakKeyDictionary()        # calibrated robot -> _Nominal (links immutable)
+_NEAREST_EXACT = weakref.WeakKeyDictionary()   # calibrated robot -> _NearestExact (immutable)
 
 
 def nominal_ur(robot: Robot) -> Robot:
@@ -196,13 +207,13 @@ def nominal_ur(robot: Robot) -> Robot:
     >>> round(exact.links[1].a, 6), exact.links[1].alpha
     (-0.426, 0.0)
     """
-    return _nominal(robot).robot
+    return _nearest_exact(robot).robot
 
 
-def _nominal(robot):
-    """The :class:`_Nominal` of a calibrated robot, computed once."""
+def _nearest_exact(robot):
+    """The :class:`_NearestExact` of a calibrated robot, computed once."""
     try:
-        return _NOMINAL[robot]
+        return _NEAREST_EXACT[robot]
     except (KeyError, TypeError):
         pass
     links = getattr(robot, "links", None)
@@ -246,10 +257,10 @@ def _nominal(robot):
     L = exact.links                                      # (UR_SHAPE checked above)
     parameters = {"d1": L[0].d, "a2": L[1].a, "a3": L[2].a, "d4": L[3].d, "d5": L[4].d,
                   "d6": L[5].d, "offsets": [lk.theta_offset for lk in L]}
-    nominal = _Nominal(exact, position_gap, rotation_gap, constants, exact_constants,
+    nearest = _NearestExact(exact, position_gap, rotation_gap, constants, exact_constants,
                        parameters)
-    _NOMINAL[robot] = nominal
-    return nominal
+    _NEAREST_EXACT[robot] = nearest
+    return nearest
 
 
 def _angle_about(u, v, n):
@@ -328,7 +339,7 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
     True
     """
     compiled_refresh()                                  # DQLAB_COMPILED, read once a call
-    nominal = _nominal(robot)
+    nearest = _nearest_exact(robot)
     tol, singular_tol, near_tol, pose_tol = check_ur_options(tol, singular_tol, near_tol,
                                                              pose_tol, residuals)
     if closed_form is None:
@@ -353,10 +364,10 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
         if not np.isfinite(X_06).all():
             raise ValueError("target: a position is so far from the robot (some 1e308 m) "
                              "that it overflows in the robot's base frame")
-    wide = max(tol, 2.0 * nominal.position_gap)
+    wide = max(tol, 2.0 * nearest.position_gap)
     references = _references(q_ref, batch)              # (n, 6), or None
 
-    near_limit = max(near_tol, _NEAR_GAPS * nominal.rotation_gap)
+    near_limit = max(near_tol, _NEAR_GAPS * nearest.rotation_gap)
 
     def exact_solutions(X, poses=None, tol=wide, near_tol=near_limit):
         """The exact arm's closed form of the flanges X (m, 4, 4), which are those of the
@@ -366,21 +377,21 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
                                                else references[poses])
         if batch == () and X.shape[0] == 1:             # one pose (compiled, with numba)
             if ref is None and compiled_ready():
-                result = _exact_one_pose(nominal, X[0], tol, singular_tol, near_tol)
+                result = _exact_one_pose(nearest, X[0], tol, singular_tol, near_tol)
                 if result is not None:
                     return result
             X, ref = X[0], None if ref is None else ref[0]
         elif ref is None and pose_tol <= RIGID_TOL and compiled_ready():
             # (the targets are checked at least as strictly as the closed form checks them)
-            return _exact_poses(nominal, X, tol, singular_tol, near_tol, closed_form)
-        return closed_form(nominal, X, tol=tol, q_ref=ref, singular_tol=singular_tol,
+            return _exact_poses(nearest, X, tol, singular_tol, near_tol, closed_form)
+        return closed_form(nearest, X, tol=tol, q_ref=ref, singular_tol=singular_tol,
                            near_tol=near_tol)
 
     start = exact_solutions(X_06)
-    start.solutions = _off_the_edge(nominal.robot, start.solutions, start.valid,
+    start.solutions = _off_the_edge(nearest.robot, start.solutions, start.valid,
                                     start.position_error, tol)
     if batch == ():
-        result = _one_pose(nominal, start, X_0T[0], X_6T, tol, singular_tol, max_iter, wide,
+        result = _one_pose(nearest, start, X_0T[0], X_6T, tol, singular_tol, max_iter, wide,
                            near_limit)
         if result is not None:
             return result
@@ -395,11 +406,11 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
         again = exact_solutions(X_06[poses], poses, tol=10.0 * wide)
         rows = (8 * poses[:, None] + np.arange(8)).reshape(-1)
         use = near[rows] & again.valid.reshape(-1)
-        again.solutions = _off_the_edge(nominal.robot, again.solutions, again.valid,
+        again.solutions = _off_the_edge(nearest.robot, again.solutions, again.valid,
                                         again.position_error, tol)
         q0[rows[use]] = again.solutions.reshape(-1, 6)[use]
         started[rows[use]] = True
-    chain = (nominal.links, X_6T)
+    chain = (nearest.links, X_6T)
     polished = _Polished.empty(n)
     # the branches the exact arm misses go last: they seldom converge, and each group of
     # eight branches that the compiled steps take together runs as long as its slowest
@@ -408,15 +419,16 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
     polished.record(rows, *_newton(*chain, q0[rows], X_0T[rows // 8], tol, max_iter))
     polished.converged[extra] &= polished.are_new(extra, polished.q[extra],   # keep them
                                                   polished.unique() & found)  # if new
-    _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, tol, max_iter)
-    _family(chain, nominal, polished, X_06, X_0T, closed_form, tol, max_iter)
-    _deflate(chain, nominal, polished, X_0T, tol, max_iter)
+    _repair(chain, nearest, polished, q0, found, exact_solutions, X_0T, X_T6, tol, max_iter)
+    _family(chain, nearest, polished, X_06, X_0T, closed_form, tol, max_iter)
+    _deflate(chain, nearest, polished, X_0T, tol, max_iter)
     done = np.flatnonzero(polished.done)
     pe = start.position_error.reshape(n * 8).copy()
     re = start.rotation_error.reshape(n * 8).copy()
     pe[done], re[done] = polished.errors[:, done]
     valid = polished.converged & (pe <= tol) & (re <= tol)
-    flags = _flags(polished.measures, valid, singular_tol, nominal.robot.links[3].d,
+    solutions = _polish(nearest, X_6T, wrap_angle(polished.q), valid, pe, re, X_0T, tol)
+    flags = _flags(polished.measures, valid, singular_tol, nearest.robot.links[3].d,
                    near_limit)
     flags["near_singular"] |= start.flags["near_singular"].reshape(n)   # the exact arm's
     flags["not_converged"] = (exact & ~valid).reshape(n, 8).any(axis=1)
@@ -425,27 +437,27 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
     started = start.valid.reshape(n, 8).any(axis=1)
     reason[none & started] = REASON_NOT_CONVERGED
     reason[none & ~started] = start.reason.reshape(n)[none & ~started]
-    return finish(wrap_angle(polished.q).reshape(batch + (8, 6)), valid.reshape(batch + (8,)),
+    return finish(solutions.reshape(batch + (8, 6)), valid.reshape(batch + (8,)),
                   pe.reshape(batch + (8,)), re.reshape(batch + (8,)),
                   {name: f.reshape(batch) for name, f in flags.items()},
                   reason.reshape(batch))
 
 
-def _closed_form(nominal, X_06, *, tol, q_ref=None, singular_tol=5e-7,
+def _closed_form(nearest, X_06, *, tol, q_ref=None, singular_tol=5e-7,
                  near_tol=NEAR_SINGULAR):
-    """``dqlab.ik.ur`` of the exact arm ``nominal.robot`` for the flange poses ``X_06``, its
+    """``dqlab.ik.ur`` of the exact arm ``nearest.robot`` for the flange poses ``X_06``, its
     tolerances checked already: the engine's :func:`~dqlab.ik._ur_engine.solve` with ``ur``'s
     defaults (``pose_tol`` :data:`~dqlab.ik.targets.RIGID_TOL`, no tool, the residuals of
     the solved equations)."""
-    return exact_solve(nominal.robot, nominal.parameters, X_06, tol, singular_tol, RIGID_TOL,
+    return exact_solve(nearest.robot, nearest.parameters, X_06, tol, singular_tol, RIGID_TOL,
                        None, q_ref, "equations", near_tol)
 
 
 def _solver_of_robot(closed_form):
     """A ``closed_form(robot, X, **options)`` given to :func:`calibrated_ur`, called as
-    :func:`_closed_form` is, with the :class:`_Nominal`."""
-    def solver(nominal, X_06, **options):
-        return closed_form(nominal.robot, X_06, **options)
+    :func:`_closed_form` is, with the :class:`_NearestExact`."""
+    def solver(nearest, X_06, **options):
+        return closed_form(nearest.robot, X_06, **options)
     return solver
 
 
@@ -498,9 +510,9 @@ def _plain_pose(target, pose_tol):
             and rigid_rows(target, pose_tol) is not None)
 
 
-def _exact_one_pose(nominal, X_06, tol, singular_tol, near_tol):
+def _exact_one_pose(nearest, X_06, tol, singular_tol, near_tol):
     """The exact arm's closed form of one flange pose ``X_06`` (4, 4) with the tolerance
-    ``tol``, compiled (``dqlab.ik._newton_compiled.closed_form``): the :class:`IKResult` the
+    ``tol``, compiled (``dqlab.ik._newton_compiled.exact_one_pose``): the :class:`IKResult` the
     closed form's one-pose path gives (at its default ``pose_tol``), or None where that path
     hands the pose to the batch path (and so does the caller)."""
     rows = rigid_rows(X_06, RIGID_TOL)                  # that path's check, and its flange:
@@ -508,7 +520,7 @@ def _exact_one_pose(nominal, X_06, tol, singular_tol, near_tol):
         return None
     a, b, c = rows
     q = quaternion_from_matrix_entries(a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2])
-    done = compiled_closed_form((q, (a[3], b[3], c[3]), (a[2], b[2], c[2])), nominal.exact,
+    done = compiled_exact_one_pose((q, (a[3], b[3], c[3]), (a[2], b[2], c[2])), nearest.exact,
                                 tol, singular_tol, NEAR_WRIST, near_tol)
     if done is None:
         return None
@@ -519,17 +531,17 @@ def _exact_one_pose(nominal, X_06, tol, singular_tol, near_tol):
     return IKResult(solutions, valid, errors, np.zeros(8), flags, np.array("", dtype=object))
 
 
-def _exact_poses(nominal, X_06, tol, singular_tol, near_tol, closed_form):
+def _exact_poses(nearest, X_06, tol, singular_tol, near_tol, closed_form):
     """The exact arm's closed form of the flange poses ``X_06`` (n, 4, 4) (rigid transforms,
     checked) with the tolerance ``tol``, compiled pose by pose
-    (``dqlab.ik._newton_compiled.closed_forms``, the loop of :func:`_exact_one_pose`); the
+    (``dqlab.ik._newton_compiled.exact_poses``, the loop of :func:`_exact_one_pose`); the
     poses that path hands on (a wrist near its singularity, a wrist centre inside the
     shoulder cylinder, no valid row) are solved by ``closed_form`` itself. The
     :class:`IKResult` ``closed_form`` gives for them all (tested equal)."""
     R = X_06[:, :3, :3]
     q = quaternion_from_matrix_entries(*(R[:, i, j] for i in range(3) for j in range(3)))
-    solutions, valid, errors, flags, done = compiled_closed_forms(
-        np.stack(q, axis=-1), X_06[:, :3, 3], X_06[:, :3, 2], nominal.exact, tol,
+    solutions, valid, errors, flags, done = compiled_exact_poses(
+        np.stack(q, axis=-1), X_06[:, :3, 3], X_06[:, :3, 2], nearest.exact, tol,
         singular_tol, NEAR_WRIST, near_tol)
     flags = dict(zip(_FLAG_NAMES[:4], flags.T, strict=True))   # wrist, shoulder, elbow, near
     flags["unreachable"] = np.zeros(done.shape, dtype=bool)
@@ -538,7 +550,7 @@ def _exact_poses(nominal, X_06, tol, singular_tol, near_tol, closed_form):
     reason = np.full(done.shape, "", dtype=object)
     rest = np.flatnonzero(~done)
     if rest.size:
-        other = closed_form(nominal, X_06[rest], tol=tol, singular_tol=singular_tol,
+        other = closed_form(nearest, X_06[rest], tol=tol, singular_tol=singular_tol,
                             near_tol=near_tol)
         solutions[rest], valid[rest] = other.solutions, other.valid
         errors[rest], rotation_errors[rest] = other.position_error, other.rotation_error
@@ -548,7 +560,7 @@ def _exact_poses(nominal, X_06, tol, singular_tol, near_tol, closed_form):
     return IKResult(solutions, valid, errors, rotation_errors, flags, reason)
 
 
-def _one_pose(nominal, start, X_0T, tool, tol, singular_tol, max_iter, wide, near):
+def _one_pose(nearest, start, X_0T, tool, tol, singular_tol, max_iter, wide, near):
     """The result of :func:`calibrated_ur` for one pose (``start`` the exact arm's
     :class:`IKResult` of it, ``X_0T`` (4, 4) the target in frame 0) with a few numpy calls,
     when Newton from the exact arm's branches is all it takes: every branch the exact arm
@@ -557,9 +569,9 @@ def _one_pose(nominal, start, X_0T, tool, tol, singular_tol, max_iter, wide, nea
     With numba, all of it after the closed form is one compiled call
     (``dqlab.ik._newton_compiled.one_pose``)."""
     found, pe, re = start.valid, start.position_error, start.rotation_error
-    d4 = nominal.robot.links[3].d
+    d4 = nearest.robot.links[3].d
     if compiled_ready():
-        done = compiled_one_pose(nominal.links, tool, start.solutions, found, pe, re, X_0T,
+        done = compiled_one_pose(nearest.links, tool, start.solutions, found, pe, re, X_0T,
                                  tol, max_iter, singular_tol, d4, 10.0 * wide, near,
                                  plain=_PLAIN_STEPS, stop_factor=_STOP,
                                  give_up_after=_GIVE_UP_AFTER, damping=_DAMPING,
@@ -572,7 +584,7 @@ def _one_pose(nominal, start, X_0T, tool, tol, singular_tol, max_iter, wide, nea
         if (~found & (pe <= 10.0 * wide)).any() or not found.any():
             return None
         rows = np.flatnonzero(found)
-        q, converged, _, measures, errors = _newton(nominal.links, tool, start.solutions[rows],
+        q, converged, _, measures, errors = _newton(nearest.links, tool, start.solutions[rows],
                                                     np.broadcast_to(X_0T, (rows.size, 4, 4)),
                                                     tol, max_iter)
         Q, M = np.zeros((8, 6)), np.zeros((3, 8))
@@ -586,10 +598,56 @@ def _one_pose(nominal, start, X_0T, tool, tol, singular_tol, max_iter, wide, nea
         solutions = wrap_angle(Q)
         flags = _flags(M, valid, singular_tol, d4, near)
         flags["not_converged"] = (exact & ~valid).any()
+    solutions = _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol)
     flags["near_singular"] = flags["near_singular"] | start.flags["near_singular"]
     flags = {name: np.array(flag, dtype=bool).reshape(()) for name, flag in flags.items()}
     return finish(solutions, valid, pe, re, flags,
                   np.array(REASON_NOT_CONVERGED if flags["unreachable"] else "", dtype=object))
+
+
+def _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol):
+    r"""The valid rows ``solutions`` (m, 6) (wrapped) near a singularity of the exact arm
+    (:math:`|\sin\theta_3|`, :math:`|\sin\theta_5|` or the wrist centre's distance
+    :math:`h` of :func:`_branches` over :math:`|a_2|` below :data:`_POLISH_NEAR`) taken
+    ``_PLAIN_STEPS`` Newton steps further towards their targets ``X_0T``.
+
+    A row stops once its errors are below a tenth of ``tol``; near a singularity, where
+    the smallest singular value :math:`\sigma` of :math:`J` is small, that leaves the
+    joints :math:`10^{-10}/\sigma` from the solution (1e-5 rad at :math:`\sigma \approx
+    10^{-5}`), and a solution that a singularity nearly pairs with another is not told
+    apart from it. The steps further bring such a row to the solution (quadratic
+    convergence). The errors ``pe``, ``re`` (m,) of a row polished are updated in place;
+    returns the solutions, wrapped (``solutions`` itself if no row moves). ``X_0T`` holds
+    the targets of the poses whose rows are ``solutions``, eight each. With numba, the rows
+    near a singularity are picked in compiled code
+    (``dqlab.ik._newton_compiled.near_rows``, tested equal)."""
+    if compiled_ready():
+        near = compiled_near_rows(solutions, valid, nearest.exact, _POLISH_NEAR)
+    else:
+        near = valid & _near_rows(nearest.robot, solutions, _POLISH_NEAR)
+    rows = np.flatnonzero(near)
+    if not rows.size:
+        return solutions
+    q, _, _, _, errors = _newton(nearest.links, tool, solutions[rows],
+                                 X_0T.reshape(-1, 4, 4)[rows // 8], tol, _PLAIN_STEPS)
+    better = (errors <= tol).all(axis=0) & np.isfinite(q).all(axis=1)
+    rows, q = rows[better], q[better]
+    solutions = solutions.copy()
+    solutions[rows] = wrap_angle(q)
+    pe[rows], re[rows] = errors[:, better]
+    return solutions
+
+
+def _near_rows(exact, q, threshold):
+    r"""Which joint vectors q (m, 6) are within ``threshold`` of a singularity of the exact
+    arm: :math:`|\sin\theta_3|`, :math:`|\sin\theta_5|` or the wrist centre's distance
+    :math:`h` of :func:`_branches` over :math:`|a_2|` below it."""
+    t = q + np.array([lk.theta_offset for lk in exact.links])
+    L = exact.links
+    h = (L[1].a * np.cos(t[:, 1]) + L[2].a * np.cos(t[:, 1] + t[:, 2])
+         + L[4].d * np.sin(t[:, 1] + t[:, 2] + t[:, 3]))
+    return ((np.abs(np.sin(t[:, 2])) < threshold) | (np.abs(np.sin(t[:, 4])) < threshold)
+            | (np.abs(h) < threshold * abs(L[1].a)))
 
 
 @dataclass
@@ -666,7 +724,7 @@ def _checked_tool(tool, pose_tol):
     return tool
 
 
-def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, tol, max_iter):
+def _repair(chain, nearest, polished, q0, found, exact_solutions, X_0T, X_T6, tol, max_iter):
     r"""Restart the branches missing from a pose: converged onto another branch's solution
     (near a singularity the exact arm's start may lie on the wrong side of the calibrated
     arm's), or not converged. Restarts, in turn:
@@ -695,7 +753,7 @@ def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, to
     if poses.size:
         first = 8 * poses + np.argmax(unique.reshape(-1, 8)[poses], axis=1)
         X_cal6 = polished.X[first] @ X_T6               # the calibrated flange at q*
-        X_exact6 = nominal.robot.fk(polished.q[first])
+        X_exact6 = nearest.robot.fk(polished.q[first])
         corrected = exact_solutions(X_0T[poses] @ X_T6 @ rigid_inverse(X_cal6)
                                     @ X_exact6, poses)
         rows = (8 * poses[:, None] + np.arange(8)).reshape(-1)
@@ -710,7 +768,7 @@ def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, to
         sibling = wanted ^ bits
         ok = unique[sibling]
         owners.append(wanted[ok])
-        starts.append(_flip(nominal.robot, polished.q[sibling[ok]], bits))
+        starts.append(_flip(nearest.robot, polished.q[sibling[ok]], bits))
     _restart(chain, polished, unique, np.concatenate(owners), np.concatenate(starts), X_0T,
              tol, max_iter)
     wanted = wanted[~unique[wanted]]                    # still missing after the flips
@@ -721,7 +779,7 @@ def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, to
     known = np.unique(np.concatenate([s[unique[s]] for s in shoulder]))
     # the joint vectors to move, each once: the branches' own starts, then the solutions
     q = np.concatenate([q0[wanted], polished.q[known]])
-    near, direction = _near_singular(nominal, chain[1], q)
+    near, direction = _near_singular(nearest, chain[1], q)
     step = np.zeros_like(q)
     step[near] = direction
     keep = polished.converged[wanted] | near[:wanted.size]   # a branch that did not converge
@@ -743,7 +801,7 @@ def _repair(chain, nominal, polished, q0, found, exact_solutions, X_0T, X_T6, to
     _restart(chain, polished, unique, owners, starts, X_0T, tol, max_iter, which)
 
 
-def _family(chain, nominal, polished, X_06, X_0T, closed_form, tol, max_iter):
+def _family(chain, nearest, polished, X_06, X_0T, closed_form, tol, max_iter):
     r"""Near the wrist singularity, seek the missing branches of a pose from the exact arm's
     wrist family.
 
@@ -752,7 +810,11 @@ def _family(chain, nominal, polished, X_06, X_0T, closed_form, tol, max_iter):
     it, the calibrated arm's solutions of a shoulder and elbow lie near that family, some
     far along it from the exact arm's two branches (one pose has up to four such
     solutions, not two). A pose with a branch missing and a solution whose
-    :math:`|\sin\theta_5|` is below :data:`_NEAR_MEASURE` takes :data:`_FAMILY` members
+    :math:`|\sin\theta_5|` is below :data:`_NEAR_MEASURE`, or with at most
+    :data:`_FEW_BRANCHES` solutions none of which has :math:`|\sin\theta_5|` above
+    :data:`_FEW_WRIST` (or none at all: within the gap of the wrist singularity the exact
+    arm's closed form may miss a whole shoulder of the calibrated arm's, or every branch),
+    takes :data:`_FAMILY` members
     of the family as starts: the exact arm's closed form with a tolerance of 0.5 (which
     makes every pose within :math:`|\theta_5| \lesssim 0.1` a family, and clipped rows
     valid) and references :math:`\theta_6 = -\pi + 2\pi j / 6`. Each start is offered to
@@ -760,19 +822,23 @@ def _family(chain, nominal, polished, X_06, X_0T, closed_form, tol, max_iter):
     (:func:`_branches`) first (:func:`_restart`)."""
     unique = polished.unique()
     missing = ~unique.reshape(-1, 8)
-    theta5 = polished.q[:, 4] + nominal.robot.links[4].theta_offset
-    wrist = (polished.done & (np.abs(np.sin(theta5)) < _NEAR_MEASURE)).reshape(-1, 8)
-    poses = np.flatnonzero(missing.any(axis=1) & wrist.any(axis=1))
+    theta5 = polished.q[:, 4] + nearest.robot.links[4].theta_offset
+    sin5 = np.abs(np.sin(theta5))
+    wrist = (polished.done & (sin5 < _NEAR_MEASURE)).reshape(-1, 8)
+    have = unique.reshape(-1, 8)                        # few branches, none far from the
+    few = ((have.sum(axis=1) <= _FEW_BRANCHES)          # wrist singularity (or none at all)
+           & ~(have & (sin5.reshape(-1, 8) >= _FEW_WRIST)).any(axis=1))
+    poses = np.flatnonzero(missing.any(axis=1) & (wrist.any(axis=1) | few))
     if not poses.size:
         return
     references = np.zeros((poses.size, _FAMILY, 6))
     references[..., 5] = -np.pi + 2.0 * np.pi / _FAMILY * np.arange(_FAMILY)
-    members = closed_form(nominal, np.repeat(X_06[poses], _FAMILY, axis=0), tol=0.5,
+    members = closed_form(nearest, np.repeat(X_06[poses], _FAMILY, axis=0), tol=0.5,
                           q_ref=references.reshape(-1, 6))
-    solutions = _off_the_edge(nominal.robot, members.solutions, members.valid,
+    solutions = _off_the_edge(nearest.robot, members.solutions, members.valid,
                               members.position_error, tol).reshape(-1, 6)
     ok = members.valid.reshape(-1)
-    label = _branches(nominal.robot, solutions)
+    label = _branches(nearest.robot, solutions)
     pose_of = np.repeat(poses, 8 * _FAMILY)
     ok &= missing[pose_of, label]                       # a start for a missing branch
     _offer(chain, polished, unique, missing, solutions[ok], pose_of[ok], label[ok], X_0T,
@@ -799,7 +865,7 @@ def _offer(chain, polished, unique, missing, starts, pose_of, label, X_0T, tol, 
              which)
 
 
-def _deflate(chain, nominal, polished, X_0T, tol, max_iter):
+def _deflate(chain, nearest, polished, X_0T, tol, max_iter):
     r"""Seek the branches still missing from a pose by deflation: Newton steps that cannot
     end at a solution the pose already has.
 
@@ -830,12 +896,12 @@ def _deflate(chain, nominal, polished, X_0T, tol, max_iter):
     if not poses.size:
         return
     rows = (8 * poses[:, None] + np.arange(8)).reshape(-1)
-    scale = np.array([[1.0], [1.0], [nominal.robot.links[3].d]])  # shoulder measure / d4
+    scale = np.array([[1.0], [1.0], [nearest.robot.links[3].d]])  # shoulder measure / d4
     near_measure = (polished.measures[:, rows] / scale).min(axis=0) < _NEAR_MEASURE
     moved = np.flatnonzero(unique[rows] & near_measure)
     if not moved.size:
         return
-    near, direction = _near_singular(nominal, chain[1], polished.q[rows[moved]])
+    near, direction = _near_singular(nearest, chain[1], polished.q[rows[moved]])
     moved = moved[near]
     if not moved.size:
         return
@@ -847,7 +913,7 @@ def _deflate(chain, nominal, polished, X_0T, tol, max_iter):
                          known[np.repeat(moved // 8, ways.size)], tol,
                          min(max_iter, _RESTART_ITER))
     _offer(chain, polished, unique, wanted.reshape(-1, 8), q, pose_of,
-           _branches(nominal.robot, q), X_0T, tol, max_iter)
+           _branches(nearest.robot, q), X_0T, tol, max_iter)
 
 
 def _deflated_newton(chain, q, X_target, known, tol, steps):
@@ -906,19 +972,19 @@ def _branches(exact, q):
     return 4 * (h < 0) + 2 * (np.sin(t[:, 2]) < 0) + (np.sin(t[:, 4]) < 0)
 
 
-def _matrix_chain(nominal, tool):
+def _matrix_chain(nearest, tool):
     """The :class:`_MatrixChain` of a calibrated arm with the tool ``tool`` (4, 4), built
     once for each of the last few tools used (one pose's repair needs it on every call)."""
     key = tool.tobytes()
-    chain = nominal.matrix_chains.get(key)
+    chain = nearest.matrix_chains.get(key)
     if chain is None:
-        if len(nominal.matrix_chains) >= 4:
-            nominal.matrix_chains.clear()
-        chain = nominal.matrix_chains[key] = _MatrixChain(nominal.links, tool)
+        if len(nearest.matrix_chains) >= 4:
+            nearest.matrix_chains.clear()
+        chain = nearest.matrix_chains[key] = _MatrixChain(nearest.links, tool)
     return chain
 
 
-def _near_singular(nominal, tool, q):
+def _near_singular(nearest, tool, q):
     r"""Which joint vectors q (m, 6) are near a singularity of the calibrated arm with the
     tool ``tool`` (the smallest singular value of J below 1e-2 of the largest), and the most
     singular direction there, (k, 6) for those k: the eigenvector of :math:`J^\mathsf{T} J`
@@ -928,11 +994,11 @@ def _near_singular(nominal, tool, q):
     (``dqlab.ik._newton_compiled.smallest``) wherever it is certain of them, ``eigh``
     elsewhere."""
     if not compiled_ready():
-        kernel = _matrix_chain(nominal, tool)
+        kernel = _matrix_chain(nearest, tool)
         J = kernel.jacobian(kernel.frames(q))
         near, v = _smallest_eigenvector(np.swapaxes(J, -1, -2) @ J)
         return near, v[near]
-    H = compiled_gram(nominal.links, tool, q)
+    H = compiled_gram(nearest.links, tool, q)
     near, v, known = compiled_smallest(H, _NEAR)
     if not known.all():
         rest = ~known
