@@ -9,18 +9,18 @@ the fast path as installed, compiled or not, which are tested equal elsewhere):
 
 - random poses: 179 of 180 have the same valid solutions in both, 176 the same rows branch
   by branch (the others: the same solutions under other branch labels). The rows agree to
-  4e-10 rad (on 900 poses of another seed: median 2e-13, 99 % below 2.4e-11 rad, 4.7e-8 at
-  worst, at a pose flagged ``near_singular``, where Newton's stop at tol / 10 = 1e-10
-  leaves more over a small singular value). The one pose whose solutions differ has
-  a solution near a singularity (flagged ``near_singular`` by both): the reference misses
-  one of its eight. Both find the configuration each target came from, every time.
-- near-singular configurations (within a milliradian of theta_5 = 0, pi or theta_3 = 0): 98
-  of 108 have the same solution sets, 86 the same rows; both solvers' rows there agree to
-  3.7e-7 rad (Newton's stop over a small singular value). At the other ten, the pose has
-  more solutions than the eight rows hold, or solutions that do not follow the exact arm's
-  branches, and the two repairs start from different points: the reference finds fewer
-  solutions at six, more at one, and each finds some the other does not at three. The
-  generating configuration: the fast solver 92 of 108, the reference 90.
+  9e-11 rad (4.5e-10 at the poses neither flags ``near_singular``). The one pose whose
+  solutions differ has a solution near a singularity (flagged ``near_singular`` by both):
+  the reference misses one of its eight. Both find the configuration each target came
+  from, every time.
+- near-singular configurations (within a milliradian of theta_5 = 0, pi or theta_3 = 0): 100
+  of 108 have the same solution sets, 85 the same rows; the rows both hold agree to
+  1.8e-8 rad (both take three Newton steps more near a singularity of the exact arm). At
+  the other eight, the pose has more solutions than the eight rows hold, or solutions that
+  do not follow the exact arm's branches, and the two repairs start from different points:
+  the reference finds four solutions where the fast solver finds six at five poses, and
+  each finds some the other does not at three. The generating configuration: the fast
+  solver 97 of 108, the reference 94.
 
 The test asserts what holds, with a margin: every valid row of both is a solution; the same
 sets on all but two random poses, which both flag near_singular, and on 85 % of the poses
