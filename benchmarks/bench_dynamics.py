@@ -11,7 +11,7 @@ prepared call (``NewtonEuler``) within 10 times pinocchio's ``rnea``.
 - dqlab: the checked functions ``dynamics.inverse_dynamics``, ``mass_matrix`` (composite
   rigid bodies), ``forward_dynamics`` (articulated bodies) and ``regressor``, and
   ``dynamics.NewtonEuler``, prepared once for a controller's loop. With numba installed they
-  run compiled kernels (``dqlab._dynamics_compiled``); ``DQLAB_COMPILED=0`` runs the numpy
+  run compiled kernels (``dqlab._fast.dynamics_compiled``); ``DQLAB_COMPILED=0`` runs the numpy
   path instead (and the float path for one state), to see what numba buys.
 - MuJoCo (C, called from Python) on ``mjcf_from_robot(ur3(), damping=0, armature=0)``:
   ``mj_inverse`` after writing the state; ``mj_fwdPosition`` with ``mj_fullM``;

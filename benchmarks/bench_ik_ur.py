@@ -30,7 +30,7 @@ ur_analytic_ik's time to each method's (above 1: faster than ur_analytic_ik).
 
 Before timing, the solution counts of dqlab and ur_analytic_ik are compared. Goals, as
 ratios to ur_analytic_ik in the same run: a single pose at most 2 times its single call
-(one pose is solved on Python floats, see ``dqlab.ik._ur_engine``); a batch at least 25
+(one pose is solved on Python floats, see ``dqlab._fast.ur_engine``); a batch at least 25
 times faster per pose than its loop; the numerical solver's single pose at most 60 times its
 closed-form single call, and at most half the time of ik_LM with as many poses solved. This
 is not a test. Times are the CPU time of this process (``time.process_time``), the best of

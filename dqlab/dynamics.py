@@ -75,7 +75,7 @@ carries no mass; a payload is part of the last link's inertia
 (:func:`with_payload`). Units: radians, metres, seconds, kilograms, newtons.
 
 With numba installed, the batch and single-state paths run compiled kernels
-(``dqlab._dynamics_compiled``, tested equal to the numpy code here, which stays the
+(``dqlab._fast.dynamics_compiled``, tested equal to the numpy code here, which stays the
 reference and the path without numba); ``DQLAB_COMPILED=0`` in the environment switches them
 off.
 """
@@ -93,15 +93,15 @@ from ._checks import (
     short_repr,
     stack_components,
 )
-from ._dynamics_compiled import constants as compiled_constants
-from ._dynamics_compiled import forward as compiled_forward
-from ._dynamics_compiled import inverse as compiled_inverse
-from ._dynamics_compiled import kernel_inverse as compiled_kernel_inverse
-from ._dynamics_compiled import mass as compiled_mass
-from ._dynamics_compiled import ready as compiled_ready
-from ._dynamics_compiled import regressor_rows as compiled_regressor
-from ._dynamics_floats import constants as float_constants
-from ._dynamics_floats import inverse_dynamics as inverse_dynamics_on_floats
+from ._fast.dynamics_compiled import constants as compiled_constants
+from ._fast.dynamics_compiled import forward as compiled_forward
+from ._fast.dynamics_compiled import inverse as compiled_inverse
+from ._fast.dynamics_compiled import kernel_inverse as compiled_kernel_inverse
+from ._fast.dynamics_compiled import mass as compiled_mass
+from ._fast.dynamics_compiled import ready as compiled_ready
+from ._fast.dynamics_compiled import regressor_rows as compiled_regressor
+from ._fast.dynamics_floats import constants as float_constants
+from ._fast.dynamics_floats import inverse_dynamics as inverse_dynamics_on_floats
 from ._formulas import dual_cross as _dual_cross
 from ._formulas import dual_quaternion_mul, momentum
 from .dualquat import (
@@ -254,7 +254,7 @@ def _adjoint(Q, real, dual):
 
 
 def _compiled_or_none(robot, inertias):
-    """The constants of ``robot`` for the compiled kernels of :mod:`dqlab._dynamics_compiled`
+    """The constants of ``robot`` for the compiled kernels of :mod:`dqlab._fast.dynamics_compiled`
     (``inertias`` None: without inertias, for the regressor), or None where they cannot be
     used (numba absent, or ``DQLAB_COMPILED=0``)."""
     if not compiled_ready():
@@ -356,8 +356,8 @@ def _recursion(robot, inertias, q, qd, qdd, g_0, energy):
 
 def _torques(robot, inertias, q, qd, qdd, g_0):
     """:func:`_newton_euler`'s torques: compiled when it can be
-    (:mod:`dqlab._dynamics_compiled`); else one state (q of shape (n,)) runs the same
-    recursion on Python floats (:mod:`dqlab._dynamics_floats`), a batch on numpy arrays. All
+    (:mod:`dqlab._fast.dynamics_compiled`); else one state (q of shape (n,)) runs the same
+    recursion on Python floats (:mod:`dqlab._fast.dynamics_floats`), a batch on numpy arrays. All
     tested equal."""
     consts = _compiled_or_none(robot, inertias)
     if consts is not None:
@@ -660,7 +660,7 @@ def mass_matrix(robot: Robot, q: ArrayLike) -> NDArray[np.float64]:
 
 def _mass_matrix(robot, inertias, q):
     """:func:`mass_matrix` on checked arrays: compiled when it can be
-    (:mod:`dqlab._dynamics_compiled`), one state on Python floats, else the composite rigid
+    (:mod:`dqlab._fast.dynamics_compiled`), one state on Python floats, else the composite rigid
     bodies below."""
     consts = _compiled_or_none(robot, inertias)
     if consts is not None:

@@ -43,8 +43,8 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._chain import CompiledChain
 from ._checks import as_float_array, check_scalar, check_text, real_array, short_repr
+from ._fast.chain import CompiledChain
 from .dualquat import dual_quaternion_from_transform
 from .inertia import LinkInertia
 from .transforms import check_transform
@@ -747,7 +747,7 @@ class Robot:
            X_{WT}(q) = X_{W0} \prod_{i=1}^{n} X_{i-1,i}(q_i)\; X_{nT}
 
         The definition is this product of the :meth:`link_transforms`. It is computed by
-        the robot's compiled chain (``dqlab._chain``: the constant factors of
+        the robot's compiled chain (``dqlab._fast.chain``: the constant factors of
         neighbouring links multiplied once, the product unrolled on the entries, one joint
         vector on Python floats), which the tests hold to the product of
         :meth:`link_transforms` with the base and the tool.

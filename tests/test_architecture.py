@@ -100,8 +100,9 @@ def test_the_imports_between_dqlab_modules_have_no_cycle():
         if name not in state:
             visit(name, [name])
     # the walk sees the arrows it should (a smoke test of the test itself)
-    assert "dqlab._chain" in graph["dqlab.robot"] and "dqlab.dualquat" in graph["dqlab._chain"]
-    assert "dqlab.ik.ur_steps" in graph["dqlab.ik._ur_engine"]
+    assert "dqlab._fast.chain" in graph["dqlab.robot"]
+    assert "dqlab.dualquat" in graph["dqlab._fast.chain"]
+    assert "dqlab.ik.ur_steps" in graph["dqlab._fast.ur_engine"]
 
 
 def test_robot_and_jacobian_depend_one_way():
@@ -143,27 +144,36 @@ def test_the_ik_solvers_are_functions_and_no_module_alias_is_left():
             importlib.import_module(old)
 
 
-# The speed twins: machinery that makes a readable path fast. Each sits behind one front,
-# the only module that imports it, and is registered here beside the test that holds it equal
-# to the readable path it speeds up (or, for generated code, to its generator's output).
+# The speed twins: machinery that makes a readable path fast, all in one private package,
+# dqlab._fast. Each sits behind one front, the only module that imports it, and is registered
+# here beside the test that holds it equal to the readable path it speeds up (or, for
+# generated code, to its generator's output). One Newton step and one forward kinematics per
+# twin: the calibrated solver's numpy kernels (calibrated_chains), its compiled ones
+# (newton_compiled, over the generated newton_lanes), the closed form's engine (ur_engine), the
+# chain's products (chain), the dynamics on floats and compiled.
 ENGINES = {
-    "dqlab._chain": ({"dqlab.robot"}, "test_robot.py::"
-                     "test_fk_is_the_product_of_link_transforms_with_base_and_tool"),
+    "dqlab._fast.chain": ({"dqlab.robot"}, "test_robot.py::"
+                          "test_fk_is_the_product_of_link_transforms_with_base_and_tool"),
     # the calibrated solver starts from the closed form of the nearest exact UR: it calls
     # the engine directly, its arguments checked already, instead of dqlab.ik.ur
-    "dqlab.ik._ur_engine": ({"dqlab.ik.ur_closed_form", "dqlab.ik.ur_calibrated"},
-                            "test_ik_ur.py::test_single_pose_path_equals_the_batch_path"),
-    "dqlab.ik._newton_compiled": (
+    "dqlab._fast.ur_engine": ({"dqlab.ik.ur_closed_form", "dqlab.ik.ur_calibrated"},
+                              "test_ik_ur.py::test_single_pose_path_equals_the_batch_path"),
+    "dqlab._fast.calibrated_chains": (
+        {"dqlab.ik.ur_calibrated"},
+        "test_ik_ur_calibrated.py::test_kernels_equal_forward_kinematics_and_jacobian"),
+    "dqlab._fast.newton_compiled": (
         {"dqlab.ik.ur_calibrated"}, "test_ik_ur_calibrated_compiled.py::"
         "test_results_are_the_same_with_and_without_the_compiled_kernels"),
-    "dqlab.ik._newton_lanes": ({"dqlab.ik._newton_compiled"},
-                               "test_ik_ur_calibrated_compiled.py::"
-                               "test_the_generated_lanes_are_those_of_the_generator"),
-    "dqlab._dynamics_floats": ({"dqlab.dynamics"},
-                               "test_dynamics.py::test_the_float_path_equals_the_readable_path"),
-    "dqlab._dynamics_compiled": ({"dqlab.dynamics"}, "test_dynamics_compiled.py::"
-                                 "test_the_compiled_kernels_equal_the_numpy_path"),
+    "dqlab._fast.newton_lanes": ({"dqlab._fast.newton_compiled"},
+                                 "test_ik_ur_calibrated_compiled.py::"
+                                 "test_the_generated_lanes_are_those_of_the_generator"),
+    "dqlab._fast.dynamics_floats": ({"dqlab.dynamics"}, "test_dynamics.py::"
+                                    "test_the_float_path_equals_the_readable_path"),
+    "dqlab._fast.dynamics_compiled": ({"dqlab.dynamics"}, "test_dynamics_compiled.py::"
+                                      "test_the_compiled_kernels_equal_the_numpy_path"),
 }
+#: the switch of the compiled paths (DQLAB_COMPILED) and their compiler: not a twin
+SWITCH = "dqlab._fast.compiled"
 
 
 @pytest.mark.parametrize("engine", sorted(ENGINES))
@@ -179,12 +189,16 @@ def test_each_engine_has_its_equality_test(engine):
     assert f"def {test}(" in source, f"{file} has no {test}"
 
 
-def test_every_private_twin_module_is_registered():
-    """A private module of compiled, float-only or unrolled twins is in ENGINES."""
-    twins = {name for name in MODULES if re.search(
-        r"\._\w*(compiled|floats|engine|lanes|chain)$", name)}
-    twins.discard("dqlab._compiled")        # the switch of the compiled paths, not a twin
-    assert twins == set(ENGINES)
+def test_every_speed_twin_is_in_the_private_package_and_registered():
+    """Every module of dqlab._fast but the switch is in ENGINES, and no module outside it
+    is named like a twin (compiled, float-only, unrolled kernels)."""
+    fast = {name for name in MODULES if name.startswith("dqlab._fast.")}
+    assert fast - {SWITCH} == set(ENGINES)
+    outside = {name for name in MODULES if not name.startswith("dqlab._fast") and re.search(
+        r"\._\w*(compiled|floats|engine|lanes|chains?|kernels)$", name)}
+    assert outside == set()
+    users = {name for name, path in MODULES.items() if SWITCH in set(dqlab_edges(path))}
+    assert users <= set(ENGINES) | {SWITCH}
 
 
 # The readable references: a fast public solver, the public module written to be read that
@@ -231,8 +245,11 @@ def float_switches(path):
 
 
 CORE = [p for p in SOURCES if (module_name(p) + ".").split(".")[1] in
-        ("complex", "rotations", "quaternion", "transforms", "dualquat", "robot", "_chain",
-         "models", "jacobian", "ik", "_formulas", "_checks", "_wrapper")]
+        ("complex", "rotations", "quaternion", "transforms", "dualquat", "robot", "models",
+         "jacobian", "ik", "_formulas", "_checks", "_wrapper")] + [
+    MODULES[name] for name in ("dqlab._fast.chain", "dqlab._fast.ur_engine",
+                               "dqlab._fast.calibrated_chains", "dqlab._fast.newton_compiled",
+                               "dqlab._fast.newton_lanes")]
 
 
 def test_the_core_tells_floats_from_arrays_in_one_place():
@@ -240,13 +257,14 @@ def test_the_core_tells_floats_from_arrays_in_one_place():
     dqlab._formulas.functions_for from the type of a number to its functions. No other
     place of the core tests for a float, except where the test is not a choice of formula:
     wrap_angle and check_scalar, which skip their argument checks for a Python float, and
-    the calibrated solver's _dot, which skips the entries that are the float 0.0 (the
+    the calibrated solver's dot product of entries (dqlab._fast.calibrated_chains.dot),
+    which skips the entries that are the float 0.0 (the
     structural zeros of its Jacobian's entries)."""
     from dqlab._formulas import functions_for
 
     sites = {(module_name(p), name) for p in CORE for name, _ in float_switches(p)}
     assert sites == {("dqlab.rotations", "wrap_angle"), ("dqlab._checks", "check_scalar"),
-                     ("dqlab.ik.ur_calibrated", "_dot")}
+                     ("dqlab._fast.calibrated_chains", "dot")}
     floats, arrays = functions_for(float), functions_for(np.ndarray)
     assert floats.atan2 is math.atan2 and arrays.atan2 is np.arctan2
     assert functions_for(np.float64) is arrays and functions_for((float, np.ndarray)) is arrays

@@ -262,7 +262,7 @@ def test_broadcasting_and_an_empty_batch():
 @pytest.mark.parametrize("name", list(ROBOTS))
 def test_the_float_path_equals_the_readable_path(name, monkeypatch):
     # without the compiled kernels, a single state runs on Python floats
-    # (dqlab._dynamics_floats) and a batch of one the dual-quaternion recursion on arrays
+    # (dqlab._fast.dynamics_floats) and a batch of one the dual-quaternion recursion on arrays
     monkeypatch.setenv("DQLAB_COMPILED", "0")
     robot = ROBOTS[name]()
     q, qd, qdd = random_states(robot, 100, seed=10)

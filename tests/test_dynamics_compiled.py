@@ -1,4 +1,4 @@
-"""The compiled kernels of dqlab.dynamics (dqlab._dynamics_compiled, with numba) against the
+"""The compiled kernels of dqlab.dynamics (dqlab._fast.dynamics_compiled, with numba) against the
 numpy path, which stays the reference and the one used without numba or with
 DQLAB_COMPILED=0: inverse dynamics, the mass matrix, forward dynamics and the regressor on
 random states of every model, one state and batches, and the prepared NewtonEuler."""
@@ -7,11 +7,14 @@ import numpy as np
 import pytest
 from test_dynamics import ROBOTS, random_states
 
-from dqlab import _dynamics_compiled as compiled
 from dqlab import dynamics, models
+from dqlab._fast import dynamics_compiled as compiled
+from dqlab._fast.compiled import compiled_allowed
 from dqlab.inertia import LinkInertia
 
 pytest.importorskip("numba")
+pytestmark = pytest.mark.skipif(not compiled_allowed(),
+                                reason="DQLAB_COMPILED switches the compiled paths off")
 
 
 def everything(robot, q, qd, qdd):

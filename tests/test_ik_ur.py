@@ -12,9 +12,9 @@ So the two solvers answer the same question without any frame conversion.
 import numpy as np
 import pytest
 
+from dqlab._fast import ur_engine as engine
 from dqlab.dualquat import dual_quaternion_from_transform
 from dqlab.ik import IKResult, ur, ur_parameters
-from dqlab.ik import _ur_engine as engine
 from dqlab.ik import ur_closed_form as urmod
 from dqlab.ik.ur_steps import candidate_solutions
 from dqlab.models import ur3

@@ -5,6 +5,7 @@ form, and how close to a singularity the generating configuration is still found
 import numpy as np
 import pytest
 
+from dqlab._fast import calibrated_chains
 from dqlab.identify import dh_parameters, robot_from_dh_parameters
 from dqlab.ik import IKResult, ur
 from dqlab.ik.ur_calibrated import REASON_NOT_CONVERGED, calibrated_ur, nominal_ur
@@ -19,8 +20,8 @@ def _compiled_as_the_environment_says():
     """After a test that switched DQLAB_COMPILED, the kernels read it again (dqlab.ik.ur
     does at each call; a test may ask ready() first)."""
     yield
-    from dqlab.ik import _newton_compiled
-    _newton_compiled.refresh()
+    from dqlab._fast import newton_compiled
+    newton_compiled.refresh()
 
 
 FLAGS = {"wrist_singular", "shoulder_singular", "elbow_singular", "near_singular", "unreachable",
@@ -254,7 +255,6 @@ def test_shapes_dual_quaternions_base_and_tool():
 
 def test_kernels_equal_forward_kinematics_and_jacobian():
     """The speed machinery of ur_calibrated against Robot.fk_with_jacobian."""
-    from dqlab.ik import ur_calibrated as module
 
     robot = physically_calibrated(86)
     tool = np.eye(4)
@@ -265,14 +265,15 @@ def test_kernels_equal_forward_kinematics_and_jacobian():
     q = np.random.default_rng(87).uniform(-np.pi, np.pi, (70, 6))
     X, J = robot.fk_with_jacobian(q)
     steps = []
-    for kernel in (module._MatrixChain(links, tool), module._EntryChain(links, tool)):
+    for kernel in (calibrated_chains.MatrixChain(links, tool),
+                   calibrated_chains.EntryChain(links, tool)):
         F = kernel.frames(q)
         assert np.abs(kernel.transforms(F) - X).max() < 1e-12
         assert np.abs(kernel.jacobian(F) - J).max() < 1e-12
         e = kernel.residual(F, kernel.targets(robot.fk(q + 1e-4)))
         steps.append(kernel.newton_step(F, e))
-        np.testing.assert_allclose(kernel.singularity_measures(F), module._MatrixChain(
-            links, tool).singularity_measures(module._MatrixChain(links, tool).frames(q)),
+        np.testing.assert_allclose(kernel.singularity_measures(F), calibrated_chains.MatrixChain(
+            links, tool).singularity_measures(calibrated_chains.MatrixChain(links, tool).frames(q)),
             atol=1e-12)
     np.testing.assert_allclose(steps[0], steps[1], atol=1e-12)
     assert np.median(np.abs(steps[0] - 1e-4)) < 1e-7            # one step goes most of it
@@ -351,13 +352,13 @@ def test_one_pose_path_equals_the_array_path(compiled_kernels, monkeypatch):
     (Without numba one pose starts from the closed form on floats, math's atan2, and a batch
     of one from its array path, numpy's: where the two differ in the last bit, Newton from
     the two starts stops at solutions that agree within its stop, tol / 10.)"""
-    from dqlab.ik import _newton_compiled
+    from dqlab._fast import newton_compiled
     from dqlab.ik import ur_calibrated as module
     if compiled_kernels:
         pytest.importorskip("numba")
-        assert _newton_compiled.ready()
-    else:
-        monkeypatch.setenv("DQLAB_COMPILED", "0")   # read at each call of ur
+    monkeypatch.setenv("DQLAB_COMPILED", "1" if compiled_kernels else "0")   # (read by ur)
+    newton_compiled.refresh()
+    assert newton_compiled.ready() == compiled_kernels
     robot = calibrated(90, model=ur10e)
     base, tool = np.eye(4), np.eye(4)
     base[:3, :3], base[:3, 3] = rot_z(-0.7), (0.1, 0.2, 0.5)

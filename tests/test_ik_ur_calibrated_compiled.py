@@ -1,4 +1,4 @@
-"""The compiled kernels of the calibrated UR solver (dqlab.ik._newton_compiled, with numba)
+"""The compiled kernels of the calibrated UR solver (dqlab._fast.newton_compiled, with numba)
 against the numpy path of dqlab.ik.ur_calibrated, which stays the one used without numba:
 the Newton steps row by row, the repeated-row tests, and whole results of dqlab.ik.ur on
 random and near-singular poses."""
@@ -7,16 +7,20 @@ import numpy as np
 import pytest
 from test_ik_ur_calibrated import calibrated, physically_calibrated, singular_poses
 
-from dqlab import _compiled as dqlab_compiled
+from dqlab._fast import calibrated_chains
+from dqlab._fast import compiled as dqlab_compiled
+from dqlab._fast import newton_compiled as compiled
+from dqlab._fast.compiled import compiled_allowed
 from dqlab._formulas import quaternion_from_matrix_entries
-from dqlab.ik import _newton_compiled as compiled
 from dqlab.ik import ur
 from dqlab.ik import ur_calibrated as module
 from dqlab.ik.targets import pose_errors
-from dqlab.ik.ur_steps import NEAR_WRIST
+from dqlab.ik.ur_steps import NEAR_SINGULAR, NEAR_WRIST
 from dqlab.rotations import rot_x
 
 pytest.importorskip("numba")
+pytestmark = pytest.mark.skipif(not compiled_allowed(),
+                                reason="DQLAB_COMPILED switches the compiled paths off")
 
 
 @pytest.fixture(autouse=True)
@@ -24,8 +28,8 @@ def _compiled_as_the_environment_says():
     """After a test that switched DQLAB_COMPILED, the kernels read it again (dqlab.ik.ur
     does at each call; a test may ask ready() first)."""
     yield
-    from dqlab.ik import _newton_compiled
-    _newton_compiled.refresh()
+    from dqlab._fast import newton_compiled
+    newton_compiled.refresh()
 
 
 @pytest.fixture
@@ -84,9 +88,9 @@ def test_compiled_newton_equals_the_numpy_path(make, numpy_path):
         for qq, XX, ee, mm in ((q, X, errors, measures), (q_n, X_n, errors_n, measures_n)):
             assert np.abs(XX - robot.fk(qq)).max() < 1e-12
             np.testing.assert_allclose(ee, np.stack(pose_errors(XX, targets)), atol=1e-15)
-            frames = module._MatrixChain(*chain).frames(qq)
-            np.testing.assert_allclose(mm, module._MatrixChain.singularity_measures(frames),
-                                       atol=1e-12)
+            frames = calibrated_chains.MatrixChain(*chain).frames(qq)
+            np.testing.assert_allclose(
+                mm, calibrated_chains.MatrixChain.singularity_measures(frames), atol=1e-12)
         far = slice(-52, -2)
         assert converged[far].sum() < 50                     # random starts: some fail
 
@@ -171,7 +175,7 @@ def test_ready_without_numba(monkeypatch):
 
 
 def test_the_generated_lanes_are_those_of_the_generator():
-    """dqlab/ik/_newton_lanes.py is what tools/generate_newton_lanes.py writes."""
+    """dqlab/_fast/newton_lanes.py is what tools/generate_newton_lanes.py writes."""
     import subprocess
     import sys
     from pathlib import Path
@@ -213,7 +217,7 @@ def test_compiled_gram_and_acceptance_equal_the_numpy_path(numpy_path):
     robot = calibrated(48)
     chain, q0, targets = chain_and_starts(robot, 49, 40)
     q = q0[np.isfinite(q0).all(axis=1)]
-    kernel = module._MatrixChain(*chain)
+    kernel = calibrated_chains.MatrixChain(*chain)
     J = kernel.jacobian(kernel.frames(q))
     np.testing.assert_allclose(compiled.gram(*chain, q), np.swapaxes(J, -1, -2) @ J,
                                rtol=0, atol=1e-13)
@@ -260,12 +264,13 @@ def poses_of_every_kind(robot, seed, random, near):
 @pytest.mark.parametrize("make", [calibrated, physically_calibrated])
 def test_compiled_exact_one_pose_equals_the_one_pose_closed_form(make):
     """The exact arm's closed form of one pose, compiled (module._exact_one_pose), is the
-    IKResult of the closed form's one-pose path on floats (dqlab.ik._ur_engine.solve_single)
+    IKResult of the closed form's one-pose path on floats (dqlab._fast.ur_engine.solve_single)
     bit for bit: solutions (joint offsets subtracted and wrapped), valid rows, errors and
     flags, at three tolerances, on random poses, poses near each singularity and poses out
     of reach; and None exactly where that path hands the pose to the batch path (a wrist
     near its singularity, a wrist centre inside the shoulder cylinder, no valid row)."""
-    from dqlab.ik import _ur_engine, ur_parameters
+    from dqlab._fast import ur_engine
+    from dqlab.ik import ur_parameters
     assert compiled.ready()
     robot = make(51)
     nearest = module._nearest_exact(robot)
@@ -278,7 +283,7 @@ def test_compiled_exact_one_pose_equals_the_one_pose_closed_form(make):
     for tol in (1e-9, wide, 10 * wide):
         for T in X:
             fast = module._exact_one_pose(nearest, T, tol, 5e-7, 1e-2)
-            floats = _ur_engine.solve_single(nearest.robot, prm, T, tol, 5e-7, 1e-9, None)
+            floats = ur_engine.solve_single(nearest.robot, prm, T, tol, 5e-7, 1e-9, None)
             assert (fast is None) == (floats is None)
             if fast is None:
                 handed_over += 1
@@ -317,7 +322,7 @@ def test_compiled_exact_poses_equal_the_batch_closed_form(make):
         R = X[:, :3, :3].reshape(-1, 9).T
         done = compiled.exact_poses(np.stack(quaternion_from_matrix_entries(*R), axis=-1),
                                      X[:, :3, 3], X[:, :3, 2], nearest.exact, tol, 5e-7,
-                                     NEAR_WRIST)[-1]
+                                     NEAR_WRIST, NEAR_SINGULAR)[-1]
         handed_over.append(int((~done).sum()))
         for name in ("valid", "reason"):
             np.testing.assert_array_equal(getattr(fast, name), getattr(batch, name))
@@ -378,7 +383,7 @@ def test_smallest_eigenvector_where_certain_is_eighs():
 
 def test_restarts_step_a_shared_start_once(numpy_path):
     """A start shared by several rows (given once, with which) leaves the same rows, joint
-    vectors, errors and marks as the same start given once per row (fewer than _FEW_ROWS
+    vectors, errors and marks as the same start given once per row (fewer than FEW_ROWS
     starts either way: the numpy path's kernel is the same one)."""
     robot = calibrated(53)
     nearest = module._nearest_exact(robot)
@@ -411,7 +416,7 @@ def test_restarts_step_a_shared_start_once(numpy_path):
         np.testing.assert_array_equal(ua, ub)
         for name in ("q", "done", "converged", "X", "measures", "errors"):
             np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
-        assert owners.size <= module._FEW_ROWS
+        assert owners.size <= calibrated_chains.FEW_ROWS
         assert (ua & ~a.converged).sum() == 0 and ua[rows[::3]].any()
 
 
@@ -430,7 +435,7 @@ def test_compiled_deflation_equals_the_numpy_path(numpy_path):
     fast = module._deflated_newton((links, tool), starts, targets, known, 1e-9, 10)
     plain = numpy_path(module._deflated_newton, (links, tool), starts, targets, known, 1e-9,
                        10)
-    chain = module._MatrixChain(links, tool)
+    chain = calibrated_chains.MatrixChain(links, tool)
     errors = np.stack(pose_errors(chain.transforms(chain.frames(fast)), targets))
     converged = errors.max(axis=0) < 1e-10
     assert converged.mean() > 0.3 and not converged.all()

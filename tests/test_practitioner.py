@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 import dqlab
-from dqlab.ik import _ur_engine, closest_solution, closest_ur_solution, ur
+from dqlab._fast import ur_engine
+from dqlab.ik import closest_solution, closest_ur_solution, ur
 from dqlab.ik.ur_closed_form import ROW_NAMES, SOLUTION_ORDER
 from dqlab.models import UR_DH, UR_SHAPE, ur3_mdh, ur5e
 from dqlab.quaternion import quaternion_from_xyzw, xyzw_from_quaternion
@@ -135,7 +136,7 @@ def test_one_pose_with_a_tool_is_solved_on_floats_as_in_a_batch(kind, monkeypatc
     batch = ur(robot, X)
     singles = []
     calls = []
-    monkeypatch.setattr(_ur_engine, "solve_batch",
+    monkeypatch.setattr(ur_engine, "solve_batch",
                         lambda *a, **k: calls.append(1) or _SOLVE_BATCH(*a, **k))
     for i in range(len(q)):
         singles.append(ur(robot, X[i]))
@@ -153,7 +154,7 @@ def test_one_pose_with_a_tool_is_solved_on_floats_as_in_a_batch(kind, monkeypatc
     assert all(r.position_error[r.valid].max() < 1e-12 for r in singles)
 
 
-_SOLVE_BATCH = _ur_engine.solve_batch
+_SOLVE_BATCH = ur_engine.solve_batch
 
 
 def test_one_pose_with_the_tool_argument_equals_the_robot_with_that_tool():

@@ -42,7 +42,7 @@ keeps its contract (every branch, flags, reasons, batches) in three steps:
    of the exact arm but does not get there is kept as an invalid row with its errors and
    flagged ``"not_converged"``, never dropped silently. With numba installed (the ``fast``
    extra), these steps run compiled, on the eight branches of a pose at once
-   (``dqlab.ik._newton_compiled``, tested to give the same solutions), and so does the
+   (``dqlab._fast.newton_compiled``, tested to give the same solutions), and so does the
    exact arm's closed form of step 2, pose by pose (tested equal to it bit for bit); numpy
    runs them otherwise. One pose whose branches all converge, to distinct solutions, is
    finished with a few calls (``_one_pose``, tested equal to the array path); the others go
@@ -86,25 +86,27 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._checks import as_float_array, rigid_rows
+from .._fast import ur_engine as exact_engine
+from .._fast.calibrated_chains import DAMPING, MatrixChain
+from .._fast.calibrated_chains import kernel as newton_kernel
+from .._fast.newton_compiled import accept as compiled_accept
+from .._fast.newton_compiled import are_new as compiled_are_new
+from .._fast.newton_compiled import deflated as compiled_deflated
+from .._fast.newton_compiled import exact_one_pose as compiled_exact_one_pose
+from .._fast.newton_compiled import exact_poses as compiled_exact_poses
+from .._fast.newton_compiled import gram as compiled_gram
+from .._fast.newton_compiled import near_rows as compiled_near_rows
+from .._fast.newton_compiled import newton as compiled_newton
+from .._fast.newton_compiled import one_pose as compiled_one_pose
+from .._fast.newton_compiled import ready as compiled_ready
+from .._fast.newton_compiled import refresh as compiled_refresh
+from .._fast.newton_compiled import smallest as compiled_smallest
+from .._fast.newton_compiled import unique as compiled_unique
 from .._formulas import quaternion_from_matrix_entries, rigid_inverse
 from ..dualquat import dual_quaternion_from_transform
 from ..models import UR_ALPHA, UR_SHAPE
 from ..robot import Link, Robot
 from ..rotations import wrap_angle
-from ._newton_compiled import accept as compiled_accept
-from ._newton_compiled import are_new as compiled_are_new
-from ._newton_compiled import deflated as compiled_deflated
-from ._newton_compiled import exact_one_pose as compiled_exact_one_pose
-from ._newton_compiled import exact_poses as compiled_exact_poses
-from ._newton_compiled import gram as compiled_gram
-from ._newton_compiled import near_rows as compiled_near_rows
-from ._newton_compiled import newton as compiled_newton
-from ._newton_compiled import one_pose as compiled_one_pose
-from ._newton_compiled import ready as compiled_ready
-from ._newton_compiled import refresh as compiled_refresh
-from ._newton_compiled import smallest as compiled_smallest
-from ._newton_compiled import unique as compiled_unique
-from ._ur_engine import solve as exact_solve
 from .result import IKResult, check_ur_options, finish
 from .targets import RIGID_TOL, parse_targets, pose_errors
 from .ur_steps import NEAR_SINGULAR, NEAR_WRIST
@@ -121,13 +123,11 @@ REASON_NOT_CONVERGED = ("calibrated chain: no branch of the nearest exact UR's s
 MAX_DISCREPANCY = 0.05
 
 _STOP = 0.1            # a Newton branch stops when its errors are below _STOP tol
-_DAMPING = 1e-12       # lambda = _DAMPING tr(J^T J) / 6
 _MAX_STEP = 0.5        # longest Newton step, rad (a longer one is shortened)
 _GIVE_UP_AFTER = 8     # steps after which a branch must keep halving its error
 _PLAIN_STEPS = 3       # first steps taken by every branch together, none stopped
 _BLOCK = 2048          # branches per block of the Newton steps
 _RESTART_ITER = 10     # Newton steps of a restart at most
-_FEW_ROWS = 192        # up to this many branches, the kernel working on whole matrices
 _NEAR = 1e-4          # near a singularity: smallest eigenvalue of J^T J below _NEAR largest
 #: The flags of a result, in order (the compiled one-pose path returns them so).
 _FLAG_NAMES = ("wrist_singular", "shoulder_singular", "elbow_singular", "near_singular",
@@ -446,10 +446,10 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
 def _closed_form(nearest, X_06, *, tol, q_ref=None, singular_tol=5e-7,
                  near_tol=NEAR_SINGULAR):
     """``dqlab.ik.ur`` of the exact arm ``nearest.robot`` for the flange poses ``X_06``, its
-    tolerances checked already: the engine's :func:`~dqlab.ik._ur_engine.solve` with ``ur``'s
+    tolerances checked already: the engine's :func:`~dqlab._fast.ur_engine.solve` with ``ur``'s
     defaults (``pose_tol`` :data:`~dqlab.ik.targets.RIGID_TOL`, no tool, the residuals of
     the solved equations)."""
-    return exact_solve(nearest.robot, nearest.parameters, X_06, tol, singular_tol, RIGID_TOL,
+    return exact_engine.solve(nearest.robot, nearest.parameters, X_06, tol, singular_tol, RIGID_TOL,
                        None, q_ref, "equations", near_tol)
 
 
@@ -512,7 +512,7 @@ def _plain_pose(target, pose_tol):
 
 def _exact_one_pose(nearest, X_06, tol, singular_tol, near_tol):
     """The exact arm's closed form of one flange pose ``X_06`` (4, 4) with the tolerance
-    ``tol``, compiled (``dqlab.ik._newton_compiled.exact_one_pose``): the :class:`IKResult` the
+    ``tol``, compiled (``dqlab._fast.newton_compiled.exact_one_pose``): the :class:`IKResult` the
     closed form's one-pose path gives (at its default ``pose_tol``), or None where that path
     hands the pose to the batch path (and so does the caller)."""
     rows = rigid_rows(X_06, RIGID_TOL)                  # that path's check, and its flange:
@@ -534,7 +534,7 @@ def _exact_one_pose(nearest, X_06, tol, singular_tol, near_tol):
 def _exact_poses(nearest, X_06, tol, singular_tol, near_tol, closed_form):
     """The exact arm's closed form of the flange poses ``X_06`` (n, 4, 4) (rigid transforms,
     checked) with the tolerance ``tol``, compiled pose by pose
-    (``dqlab.ik._newton_compiled.exact_poses``, the loop of :func:`_exact_one_pose`); the
+    (``dqlab._fast.newton_compiled.exact_poses``, the loop of :func:`_exact_one_pose`); the
     poses that path hands on (a wrist near its singularity, a wrist centre inside the
     shoulder cylinder, no valid row) are solved by ``closed_form`` itself. The
     :class:`IKResult` ``closed_form`` gives for them all (tested equal)."""
@@ -567,14 +567,14 @@ def _one_pose(nearest, start, X_0T, tool, tol, singular_tol, max_iter, wide, nea
     found converges, to distinct solutions, and none is missed by a little (five poses in
     six). None otherwise, and the pose takes the array path, which this is tested equal to.
     With numba, all of it after the closed form is one compiled call
-    (``dqlab.ik._newton_compiled.one_pose``)."""
+    (``dqlab._fast.newton_compiled.one_pose``)."""
     found, pe, re = start.valid, start.position_error, start.rotation_error
     d4 = nearest.robot.links[3].d
     if compiled_ready():
         done = compiled_one_pose(nearest.links, tool, start.solutions, found, pe, re, X_0T,
                                  tol, max_iter, singular_tol, d4, 10.0 * wide, near,
                                  plain=_PLAIN_STEPS, stop_factor=_STOP,
-                                 give_up_after=_GIVE_UP_AFTER, damping=_DAMPING,
+                                 give_up_after=_GIVE_UP_AFTER, damping=DAMPING,
                                  max_step=_MAX_STEP)
         if done is None:
             return None
@@ -620,7 +620,7 @@ def _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol):
     returns the solutions, wrapped (``solutions`` itself if no row moves). ``X_0T`` holds
     the targets of the poses whose rows are ``solutions``, eight each. With numba, the rows
     near a singularity are picked in compiled code
-    (``dqlab.ik._newton_compiled.near_rows``, tested equal)."""
+    (``dqlab._fast.newton_compiled.near_rows``, tested equal)."""
     if compiled_ready():
         near = compiled_near_rows(solutions, valid, nearest.exact, _POLISH_NEAR)
     else:
@@ -922,12 +922,12 @@ def _deflated_newton(chain, q, X_target, known, tol, steps):
     solutions ``known`` (m, k, 6) of its pose (NaN rows: none). A row stops as Newton's do
     (:func:`_newton_rows`): below ``_STOP tol``, or no longer halving its error in two
     steps after ``_GIVE_UP_AFTER``. With numba, compiled
-    (``dqlab.ik._newton_compiled.deflated``, tested equal)."""
+    (``dqlab._fast.newton_compiled.deflated``, tested equal)."""
     if compiled_ready():
         return compiled_deflated(*chain, q, X_target, known, steps, stop=_STOP * tol,
-                                 give_up_after=_GIVE_UP_AFTER, damping=_DAMPING,
+                                 give_up_after=_GIVE_UP_AFTER, damping=DAMPING,
                                  max_step=_MAX_STEP)
-    kernel = _chain(*chain, q.shape[0])
+    kernel = newton_kernel(*chain, q.shape[0])
     q = q.copy()
     have = ~np.isnan(known[..., 0])                     # (m, k)
     known = np.where(have[..., None], known, 0.0)
@@ -973,14 +973,14 @@ def _branches(exact, q):
 
 
 def _matrix_chain(nearest, tool):
-    """The :class:`_MatrixChain` of a calibrated arm with the tool ``tool`` (4, 4), built
+    """The :class:`MatrixChain` of a calibrated arm with the tool ``tool`` (4, 4), built
     once for each of the last few tools used (one pose's repair needs it on every call)."""
     key = tool.tobytes()
     chain = nearest.matrix_chains.get(key)
     if chain is None:
         if len(nearest.matrix_chains) >= 4:
             nearest.matrix_chains.clear()
-        chain = nearest.matrix_chains[key] = _MatrixChain(nearest.links, tool)
+        chain = nearest.matrix_chains[key] = MatrixChain(nearest.links, tool)
     return chain
 
 
@@ -990,8 +990,8 @@ def _near_singular(nearest, tool, q):
     singular direction there, (k, 6) for those k: the eigenvector of :math:`J^\mathsf{T} J`
     of its smallest eigenvalue (the last right singular vector of J), its largest entry made
     positive. With numba, :math:`J^\mathsf{T} J` comes from the compiled frames
-    (``dqlab.ik._newton_compiled.gram``), and the test and direction from inverse iteration
-    (``dqlab.ik._newton_compiled.smallest``) wherever it is certain of them, ``eigh``
+    (``dqlab._fast.newton_compiled.gram``), and the test and direction from inverse iteration
+    (``dqlab._fast.newton_compiled.smallest``) wherever it is certain of them, ``eigh``
     elsewhere."""
     if not compiled_ready():
         kernel = _matrix_chain(nearest, tool)
@@ -1090,11 +1090,11 @@ def _newton(links, tool, q, X_target, tol, max_iter):
     ``_BLOCK`` (temporaries that stay in the cache).
 
     With numba installed, the same steps run compiled, eight branches at a time
-    (:mod:`dqlab.ik._newton_compiled`, tested equal to this path)."""
+    (:mod:`dqlab._fast.newton_compiled`, tested equal to this path)."""
     if compiled_ready():
         return compiled_newton(links, tool, q, X_target, tol, max_iter, plain=_PLAIN_STEPS,
                                 stop_factor=_STOP, give_up_after=_GIVE_UP_AFTER,
-                                damping=_DAMPING, max_step=_MAX_STEP)
+                                damping=DAMPING, max_step=_MAX_STEP)
     m = q.shape[0]
     q = q.copy()
     converged, size = np.zeros(m, dtype=bool), np.zeros(m)
@@ -1114,7 +1114,7 @@ def _newton(links, tool, q, X_target, tol, max_iter):
     lost = np.flatnonzero(~np.isfinite(q).all(axis=1))  # a step that overflowed: back to 0
     if lost.size:
         q[lost] = np.where(np.isfinite(q[lost]), q[lost], 0.0)
-        again = _chain(links, tool, lost.size)
+        again = newton_kernel(links, tool, lost.size)
         frames = again.frames(q[lost])
         X[lost], measures[:, lost] = again.transforms(frames), again.singularity_measures(frames)
     return q, converged, X, measures, np.stack(pose_errors(X, X_target))
@@ -1124,7 +1124,7 @@ def _plain_steps(links, tool, q, X_target, steps):
     """``steps`` Newton steps of every row (m, 6), none stopped: the joint vectors, the size
     of their errors (:func:`_error_size`), the TCP poses (m, 4, 4) and the singularity
     measures (3, m) at them."""
-    chain = _chain(links, tool, q.shape[0])
+    chain = newton_kernel(links, tool, q.shape[0])
     q = q.copy()
     targets = chain.targets(X_target)
     frames = chain.frames(q)
@@ -1145,7 +1145,7 @@ def _newton_rows(links, tool, q, X_target, tol, first, max_iter):
     """Steps ``first`` to ``max_iter`` of :func:`_newton`, each row stopped as soon as it is
     below the stop or no longer halving its error (returns as :func:`_newton` does)."""
     m = q.shape[0]
-    chain = _chain(links, tool, m)
+    chain = newton_kernel(links, tool, m)
     q = q.copy()
     frames = chain.frames(q)
     targets = chain.targets(X_target)
@@ -1193,268 +1193,5 @@ def _flags(measures, valid, singular_tol, d4, near):
     return flags
 
 
-def _chain(links, tool, m):
-    """The Newton kernel for m branches: whole matrices for a few (one pose), entries for
-    many (a batch)."""
-    return (_MatrixChain if m <= _FEW_ROWS else _EntryChain)(links, tool)
-
-
-class _MatrixChain:
-    r"""Forward kinematics, residual and Newton step of a calibrated arm on whole matrices:
-    frames (m, 7, 4, 4) (frame 0, frames 1..5 and the TCP, in the chain's frame 0), a few
-    numpy calls per step whatever m. The kernel of one pose's branches; tested equal to
-    :meth:`dqlab.robot.Robot.fk_with_jacobian`.
-
-    Link i is :math:`A_i = \cos\theta_i K_i^c + \sin\theta_i K_i^s + K_i^1` (standard DH,
-    the tool folded into :math:`A_6`), and the frames are the prefix products
-    :math:`A_1 \cdots A_i`, computed in three rounds of products."""
-
-    def __init__(self, links, tool):
-        K = np.zeros((6, 3, 4, 4))
-        for i, (ca, sa, a, d, _) in enumerate(links):
-            K[i, 0] = [[1, 0, 0, a], [0, ca, -sa, 0], [0, 0, 0, 0], [0, 0, 0, 0]]
-            K[i, 1] = [[0, -ca, sa, 0], [1, 0, 0, a], [0, 0, 0, 0], [0, 0, 0, 0]]
-            K[i, 2] = [[0, 0, 0, 0], [0, 0, 0, 0], [0, sa, ca, d], [0, 0, 0, 1]]
-        K[5] = K[5] @ tool
-        self.K = K.reshape(6, 3, 16)
-        self.offsets = np.array([lk[4] for lk in links])
-
-    def frames(self, q):
-        m = q.shape[0]
-        cs = np.empty((m, 6, 1, 3))
-        cs[..., 2] = 1.0
-        theta = q + self.offsets
-        np.cos(theta, out=cs[:, :, 0, 0])
-        np.sin(theta, out=cs[:, :, 0, 1])
-        F = np.empty((m, 7, 4, 4))
-        F[:, 0] = np.eye(4)
-        P = F[:, 1:]
-        P[...] = (cs @ self.K).reshape(m, 6, 4, 4)      # the links A_1 .. A_6 (tool)
-        P[:, 1:] = P[:, :-1] @ P[:, 1:]                  # prefix products in three rounds
-        P[:, 2:] = P[:, :-2] @ P[:, 2:]
-        P[:, 4:] = P[:, :-4] @ P[:, 4:]
-        return F
-
-    @staticmethod
-    def take(F, rows):
-        return F[rows]
-
-    def put(self, F, rows, q):
-        F[rows] = self.frames(q)
-
-    @staticmethod
-    def targets(X):
-        return X
-
-    @staticmethod
-    def transforms(F):
-        """The TCP poses (m, 4, 4) in frame 0."""
-        return F[:, 6]
-
-    @staticmethod
-    def residual(F, X_target):
-        """e (m, 6): the position error and the rotation vector (small angles) from the TCP
-        to the target, in frame 0."""
-        E = X_target[:, :3, :3] @ np.swapaxes(F[:, 6, :3, :3], -1, -2)
-        e = np.empty((F.shape[0], 6))
-        e[:, :3] = X_target[:, :3, 3] - F[:, 6, :3, 3]
-        e[:, 3:] = 0.5 * (E.reshape(-1, 9)[:, [7, 2, 3]] - E.reshape(-1, 9)[:, [5, 6, 1]])
-        return e
-
-    @staticmethod
-    def jacobian(F):
-        """J (m, 6, 6) at the TCP, in frame 0, linear rows first."""
-        z, r = F[:, :6, :3, 2], F[:, 6, None, :3, 3] - F[:, :6, :3, 3]
-        J = np.empty((F.shape[0], 6, 6))
-        J[:, 0] = z[..., 1] * r[..., 2] - z[..., 2] * r[..., 1]
-        J[:, 1] = z[..., 2] * r[..., 0] - z[..., 0] * r[..., 2]
-        J[:, 2] = z[..., 0] * r[..., 1] - z[..., 1] * r[..., 0]
-        J[:, 3:] = np.swapaxes(z, -1, -2)
-        return J
-
-    def newton_step(self, F, e):
-        """The damped Newton step (J^T J + lambda I)^-1 J^T e of every row (m, 6)."""
-        J = self.jacobian(F)
-        JT = np.swapaxes(J, -1, -2)
-        H = JT @ J
-        H[:, _DIAGONAL, _DIAGONAL] += (_DAMPING / 6.0) * np.trace(H, axis1=1, axis2=2)[:, None]
-        return np.linalg.solve(H, JT @ e[..., None])[..., 0]
-
-    @staticmethod
-    def singularity_measures(F):
-        """(3, m): |sin| of the angle between joint axes 4 and 6, |sin| of the elbow angle
-        (between the common normals x_2 and x_3) and the wrist centre's distance from the
-        plane of joint 1 and joint 2's direction."""
-        return _measures(F[:, 1, :3, 2], F[:, 3, :3, 2], F[:, 5, :3, 2], F[:, 2, :3, 0],
-                         F[:, 3, :3, 0], F[:, 5, :3, 3])
-
-
-def _measures(z1, z3, z5, x2, x3, o5):
-    """The three singularity measures (3, m) from the vectors (m, 3) they need: |z3 x z5|,
-    |x2 x x3| and |(o5 . (z0 x z1))| / |z0 x z1| with z0 = (0, 0, 1)."""
-    a, b = np.stack([z3, x2]), np.stack([z5, x3])                  # (2, m, 3)
-    cross = a[..., [1, 2, 0]] * b[..., [2, 0, 1]] - a[..., [2, 0, 1]] * b[..., [1, 2, 0]]
-    sines = np.sqrt((cross * cross).sum(axis=-1))                   # (2, m)
-    shoulder = (np.abs(z1[:, 0] * o5[:, 1] - z1[:, 1] * o5[:, 0])
-                / np.hypot(z1[:, 0], z1[:, 1]))
-    return np.concatenate([sines, shoulder[None]])
-
-
-_DIAGONAL = np.arange(6)
 _PAIRS = np.array([(k, i) for i in range(8) for k in range(i)]).T     # (2, 28): rows k < i
 _COARSE = [0, 2, 4]
-
-
-class _EntryChain:
-    """The same as :class:`_MatrixChain` on entries: one array per entry of the frames with
-    the m branches along it, arithmetic written out (a fixed number of numpy calls per
-    entry, none per branch): the kernel of a batch. Frames are an array (48, m) holding
-    z_1..z_5, o_1..o_5 (frames 1..5), x_2, x_3, the TCP position and its rotation matrix row
-    by row; targets an array (12, m), rotation row by row then position."""
-
-    def __init__(self, links, tool):
-        self.links = links
-        self.tool = tool.tolist()
-        self.no_tool = bool(np.array_equal(tool, np.eye(4)))
-
-    def frames(self, q):
-        qT = np.ascontiguousarray(q.T)
-        (ca, sa, a, d, t0) = self.links[0]
-        theta = qT[0] + t0
-        c, s = np.cos(theta), np.sin(theta)
-        x, y, z = (c, s, 0.0), (-ca * s, ca * c, sa), (sa * s, -sa * c, ca)
-        o = (a * c, a * s, d)
-        zs, os_, xs = [z], [o], [x]
-        for ca, sa, a, d, t0 in self.links[1:]:
-            theta = qT[len(zs)] + t0
-            c, s = np.cos(theta), np.sin(theta)
-            xn = tuple(c * xk + s * yk for xk, yk in zip(x, y, strict=True))
-            yp = tuple(c * yk - s * xk for xk, yk in zip(x, y, strict=True))
-            o = tuple(ok + d * zk + a * xk for ok, zk, xk in zip(o, z, xn, strict=True))
-            y = tuple(ca * yk + sa * zk for yk, zk in zip(yp, z, strict=True))
-            z = tuple(ca * zk - sa * yk for yk, zk in zip(yp, z, strict=True))
-            x = xn
-            zs.append(z)
-            os_.append(o)
-            xs.append(x)
-        (t00, t01, t02, tx), (t10, t11, t12, ty), (t20, t21, t22, tz), _ = self.tool
-        if self.no_tool:
-            p, R = list(o), [(x[k], y[k], z[k]) for k in range(3)]            # R by rows
-        else:
-            p = [o[k] + tx * x[k] + ty * y[k] + tz * z[k] for k in range(3)]
-            R = [(x[k] * t00 + y[k] * t10 + z[k] * t20, x[k] * t01 + y[k] * t11 + z[k] * t21,
-                  x[k] * t02 + y[k] * t12 + z[k] * t22) for k in range(3)]
-        entries = [v for vec in (*zs[:5], *os_[:5], xs[1], xs[2]) for v in vec]
-        entries += p + [v for row in R for v in row]
-        out = np.empty((48, q.shape[0]))
-        for k, v in enumerate(entries):
-            out[k] = v
-        return out
-
-    @staticmethod
-    def take(F, rows):
-        return F[:, rows]
-
-    def put(self, F, rows, q):
-        F[:, rows] = self.frames(q)
-
-    @staticmethod
-    def targets(X):
-        return np.concatenate([X[:, :3, :3].reshape(-1, 9).T, X[:, :3, 3].T])
-
-    @staticmethod
-    def transforms(F):
-        m = F.shape[1]
-        X = np.zeros((m, 4, 4))
-        X[:, :3, :3] = F[39:48].T.reshape(m, 3, 3)
-        X[:, :3, 3] = F[36:39].T
-        X[:, 3, 3] = 1.0
-        return X
-
-    @staticmethod
-    def residual(F, target):
-        R, Rt = F[39:48], target[:9]
-        e = np.empty((6, F.shape[1]))
-        np.subtract(target[9:12], F[36:39], out=e[:3])
-        for k, (i, j) in enumerate(((2, 1), (0, 2), (1, 0))):     # (E_ij - E_ji) / 2
-            ti, tj, ri, rj = Rt[3 * i:3 * i + 3], Rt[3 * j:3 * j + 3], R[3 * i:3 * i + 3], \
-                R[3 * j:3 * j + 3]
-            e[3 + k] = 0.5 * ((ti[0] * rj[0] + ti[1] * rj[1] + ti[2] * rj[2])
-                              - (tj[0] * ri[0] + tj[1] * ri[1] + tj[2] * ri[2]))
-        return e.T
-
-    @staticmethod
-    def _columns(F):
-        """The six columns of J, each six entries (arrays, or floats for the constants)."""
-        px, py, pz = F[36], F[37], F[38]
-        columns = [(-py, px, 0.0, 0.0, 0.0, 1.0)]          # joint 1: z_0 = (0, 0, 1), o_0 = 0
-        for i in range(5):
-            zx, zy, zz = F[3 * i], F[3 * i + 1], F[3 * i + 2]
-            rx, ry, rz = px - F[15 + 3 * i], py - F[16 + 3 * i], pz - F[17 + 3 * i]
-            columns.append((zy * rz - zz * ry, zz * rx - zx * rz, zx * ry - zy * rx,
-                            zx, zy, zz))
-        return columns
-
-    def jacobian(self, F):
-        m = F.shape[1]
-        J = np.empty((m, 6, 6))
-        for j, column in enumerate(self._columns(F)):
-            for i, v in enumerate(column):
-                J[:, i, j] = v
-        return J
-
-    def newton_step(self, F, e):
-        """The damped Newton step of :meth:`_MatrixChain.newton_step`, by the normal
-        equations solved with Cholesky on entries."""
-        J = self._columns(F)
-        e = e.T
-        H = [[_dot(J[i], J[j]) for j in range(i + 1)] for i in range(6)]
-        g = [_dot(J[i], e) for i in range(6)]
-        lam = (_DAMPING / 6.0) * sum(H[i][i] for i in range(6))
-        for i in range(6):
-            H[i][i] = H[i][i] + lam
-        return np.array(_cholesky_solve(H, g)).T
-
-    @staticmethod
-    def singularity_measures(F):
-        return _measures(F[0:3].T, F[6:9].T, F[12:15].T, F[30:33].T, F[33:36].T, F[27:30].T)
-
-
-def _dot(u, v):
-    """The dot product of two 6-vectors of entries (arrays or floats), zero entries skipped."""
-    total = 0.0
-    for a, b in zip(u, v, strict=True):
-        if not (type(a) is float and a == 0.0) and not (type(b) is float and b == 0.0):
-            total = total + a * b
-    return total
-
-
-def _cholesky_solve(H, g):
-    """Solve H x = g for a symmetric positive definite H given by its lower triangle
-    ``H[i][j], j <= i`` (entries), by Cholesky: H = L L^T."""
-    n = len(g)
-    L = [[None] * n for _ in range(n)]
-    for j in range(n):
-        s = H[j][j]
-        for k in range(j):
-            s = s - L[j][k] * L[j][k]
-        L[j][j] = np.sqrt(s)
-        inv = 1.0 / L[j][j]
-        for i in range(j + 1, n):
-            s = H[i][j]
-            for k in range(j):
-                s = s - L[i][k] * L[j][k]
-            L[i][j] = s * inv
-    y = []
-    for i in range(n):
-        s = g[i]
-        for k in range(i):
-            s = s - L[i][k] * y[k]
-        y.append(s / L[i][i])
-    x = [None] * n
-    for i in range(n - 1, -1, -1):
-        s = y[i]
-        for k in range(i + 1, n):
-            s = s - L[k][i] * x[k]
-        x[i] = s / L[i][i]
-    return x

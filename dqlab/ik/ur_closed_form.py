@@ -22,7 +22,7 @@ function of :mod:`dqlab.ik.ur_steps`:
 
 :func:`~dqlab.ik.ur_steps.candidate_solutions` assembles the steps into the eight rows in the
 order of the book's chapter 8, readably; :func:`exact_ur` returns the same rows, bit for
-bit, from the private engine ``dqlab.ik._ur_engine`` (one pose on Python floats, a batch
+bit, from the private engine ``dqlab._fast.ur_engine`` (one pose on Python floats, a batch
 with all branches as arrays, in blocks), which also checks every row, sets the flags and, at
 a wrist singularity, chooses a member of the family. The arm must have the exact UR shape
 (:func:`ur_parameters`); ``dqlab.ik.ur`` (:func:`dqlab.ik.ur_solver.ur`) solves any UR,
@@ -118,21 +118,20 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._checks import check_instance, check_scalar
 from .._deprecated import renamed_attributes
+from .._fast import ur_engine as engine
 from ..models import UR_SHAPE
 from ..robot import Robot
 from ..rotations import wrap_angle
-from ._ur_engine import (  # noqa: F401  (the reasons, re-exported)
+from .result import IKResult, check_ur_options
+from .ur_steps import (  # noqa: F401  (the reasons, re-exported)
+    NEAR_SINGULAR,
     REASON_FAR,
     REASON_INNER,
     REASON_OUTER,
     REASON_REACH,
     REASON_SHOULDER,
     REASON_TOL,
-    arm_constants,
-    solve,
 )
-from .result import IKResult, check_ur_options
-from .ur_steps import NEAR_SINGULAR
 
 __all__ = ["exact_ur", "ur_parameters", "distinct_solutions", "SOLUTION_ORDER", "ROW_NAMES"]
 
@@ -161,7 +160,7 @@ def _exact_parameters(robot):
     except (KeyError, TypeError):
         try:
             prm = ur_parameters(robot)
-            prm["one pose"] = arm_constants(prm)      # (this dict is not handed out)
+            prm["one pose"] = engine.arm_constants(prm)      # (this dict is not handed out)
         except ValueError as exc:
             prm = ValueError(f"{exc} (a calibrated UR is solved by dqlab.ik.ur)")
         try:
@@ -374,7 +373,7 @@ def exact_ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9,
     prm = _exact_parameters(robot)
     tol, singular_tol, near_tol, pose_tol = check_ur_options(tol, singular_tol, near_tol,
                                                              pose_tol, residuals)
-    result = solve(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals,
+    result = engine.solve(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals,
                    near_tol)
     result.row_names = ROW_NAMES
     return result

@@ -11,7 +11,7 @@ coefficients :math:`L` and the wrist angles (:func:`relative_rotation_coefficien
 the planar two-link arm (:func:`elbow_angles`). :func:`candidate_solutions` runs them in the
 chapter's order and is what the chapter shows.
 :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>` computes the same rows with the speed
-machinery of the private module ``dqlab.ik._ur_engine`` (tested equal, bit for bit) and
+machinery of the private module ``dqlab._fast.ur_engine`` (tested equal, bit for bit) and
 adds the checks, the flags and the choice at a wrist singularity.
 
 Each step is one formula for two kinds of numbers, told apart by one switch
@@ -69,6 +69,18 @@ NEAR_WRIST = 1e-3
 #: (about 0.57 degrees, or 1 % of :math:`d_4`) is near a singularity, where its joints are
 #: sensitive to the pose.
 NEAR_SINGULAR = 1e-2
+
+#: Why a pose has no solution (``IKResult.reason``), from the first step that fails.
+REASON_SHOULDER = ("shoulder: the wrist centre p5 = p6 - d6 z6 lies inside the cylinder "
+                   "x5^2 + y5^2 < d4^2 about the base axis")
+REASON_OUTER = ("elbow: the wrist-1 point is farther from the shoulder than |a2| + |a3| on "
+                "every branch")
+REASON_INNER = ("elbow: the wrist-1 point is closer to the shoulder than ||a2| - |a3|| on "
+                "every branch")
+REASON_REACH = "elbow: the wrist-1 point is out of the forearm's reach on every branch"
+REASON_TOL = "no branch reproduces the pose within tol"
+REASON_FAR = ("the wrist centre is farther from the shoulder than 1 / eps times the arm's "
+              "reach: out of reach, its distance the error of every row")
 
 
 def target_rotation(q: tuple) -> tuple:

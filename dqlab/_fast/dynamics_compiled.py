@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-from ._compiled import compile_in_place, compiled_allowed
+from .compiled import compile_in_place, compiled_allowed
 
 _COMPILED = []     # the kernels below, compiled in place by ready()
 _READY = None      # whether numba imported and the kernels compiled (once known)
@@ -38,7 +38,7 @@ WIDTH = 22
 
 
 def switched_on():
-    """Whether ``DQLAB_COMPILED`` lets compiled kernels run (:mod:`dqlab._compiled`). Read at
+    """Whether ``DQLAB_COMPILED`` lets compiled kernels run (:mod:`dqlab._fast.compiled`). Read at
     every call, so that a test or a session can switch them off."""
     return compiled_allowed()
 

@@ -23,9 +23,9 @@ every size and for one joint vector on floats.
 
 import numpy as np
 
-from ._checks import batched
-from ._formulas import dual_quaternion_mul, functions_for, screw_entries
-from .dualquat import dual_quaternion_from_transform
+from .._checks import batched
+from .._formulas import dual_quaternion_mul, functions_for, screw_entries
+from ..dualquat import dual_quaternion_from_transform
 
 __all__ = ["CompiledChain"]
 

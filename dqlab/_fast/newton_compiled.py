@@ -5,8 +5,9 @@ compiled code, eight branches at a time: forward kinematics of the calibrated ch
 residual :math:`e = (p^\ast - p,\ \tfrac12 (R^\ast R^\mathsf{T} - R R^{\ast\mathsf{T}})^\vee)`,
 the Jacobian at the TCP and the damped step
 :math:`(J^\mathsf{T} J + \lambda I)^{-1} J^\mathsf{T} e` by Cholesky, with the same stop,
-give-up and shortening rules and the same frames layout as ``_EntryChain``. The steps
-themselves are straight-line code over the eight branches (``dqlab.ik._newton_lanes``,
+give-up and shortening rules and the same frames layout as
+``calibrated_chains.EntryChain``. The steps
+themselves are straight-line code over the eight branches (``dqlab._fast.newton_lanes``,
 written by ``tools/generate_newton_lanes.py``), which the compiler turns into vector
 instructions; a branch that has stopped takes steps of zero while the others go on. It is
 tested equal to the numpy path, which stays the one the module's docstring describes and the
@@ -21,12 +22,12 @@ that module, compiled; :func:`one_pose` is its ``_one_pose`` after the closed fo
 and direction by inverse iteration wherever they are certain (``eigh`` answers elsewhere,
 and is what the numpy path uses). :func:`exact_one_pose` is the nearest exact
 arm's closed form of one pose that the one-pose path starts from: the loop of
-``dqlab.ik._ur_engine.solve_single`` over the steps of ``dqlab.ik.ur_steps``, written out on
+``dqlab._fast.ur_engine.solve_single`` over the steps of ``dqlab.ik.ur_steps``, written out on
 floats (tested equal to it bit for bit), and :func:`exact_poses` the same for a batch of
 poses, which the batch path starts from (the poses it does not solve go to the closed form's
 own batch path); :func:`deflated` the deflated Newton steps of its ``_deflate``.
 :func:`ready` says whether numba is there and the environment variable ``DQLAB_COMPILED``
-(:mod:`dqlab._compiled`, read again by :func:`refresh`) does not switch the compiled paths
+(:mod:`dqlab._fast.compiled`, read again by :func:`refresh`) does not switch the compiled paths
 off; the first compilation takes seconds, and is cached on disk for the next processes.
 
 The compiled path differs from the numpy path in two ways that change no result beyond
@@ -41,13 +42,12 @@ import math
 
 import numpy as np
 
-from .._compiled import compile_in_place, compiled_allowed
-from ._newton_lanes import INDEX, NV, W
-from ._newton_lanes import angles as lane_angles
-from ._newton_lanes import frames as lane_frames
-from ._newton_lanes import size as lane_size
-from ._newton_lanes import step as lane_step
-from .ur_steps import NEAR_SINGULAR
+from .compiled import compile_in_place, compiled_allowed
+from .newton_lanes import INDEX, NV, W
+from .newton_lanes import angles as lane_angles
+from .newton_lanes import frames as lane_frames
+from .newton_lanes import size as lane_size
+from .newton_lanes import step as lane_step
 
 __all__ = ["ready", "refresh", "newton", "one_pose", "exact_one_pose", "exact_poses", "unique",
            "are_new", "accept", "near_rows", "gram", "smallest", "deflated"]
@@ -59,7 +59,7 @@ _ALLOWED = True    # DQLAB_COMPILED as last read (refresh)
 
 def refresh():
     """Read the environment variable ``DQLAB_COMPILED`` again
-    (:func:`dqlab._compiled.compiled_allowed`): ``dqlab.ik.ur`` does at each call on a
+    (:func:`dqlab._fast.compiled.compiled_allowed`): ``dqlab.ik.ur`` does at each call on a
     calibrated UR, so that a process may switch the compiled kernels on and off; until
     then :func:`ready` answers with the value read last."""
     global _ALLOWED
@@ -179,8 +179,9 @@ def _near_rows(solutions, valid, constants, threshold, near):
 
 def gram(links, tool, q):
     r""":math:`J^\mathsf{T} J` (m, 6, 6) of the calibrated chain (links, tool) at the joint
-    vectors q (m, 6), J the Jacobian at the TCP of ``_MatrixChain.jacobian``: the lanes'
-    frames, then the columns of ``_EntryChain._columns``."""
+    vectors q (m, 6), J the Jacobian at the TCP of
+    ``calibrated_chains.MatrixChain.jacobian``: the lanes'
+    frames, then the columns of ``calibrated_chains.EntryChain._columns``."""
     H = np.empty((q.shape[0], 6, 6))
     _gram(np.asarray(links, dtype=float), np.ascontiguousarray(tool, dtype=float),
           np.ascontiguousarray(q, dtype=float), H)
@@ -224,8 +225,8 @@ def deflated(links, tool, q, X_target, known, steps, *, stop, give_up_after, dam
     return out
 
 
-def exact_one_pose(flange, constants, tol, singular_tol, near_wrist, near_tol=NEAR_SINGULAR):
-    """``dqlab.ik._ur_engine.solve_single`` after the flange, compiled: the closed form of the
+def exact_one_pose(flange, constants, tol, singular_tol, near_wrist, near_tol):
+    """``dqlab._fast.ur_engine.solve_single`` after the flange, compiled: the closed form of the
     exact UR of ``constants`` (12,) (``d1, a2, a3, d4, d5, d6`` and the six joint offsets)
     for the flange ``(q, p, z6)`` (rotation quaternion, position, z axis). The solutions (8, 6),
     ``valid`` (8,), the errors (8,) and the flags (4,) wrist, shoulder and elbow singular and
@@ -243,7 +244,7 @@ def exact_one_pose(flange, constants, tol, singular_tol, near_wrist, near_tol=NE
     return (solutions, errors <= tol, errors, flags) if done else None
 
 
-def exact_poses(Q, P, Z, constants, tol, singular_tol, near_wrist, near_tol=NEAR_SINGULAR):
+def exact_poses(Q, P, Z, constants, tol, singular_tol, near_wrist, near_tol):
     """:func:`exact_one_pose` of n flanges at once, pose by pose in compiled code: rotation
     quaternions ``Q`` (n, 4), positions ``P`` (n, 3) and z axes ``Z`` (n, 3). The solutions
     (n, 8, 6), ``valid`` (n, 8), the errors (n, 8), the flags (n, 4) and ``done`` (n,):
@@ -604,7 +605,7 @@ def _exact_one_pose(qw, qx, qy, qz, px, py, pz, zx, zy, zz, constants, tol, sing
     ``dqlab.ik.ur_steps`` named beside it; False where that function returns None."""
     d1, a2, a3, d4, d5, d6 = (constants[0], constants[1], constants[2], constants[3],
                               constants[4], constants[5])
-    family_tol = tol / (8.0 * max(1.0, abs(d6)))       # dqlab.ik._ur_engine.wrist_family_tol
+    family_tol = tol / (8.0 * max(1.0, abs(d6)))       # dqlab._fast.ur_engine.wrist_family_tol
     offset = False
     for i in range(6):
         offset = offset or constants[6 + i] != 0.0

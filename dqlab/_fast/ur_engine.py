@@ -49,12 +49,20 @@ from ..dualquat import (
     dual_quaternion_inverse,
     dual_quaternion_product,
 )
+from ..ik import ur_steps as steps
+from ..ik.result import IKResult, finish
+from ..ik.targets import RIGID_TOL, parse_targets, pose_errors
+from ..ik.ur_steps import (
+    NEAR_SINGULAR,
+    REASON_FAR,
+    REASON_INNER,
+    REASON_OUTER,
+    REASON_REACH,
+    REASON_SHOULDER,
+    REASON_TOL,
+)
 from ..rotations import wrap_angle
 from ..transforms import transform_inverse
-from . import ur_steps as steps
-from .result import IKResult, finish
-from .targets import RIGID_TOL, parse_targets, pose_errors
-from .ur_steps import NEAR_SINGULAR
 
 __all__ = ["solve", "solve_single", "arm_constants", "solve_batch", "Block", "CHUNK",
            "REASON_SHOULDER", "REASON_OUTER", "REASON_INNER", "REASON_REACH", "REASON_TOL",
@@ -75,19 +83,6 @@ _DQ_IDENTITY = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
 _SHOULDER = np.array([[1.0], [-1.0]])     # h+- = +h, -h: axis 0 of (s, n)
 _SIGMA = np.array([[1.0], [-1.0]])        # wrist branch w = 0, 1, axis -2 of (s, w, n)
 _ELBOW = np.array([[[1.0]], [[-1.0]]])    # elbow branch e = 0, 1, axis -3 of (s, e, w, n)
-
-#: Why a pose has no solution (``IKResult.reason``), from the first step that fails.
-REASON_SHOULDER = ("shoulder: the wrist centre p5 = p6 - d6 z6 lies inside the cylinder "
-                   "x5^2 + y5^2 < d4^2 about the base axis")
-REASON_OUTER = ("elbow: the wrist-1 point is farther from the shoulder than |a2| + |a3| on "
-                "every branch")
-REASON_INNER = ("elbow: the wrist-1 point is closer to the shoulder than ||a2| - |a3|| on "
-                "every branch")
-REASON_REACH = "elbow: the wrist-1 point is out of the forearm's reach on every branch"
-REASON_TOL = "no branch reproduces the pose within tol"
-REASON_FAR = ("the wrist centre is farther from the shoulder than 1 / eps times the arm's "
-              "reach: out of reach, its distance the error of every row")
-
 
 def solve(robot, prm, target, tol, singular_tol, pose_tol, tool, q_ref, residuals,
           near_tol=NEAR_SINGULAR):

@@ -2,8 +2,8 @@
 
 Some speed machinery of dqlab runs compiled by numba when it is installed (the ``fast``
 extra): the Newton steps of inverse kinematics on a calibrated UR
-(``dqlab.ik._newton_compiled``) and the recursions of the dynamics
-(``dqlab._dynamics_compiled``), each tested equal to the numpy path that runs without it;
+(``dqlab._fast.newton_compiled``) and the recursions of the dynamics
+(``dqlab._fast.dynamics_compiled``), each tested equal to the numpy path that runs without it;
 :func:`compile_in_place` compiles them, once per process.
 ``DQLAB_COMPILED=0`` switches every compiled path off (the numpy paths run, as in a browser
 or without numba); unset, ``1`` or empty: on wherever numba imports. It is read here only,
