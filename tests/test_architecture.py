@@ -148,9 +148,9 @@ def test_the_ik_solvers_are_functions_and_no_module_alias_is_left():
 # dqlab._fast. Each sits behind one front, the only module that imports it, and is registered
 # here beside the test that holds it equal to the readable path it speeds up (or, for
 # generated code, to its generator's output). One Newton step and one forward kinematics per
-# twin: the calibrated solver's numpy kernels (calibrated_chains), its compiled ones
-# (newton_compiled, over the generated newton_lanes), the closed form's engine (ur_engine), the
-# chain's products (chain), the dynamics on floats and compiled.
+# twin: the calibrated solver's numpy kernels (calibrated_matrices, calibrated_entries), its
+# compiled ones (newton_compiled, over the generated newton_lanes), the closed form's engine
+# (ur_engine), the chain's products (chain), the dynamics on floats and compiled.
 ENGINES = {
     "dqlab._fast.chain": ({"dqlab.robot"}, "test_robot.py::"
                           "test_fk_is_the_product_of_link_transforms_with_base_and_tool"),
@@ -158,7 +158,10 @@ ENGINES = {
     # the engine directly, its arguments checked already, instead of dqlab.ik.ur
     "dqlab._fast.ur_engine": ({"dqlab.ik.ur_closed_form", "dqlab.ik.ur_calibrated"},
                               "test_ik_ur.py::test_single_pose_path_equals_the_batch_path"),
-    "dqlab._fast.calibrated_chains": (
+    "dqlab._fast.calibrated_matrices": (
+        {"dqlab.ik.ur_calibrated", "dqlab._fast.calibrated_entries"},
+        "test_ik_ur_calibrated.py::test_kernels_equal_forward_kinematics_and_jacobian"),
+    "dqlab._fast.calibrated_entries": (
         {"dqlab.ik.ur_calibrated"},
         "test_ik_ur_calibrated.py::test_kernels_equal_forward_kinematics_and_jacobian"),
     "dqlab._fast.newton_compiled": (
@@ -248,7 +251,8 @@ CORE = [p for p in SOURCES if (module_name(p) + ".").split(".")[1] in
         ("complex", "rotations", "quaternion", "transforms", "dualquat", "robot", "models",
          "jacobian", "ik", "_formulas", "_checks", "_wrapper")] + [
     MODULES[name] for name in ("dqlab._fast.chain", "dqlab._fast.ur_engine",
-                               "dqlab._fast.calibrated_chains", "dqlab._fast.newton_compiled",
+                               "dqlab._fast.calibrated_matrices",
+                               "dqlab._fast.calibrated_entries", "dqlab._fast.newton_compiled",
                                "dqlab._fast.newton_lanes")]
 
 
@@ -257,14 +261,14 @@ def test_the_core_tells_floats_from_arrays_in_one_place():
     dqlab._formulas.functions_for from the type of a number to its functions. No other
     place of the core tests for a float, except where the test is not a choice of formula:
     wrap_angle and check_scalar, which skip their argument checks for a Python float, and
-    the calibrated solver's dot product of entries (dqlab._fast.calibrated_chains.dot),
+    the calibrated solver's dot product of entries (dqlab._fast.calibrated_entries.dot),
     which skips the entries that are the float 0.0 (the
     structural zeros of its Jacobian's entries)."""
     from dqlab._formulas import functions_for
 
     sites = {(module_name(p), name) for p in CORE for name, _ in float_switches(p)}
     assert sites == {("dqlab.rotations", "wrap_angle"), ("dqlab._checks", "check_scalar"),
-                     ("dqlab._fast.calibrated_chains", "dot")}
+                     ("dqlab._fast.calibrated_entries", "dot")}
     floats, arrays = functions_for(float), functions_for(np.ndarray)
     assert floats.atan2 is math.atan2 and arrays.atan2 is np.arctan2
     assert functions_for(np.float64) is arrays and functions_for((float, np.ndarray)) is arrays

@@ -5,7 +5,7 @@ form, and how close to a singularity the generating configuration is still found
 import numpy as np
 import pytest
 
-from dqlab._fast import calibrated_chains
+from dqlab._fast import calibrated_entries, calibrated_matrices
 from dqlab.identify import dh_parameters, robot_from_dh_parameters
 from dqlab.ik import IKResult, ur
 from dqlab.ik.ur_calibrated import REASON_NOT_CONVERGED, calibrated_ur, nominal_ur
@@ -265,16 +265,16 @@ def test_kernels_equal_forward_kinematics_and_jacobian():
     q = np.random.default_rng(87).uniform(-np.pi, np.pi, (70, 6))
     X, J = robot.fk_with_jacobian(q)
     steps = []
-    for kernel in (calibrated_chains.MatrixChain(links, tool),
-                   calibrated_chains.EntryChain(links, tool)):
+    for kernel in (calibrated_matrices.MatrixChain(links, tool),
+                   calibrated_entries.EntryChain(links, tool)):
         F = kernel.frames(q)
         assert np.abs(kernel.transforms(F) - X).max() < 1e-12
         assert np.abs(kernel.jacobian(F) - J).max() < 1e-12
         e = kernel.residual(F, kernel.targets(robot.fk(q + 1e-4)))
         steps.append(kernel.newton_step(F, e))
-        np.testing.assert_allclose(kernel.singularity_measures(F), calibrated_chains.MatrixChain(
-            links, tool).singularity_measures(calibrated_chains.MatrixChain(links, tool).frames(q)),
-            atol=1e-12)
+        matrices = calibrated_matrices.MatrixChain(links, tool)
+        np.testing.assert_allclose(kernel.singularity_measures(F),
+                                   matrices.singularity_measures(matrices.frames(q)), atol=1e-12)
     np.testing.assert_allclose(steps[0], steps[1], atol=1e-12)
     assert np.median(np.abs(steps[0] - 1e-4)) < 1e-7            # one step goes most of it
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from test_ik_ur_calibrated import calibrated, physically_calibrated, singular_poses
 
-from dqlab._fast import calibrated_chains
+from dqlab._fast import calibrated_matrices
 from dqlab._fast import compiled as dqlab_compiled
 from dqlab._fast import newton_compiled as compiled
 from dqlab._fast.compiled import compiled_allowed
@@ -88,9 +88,9 @@ def test_compiled_newton_equals_the_numpy_path(make, numpy_path):
         for qq, XX, ee, mm in ((q, X, errors, measures), (q_n, X_n, errors_n, measures_n)):
             assert np.abs(XX - robot.fk(qq)).max() < 1e-12
             np.testing.assert_allclose(ee, np.stack(pose_errors(XX, targets)), atol=1e-15)
-            frames = calibrated_chains.MatrixChain(*chain).frames(qq)
+            frames = calibrated_matrices.MatrixChain(*chain).frames(qq)
             np.testing.assert_allclose(
-                mm, calibrated_chains.MatrixChain.singularity_measures(frames), atol=1e-12)
+                mm, calibrated_matrices.MatrixChain.singularity_measures(frames), atol=1e-12)
         far = slice(-52, -2)
         assert converged[far].sum() < 50                     # random starts: some fail
 
@@ -217,7 +217,7 @@ def test_compiled_gram_and_acceptance_equal_the_numpy_path(numpy_path):
     robot = calibrated(48)
     chain, q0, targets = chain_and_starts(robot, 49, 40)
     q = q0[np.isfinite(q0).all(axis=1)]
-    kernel = calibrated_chains.MatrixChain(*chain)
+    kernel = calibrated_matrices.MatrixChain(*chain)
     J = kernel.jacobian(kernel.frames(q))
     np.testing.assert_allclose(compiled.gram(*chain, q), np.swapaxes(J, -1, -2) @ J,
                                rtol=0, atol=1e-13)
@@ -383,7 +383,7 @@ def test_smallest_eigenvector_where_certain_is_eighs():
 
 def test_restarts_step_a_shared_start_once(numpy_path):
     """A start shared by several rows (given once, with which) leaves the same rows, joint
-    vectors, errors and marks as the same start given once per row (fewer than FEW_ROWS
+    vectors, errors and marks as the same start given once per row (fewer than _FEW_ROWS
     starts either way: the numpy path's kernel is the same one)."""
     robot = calibrated(53)
     nearest = module._nearest_exact(robot)
@@ -416,7 +416,7 @@ def test_restarts_step_a_shared_start_once(numpy_path):
         np.testing.assert_array_equal(ua, ub)
         for name in ("q", "done", "converged", "X", "measures", "errors"):
             np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
-        assert owners.size <= calibrated_chains.FEW_ROWS
+        assert owners.size <= module._FEW_ROWS
         assert (ua & ~a.converged).sum() == 0 and ua[rows[::3]].any()
 
 
@@ -435,7 +435,7 @@ def test_compiled_deflation_equals_the_numpy_path(numpy_path):
     fast = module._deflated_newton((links, tool), starts, targets, known, 1e-9, 10)
     plain = numpy_path(module._deflated_newton, (links, tool), starts, targets, known, 1e-9,
                        10)
-    chain = calibrated_chains.MatrixChain(links, tool)
+    chain = calibrated_matrices.MatrixChain(links, tool)
     errors = np.stack(pose_errors(chain.transforms(chain.frames(fast)), targets))
     converged = errors.max(axis=0) < 1e-10
     assert converged.mean() > 0.3 and not converged.all()

@@ -6,7 +6,7 @@ residual :math:`e = (p^\ast - p,\ \tfrac12 (R^\ast R^\mathsf{T} - R R^{\ast\math
 the Jacobian at the TCP and the damped step
 :math:`(J^\mathsf{T} J + \lambda I)^{-1} J^\mathsf{T} e` by Cholesky, with the same stop,
 give-up and shortening rules and the same frames layout as
-``calibrated_chains.EntryChain``. The steps
+``calibrated_entries.EntryChain``. The steps
 themselves are straight-line code over the eight branches (``dqlab._fast.newton_lanes``,
 written by ``tools/generate_newton_lanes.py``), which the compiler turns into vector
 instructions; a branch that has stopped takes steps of zero while the others go on. It is
@@ -180,8 +180,8 @@ def _near_rows(solutions, valid, constants, threshold, near):
 def gram(links, tool, q):
     r""":math:`J^\mathsf{T} J` (m, 6, 6) of the calibrated chain (links, tool) at the joint
     vectors q (m, 6), J the Jacobian at the TCP of
-    ``calibrated_chains.MatrixChain.jacobian``: the lanes'
-    frames, then the columns of ``calibrated_chains.EntryChain._columns``."""
+    ``calibrated_matrices.MatrixChain.jacobian``: the lanes'
+    frames, then the columns of ``calibrated_entries.EntryChain._columns``."""
     H = np.empty((q.shape[0], 6, 6))
     _gram(np.asarray(links, dtype=float), np.ascontiguousarray(tool, dtype=float),
           np.ascontiguousarray(q, dtype=float), H)

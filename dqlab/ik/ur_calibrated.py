@@ -87,8 +87,8 @@ from numpy.typing import ArrayLike
 
 from .._checks import as_float_array, rigid_rows
 from .._fast import ur_engine as exact_engine
-from .._fast.calibrated_chains import DAMPING, MatrixChain
-from .._fast.calibrated_chains import kernel as newton_kernel
+from .._fast.calibrated_entries import EntryChain
+from .._fast.calibrated_matrices import DAMPING, MatrixChain
 from .._fast.newton_compiled import accept as compiled_accept
 from .._fast.newton_compiled import are_new as compiled_are_new
 from .._fast.newton_compiled import deflated as compiled_deflated
@@ -125,6 +125,7 @@ MAX_DISCREPANCY = 0.05
 _STOP = 0.1            # a Newton branch stops when its errors are below _STOP tol
 _MAX_STEP = 0.5        # longest Newton step, rad (a longer one is shortened)
 _GIVE_UP_AFTER = 8     # steps after which a branch must keep halving its error
+_FEW_ROWS = 192        # up to this many branches, the kernel working on whole matrices
 _PLAIN_STEPS = 3       # first steps taken by every branch together, none stopped
 _BLOCK = 2048          # branches per block of the Newton steps
 _RESTART_ITER = 10     # Newton steps of a restart at most
@@ -927,7 +928,7 @@ def _deflated_newton(chain, q, X_target, known, tol, steps):
         return compiled_deflated(*chain, q, X_target, known, steps, stop=_STOP * tol,
                                  give_up_after=_GIVE_UP_AFTER, damping=DAMPING,
                                  max_step=_MAX_STEP)
-    kernel = newton_kernel(*chain, q.shape[0])
+    kernel = _newton_kernel(*chain, q.shape[0])
     q = q.copy()
     have = ~np.isnan(known[..., 0])                     # (m, k)
     known = np.where(have[..., None], known, 0.0)
@@ -1114,7 +1115,7 @@ def _newton(links, tool, q, X_target, tol, max_iter):
     lost = np.flatnonzero(~np.isfinite(q).all(axis=1))  # a step that overflowed: back to 0
     if lost.size:
         q[lost] = np.where(np.isfinite(q[lost]), q[lost], 0.0)
-        again = newton_kernel(links, tool, lost.size)
+        again = _newton_kernel(links, tool, lost.size)
         frames = again.frames(q[lost])
         X[lost], measures[:, lost] = again.transforms(frames), again.singularity_measures(frames)
     return q, converged, X, measures, np.stack(pose_errors(X, X_target))
@@ -1124,7 +1125,7 @@ def _plain_steps(links, tool, q, X_target, steps):
     """``steps`` Newton steps of every row (m, 6), none stopped: the joint vectors, the size
     of their errors (:func:`_error_size`), the TCP poses (m, 4, 4) and the singularity
     measures (3, m) at them."""
-    chain = newton_kernel(links, tool, q.shape[0])
+    chain = _newton_kernel(links, tool, q.shape[0])
     q = q.copy()
     targets = chain.targets(X_target)
     frames = chain.frames(q)
@@ -1145,7 +1146,7 @@ def _newton_rows(links, tool, q, X_target, tol, first, max_iter):
     """Steps ``first`` to ``max_iter`` of :func:`_newton`, each row stopped as soon as it is
     below the stop or no longer halving its error (returns as :func:`_newton` does)."""
     m = q.shape[0]
-    chain = newton_kernel(links, tool, m)
+    chain = _newton_kernel(links, tool, m)
     q = q.copy()
     frames = chain.frames(q)
     targets = chain.targets(X_target)
@@ -1195,3 +1196,10 @@ def _flags(measures, valid, singular_tol, d4, near):
 
 _PAIRS = np.array([(k, i) for i in range(8) for k in range(i)]).T     # (2, 28): rows k < i
 _COARSE = [0, 2, 4]
+
+
+def _newton_kernel(links, tool, m):
+    """The Newton kernel for m branches: whole matrices for a few (one pose), entries for
+    many (a batch); both in :mod:`dqlab._fast`, tested equal to
+    :meth:`dqlab.robot.Robot.fk_with_jacobian`."""
+    return (MatrixChain if m <= _FEW_ROWS else EntryChain)(links, tool)
