@@ -122,6 +122,7 @@ from .._fast import ur_engine as engine
 from ..models import UR_SHAPE
 from ..robot import Robot
 from ..rotations import wrap_angle
+from ._per_robot import remembered
 from .result import IKResult, check_ur_options
 from .ur_steps import (  # noqa: F401  (the reasons, re-exported)
     NEAR_SINGULAR,
@@ -155,20 +156,16 @@ _PARAMETERS = weakref.WeakKeyDictionary()  # robot -> ur_parameters or its error
 def _exact_parameters(robot):
     """:func:`ur_parameters` of a robot, computed once per robot (an error too: remembered,
     and raised again, with a pointer to the solver of calibrated arms)."""
+    return remembered(_PARAMETERS, robot, _parameters_and_constants)
+
+
+def _parameters_and_constants(robot):
+    """:func:`ur_parameters` with the engine's constants of one pose, or the ValueError."""
     try:
-        prm = _PARAMETERS[robot]
-    except (KeyError, TypeError):
-        try:
-            prm = ur_parameters(robot)
-            prm["one pose"] = engine.arm_constants(prm)      # (this dict is not handed out)
-        except ValueError as exc:
-            prm = ValueError(f"{exc} (a calibrated UR is solved by dqlab.ik.ur)")
-        try:
-            _PARAMETERS[robot] = prm
-        except TypeError:                       # not weakly referenceable: not remembered
-            pass
-    if isinstance(prm, ValueError):
-        raise ValueError(str(prm))
+        prm = ur_parameters(robot)
+    except ValueError as exc:
+        return ValueError(f"{exc} (a calibrated UR is solved by dqlab.ik.ur)")
+    prm["one pose"] = engine.arm_constants(prm)      # (this dict is not handed out)
     return prm
 
 

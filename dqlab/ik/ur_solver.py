@@ -22,6 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._checks import check_instance, real_array
 from ..robot import Robot
+from ._per_robot import remembered
 from .result import IKResult
 from .solutions import check_joint_limits, check_reference, closest_solution
 from .ur_calibrated import calibrated_ur, nominal_ur
@@ -38,17 +39,7 @@ def _classify(robot):
     """The kind of a robot, decided once per robot: ``(_EXACT, None)`` for the exact UR
     shape, ``(_CALIBRATED, nominal_ur(robot))`` for a calibrated UR; for neither a
     ValueError naming both reasons (remembered too, and raised again)."""
-    try:
-        kind = _KINDS[robot]
-    except (KeyError, TypeError):
-        kind = _kind(robot)
-        try:
-            _KINDS[robot] = kind
-        except TypeError:                       # not weakly referenceable: not remembered
-            pass
-    if isinstance(kind, ValueError):
-        raise ValueError(str(kind))
-    return kind
+    return remembered(_KINDS, robot, _kind)
 
 
 def _kind(robot):
