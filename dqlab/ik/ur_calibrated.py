@@ -565,7 +565,8 @@ def _one_pose(nearest, start, X_0T, tool, tol, singular_tol, max_iter, wide, nea
     """The result of :func:`calibrated_ur` for one pose (``start`` the exact arm's
     :class:`IKResult` of it, ``X_0T`` (4, 4) the target in frame 0) with a few numpy calls,
     when Newton from the exact arm's branches is all it takes: every branch the exact arm
-    found converges, to distinct solutions, and none is missed by a little (five poses in
+    found converges, to distinct solutions, none is missed by a little, and the pose does not
+    seek missing branches from the wrist family (:func:`_wants_the_family`; five poses in
     six). None otherwise, and the pose takes the array path, which this is tested equal to.
     With numba, all of it after the closed form is one compiled call
     (``dqlab._fast.newton_compiled.one_pose``)."""
@@ -599,6 +600,8 @@ def _one_pose(nearest, start, X_0T, tool, tol, singular_tol, max_iter, wide, nea
         solutions = wrap_angle(Q)
         flags = _flags(M, valid, singular_tol, d4, near)
         flags["not_converged"] = (exact & ~valid).any()
+    if _wants_the_family(nearest, solutions, found, found)[0]:   # (found: all converged)
+        return None
     solutions = _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol)
     flags["near_singular"] = flags["near_singular"] | start.flags["near_singular"]
     flags = {name: np.array(flag, dtype=bool).reshape(()) for name, flag in flags.items()}
@@ -823,13 +826,7 @@ def _family(chain, nearest, polished, X_06, X_0T, closed_form, tol, max_iter):
     (:func:`_branches`) first (:func:`_restart`)."""
     unique = polished.unique()
     missing = ~unique.reshape(-1, 8)
-    theta5 = polished.q[:, 4] + nearest.robot.links[4].theta_offset
-    sin5 = np.abs(np.sin(theta5))
-    wrist = (polished.done & (sin5 < _NEAR_MEASURE)).reshape(-1, 8)
-    have = unique.reshape(-1, 8)                        # few branches, none far from the
-    few = ((have.sum(axis=1) <= _FEW_BRANCHES)          # wrist singularity (or none at all)
-           & ~(have & (sin5.reshape(-1, 8) >= _FEW_WRIST)).any(axis=1))
-    poses = np.flatnonzero(missing.any(axis=1) & (wrist.any(axis=1) | few))
+    poses = np.flatnonzero(_wants_the_family(nearest, polished.q, polished.done, unique))
     if not poses.size:
         return
     references = np.zeros((poses.size, _FAMILY, 6))
@@ -844,6 +841,21 @@ def _family(chain, nearest, polished, X_06, X_0T, closed_form, tol, max_iter):
     ok &= missing[pose_of, label]                       # a start for a missing branch
     _offer(chain, polished, unique, missing, solutions[ok], pose_of[ok], label[ok], X_0T,
            tol, max_iter)
+
+
+
+def _wants_the_family(nearest, q, done, have):
+    r"""Which poses :func:`_family` gives the exact arm's wrist family as starts, from their
+    rows ``q`` (8 m, 6), the rows ``done`` (8 m,) that Newton ran from the exact arm's
+    branches and the rows ``have`` (8 m,) holding distinct solutions: a pose with a branch
+    missing and a row done with :math:`|\sin\theta_5|` below :data:`_NEAR_MEASURE`, or
+    with at most :data:`_FEW_BRANCHES` solutions none of which has :math:`|\sin\theta_5|`
+    above :data:`_FEW_WRIST`. (m,) booleans; one pose alone (:func:`_one_pose`) asks too."""
+    sin5 = np.abs(np.sin(q[:, 4] + nearest.robot.links[4].theta_offset)).reshape(-1, 8)
+    have = have.reshape(-1, 8)
+    wrist = (done.reshape(-1, 8) & (sin5 < _NEAR_MEASURE)).any(axis=1)
+    few = (have.sum(axis=1) <= _FEW_BRANCHES) & ~(have & (sin5 >= _FEW_WRIST)).any(axis=1)
+    return ~have.all(axis=1) & (wrist | few)
 
 
 def _offer(chain, polished, unique, missing, starts, pose_of, label, X_0T, tol, max_iter):
