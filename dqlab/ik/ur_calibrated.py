@@ -566,7 +566,7 @@ def _one_pose(nearest, start, X_0T, tool, tol, singular_tol, max_iter, wide, nea
     :class:`IKResult` of it, ``X_0T`` (4, 4) the target in frame 0) with a few numpy calls,
     when Newton from the exact arm's branches is all it takes: every branch the exact arm
     found converges, to distinct solutions, none is missed by a little, and the pose does not
-    seek missing branches from the wrist family (:func:`_wants_the_family`; five poses in
+    seek missing branches from the wrist family (:func:`_family_members`; five poses in
     six). None otherwise, and the pose takes the array path, which this is tested equal to.
     With numba, all of it after the closed form is one compiled call
     (``dqlab._fast.newton_compiled.one_pose``)."""
@@ -600,7 +600,7 @@ def _one_pose(nearest, start, X_0T, tool, tol, singular_tol, max_iter, wide, nea
         solutions = wrap_angle(Q)
         flags = _flags(M, valid, singular_tol, d4, near)
         flags["not_converged"] = (exact & ~valid).any()
-    if _wants_the_family(nearest, solutions, found, found)[0]:   # (found: all converged)
+    if _family_members(nearest, solutions, found, found)[0]:   # (found: all converged)
         return None
     solutions = _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol)
     flags["near_singular"] = flags["near_singular"] | start.flags["near_singular"]
@@ -818,44 +818,55 @@ def _family(chain, nearest, polished, X_06, X_0T, closed_form, tol, max_iter):
     :data:`_FEW_BRANCHES` solutions none of which has :math:`|\sin\theta_5|` above
     :data:`_FEW_WRIST` (or none at all: within the gap of the wrist singularity the exact
     arm's closed form may miss a whole shoulder of the calibrated arm's, or every branch),
-    takes :data:`_FAMILY` members
-    of the family as starts: the exact arm's closed form with a tolerance of 0.5 (which
+    takes :data:`_FAMILY` members of the family as starts; a pose with at most
+    :data:`_FEW_BRANCHES` solutions elsewhere (a whole shoulder of the calibrated arm's that
+    the exact arm's closed form clips, centimetres off) takes one (:func:`_family_members`).
+    A member is the exact arm's closed form with a tolerance of 0.5 (which
     makes every pose within :math:`|\theta_5| \lesssim 0.1` a family, and clipped rows
     valid) and references :math:`\theta_6 = -\pi + 2\pi j / 6`. Each start is offered to
     the missing branches of its pose, the branch of its own label
     (:func:`_branches`) first (:func:`_restart`)."""
     unique = polished.unique()
     missing = ~unique.reshape(-1, 8)
-    poses = np.flatnonzero(_wants_the_family(nearest, polished.q, polished.done, unique))
+    count = _family_members(nearest, polished.q, polished.done, unique)
+    poses = np.flatnonzero(count)
     if not poses.size:
         return
-    references = np.zeros((poses.size, _FAMILY, 6))
-    references[..., 5] = -np.pi + 2.0 * np.pi / _FAMILY * np.arange(_FAMILY)
-    members = closed_form(nearest, np.repeat(X_06[poses], _FAMILY, axis=0), tol=0.5,
-                          q_ref=references.reshape(-1, 6))
+    count = count[poses]
+    member_of = np.repeat(poses, count)                 # one entry per member
+    j = np.arange(member_of.size) - np.repeat(np.cumsum(count) - count, count)
+    references = np.zeros((member_of.size, 6))
+    family = np.repeat(count, count) > 1                # else one member, theta_6 from 0
+    references[:, 5] = np.where(family, -np.pi + 2.0 * np.pi / _FAMILY * j, 0.0)
+    members = closed_form(nearest, X_06[member_of], tol=0.5, q_ref=references)
     solutions = _off_the_edge(nearest.robot, members.solutions, members.valid,
                               members.position_error, tol).reshape(-1, 6)
     ok = members.valid.reshape(-1)
     label = _branches(nearest.robot, solutions)
-    pose_of = np.repeat(poses, 8 * _FAMILY)
+    pose_of = np.repeat(member_of, 8)
     ok &= missing[pose_of, label]                       # a start for a missing branch
     _offer(chain, polished, unique, missing, solutions[ok], pose_of[ok], label[ok], X_0T,
            tol, max_iter)
 
 
 
-def _wants_the_family(nearest, q, done, have):
-    r"""Which poses :func:`_family` gives the exact arm's wrist family as starts, from their
-    rows ``q`` (8 m, 6), the rows ``done`` (8 m,) that Newton ran from the exact arm's
-    branches and the rows ``have`` (8 m,) holding distinct solutions: a pose with a branch
-    missing and a row done with :math:`|\sin\theta_5|` below :data:`_NEAR_MEASURE`, or
-    with at most :data:`_FEW_BRANCHES` solutions none of which has :math:`|\sin\theta_5|`
-    above :data:`_FEW_WRIST`. (m,) booleans; one pose alone (:func:`_one_pose`) asks too."""
+def _family_members(nearest, q, done, have):
+    r"""How many members of the exact arm's wrist family :func:`_family` gives each pose as
+    starts, from its rows ``q`` (8 m, 6), the rows ``done`` (8 m,) that Newton ran from the
+    exact arm's branches and the rows ``have`` (8 m,) holding distinct solutions: for a pose
+    with a branch missing, :data:`_FAMILY` if a row done has :math:`|\sin\theta_5|` below
+    :data:`_NEAR_MEASURE` or if it has at most :data:`_FEW_BRANCHES` solutions none of which
+    has :math:`|\sin\theta_5|` above :data:`_FEW_WRIST`; one (the exact arm's rows, clipped
+    ones included, :math:`\theta_6` from 0) if it has at most :data:`_FEW_BRANCHES` solutions
+    otherwise; none else.
+    (m,) integers; one pose alone (:func:`_one_pose`) asks too."""
     sin5 = np.abs(np.sin(q[:, 4] + nearest.robot.links[4].theta_offset)).reshape(-1, 8)
     have = have.reshape(-1, 8)
+    missing = ~have.all(axis=1)
     wrist = (done.reshape(-1, 8) & (sin5 < _NEAR_MEASURE)).any(axis=1)
-    few = (have.sum(axis=1) <= _FEW_BRANCHES) & ~(have & (sin5 >= _FEW_WRIST)).any(axis=1)
-    return ~have.all(axis=1) & (wrist | few)
+    few = have.sum(axis=1) <= _FEW_BRANCHES
+    near_wrist = few & ~(have & (sin5 >= _FEW_WRIST)).any(axis=1)
+    return np.where(missing & (wrist | near_wrist), _FAMILY, np.where(missing & few, 1, 0))
 
 
 def _offer(chain, polished, unique, missing, starts, pose_of, label, X_0T, tol, max_iter):
