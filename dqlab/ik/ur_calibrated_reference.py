@@ -18,8 +18,8 @@ Newton step (:func:`newton_step`):
 3. **The repair of the branches still missing** (near a singularity, two starts may lead
    to one solution): members of the exact arm's wrist family as starts, and deflated
    Newton from the solutions found, moved along the most singular direction of
-   :math:`J^\mathsf{T} J` (every branch, when Newton found at most two, none far from the
-   wrist singularity: there the exact arm may miss a whole shoulder). A row near a
+   :math:`J^\mathsf{T} J` (every branch, when Newton found at most two: there the exact
+   arm may clip a whole shoulder that the calibrated arm reaches). A row near a
    singularity of the exact arm then takes three Newton steps more, which bring its joints,
    not only its pose, to the solution.
 
@@ -203,11 +203,9 @@ def solve_pose(arm, exact, X_0T, tol, wide, singular_tol, near_tol):
     for k in [*np.flatnonzero(found), *np.flatnonzero(started & ~found)]:
         q[k], ok = newton(arm, starts[k], X_0T, tol)
         converged[k] = ok and is_new(q[k], q[converged])
-    # step 3: the branches still missing; every one when Newton found at most two, none far
-    # from the wrist singularity (there the exact arm may miss a whole shoulder, or all)
-    theta = q + [link.theta_offset for link in exact.links]
-    few = converged.sum() <= 2 and not (np.abs(np.sin(theta[converged, 4])) >= 0.2).any()
-    open_rows = ~converged if few else started & ~converged
+    # step 3: the branches still missing; every one when Newton found at most two (there
+    # the exact arm may clip a whole shoulder that the calibrated arm reaches, or all)
+    open_rows = ~converged if converged.sum() <= 2 else started & ~converged
     if open_rows.any():
         repair(arm, exact, X_06, X_0T, q, converged, open_rows, tol)
     polish(arm, exact, X_0T, q, converged, tol)
