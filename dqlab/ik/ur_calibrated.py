@@ -49,9 +49,9 @@ keeps its contract (every branch, flags, reasons, batches) in three steps:
    on to the restarts of ``_repair``.
 4. **The branches still missing**, near a singularity: members of the exact arm's wrist
    family as starts (``_family``, also for a pose with at most two branches near the wrist
-   singularity, or none, where the exact arm's closed form may miss a whole shoulder), and
-   Newton steps deflated so that they cannot return to a solution the pose already has
-   (``_deflate``).
+   singularity, or none, where the exact arm's closed form may miss a whole shoulder; such
+   a pose elsewhere takes the exact arm's clipped rows), and Newton steps deflated so that
+   they cannot return to a solution the pose already has (``_deflate``).
 5. **The valid rows near a singularity** of the exact arm take three Newton steps more
    (``_polish``): there a row stopped at a tenth of ``tol`` may lie 1e-5 rad from its
    solution (the smallest singular value of :math:`J` is small), and the steps bring the
@@ -70,8 +70,8 @@ that the calibrated arm reaches (``_off_the_edge`` moves such a start off the el
 singularity, where Newton cannot start); near the wrist singularity a shoulder and elbow
 may have four solutions along the exact arm's wrist family, not two. Steps 1-3 alone found
 the generating configuration of 99.75-99.88 % of random poses of those arms; with steps 4
-and 5, 99.91-99.99 % of 10,000 (``benchmarks/bench_ik_ur_calibrated.py``; 99.88-99.98 %
-on each of two other sets of 10,000). What remains is mostly poses with
+and 5, 99.88-99.99 % on each of three sets of 10,000
+(``benchmarks/bench_ik_ur_calibrated.py``). What remains is mostly poses with
 more solutions than the eight rows (a general 6R arm has up to 16): near a singularity of
 the exact arm the calibrated one may have ten or twelve, and a row holds one of them. Such
 poses are flagged ``"near_singular"`` (the threshold is at least four times the arms'
