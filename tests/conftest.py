@@ -27,16 +27,16 @@ def pytest_collection_modifyitems(items):
 
 #: The tests of one built page, parametrized by the page: under ``--dist loadgroup`` they run
 #: in one worker, which loads the page once for all of them (``test_browser.page_report``).
-_PAGE_TEST = re.compile(r"::(test_page_renders|test_page_is_accessible)\[(?P<page>[^\]@]+)\]$")
+_PAGE_TEST = re.compile(r"::(test_page_renders|test_page_is_accessible)\[(?P<page>[^\]]+)\]$")
 
 
 def pytest_xdist_make_scheduler(config, log):
     """``--dist loadgroup``, with the tests of one page in one group, in the order collected.
 
-    They carry the mark ``xdist_group("page <page>")``, but pytest-xdist 3.8 adds the group to
-    a test's id in a way pytest 9 no longer sees; this names the same groups from the ids.
-    The groups are handed out in the order collected (the tests marked ``long`` first), not
-    the largest group first as xdist would, which would leave the long tests to the end.
+    The groups are named from the tests' ids (pytest-xdist 3.8's ``xdist_group`` mark adds
+    the group to a test's id in a way pytest 9 no longer sees). They are handed out in the
+    order collected (the tests marked ``long`` first), not the largest group first as xdist
+    would, which would leave the long tests to the end.
     """
     if config.getvalue("dist") != "loadgroup":
         return None

@@ -321,6 +321,9 @@ add(M, "ik.ur", ik.ur, robot=O(UR5E, names=ROBOT_NAMES, extra={"calibrated UR3":
 add(M, "ik.ur_closed_form.exact_ur", ik.ur_closed_form.exact_ur, robot=O(UR5E, names=ROBOT_NAMES,
     extra={"calibrated UR3": CALIBRATED}), target=_IK_TARGET, tol=S(1e-9, inf_ok=True),
     q_ref=A(Q6, none_ok=True), check=reaches_target())
+add(M, "ik.ur_closed_form.branch_measures",
+    lambda **kw: np.stack(ik.ur_closed_form.branch_measures(**kw)),
+    robot=O(UR5E, names=ROBOT_NAMES, extra={"calibrated UR3": CALIBRATED}), q=A(Q6))
 add(M, "ik.ur(calibrated)", ik.ur, robot=O(CALIBRATED), target=A(X_CALIBRATED, extra={
     "at 1e200 m": Fine(X_CALIBRATED + np.pad([[0, 0, 0, 1e200]], ((0, 3), (0, 0))))}),
     tol=S(1e-9, inf_ok=True), q_ref=A(Q6, none_ok=True), check=reaches_target())
@@ -577,7 +580,7 @@ def test_bad_arguments_are_refused_by_name_or_give_a_correct_result(group, reque
 #: callable and has nothing to sweep).
 MODULES = ("dqlab.dynamics", "dqlab.inertia", "dqlab.models", "dqlab.desk_arm_firmware",
            "dqlab.sim.mjcf", "dqlab.sim.urdf", "dqlab.ur.calibration", "dqlab.ik",
-           "dqlab.ik.ur_calibrated_reference")
+           "dqlab.ik.ur_closed_form", "dqlab.ik.ur_solver", "dqlab.ik.ur_calibrated_reference")
 #: Public callables that take no input to sweep: exception types.
 NOT_SWEPT = {"CalibrationError"}
 #: Callables without arguments: nothing to sweep, each called once here.

@@ -177,11 +177,10 @@ def _check_scenes(page, name, problems):
 
 
 def page_params():
-    """The pages as test parameters, each in an xdist group of its own: the tests of one page
-    (its rendering here, its accessibility in ``test_accessibility.py``) run in one worker,
-    which loads the page once for both (``pytest -n 2 --dist loadgroup``)."""
-    return [pytest.param(p, marks=pytest.mark.xdist_group(f"page {p}"))
-            for p in _pages()] or ["(no built pages)"]
+    """The pages as test parameters. Under ``--dist loadgroup`` the tests of one page (its
+    rendering here, its accessibility in ``test_accessibility.py``) run in one worker, which
+    loads the page once for both (the groups are named in ``conftest.py``)."""
+    return _pages() or ["(no built pages)"]
 
 
 #: The report of each page this process has loaded (:func:`page_report`).

@@ -109,6 +109,7 @@ from ..robot import Link, Robot
 from ..rotations import wrap_angle
 from .result import IKResult, check_ur_options, finish
 from .targets import RIGID_TOL, parse_targets, pose_errors
+from .ur_closed_form import branch_measures
 from .ur_steps import NEAR_SINGULAR, NEAR_WRIST
 
 __all__ = ["calibrated_ur", "nominal_ur", "REASON_NOT_CONVERGED", "MAX_DISCREPANCY"]
@@ -644,14 +645,11 @@ def _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol):
 
 def _near_rows(exact, q, threshold):
     r"""Which joint vectors q (m, 6) are within ``threshold`` of a singularity of the exact
-    arm: :math:`|\sin\theta_3|`, :math:`|\sin\theta_5|` or the wrist centre's distance
-    :math:`h` of :func:`_branches` over :math:`|a_2|` below it."""
-    t = q + np.array([lk.theta_offset for lk in exact.links])
-    L = exact.links
-    h = (L[1].a * np.cos(t[:, 1]) + L[2].a * np.cos(t[:, 1] + t[:, 2])
-         + L[4].d * np.sin(t[:, 1] + t[:, 2] + t[:, 3]))
-    return ((np.abs(np.sin(t[:, 2])) < threshold) | (np.abs(np.sin(t[:, 4])) < threshold)
-            | (np.abs(h) < threshold * abs(L[1].a)))
+    arm: a measure of :func:`~dqlab.ik.ur_closed_form.branch_measures`,
+    :math:`|\sin\theta_3|`, :math:`|\sin\theta_5|` or :math:`|h| / |a_2|`, below it."""
+    h, sin_theta3, sin_theta5 = branch_measures(exact, q)
+    return ((np.abs(sin_theta3) < threshold) | (np.abs(sin_theta5) < threshold)
+            | (np.abs(h) < threshold * abs(exact.links[1].a)))
 
 
 @dataclass
@@ -985,15 +983,10 @@ def _deflated_newton(chain, q, X_target, known, tol, steps):
 
 def _branches(exact, q):
     r"""The branch ``4 s + 2 e + w`` of the exact arm's row order that joint vectors q (m, 6)
-    have on the exact arm (its offsets): shoulder :math:`s = 1` when the wrist centre lies
-    behind the base axis, :math:`h = a_2 c_2 + a_3 c_{23} + d_5 s_{234} < 0`; elbow
-    :math:`e = 1` when :math:`\sin\theta_3 < 0`; wrist :math:`w = 1` when
-    :math:`\sin\theta_5 < 0`."""
-    t = q + np.array([lk.theta_offset for lk in exact.links])
-    a2, a3, d5 = exact.links[1].a, exact.links[2].a, exact.links[4].d
-    h = (a2 * np.cos(t[:, 1]) + a3 * np.cos(t[:, 1] + t[:, 2])
-         + d5 * np.sin(t[:, 1] + t[:, 2] + t[:, 3]))
-    return 4 * (h < 0) + 2 * (np.sin(t[:, 2]) < 0) + (np.sin(t[:, 4]) < 0)
+    have on the exact arm, as :func:`dqlab.ik.ur_branch` tells it (from the signs of
+    :func:`~dqlab.ik.ur_closed_form.branch_measures`)."""
+    h, sin_theta3, sin_theta5 = branch_measures(exact, q)
+    return 4 * (h < 0) + 2 * (sin_theta3 < 0) + (sin_theta5 < 0)
 
 
 def _matrix_chain(nearest, tool):

@@ -35,7 +35,7 @@ from ..rotations import wrap_angle
 from .result import IKResult, check_ur_options, finish
 from .targets import parse_targets, pose_errors
 from .ur_calibrated import REASON_NOT_CONVERGED, nominal_ur
-from .ur_closed_form import ROW_NAMES, exact_ur
+from .ur_closed_form import ROW_NAMES, branch_measures, exact_ur
 from .ur_solver import ur_branch
 from .ur_steps import NEAR_SINGULAR
 
@@ -241,15 +241,12 @@ def is_new(q, known):
 
 def polish(arm, exact, X_0T, q, converged, tol):
     r"""Three Newton steps more, in place, for the rows ``converged`` near a singularity of
-    the exact arm (:math:`|\sin\theta_3|`, :math:`|\sin\theta_5|` or
-    :math:`h/|a_2| = |a_2 c_2 + a_3 c_{23} + d_5 s_{234}|/|a_2|` below 0.04), where a row
+    the exact arm (:math:`|\sin\theta_3|`, :math:`|\sin\theta_5|` or :math:`|h|/|a_2|` of
+    :func:`~dqlab.ik.ur_closed_form.branch_measures` below 0.04), where a row
     stopped at ``tol / 10`` may lie :math:`10^{-10}/\sigma_{\min}(J)` rad from its solution."""
-    L = exact.links
-    t = q + [link.theta_offset for link in L]
-    h = L[1].a * np.cos(t[:, 1]) + L[2].a * np.cos(t[:, 1] + t[:, 2]) \
-        + L[4].d * np.sin(t[:, 1] + t[:, 2] + t[:, 3])
-    near = ((np.abs(np.sin(t[:, 2])) < 0.04) | (np.abs(np.sin(t[:, 4])) < 0.04)
-            | (np.abs(h) < 0.04 * abs(L[1].a)))
+    h, sin_theta3, sin_theta5 = branch_measures(exact, q)
+    near = ((np.abs(sin_theta3) < 0.04) | (np.abs(sin_theta5) < 0.04)
+            | (np.abs(h) < 0.04 * abs(exact.links[1].a)))
     for k in np.flatnonzero(converged & near):
         q_k = q[k]
         for _ in range(3):

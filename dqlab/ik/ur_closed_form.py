@@ -134,7 +134,8 @@ from .ur_steps import (  # noqa: F401  (the reasons, re-exported)
     REASON_TOL,
 )
 
-__all__ = ["exact_ur", "ur_parameters", "distinct_solutions", "SOLUTION_ORDER", "ROW_NAMES"]
+__all__ = ["exact_ur", "ur_parameters", "branch_measures", "distinct_solutions",
+           "SOLUTION_ORDER", "ROW_NAMES"]
 
 #: Former names of this module, which solve any UR (exact or calibrated): now in
 #: :mod:`dqlab.ik.ur_solver`.
@@ -167,6 +168,47 @@ def _parameters_and_constants(robot):
         return ValueError(f"{exc} (a calibrated UR is solved by dqlab.ik.ur)")
     prm["one pose"] = engine.arm_constants(prm)      # (this dict is not handed out)
     return prm
+
+
+def branch_measures(robot: Robot, q: ArrayLike) -> tuple[NDArray[np.float64], ...]:
+    r"""The three measures whose signs tell the branches of an exact UR's joint vectors
+    apart, and which vanish at its singularities: with :math:`\theta = q + \theta^0` (the
+    joint offsets),
+
+    .. math::
+
+       h = a_2 \cos\theta_2 + a_3 \cos(\theta_2 + \theta_3) + d_5 \sin\theta_{234},
+       \quad \sin\theta_3, \quad \sin\theta_5,
+
+    :math:`h` the wrist centre's distance from the base axis along :math:`x_1` (shoulder),
+    then the elbow and the wrist.
+
+    Parameters
+    ----------
+    robot : dqlab.robot.Robot
+        An exact UR-family arm (:func:`ur_parameters`).
+    q : array_like, shape (..., 6)
+        Joint vectors, radians.
+
+    Returns
+    -------
+    h, sin_theta3, sin_theta5 : ndarray, shape (...)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dqlab.models import ur5e
+    >>> h, s3, s5 = branch_measures(ur5e(), [0.3, -1.2, 1.1, -0.4, 0.9, 0.2])
+    >>> int(4 * (h < 0) + 2 * (s3 < 0) + (s5 < 0))      # right (h < 0), up, no flip
+    4
+    """
+    check_instance(robot, Robot, "robot")
+    _exact_parameters(robot)
+    t = robot.check_joints(q) + np.array([link.theta_offset for link in robot.links])
+    a2, a3, d5 = robot.links[1].a, robot.links[2].a, robot.links[4].d
+    h = (a2 * np.cos(t[..., 1]) + a3 * np.cos(t[..., 1] + t[..., 2])
+         + d5 * np.sin(t[..., 1] + t[..., 2] + t[..., 3]))
+    return h, np.sin(t[..., 2]), np.sin(t[..., 4])
 
 
 def ur_parameters(robot: Robot, *, atol: float = 1e-12) -> dict:

@@ -26,7 +26,7 @@ from ._per_robot import remembered
 from .result import IKResult
 from .solutions import check_joint_limits, check_reference, closest_solution
 from .ur_calibrated import calibrated_ur, nominal_ur
-from .ur_closed_form import ROW_NAMES, exact_ur, ur_parameters
+from .ur_closed_form import ROW_NAMES, branch_measures, exact_ur, ur_parameters
 from .ur_steps import NEAR_SINGULAR
 
 __all__ = ["ur", "closest_ur_solution", "ur_branch"]
@@ -260,10 +260,9 @@ def ur_branch(robot: Robot, q: ArrayLike) -> NDArray[np.int64]:
     solutions (:data:`~dqlab.ik.ur_closed_form.SOLUTION_ORDER`) that a pose reached with
     them is solved in.
 
-    With :math:`\theta = q + \theta^0` (the joint offsets): shoulder :math:`s = 1`
-    ("right") when the wrist centre lies behind the base axis along :math:`x_1`,
-    :math:`h = a_2 \cos\theta_2 + a_3 \cos(\theta_2 + \theta_3) + d_5
-    \sin\theta_{234} < 0`; elbow :math:`e = 1` ("down") when :math:`\sin\theta_3 < 0`;
+    With the measures of :func:`~dqlab.ik.ur_closed_form.branch_measures`: shoulder
+    :math:`s = 1` ("right") when the wrist centre lies behind the base axis along
+    :math:`x_1`, :math:`h < 0`; elbow :math:`e = 1` ("down") when :math:`\sin\theta_3 < 0`;
     wrist :math:`w = 1` ("flip") when :math:`\sin\theta_5 < 0`. On a calibrated UR, those
     of its nearest exact UR (:func:`~dqlab.ik.ur_calibrated.nominal_ur`); exactly at a
     singularity the two branches it separates are one, and either is returned.
@@ -290,9 +289,5 @@ def ur_branch(robot: Robot, q: ArrayLike) -> NDArray[np.int64]:
     check_instance(robot, Robot, "robot")
     q = robot.check_joints(q)
     kind, nominal = _classify(robot)
-    exact = robot if kind is _EXACT else nominal
-    t = q + np.array([lk.theta_offset for lk in exact.links])
-    a2, a3, d5 = exact.links[1].a, exact.links[2].a, exact.links[4].d
-    h = (a2 * np.cos(t[..., 1]) + a3 * np.cos(t[..., 1] + t[..., 2])
-         + d5 * np.sin(t[..., 1] + t[..., 2] + t[..., 3]))
-    return 4 * (h < 0) + 2 * (np.sin(t[..., 2]) < 0) + (np.sin(t[..., 4]) < 0)
+    h, sin_theta3, sin_theta5 = branch_measures(robot if kind is _EXACT else nominal, q)
+    return 4 * (h < 0) + 2 * (sin_theta3 < 0) + (sin_theta5 < 0)
