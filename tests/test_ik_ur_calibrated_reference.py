@@ -5,27 +5,27 @@ calibrated arm, ``dqlab.ik.ur_calibrated``), on the six real calibrations of
 a milliradian of the wrist (theta_5 = 0 or pi) and elbow (theta_3 = 0) singularities.
 
 Measured (seed 20261128, 30 random and 18 near-singular configurations per arm, 288 poses;
-the fast path as installed, compiled or not, which are tested equal elsewhere):
-
-- random poses: 179 of 180 have the same valid solutions in both, 176 the same rows branch
-  by branch (the others: the same solutions under other branch labels). The rows agree to
+the fast path as installed, compiled or not, which are tested equal elsewhere; a pose's
+solutions are its valid rows and those beyond them, ``result.more``):
+- random poses: 179 of 180 have the same solutions in both, 176 the same rows branch by
+  branch (the others: the same solutions under other branch labels). The rows agree to
   9e-11 rad (4.5e-10 at the poses neither flags ``near_singular``). The one pose whose
   solutions differ has a solution near a singularity (flagged ``near_singular`` by both):
-  the reference misses one of its eight. Both find the configuration each target came
-  from, every time.
-- near-singular configurations (within a milliradian of theta_5 = 0, pi or theta_3 = 0): 100
+  the fast solver finds eight and solutions beyond them, the reference seven. Both find the
+  configuration each target came from, every time.
+- near-singular configurations (within a milliradian of theta_5 = 0, pi or theta_3 = 0): 95
   of 108 have the same solution sets, 85 the same rows; the rows both hold agree to
-  1.8e-8 rad (both take three Newton steps more near a singularity of the exact arm). At
-  the other eight, the pose has more solutions than the eight rows hold, or solutions that
-  do not follow the exact arm's branches, and the two repairs start from different points:
-  the reference finds four solutions where the fast solver finds six at five poses, and
-  each finds some the other does not at three. The generating configuration: the fast
-  solver 97 of 108, the reference 94.
-
+  1.8e-8 rad (both take three Newton steps more near a singularity of the exact arm). 19
+  poses have solutions beyond their rows in the fast solver, 17 in the reference. At the
+  other 13, where a pose has nine or ten solutions, or solutions that do not follow the
+  exact arm's branches, the two repairs start from different points and one of them
+  misses one to four solutions the other finds. The generating configuration: the fast
+  solver 105 of 108, the reference 100 (97 and 94 among the rows alone).
 The test asserts what holds, with a margin: every valid row of both is a solution; the same
 sets on all but two random poses, which both flag near_singular, and on 85 % of the poses
 near a singularity; the same flags where the rows are the same; the generating configuration
-on every random pose. Rows agree to 1e-9 rad at the poses neither solver flags
+on every random pose, and near a singularity by the reference on 85 % of the poses, at most
+seven fewer than the fast solver. Rows agree to 1e-9 rad at the poses neither solver flags
 near_singular, 1e-7 at the random ones, 1e-6 rad (the solvers' own test of one solution)
 near a singularity.
 """
@@ -59,6 +59,12 @@ def _contains(rows, q):
     return len(rows) > 0 and bool(np.abs(wrap_angle(rows - q)).max(axis=-1).min() < SAME)
 
 
+def _every(result, i):
+    """Every solution of pose i: its valid rows and those beyond them (``result.more``)."""
+    return np.concatenate([result.solutions[i][result.valid[i]],
+                           result.more.solutions[i][result.more.valid[i]]])
+
+
 @pytest.fixture(scope="module")
 def solved():
     """Per calibration: the configurations, the fast result and the reference's."""
@@ -74,7 +80,7 @@ def solved():
 def _compare(fast, reference, i):
     """For pose i: whether the valid rows are the same rows (branch by branch), the same
     set, and the largest joint difference of the rows both hold."""
-    A, B = fast.solutions[i][fast.valid[i]], reference.solutions[i][reference.valid[i]]
+    A, B = _every(fast, i), _every(reference, i)
     same_set = (all(_contains(A, x) for x in B) and all(_contains(B, x) for x in A))
     both = fast.valid[i] & reference.valid[i]
     gap = np.abs(wrap_angle(fast.solutions[i] - reference.solutions[i]))[both].max(initial=0.0)
@@ -114,11 +120,10 @@ def test_the_reference_finds_the_generating_configuration(solved):
     for _robot, q, fast, reference in solved.values():
         for i in range(q.shape[0]):
             kind = "random" if i < RANDOM else "near"
-            found[kind].append([_contains(r.solutions[i][r.valid[i]], q[i])
-                                for r in (fast, reference)])
+            found[kind].append([_contains(_every(r, i), q[i]) for r in (fast, reference)])
     random, near = np.array(found["random"]), np.array(found["near"])
     assert random.all()                                       # both, every random pose
-    assert near[:, 1].sum() >= near[:, 0].sum() - 3 and near[:, 1].mean() >= 0.75
+    assert near[:, 1].sum() >= near[:, 0].sum() - 7 and near[:, 1].mean() >= 0.85
 
 
 def test_newton_step_is_the_damped_normal_equations():

@@ -33,6 +33,15 @@ class IKResult:
         What each of the ``k`` rows stands for (for :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>`, the
         branches of :data:`~dqlab.ik.ur_closed_form.SOLUTION_ORDER`, such as
         ``"left up noflip"``); printed by ``repr``.
+    more : IKResult
+        The solutions of a target beyond its ``k`` rows, shape (..., m, n), valid where there
+        is one (a property: an :class:`IKResult` with m = 0 when the solver has no more). A
+        calibrated UR within about its gap of a singularity of its nearest exact arm may
+        reach a pose with up to 16 joint vectors (a general 6R arm has up to 16), ten or
+        twelve as a rule, while its rows are the exact arm's eight branches:
+        :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>` gives the others here, eight rows (up to
+        sixteen in all). ``count`` counts the rows only;
+        :func:`~dqlab.ik.solutions.closest_solution` and :meth:`best` choose among both.
 
     Notes
     -----
@@ -69,9 +78,20 @@ class IKResult:
     history: dict = None
     row_names: tuple = None
 
+    _more: "IKResult | None" = field(default=None, repr=False)
+
     def __post_init__(self):
         if self.reason is None:
             self.reason = np.full(np.shape(self.valid)[:-1], "", dtype=object)
+
+    @property
+    def more(self) -> "IKResult":
+        """The solutions beyond the rows (see the class docstring); m = 0 rows if none."""
+        if self._more is None:
+            batch, n = np.shape(self.valid)[:-1], np.shape(self.solutions)[-1]
+            return IKResult(np.zeros(batch + (0, n)), np.zeros(batch + (0,), dtype=bool),
+                            np.zeros(batch + (0,)), np.zeros(batch + (0,)))
+        return self._more
 
     @property
     def count(self):
@@ -141,9 +161,13 @@ def summary(result: IKResult) -> str:
     names = (tuple(result.row_names) if result.row_names is not None
              else tuple(str(i) for i in range(k)))
     flags = {name: np.asarray(f) for name, f in (result.flags or {}).items()}
+    more = result._more if isinstance(result, IKResult) else None
+    more_count = (np.zeros(valid.shape[:-1], dtype=int) if more is None
+                  else np.count_nonzero(more.valid, axis=-1))
     if valid.ndim == 1:
         set_ = [name for name, f in flags.items() if bool(f)]
-        lines = [f"IKResult: one target, {int(valid.sum())} of {k} rows valid; flags: "
+        beyond = f", {int(more_count)} more beyond them" if more_count else ""
+        lines = [f"IKResult: one target, {int(valid.sum())} of {k} rows valid{beyond}; flags: "
                  f"{', '.join(set_) or 'none'}"]
         if result.reason is not None and str(result.reason):
             lines.append(f"  no solution: {result.reason}")
@@ -154,6 +178,11 @@ def summary(result: IKResult) -> str:
                          for v in np.degrees(result.solutions[i]))
             table.append((str(i), names[i], "yes" if valid[i] else "no", _short(pe[i]),
                           _short(re[i]), q if valid[i] else "-"))
+        for j, i in enumerate(np.flatnonzero(more.valid) if more_count else ()):
+            q = " ".join("0" if abs(v) < 0.05 else f"{v:.1f}".rstrip("0").rstrip(".")
+                         for v in np.degrees(more.solutions[i]))
+            table.append((f"+{j + 1}", "(more)", "yes", _short(more.position_error[i]),
+                          _short(more.rotation_error[i]), q))
         widths = [max(len(r[c]) for r in table) for c in range(5)]
         lines += ["  " + "  ".join(c.ljust(w) for c, w in zip(r, widths + [0], strict=True))
                   .rstrip() for r in table]
@@ -165,6 +194,9 @@ def summary(result: IKResult) -> str:
              f"x {n} joints"]
     for c in sorted(set(count.ravel().tolist()), reverse=True):
         lines.append(f"  targets with {c} valid rows: {int(np.sum(count == c))}")
+    if np.any(more_count):
+        lines.append(f"  targets with solutions beyond the rows (result.more): "
+                     f"{int(np.count_nonzero(more_count))}, {int(more_count.sum())} solutions")
     if result.reason is not None:
         reasons = np.asarray(result.reason, dtype=object)[count == 0]
         for why in sorted(set(str(r) for r in reasons)):
@@ -181,8 +213,8 @@ def summary(result: IKResult) -> str:
 
 
 def finish(solutions: np.ndarray, valid: np.ndarray, position_error: np.ndarray,
-           rotation_error: np.ndarray, flags: dict, reason: np.ndarray | None = None
-           ) -> IKResult:
+           rotation_error: np.ndarray, flags: dict, reason: np.ndarray | None = None,
+           more: IKResult | None = None) -> IKResult:
     """The :class:`IKResult` of a solver, with the rows that are not valid set to zero.
 
     Every solver ends here, so that an invalid row never carries a NaN or a half-computed
@@ -196,6 +228,8 @@ def finish(solutions: np.ndarray, valid: np.ndarray, position_error: np.ndarray,
     position_error, rotation_error : ndarray, shape (..., k)
     flags : dict of str to ndarray of bool, shape (...)
     reason : ndarray of str, shape (...), optional
+    more : IKResult, optional
+        The solutions beyond the rows (:attr:`IKResult.more`), already finished.
 
     Returns
     -------
@@ -221,7 +255,7 @@ def finish(solutions: np.ndarray, valid: np.ndarray, position_error: np.ndarray,
         else:
             solutions[~valid] = 0.0
     return IKResult(solutions=solutions, valid=valid, position_error=position_error,
-                    rotation_error=rotation_error, flags=flags, reason=reason)
+                    rotation_error=rotation_error, flags=flags, reason=reason, _more=more)
 
 
 def check_ur_options(tol, singular_tol, near_tol, pose_tol, residuals) -> tuple:

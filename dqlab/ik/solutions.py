@@ -159,10 +159,11 @@ def closest_solution(result, q_ref: ArrayLike, limits: ArrayLike | None = None, 
     r"""The valid solution nearest ``q_ref``, as the :math:`2\pi`-equivalent nearest it within
     the joint limits.
 
-    Among every valid row of ``result`` and every :math:`2\pi`-equivalent of it within
-    ``limits``, the joint vector with the smallest Euclidean distance to ``q_ref`` (see the
-    module docstring): the vector a robot standing at ``q_ref`` should be sent, so that no
-    joint turns by more than half a turn when a shorter way exists within its limits.
+    Among every valid row of ``result`` (and of ``result.more``, the solutions beyond its
+    rows) and every :math:`2\pi`-equivalent of it within ``limits``, the joint vector with
+    the smallest Euclidean distance to ``q_ref`` (see the module docstring): the vector a
+    robot standing at ``q_ref`` should be sent, so that no joint turns by more than half a
+    turn when a shorter way exists within its limits.
 
     Parameters
     ----------
@@ -219,6 +220,10 @@ def closest_solution(result, q_ref: ArrayLike, limits: ArrayLike | None = None, 
         raise TypeError(f"wrapped must be True or False, got {short_repr(wrapped)}")
     solutions = np.asarray(result.solutions)
     valid = np.asarray(result.valid)
+    more = getattr(result, "_more", None)           # the solutions beyond the rows, if any
+    if more is not None and more.valid.any():
+        solutions = np.concatenate([solutions, more.solutions], axis=-2)
+        valid = np.concatenate([valid, more.valid], axis=-1)
     k, n = solutions.shape[-2:]
     q_ref = check_reference(q_ref, n)
     bounds = _joint_limits(limits, n)

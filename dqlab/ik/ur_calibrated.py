@@ -143,6 +143,8 @@ _FEW_BRANCHES = 2      # a pose with this many branches or fewer ...
 _FEW_WRIST = 0.2       # ... none with |sin theta_5| above this, takes the family's starts
 _DEFLATION_WAYS = np.array([0.05, -0.05, 0.3, -0.3])   # the moves of a deflation's starts
 _POLISH_NEAR = 0.04    # a valid row this near a singularity of the exact arm is polished
+_MORE = 8              # rows of result.more: a 6R arm has up to 16 solutions, 8 in the rows
+_MORE_WAYS = np.array([0.05, -0.05])   # the moves of the starts that seek more solutions
 _SAMPLES = np.random.default_rng(20260531).uniform(-np.pi, np.pi, (64, 6))
 
 
@@ -439,10 +441,11 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
     started = start.valid.reshape(n, 8).any(axis=1)
     reason[none & started] = REASON_NOT_CONVERGED
     reason[none & ~started] = start.reason.reshape(n)[none & ~started]
+    more = _beyond(nearest, X_6T, solutions, valid, X_0T, tol, max_iter)
     return finish(solutions.reshape(batch + (8, 6)), valid.reshape(batch + (8,)),
                   pe.reshape(batch + (8,)), re.reshape(batch + (8,)),
                   {name: f.reshape(batch) for name, f in flags.items()},
-                  reason.reshape(batch))
+                  reason.reshape(batch), more=_more_result(*more, batch))
 
 
 def _closed_form(nearest, X_06, *, tol, q_ref=None, singular_tol=5e-7,
@@ -606,8 +609,10 @@ def _one_pose(nearest, start, X_0T, tool, tol, singular_tol, max_iter, wide, nea
     solutions = _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol)
     flags["near_singular"] = flags["near_singular"] | start.flags["near_singular"]
     flags = {name: np.array(flag, dtype=bool).reshape(()) for name, flag in flags.items()}
+    more = _beyond(nearest, tool, solutions, valid, X_0T[None], tol, max_iter)
     return finish(solutions, valid, pe, re, flags,
-                  np.array(REASON_NOT_CONVERGED if flags["unreachable"] else "", dtype=object))
+                  np.array(REASON_NOT_CONVERGED if flags["unreachable"] else "", dtype=object),
+                  more=_more_result(*more, ()))
 
 
 def _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol):
@@ -641,6 +646,67 @@ def _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol):
     solutions[rows] = wrap_angle(q)
     pe[rows], re[rows] = errors[:, better]
     return solutions
+
+
+def _beyond(nearest, tool, solutions, valid, X_0T, tol, max_iter):
+    r"""The solutions of each pose beyond its eight rows (``result.more``).
+
+    Within about the two arms' gap of a singularity of the exact arm, the calibrated arm
+    may reach a pose in ten or twelve joint vectors, not eight (a general 6R arm has up to
+    16): where the exact arm has two branches meeting, the calibrated one may have two
+    solutions on either side. A pose whose eight rows ``solutions`` (8 n, 6), wrapped, are
+    all ``valid`` (8 n,) and one of them within :data:`_POLISH_NEAR` of a singularity of
+    the exact arm (:func:`_near_rows`) and near singular on the calibrated arm
+    (:func:`_near_singular`) seeks more: deflated Newton (:func:`_deflated_newton`, the
+    pose's eight rows deflated) from that row moved by :data:`_MORE_WAYS` along its most
+    singular direction, then Newton (whose first steps, taken by every start, polish the
+    joints as :func:`_polish` does). A solution valid to ``tol`` and distinct from the
+    pose's rows and from the ones found before it (1e-6 rad) fills the pose's next row of
+    ``more``. Returns the solutions (n, 8, 6), their validity (n, 8) and their position and
+    rotation errors (n, 8) each."""
+    n = valid.size // 8
+    Q, V = np.zeros((n, _MORE, 6)), np.zeros((n, _MORE), dtype=bool)
+    PE, RE = np.zeros((n, _MORE)), np.zeros((n, _MORE))
+    full = np.repeat(valid.reshape(n, 8).all(axis=1), 8)
+    if not full.any():
+        return Q, V, PE, RE
+    if compiled_ready():
+        near = compiled_near_rows(solutions, valid & full, nearest.exact, _POLISH_NEAR)
+    else:
+        near = valid & full & _near_rows(nearest.robot, solutions, _POLISH_NEAR)
+    rows = np.flatnonzero(near)
+    if not rows.size:
+        return Q, V, PE, RE
+    singular, direction = _near_singular(nearest, tool, solutions[rows])
+    rows = rows[singular]
+    if not rows.size:
+        return Q, V, PE, RE
+    ways = _MORE_WAYS
+    starts = (solutions[rows, None] + ways[:, None] * direction[:, None]).reshape(-1, 6)
+    pose_of = np.repeat(rows // 8, ways.size)
+    known = solutions.reshape(n, 8, 6)[pose_of]
+    chain = (nearest.links, tool)
+    q = _deflated_newton(chain, starts, X_0T[pose_of], known, tol,
+                         min(max_iter, _RESTART_ITER))
+    q, converged, _, _, errors = _newton(*chain, q, X_0T[pose_of], tol, max_iter)
+    q = wrap_angle(q)
+    with np.errstate(invalid="ignore"):
+        new = (converged & (errors <= tol).all(axis=0)
+               & ~(np.abs(wrap_angle(known - q[:, None])).max(axis=-1) < 1e-6).any(axis=-1))
+    count = np.zeros(n, dtype=np.int64)
+    for j in np.flatnonzero(new):                       # a few: each against those before
+        i, m = pose_of[j], count[pose_of[j]]
+        if m == _MORE or (np.abs(wrap_angle(Q[i, :m] - q[j])).max(axis=-1) < 1e-6).any():
+            continue
+        Q[i, m], V[i, m], (PE[i, m], RE[i, m]) = q[j], True, errors[:, j]
+        count[i] += 1
+    return Q, V, PE, RE
+
+
+def _more_result(solutions, valid, pe, re, batch):
+    """The :class:`IKResult` of :func:`_beyond`'s arrays, shaped for the targets ``batch``."""
+    return finish(solutions.reshape(batch + (_MORE, 6)), valid.reshape(batch + (_MORE,)),
+                  pe.reshape(batch + (_MORE,)), re.reshape(batch + (_MORE,)), {})
 
 
 def _near_rows(exact, q, threshold):

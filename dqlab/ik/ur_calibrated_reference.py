@@ -21,7 +21,9 @@ Newton step (:func:`newton_step`):
    :math:`J^\mathsf{T} J` (every branch, when Newton found at most two: there the exact
    arm may clip a whole shoulder that the calibrated arm reaches). A row near a
    singularity of the exact arm then takes three Newton steps more, which bring its joints,
-   not only its pose, to the solution.
+   not only its pose, to the solution. A pose whose eight rows are all valid, one near a
+   singularity, seeks solutions beyond them the same way (``result.more``: within the
+   arms' gap of a singularity, a calibrated arm may reach a pose in ten or twelve ways).
 
 The fast solver is tested against it on six real calibrations
 (``tests/test_ik_ur_calibrated_reference.py``).
@@ -137,7 +139,7 @@ def calibrated_ur_reference(robot: Robot, target: ArrayLike, *, tol: float = 1e-
     -------
     IKResult
         As :func:`~dqlab.ik.ur_calibrated.calibrated_ur`'s: eight rows per pose in the exact
-        arm's branch order, its flags and reasons.
+        arm's branch order, the solutions beyond them (``more``), its flags and reasons.
 
     Raises
     ------
@@ -167,18 +169,25 @@ def calibrated_ur_reference(robot: Robot, target: ArrayLike, *, tol: float = 1e-
     targets = parse_targets(target)
     X_0T = np.linalg.inv(robot.base) @ targets.transforms.reshape(-1, 4, 4)
     n = X_0T.shape[0]
-    q, valid = np.zeros((n, 8, 6)), np.zeros((n, 8), bool)
-    pe, re = np.zeros((n, 8)), np.zeros((n, 8))
+    q, valid = np.zeros((2, n, 8, 6)), np.zeros((2, n, 8), bool)     # rows, and more
+    pe, re = np.zeros((2, n, 8)), np.zeros((2, n, 8))
     flags, reason = {name: np.zeros(n, bool) for name in FLAG_NAMES}, np.full(n, "", object)
     for i in range(n):
-        q[i], valid[i], pe[i], re[i], flags_i, reason[i] = solve_pose(
+        q[0, i], valid[0, i], pe[0, i], re[0, i], flags_i, reason[i] = solve_pose(
             arm, exact, X_0T[i], tol, wide, singular_tol, near_tol)
         for name in FLAG_NAMES:
             flags[name][i] = flags_i[name]
+        if valid[0, i].all():
+            more = beyond(arm, exact, X_0T[i], q[0, i], tol)
+            m = len(more)
+            q[1, i, :m], valid[1, i, :m] = more, True
+            pe[1, i, :m], re[1, i, :m] = pose_errors(arm.fk(more), X_0T[i])
     b = targets.batch
-    result = finish(q.reshape(b + (8, 6)), valid.reshape(b + (8,)), pe.reshape(b + (8,)),
-                    re.reshape(b + (8,)), {k: f.reshape(b) for k, f in flags.items()},
-                    reason.reshape(b))
+    more, result = (finish(q[j].reshape(b + (8, 6)), valid[j].reshape(b + (8,)),
+                           pe[j].reshape(b + (8,)), re[j].reshape(b + (8,)),
+                           {k: f.reshape(b) for k, f in flags.items()} if j == 0 else {},
+                           reason.reshape(b)) for j in (1, 0))
+    result._more = more
     result.row_names = ROW_NAMES
     return result
 
@@ -239,15 +248,28 @@ def is_new(q, known):
     return not (np.abs(wrap_angle(known - q)).max(axis=-1) < 1e-6).any()
 
 
+def near_exact(exact, q):
+    """Which rows of ``q`` (8, 6) are near a singularity of the exact arm: a measure of
+    :func:`~dqlab.ik.ur_closed_form.branch_measures` below 0.04 (h over :math:`|a_2|`)."""
+    h, sin_theta3, sin_theta5 = branch_measures(exact, q)
+    return ((np.abs(sin_theta3) < 0.04) | (np.abs(sin_theta5) < 0.04)
+            | (np.abs(h) < 0.04 * abs(exact.links[1].a)))
+
+
+def singular_direction(arm, q):
+    r"""The most singular direction of :math:`J^\mathsf{T} J` at ``q``, its largest entry
+    positive, if its smallest eigenvalue is below 1e-4 of its largest; else None."""
+    J = arm.fk_with_jacobian(q)[1]
+    w, V = np.linalg.eigh(J.T @ J)
+    return V[:, 0] * np.sign(V[np.abs(V[:, 0]).argmax(), 0]) if w[0] < 1e-4 * w[-1] else None
+
+
 def polish(arm, exact, X_0T, q, converged, tol):
     r"""Three Newton steps more, in place, for the rows ``converged`` near a singularity of
     the exact arm (:math:`|\sin\theta_3|`, :math:`|\sin\theta_5|` or :math:`|h|/|a_2|` of
     :func:`~dqlab.ik.ur_closed_form.branch_measures` below 0.04), where a row
     stopped at ``tol / 10`` may lie :math:`10^{-10}/\sigma_{\min}(J)` rad from its solution."""
-    h, sin_theta3, sin_theta5 = branch_measures(exact, q)
-    near = ((np.abs(sin_theta3) < 0.04) | (np.abs(sin_theta5) < 0.04)
-            | (np.abs(h) < 0.04 * abs(exact.links[1].a)))
-    for k in np.flatnonzero(converged & near):
+    for k in np.flatnonzero(converged & near_exact(exact, q)):
         q_k = q[k]
         for _ in range(3):
             q_k = q_k + newton_step(arm, q_k, X_0T)[0]
@@ -264,11 +286,8 @@ def repair(arm, exact, X_06, X_0T, q, converged, started, tol):
     family = [exact_ur(exact, X_06, tol=0.5, q_ref=[0, 0, 0, 0, 0, t]) for t in FAMILY]
     candidates = [(s, ()) for member in family for s in member.solutions[member.valid]]
     for q_k in q[converged]:
-        J = arm.fk_with_jacobian(q_k)[1]
-        H = J.T @ J
-        w, V = np.linalg.eigh(H)
-        if w[0] < 1e-4 * w[-1]:               # near a singularity: move off it both ways
-            v = V[:, 0] * np.sign(V[np.abs(V[:, 0]).argmax(), 0])
+        v = singular_direction(arm, q_k)
+        if v is not None:                       # near a singularity: move off it both ways
             candidates += [(q_k + t * v, q[converged]) for t in MOVES]
     for q_start, known in candidates:
         missing = started & ~converged
@@ -281,6 +300,22 @@ def repair(arm, exact, X_06, X_0T, q, converged, started, tol):
             k = int(ur_branch(exact, q_end))
             k = k if missing[k] else int(np.flatnonzero(missing)[0])
             q[k], converged[k] = q_end, True
+
+
+def beyond(arm, exact, X_0T, q, tol):
+    """The solutions of a pose beyond its eight valid rows ``q`` (8, 6), (m, 6), m <= 8:
+    from each row near a singularity of both arms, deflated Newton (the rows deflated)
+    0.05 rad either way along its most singular direction, then plain Newton."""
+    more = np.zeros((0, 6))
+    for q_k in q[near_exact(exact, q)]:
+        v = singular_direction(arm, q_k)
+        for t in (0.05, -0.05) if v is not None else ():
+            q_start, _ = newton(arm, q_k + t * v, X_0T, tol, RESTART_ITER, q)
+            q_end, ok = newton(arm, q_start, X_0T, tol)
+            if (ok and max(pose_errors(arm.fk(q_end), X_0T)) <= tol and is_new(q_end, q)
+                    and is_new(q_end, more) and len(more) < 8):
+                more = np.vstack([more, wrap_angle(q_end)])
+    return more
 
 
 def singularity_flags(arm, q, valid, d4, singular_tol, near_tol):

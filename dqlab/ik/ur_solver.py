@@ -243,15 +243,23 @@ def closest_ur_solution(robot: Robot, target: ArrayLike, q_now: ArrayLike, *,
     if keep_branch:
         branch = np.broadcast_to(ur_branch(robot, q_now), result.valid.shape[:-1])
         on = result.valid & (np.arange(8) == branch[..., None])
-        if not on.any(axis=-1).all():
-            where = tuple(int(i) for i in np.argwhere(~on.any(axis=-1))[0])
+        more = result._more                 # the solutions beyond the rows, on the branch
+        if more is not None and more.valid.any():
+            more_on = more.valid & (ur_branch(robot, more.solutions) == branch[..., None])
+            more = IKResult(more.solutions, more_on, more.position_error,
+                            more.rotation_error)
+            on_any = on.any(axis=-1) | more_on.any(axis=-1)
+        else:
+            more, on_any = None, on.any(axis=-1)
+        if not on_any.all():
+            where = tuple(int(i) for i in np.argwhere(~on_any)[0])
             which = f"target {where}" if where else "the target"
             raise ValueError(f"{which} has no solution on the branch of q_now "
                              f"({ROW_NAMES[int(branch[where])]}), which keep_branch=True "
                              f"keeps; valid rows: "
                              f"{np.flatnonzero(result.valid[where]).tolist()}")
         result = IKResult(result.solutions, on, result.position_error, result.rotation_error,
-                          result.flags, result.reason)
+                          result.flags, result.reason, _more=more)
     return closest_solution(result, q_now, limits, weights=weights)
 
 
