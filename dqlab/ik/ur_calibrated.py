@@ -667,9 +667,14 @@ def _beyond(nearest, tool, solutions, valid, X_0T, tol, max_iter):
     n = valid.size // 8
     Q, V = np.zeros((n, _MORE, 6)), np.zeros((n, _MORE), dtype=bool)
     PE, RE = np.zeros((n, _MORE)), np.zeros((n, _MORE))
-    full = np.repeat(valid.reshape(n, 8).all(axis=1), 8)
-    if not full.any():
-        return Q, V, PE, RE
+    if n == 1:                                          # (one pose: fewer calls)
+        if not valid.all():
+            return Q, V, PE, RE
+        full = valid
+    else:
+        full = np.repeat(valid.reshape(n, 8).all(axis=1), 8)
+        if not full.any():
+            return Q, V, PE, RE
     if compiled_ready():
         near = compiled_near_rows(solutions, valid & full, nearest.exact, _POLISH_NEAR)
     else:
@@ -704,9 +709,10 @@ def _beyond(nearest, tool, solutions, valid, X_0T, tol, max_iter):
 
 
 def _more_result(solutions, valid, pe, re, batch):
-    """The :class:`IKResult` of :func:`_beyond`'s arrays, shaped for the targets ``batch``."""
-    return finish(solutions.reshape(batch + (_MORE, 6)), valid.reshape(batch + (_MORE,)),
-                  pe.reshape(batch + (_MORE,)), re.reshape(batch + (_MORE,)), {})
+    """The :class:`IKResult` of :func:`_beyond`'s arrays, shaped for the targets ``batch``
+    (its rows that are not valid hold zeros already, as :func:`finish` makes them)."""
+    return IKResult(solutions.reshape(batch + (_MORE, 6)), valid.reshape(batch + (_MORE,)),
+                    pe.reshape(batch + (_MORE,)), re.reshape(batch + (_MORE,)), {})
 
 
 def _near_rows(exact, q, threshold):
