@@ -161,7 +161,7 @@ def summary(result: IKResult) -> str:
     names = (tuple(result.row_names) if result.row_names is not None
              else tuple(str(i) for i in range(k)))
     flags = {name: np.asarray(f) for name, f in (result.flags or {}).items()}
-    more = result._more if isinstance(result, IKResult) else None
+    more = result.more if isinstance(result, IKResult) else None
     more_count = (np.zeros(valid.shape[:-1], dtype=int) if more is None
                   else np.count_nonzero(more.valid, axis=-1))
     if valid.ndim == 1:

@@ -220,7 +220,7 @@ def closest_solution(result, q_ref: ArrayLike, limits: ArrayLike | None = None, 
         raise TypeError(f"wrapped must be True or False, got {short_repr(wrapped)}")
     solutions = np.asarray(result.solutions)
     valid = np.asarray(result.valid)
-    more = getattr(result, "_more", None)           # the solutions beyond the rows, if any
+    more = getattr(result, "more", None)            # the solutions beyond the rows, if any
     if more is not None and more.valid.any():
         solutions = np.concatenate([solutions, more.solutions], axis=-2)
         valid = np.concatenate([valid, more.valid], axis=-1)

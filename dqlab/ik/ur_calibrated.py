@@ -56,6 +56,11 @@ keeps its contract (every branch, flags, reasons, batches) in three steps:
    (``_polish``): there a row stopped at a tenth of ``tol`` may lie 1e-5 rad from its
    solution (the smallest singular value of :math:`J` is small), and the steps bring the
    joints, not only the pose, to it.
+6. **The solutions beyond the eight rows** (``_beyond``): a pose whose eight rows are all
+   valid, one of them near a singularity of both arms, may have ten or twelve solutions
+   (a general 6R arm has up to 16); deflated Newton from that row, moved 0.05 rad either
+   way along its most singular direction, finds the others, which the result gives in
+   ``result.more`` (eight rows more, valid where there is one).
 
 Why step 4. A real calibration is not a few millimetres from an exact UR in every
 direction: the controllers' parameters put joint axes 2, 3 and 4 out of parallel by 3 to
@@ -71,11 +76,12 @@ singularity, where Newton cannot start); near the wrist singularity a shoulder a
 may have four solutions along the exact arm's wrist family, not two. Steps 1-3 alone found
 the generating configuration of 99.75-99.88 % of random poses of those arms; with steps 4
 and 5, 99.88-99.99 % on each of three sets of 10,000
-(``benchmarks/bench_ik_ur_calibrated.py``). What remains is mostly poses with
-more solutions than the eight rows (a general 6R arm has up to 16): near a singularity of
-the exact arm the calibrated one may have ten or twelve, and a row holds one of them. Such
-poses are flagged ``"near_singular"`` (the threshold is at least four times the arms'
-rotation gap, and the exact arm's branches count too).
+(``benchmarks/bench_ik_ur_calibrated.py``), the rest mostly at poses with more solutions
+than the eight rows (a general 6R arm has up to 16): near a singularity of the exact arm the
+calibrated one may have ten or twelve, and a row holds one of them. With step 6, which
+gives the others in ``result.more``, 99.96-100 % on the same sets, every pose missed but
+about one in 70,000 flagged ``"near_singular"`` (the threshold is at least four times the
+arms' rotation gap, and the exact arm's branches count too).
 """
 
 import math
@@ -319,7 +325,8 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
         ``"near_singular"`` (one of them below the near threshold), ``"unreachable"``, and
         ``"not_converged"`` (a branch started from a solution of the exact arm did not
         converge; its row is invalid and keeps its errors): the keys of the exact closed
-        form's result, in its order; ``reason``.
+        form's result, in its order; ``reason``; ``more``: the solutions beyond the eight
+        rows, (..., 8, 6), valid where a pose has one (step 6 of the module).
 
     Raises
     ------

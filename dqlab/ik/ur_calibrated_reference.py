@@ -183,11 +183,11 @@ def calibrated_ur_reference(robot: Robot, target: ArrayLike, *, tol: float = 1e-
             q[1, i, :m], valid[1, i, :m] = more, True
             pe[1, i, :m], re[1, i, :m] = pose_errors(arm.fk(more), X_0T[i])
     b = targets.batch
-    more, result = (finish(q[j].reshape(b + (8, 6)), valid[j].reshape(b + (8,)),
-                           pe[j].reshape(b + (8,)), re[j].reshape(b + (8,)),
-                           {k: f.reshape(b) for k, f in flags.items()} if j == 0 else {},
-                           reason.reshape(b)) for j in (1, 0))
-    result._more = more
+    more = finish(q[1].reshape(b + (8, 6)), valid[1].reshape(b + (8,)),
+                  pe[1].reshape(b + (8,)), re[1].reshape(b + (8,)), {})
+    result = finish(q[0].reshape(b + (8, 6)), valid[0].reshape(b + (8,)),
+                    pe[0].reshape(b + (8,)), re[0].reshape(b + (8,)),
+                    {k: f.reshape(b) for k, f in flags.items()}, reason.reshape(b), more)
     result.row_names = ROW_NAMES
     return result
 

@@ -298,7 +298,8 @@ def exact_ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9,
         the arm and its nearest exact UR (:func:`~dqlab.ik.ur_calibrated.nominal_ur`), and
         the nearest exact UR's branches count too: within it, the calibrated arm's
         solutions no longer follow the exact arm's branches one to one, and a pose may
-        have more solutions than the eight rows (see :mod:`dqlab.ik.ur_calibrated`).
+        have more solutions than the eight rows (the others in ``result.more``; see
+        :mod:`dqlab.ik.ur_calibrated`).
     pose_tol : float
         Tolerance of the rigidity check of ``target`` (and ``tool``). With a tolerance above
         the default (for poses read from rounded numbers, as in the thesis's pose file),

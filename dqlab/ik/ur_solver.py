@@ -86,7 +86,9 @@ def ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9, tool: ArrayLike | 
     -------
     IKResult
         As :func:`~dqlab.ik.ur_closed_form.exact_ur` returns it; on a calibrated UR the flag
-        ``"not_converged"`` may be set (see :func:`~dqlab.ik.ur_calibrated.calibrated_ur`).
+        ``"not_converged"`` may be set, and a pose near a singularity may have solutions
+        beyond its eight rows, in ``result.more`` (see
+        :func:`~dqlab.ik.ur_calibrated.calibrated_ur`).
 
     Raises
     ------
@@ -243,8 +245,8 @@ def closest_ur_solution(robot: Robot, target: ArrayLike, q_now: ArrayLike, *,
     if keep_branch:
         branch = np.broadcast_to(ur_branch(robot, q_now), result.valid.shape[:-1])
         on = result.valid & (np.arange(8) == branch[..., None])
-        more = result._more                 # the solutions beyond the rows, on the branch
-        if more is not None and more.valid.any():
+        more = result.more                  # the solutions beyond the rows, on the branch
+        if more.valid.any():
             more_on = more.valid & (ur_branch(robot, more.solutions) == branch[..., None])
             more = IKResult(more.solutions, more_on, more.position_error,
                             more.rotation_error)
