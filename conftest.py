@@ -36,10 +36,6 @@ import pytest
 
 NOTEBOOK_BUDGET_S = 30.0  # the goal is 20 s; the margin absorbs a loaded CI machine
 
-# The former names of renamed modules warn when imported (tests/test_deprecated_names.py
-# imports them on purpose): they hold no examples to collect.
-collect_ignore = ["dqlab/scale.py", "dqlab/lab_arm.py"]
-
 _notebook_time = defaultdict(float)
 _worker_leftovers = []   # what the xdist workers found (controller only)
 _worker_pids = set()

@@ -1,8 +1,7 @@
 """Former public names, kept for one version after a rename.
 
 Each warns with a :class:`DeprecationWarning` that names its new home, then gives the new
-object itself: a renamed module is a module that re-exports the new one and warns when it is
-imported; a renamed function or constant is served by the module's ``__getattr__``
+object itself: a renamed function or constant is served by the module's ``__getattr__``
 (:pep:`562`) and warns each time it is looked up.
 """
 
@@ -14,8 +13,7 @@ def warn_renamed(old, new):
     """Warn that ``old`` is deprecated in favour of ``new``.
 
     The warning points at the code that used the old name: the caller of the function
-    that calls this one (a module's ``__getattr__``, or a module's body, whose importer
-    is found past the import machinery's own frames).
+    that calls this one (a module's ``__getattr__``).
     """
     warnings.warn(f"{old} is deprecated: use {new} (the old name goes in the next version)",
                   DeprecationWarning, stacklevel=3)
@@ -31,7 +29,7 @@ def renamed_attributes(module, renamed):
         it does not have.
     renamed : dict of str to str
         Each former name and the dotted path of its new object
-        (``{"calibrate": "dqlab.identify.identify_dh_parameters"}``).
+        (``{"ur": "dqlab.ik.ur_solver.ur"}``).
 
     Returns
     -------

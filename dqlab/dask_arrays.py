@@ -25,8 +25,7 @@ general form of ``dask.array.map_blocks``) and return lazy dask arrays -- hence 
 dask is an optional dependency (the extra ``scale``: ``pip install 'dqlab[scale]'``). This
 module imports numpy alone; dask is imported when a function that needs it is called, and
 its absence is reported with the command that installs it. The map itself, and the numpy
-functions it is made of, are in :mod:`dqlab.reachability`. The module's former name,
-``dqlab.scale``, still imports it for one more version, with a :class:`DeprecationWarning`.
+functions it is made of, are in :mod:`dqlab.reachability`.
 """
 
 import functools

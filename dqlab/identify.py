@@ -40,7 +40,6 @@ from ._checks import (
     components,
     stack_components,
 )
-from ._deprecated import renamed_attributes
 from ._formulas import rotation_vector_from_matrix_entries
 from .robot import Link, Robot
 from .transforms import check_transform
@@ -50,9 +49,6 @@ __all__ = [
     "desk_arm_regressor", "identify_desk_arm", "dh_parameter_names", "dh_parameters",
     "robot_from_dh_parameters", "identification_jacobian", "identify_dh_parameters",
 ]
-
-__getattr__ = renamed_attributes(__name__,
-                                 {"calibrate": "dqlab.identify.identify_dh_parameters"})
 
 #: The desktop arm's lengths in the order of :func:`desk_arm_regressor`'s columns.
 DESK_ARM_PARAMETERS = ("l0", "l1", "l2", "l3", "l4")
@@ -884,9 +880,6 @@ def identify_dh_parameters(robot, q, measured, *, measure="position", fixed=(),
     10 (step rejected) otherwise; :math:`\lambda \to 0` is Gauss--Newton. The iteration stops
     when the scaled step :math:`\lVert D\delta\rVert` falls below ``tol`` (:math:`D` the
     column norms of :math:`J`).
-
-    Its former name, ``calibrate``, still finds it for one version, with a
-    :class:`DeprecationWarning`.
 
     Parameters
     ----------

@@ -6,8 +6,7 @@ return either. :func:`assert_quaternion_equal` and :func:`assert_dual_quaternion
 compare arrays of them item by item up to that sign, where
 ``numpy.testing.assert_allclose`` would report half of the right answers as wrong.
 
-The exercises' checker, ``check_function``, is :func:`dqlab.exercises.check_function`
-(``dqlab.testing.check_function`` still finds it, with a :class:`DeprecationWarning`).
+The exercises' checker, ``check_function``, is :func:`dqlab.exercises.check_function`.
 """
 
 import contextlib
@@ -17,12 +16,8 @@ import sys
 import numpy as np
 
 from ._checks import as_float_array, check_tolerance
-from ._deprecated import renamed_attributes
 
 __all__ = ["assert_quaternion_equal", "assert_dual_quaternion_equal", "quiet_stdout"]
-
-__getattr__ = renamed_attributes(__name__,
-                                 {"check_function": "dqlab.exercises.check_function"})
 
 
 def _assert_equal_up_to_sign(actual, desired, atol, size, what):

@@ -8,7 +8,6 @@ import pkgutil
 import re
 import subprocess
 import sys
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -126,9 +125,7 @@ def test_the_core_imports_numpy_alone():
 def test_no_attribute_shadows_a_module_of_its_package(package):
     pkg = importlib.import_module(package)
     for info in pkgutil.iter_modules(pkg.__path__):
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", DeprecationWarning)     # a renamed module's alias
-            importlib.import_module(f"{package}.{info.name}")
+        importlib.import_module(f"{package}.{info.name}")
         value = getattr(pkg, info.name, None)
         assert value is None or value is sys.modules[f"{package}.{info.name}"], (
             f"{package}.{info.name} is {value!r}, not the module of that name")

@@ -1,34 +1,29 @@
 """Former public names: each warns with a DeprecationWarning that names its new home and is
-the new object itself; the book, the tests, the benchmarks and the tools use the new names."""
+the new object itself, for one version; then it is gone, with the error any missing name
+gives. The book, the tests, the benchmarks and the tools use the new names."""
 
 import importlib
 import re
 import sys
+import warnings
 from pathlib import Path
 
 import pytest
 
-import dqlab.dask_arrays
-import dqlab.desk_arm_firmware
-import dqlab.exercises
 import dqlab.identify
+import dqlab.ik.ur_closed_form
+import dqlab.testing
 
 ROOT = Path(__file__).resolve().parents[1]
 
-#: (module, former name, new dotted name) of renamed functions.
-RENAMED = [("dqlab.testing", "check_function", "dqlab.exercises.check_function"),
-           ("dqlab.identify", "calibrate", "dqlab.identify.identify_dh_parameters"),
-           ("dqlab.ik.ur_closed_form", "ur", "dqlab.ik.ur_solver.ur"),
+#: (module, former name, new dotted name) of renamed functions, renamed in 0.1.6.
+RENAMED = [("dqlab.ik.ur_closed_form", "ur", "dqlab.ik.ur_solver.ur"),
            ("dqlab.ik.ur_closed_form", "closest_ur_solution",
             "dqlab.ik.ur_solver.closest_ur_solution"),
            ("dqlab.ik.ur_closed_form", "ur_branch", "dqlab.ik.ur_solver.ur_branch")]
-#: Renamed modules: former name -> (new module, {former attribute: new attribute}).
-MODULES = {
-    "dqlab.scale": (dqlab.dask_arrays, {n: n for n in dqlab.dask_arrays.__all__}),
-    "dqlab.lab_arm": (dqlab.desk_arm_firmware, {
-        **{n: n for n in dqlab.desk_arm_firmware.__all__ if n not in ("model", "LENGTHS")},
-        "uarm_swift_pro": "model", "UARM_SWIFT_PRO": "LENGTHS"}),
-}
+#: The names renamed in 0.1.5 and removed in 0.1.7: modules, and (module, attribute) pairs.
+REMOVED_MODULES = ["dqlab.scale", "dqlab.lab_arm"]
+REMOVED_ATTRIBUTES = [(dqlab.testing, "check_function"), (dqlab.identify, "calibrate")]
 #: The former names as they would be written in code or prose.
 FORMER = re.compile(r"dqlab\.scale\b|from dqlab import [^\n]*\bscale\b|\blab_arm\b|"
                     r"uarm_swift_pro|UARM_SWIFT_PRO|\bcalibrate\(|testing import check_function|"
@@ -41,30 +36,45 @@ def _new(dotted):
     return getattr(importlib.import_module(module), name)
 
 
-def test_each_former_name_warns_where_it_is_used_and_is_the_new_object(monkeypatch):
+def test_each_former_name_warns_where_it_is_used_and_is_the_new_object():
     for module, old, new in RENAMED:
         with pytest.warns(DeprecationWarning, match=rf"^{module}\.{old} is deprecated: use "
                                                     rf"{re.escape(new)}\b") as caught:
             assert getattr(importlib.import_module(module), old) is _new(new)
         assert caught[0].filename == __file__                  # the line that used the name
-    with pytest.warns(DeprecationWarning, match=r"^dqlab\.testing\.check_function is deprec"):
-        from dqlab.testing import check_function
-    assert check_function is dqlab.exercises.check_function
-    with pytest.raises(AttributeError, match="has no attribute 'calibration'"):
-        dqlab.identify.calibration                              # noqa: B018
-    for old, (new, names) in MODULES.items():
-        monkeypatch.delitem(sys.modules, old, raising=False)   # imported afresh, so it warns
-        monkeypatch.delattr(dqlab, old.rpartition(".")[2], raising=False)
-        with pytest.warns(DeprecationWarning, match=rf"^{old} is deprecated: use "
-                                                    rf"{new.__name__}\b") as caught:
-            module = importlib.import_module(old)
-        assert set(module.__all__) == set(names)
-        assert all(getattr(module, a) is getattr(new, b) for a, b in names.items())
-    monkeypatch.delitem(sys.modules, "dqlab.scale")
-    monkeypatch.delattr(dqlab, "scale")
-    with pytest.warns(DeprecationWarning) as caught:
-        from dqlab import scale
-    assert caught[0].filename == __file__ and scale.fk_dask is dqlab.dask_arrays.fk_dask
+    with pytest.warns(DeprecationWarning, match=r"^dqlab\.ik\.ur_closed_form\.ur is deprec"):
+        from dqlab.ik.ur_closed_form import ur
+    assert ur is _new("dqlab.ik.ur_solver.ur")
+    with pytest.raises(AttributeError, match="^module 'dqlab.ik.ur_closed_form' has no "
+                                             "attribute 'calibration'$"):
+        dqlab.ik.ur_closed_form.calibration                     # noqa: B018
+
+
+def test_the_names_removed_in_0_1_7_are_gone_with_the_ordinary_errors(monkeypatch):
+    # Only dqlab's own folder answers for its submodules (an editable install of another
+    # copy of dqlab adds a finder that would look in that copy's folder too).
+    monkeypatch.setattr(sys, "meta_path", [f for f in sys.meta_path
+                                           if not f.__module__.startswith("__editable")])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for old in REMOVED_MODULES:
+            assert not (ROOT / (old.replace(".", "/") + ".py")).exists()
+            assert old not in sys.modules
+            with pytest.raises(ModuleNotFoundError, match=rf"^No module named '{old}'$") as exc:
+                importlib.import_module(old)
+            assert exc.value.name == old
+            with pytest.raises(ImportError, match=rf"^cannot import name "
+                                                  rf"'{old.rpartition('.')[2]}' from 'dqlab'"):
+                exec(f"from dqlab import {old.rpartition('.')[2]}", {})
+        for module, old in REMOVED_ATTRIBUTES:
+            assert not hasattr(module, "__getattr__")
+            with pytest.raises(AttributeError, match=rf"^module '{module.__name__}' has no "
+                                                     rf"attribute '{old}'$"):
+                getattr(module, old)
+            with pytest.raises(ImportError, match=rf"^cannot import name '{old}' from "
+                                                  rf"'{module.__name__}'"):
+                exec(f"from {module.__name__} import {old}", {})
+    assert caught == []
 
 
 def test_the_book_tests_benchmarks_and_tools_use_the_new_names():
