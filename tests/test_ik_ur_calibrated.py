@@ -654,3 +654,37 @@ def test_more_is_empty_on_an_exact_arm_and_printed_on_a_calibrated_one():
     both = ur(robot, robot.fk(np.array(qs)))
     assert (f"targets with solutions beyond the rows (result.more): 2, "
             f"{int(both.more.count.sum())} solutions") in repr(both)
+
+
+def test_a_pose_missed_near_a_singularity_is_flagged():
+    """Poses of the real calibrations (tests/data/real_calibrations/hard_poses.json,
+    "flagged") whose configuration the solver misses, once without a flag: within a few
+    milliradians of a singularity of the nearest exact UR, where the calibrated arm's own
+    measures stayed above the near threshold. The exact arm's measures at the valid rows
+    count too: each is flagged near_singular. And where two solutions meet (the UR5's pose,
+    sin theta_3 = 0.001 on the exact arm), Newton stops anywhere along the flat valley
+    between them: the solutions beyond the rows hold no second copy of a row (no two
+    solutions within 0.1 rad whose midpoint also reaches the pose, by independent forward
+    kinematics)."""
+    import json
+    from pathlib import Path
+
+    from real_calibrations import real_calibrations
+
+    path = Path(__file__).parent / "data" / "real_calibrations" / "hard_poses.json"
+    stored = json.loads(path.read_text(encoding="utf-8"))["flagged"]
+    robots = real_calibrations()
+    for name, qs in stored.items():
+        robot, q = robots[name], np.array(qs)
+        T = robot.fk(q)
+        result = ur(robot, T)
+        assert result.flags["near_singular"].all(), name
+        for i in range(len(q)):
+            more = result.more.solutions[i][result.more.valid[i]]
+            every = np.concatenate([result.solutions[i][result.valid[i]], more])
+            for x in more:
+                gap = np.abs(np.angle(np.exp(1j * (every - x)))).max(axis=-1)
+                others = every[(gap > 0) & (gap < 0.1)]
+                middle = x + 0.5 * np.angle(np.exp(1j * (others - x)))
+                dp = np.linalg.norm(robot.fk(middle)[:, :3, 3] - T[i, :3, 3], axis=-1)
+                assert (dp > 1e-9).all(), (name, i)

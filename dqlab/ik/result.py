@@ -33,22 +33,14 @@ class IKResult:
         What each of the ``k`` rows stands for (for :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>`, the
         branches of :data:`~dqlab.ik.ur_closed_form.SOLUTION_ORDER`, such as
         ``"left up noflip"``); printed by ``repr``.
-    more : IKResult
-        The solutions of a target beyond its ``k`` rows, shape (..., m, n), valid where there
-        is one (a property: an :class:`IKResult` with m = 0 when the solver has no more). A
-        calibrated UR within about its gap of a singularity of its nearest exact arm may
-        reach a pose with up to 16 joint vectors (a general 6R arm has up to 16), ten or
-        twelve as a rule, while its rows are the exact arm's eight branches:
-        :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>` gives the others here, eight rows (up to
-        sixteen in all). ``count`` counts the rows only;
-        :func:`~dqlab.ik.solutions.closest_solution` and :meth:`best` choose among both.
 
     Notes
     -----
     ``repr`` (and ``print``) give a short summary, not the arrays: for one target a line
     per row (its name, whether it is valid, its errors and its joint values in degrees),
     for a batch the counts of valid rows, the targets without a solution by reason, the
-    flags that are set and the largest error of a valid row.
+    flags that are set and the largest error of a valid row. The solutions a target has
+    beyond its rows (a calibrated UR near a singularity) are in :attr:`more`.
 
     Examples
     --------
@@ -86,7 +78,15 @@ class IKResult:
 
     @property
     def more(self) -> "IKResult":
-        """The solutions beyond the rows (see the class docstring); m = 0 rows if none."""
+        """The solutions of each target beyond its ``k`` rows, shape (..., m, n), valid where
+        there is one: an :class:`IKResult` with m = 0 rows when the solver has no more.
+
+        A calibrated UR within about its gap of a singularity of its nearest exact arm may
+        reach a pose in ten or twelve ways (a general 6R arm has up to 16), while its rows
+        are the exact arm's eight branches: :func:`dqlab.ik.ur <dqlab.ik.ur_solver.ur>`
+        gives the others here, in eight rows. :attr:`count` counts the rows only;
+        :func:`~dqlab.ik.solutions.closest_solution` and :meth:`best` choose among both.
+        """
         if self._more is None:
             batch, n = np.shape(self.valid)[:-1], np.shape(self.solutions)[-1]
             return IKResult(np.zeros(batch + (0, n)), np.zeros(batch + (0,), dtype=bool),
@@ -134,11 +134,13 @@ def summary(result: IKResult) -> str:
     Returns
     -------
     str
-        For one target, a title line (valid rows, flags set) and one line per row: its name
-        (``row_names``, else its index), whether it is valid, its position and rotation
-        errors and its joints in degrees (rounded to 0.1). For a batch, the title line, the
-        number of targets by count of valid rows, the targets without a solution grouped
-        by reason, the flags set (on how many targets) and the largest error of a valid row.
+        For one target, a title line (valid rows, solutions beyond them, flags set) and one
+        line per row: its name (``row_names``, else its index), whether it is valid, its
+        position and rotation errors and its joints in degrees (rounded to 0.1), then one
+        line per solution beyond the rows (:attr:`IKResult.more`). For a batch, the title
+        line, the number of targets by count of valid rows, the targets with solutions
+        beyond the rows, the targets without a solution grouped by reason, the flags set
+        (on how many targets) and the largest error of a valid row.
 
     Examples
     --------

@@ -79,9 +79,9 @@ and 5, 99.88-99.99 % on each of three sets of 10,000
 (``benchmarks/bench_ik_ur_calibrated.py``), the rest mostly at poses with more solutions
 than the eight rows (a general 6R arm has up to 16): near a singularity of the exact arm the
 calibrated one may have ten or twelve, and a row holds one of them. With step 6, which
-gives the others in ``result.more``, 99.96-100 % on the same sets, every pose missed but
-about one in 70,000 flagged ``"near_singular"`` (the threshold is at least four times the
-arms' rotation gap, and the exact arm's branches count too).
+gives the others in ``result.more``, 99.96-100 % on the same sets, every pose missed
+flagged ``"near_singular"`` (the threshold is at least four times the arms' rotation gap,
+and the exact arm's measures count too, at its own branches and at the valid rows).
 """
 
 import math
@@ -322,7 +322,9 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
         calibrated arm at its valid rows (the sines of the angles between joint axes 4 and
         6 and between the common normals of joints 2-3 and 3-4, and the distance of the
         wrist centre from the plane of joint 1 and joint 2's direction over :math:`d_4`),
-        ``"near_singular"`` (one of them below the near threshold), ``"unreachable"``, and
+        ``"near_singular"`` (one of them below the near threshold, or a measure of the
+        nearest exact UR's at a valid row: :math:`|\sin\theta_3|`, :math:`|\sin\theta_5|`,
+        :math:`|h| / |a_2|`), ``"unreachable"``, and
         ``"not_converged"`` (a branch started from a solution of the exact arm did not
         converge; its row is invalid and keeps its errors): the keys of the exact closed
         form's result, in its order; ``reason``; ``more``: the solutions beyond the eight
@@ -441,7 +443,9 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
     solutions = _polish(nearest, X_6T, wrap_angle(polished.q), valid, pe, re, X_0T, tol)
     flags = _flags(polished.measures, valid, singular_tol, nearest.robot.links[3].d,
                    near_limit)
-    flags["near_singular"] |= start.flags["near_singular"].reshape(n)   # the exact arm's
+    flags["near_singular"] |= start.flags["near_singular"].reshape(n)   # the exact arm's,
+    flags["near_singular"] |= _rows_near(nearest, solutions, valid,     # at its rows and
+                                         near_limit).reshape(n, 8).any(axis=1)   # at ours
     flags["not_converged"] = (exact & ~valid).reshape(n, 8).any(axis=1)
     reason = np.full(n, "", dtype=object)
     none = ~valid.reshape(n, 8).any(axis=1)
@@ -614,7 +618,8 @@ def _one_pose(nearest, start, X_0T, tool, tol, singular_tol, max_iter, wide, nea
     if _family_members(nearest, solutions, found, found)[0]:   # (found: all converged)
         return None
     solutions = _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol)
-    flags["near_singular"] = flags["near_singular"] | start.flags["near_singular"]
+    flags["near_singular"] = (flags["near_singular"] | start.flags["near_singular"]
+                              | _rows_near(nearest, solutions, valid, near).any())
     flags = {name: np.array(flag, dtype=bool).reshape(()) for name, flag in flags.items()}
     more = _beyond(nearest, tool, solutions, valid, X_0T[None], tol, max_iter)
     return finish(solutions, valid, pe, re, flags,
@@ -638,11 +643,7 @@ def _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol):
     the targets of the poses whose rows are ``solutions``, eight each. With numba, the rows
     near a singularity are picked in compiled code
     (``dqlab._fast.newton_compiled.near_rows``, tested equal)."""
-    if compiled_ready():
-        near = compiled_near_rows(solutions, valid, nearest.exact, _POLISH_NEAR)
-    else:
-        near = valid & _near_rows(nearest.robot, solutions, _POLISH_NEAR)
-    rows = np.flatnonzero(near)
+    rows = np.flatnonzero(_rows_near(nearest, solutions, valid, _POLISH_NEAR))
     if not rows.size:
         return solutions
     q, _, _, _, errors = _newton(nearest.links, tool, solutions[rows],
@@ -667,9 +668,9 @@ def _beyond(nearest, tool, solutions, valid, X_0T, tol, max_iter):
     (:func:`_near_singular`) seeks more: deflated Newton (:func:`_deflated_newton`, the
     pose's eight rows deflated) from that row moved by :data:`_MORE_WAYS` along its most
     singular direction, then Newton (whose first steps, taken by every start, polish the
-    joints as :func:`_polish` does). A solution valid to ``tol`` and distinct from the
-    pose's rows and from the ones found before it (1e-6 rad) fills the pose's next row of
-    ``more``. Returns the solutions (n, 8, 6), their validity (n, 8) and their position and
+    joints as :func:`_polish` does). A solution valid to ``tol`` and not one of the
+    pose's rows nor of the ones found before it (:func:`_one_of`) fills the pose's next row
+    of ``more``. Returns the solutions (n, 8, 6), their validity (n, 8) and their position and
     rotation errors (n, 8) each."""
     n = valid.size // 8
     Q, V = np.zeros((n, _MORE, 6)), np.zeros((n, _MORE), dtype=bool)
@@ -682,11 +683,7 @@ def _beyond(nearest, tool, solutions, valid, X_0T, tol, max_iter):
         full = np.repeat(valid.reshape(n, 8).all(axis=1), 8)
         if not full.any():
             return Q, V, PE, RE
-    if compiled_ready():
-        near = compiled_near_rows(solutions, valid & full, nearest.exact, _POLISH_NEAR)
-    else:
-        near = valid & full & _near_rows(nearest.robot, solutions, _POLISH_NEAR)
-    rows = np.flatnonzero(near)
+    rows = np.flatnonzero(_rows_near(nearest, solutions, valid & full, _POLISH_NEAR))
     if not rows.size:
         return Q, V, PE, RE
     singular, direction = _near_singular(nearest, tool, solutions[rows])
@@ -706,13 +703,44 @@ def _beyond(nearest, tool, solutions, valid, X_0T, tol, max_iter):
         new = (converged & (errors <= tol).all(axis=0)
                & ~(np.abs(wrap_angle(known - q[:, None])).max(axis=-1) < 1e-6).any(axis=-1))
     count = np.zeros(n, dtype=np.int64)
+    rows_of = solutions.reshape(n, 8, 6)
     for j in np.flatnonzero(new):                       # a few: each against those before
         i, m = pose_of[j], count[pose_of[j]]
-        if m == _MORE or (np.abs(wrap_angle(Q[i, :m] - q[j])).max(axis=-1) < 1e-6).any():
+        if m == _MORE or _one_of(chain, q[j], np.concatenate([rows_of[i], Q[i, :m]]),
+                                 X_0T[i], tol):
             continue
         Q[i, m], V[i, m], (PE[i, m], RE[i, m]) = q[j], True, errors[:, j]
         count[i] += 1
     return Q, V, PE, RE
+
+
+def _one_of(chain, q, known, X_target, tol):
+    """Whether the joint vector q (6,), a solution of the pose ``X_target`` (4, 4) in frame
+    0, is one of the solutions ``known`` (m, 6): within 1e-6 rad of one, or within 0.1 rad
+    of one and their midpoint reaching the pose to ``tol`` too. (Where two solutions meet at
+    a singularity of the calibrated arm, the pose error is flat along the direction that
+    joins them, and Newton stops anywhere along it within ``tol``: rows 1e-4 rad apart,
+    one solution. Two solutions that a singularity separates, 0.05 rad or more apart,
+    miss the pose by far more than ``tol`` half way.)"""
+    gap = np.abs(wrap_angle(known - q)).max(axis=-1)
+    if (gap < 1e-6).any():
+        return True
+    close = np.flatnonzero(gap < 0.1)
+    if not close.size:
+        return False
+    kernel = _newton_kernel(*chain, close.size)
+    X = kernel.transforms(kernel.frames(q + 0.5 * wrap_angle(known[close] - q)))
+    position, rotation = pose_errors(X, np.broadcast_to(X_target, X.shape))
+    return bool(((position <= tol) & (rotation <= tol)).any())
+
+
+def _rows_near(nearest, solutions, valid, threshold):
+    """The ``valid`` (m,) rows of ``solutions`` (m, 6) within ``threshold`` of a singularity
+    of the exact arm (:func:`_near_rows`); with numba, compiled
+    (``dqlab._fast.newton_compiled.near_rows``, tested equal)."""
+    if compiled_ready():
+        return compiled_near_rows(solutions, valid, nearest.exact, threshold)
+    return valid & _near_rows(nearest.robot, solutions, threshold)
 
 
 def _more_result(solutions, valid, pe, re, batch):

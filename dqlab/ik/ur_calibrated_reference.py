@@ -223,7 +223,8 @@ def solve_pose(arm, exact, X_0T, tol, wide, singular_tol, near_tol):
     pe = np.where(started | converged, pe, start.position_error)
     re = np.where(started | converged, re, start.rotation_error)
     flags = singularity_flags(arm, q, valid, exact.links[3].d, singular_tol, near_tol)
-    flags["near_singular"] |= bool(start.flags["near_singular"])
+    flags["near_singular"] |= bool(start.flags["near_singular"]
+                                   or (valid & near_exact(exact, q, near_tol)).any())
     flags["not_converged"] = bool((found & (start.position_error <= tol) & ~valid).any())
     reason = "" if valid.any() else (REASON_NOT_CONVERGED if found.any() else start.reason[()])
     return wrap_angle(q), valid, pe, re, flags, reason
@@ -248,12 +249,13 @@ def is_new(q, known):
     return not (np.abs(wrap_angle(known - q)).max(axis=-1) < 1e-6).any()
 
 
-def near_exact(exact, q):
+def near_exact(exact, q, threshold=0.04):
     """Which rows of ``q`` (8, 6) are near a singularity of the exact arm: a measure of
-    :func:`~dqlab.ik.ur_closed_form.branch_measures` below 0.04 (h over :math:`|a_2|`)."""
+    :func:`~dqlab.ik.ur_closed_form.branch_measures` below ``threshold`` (h over
+    :math:`|a_2|`)."""
     h, sin_theta3, sin_theta5 = branch_measures(exact, q)
-    return ((np.abs(sin_theta3) < 0.04) | (np.abs(sin_theta5) < 0.04)
-            | (np.abs(h) < 0.04 * abs(exact.links[1].a)))
+    return ((np.abs(sin_theta3) < threshold) | (np.abs(sin_theta5) < threshold)
+            | (np.abs(h) < threshold * abs(exact.links[1].a)))
 
 
 def singular_direction(arm, q):
@@ -312,10 +314,20 @@ def beyond(arm, exact, X_0T, q, tol):
         for t in (0.05, -0.05) if v is not None else ():
             q_start, _ = newton(arm, q_k + t * v, X_0T, tol, RESTART_ITER, q)
             q_end, ok = newton(arm, q_start, X_0T, tol)
-            if (ok and max(pose_errors(arm.fk(q_end), X_0T)) <= tol and is_new(q_end, q)
-                    and is_new(q_end, more) and len(more) < 8):
+            if (ok and max(pose_errors(arm.fk(q_end), X_0T)) <= tol and len(more) < 8
+                    and not one_of(arm, q_end, np.vstack([q, more]), X_0T, tol)):
                 more = np.vstack([more, wrap_angle(q_end)])
     return more
+
+
+def one_of(arm, q, known, X_0T, tol):
+    """Whether the solution ``q`` is one of ``known``: within 1e-6 rad of one, or within
+    0.1 rad and the midpoint reaching the pose to ``tol`` (where two solutions meet, the
+    error is flat between them and Newton stops anywhere along it)."""
+    gap = np.abs(wrap_angle(known - q)).max(axis=-1)
+    middle = q + 0.5 * wrap_angle(known[gap < 0.1] - q)
+    return bool((gap < 1e-6).any() or any(max(pose_errors(arm.fk(m), X_0T)) <= tol
+                                            for m in middle))
 
 
 def singularity_flags(arm, q, valid, d4, singular_tol, near_tol):
