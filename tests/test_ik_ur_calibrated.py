@@ -79,6 +79,29 @@ def distance_to_every(result, q):
     return np.minimum(distance_to(result, q), distance_to(result.more, q))
 
 
+def hard_poses(section):
+    """A section of tests/data/real_calibrations/hard_poses.json: calibration name ->
+    (its robot, the stored configurations (m, 6))."""
+    import json
+    from pathlib import Path
+
+    from real_calibrations import real_calibrations
+
+    path = Path(__file__).parent / "data" / "real_calibrations" / "hard_poses.json"
+    stored = json.loads(path.read_text(encoding="utf-8"))[section]
+    robots = real_calibrations()
+    return {name: (robots[name], np.array(qs)) for name, qs in stored.items()}
+
+
+def use_kernels(compiled_kernels, monkeypatch):
+    """The compiled Newton kernels (skipped without numba), or the numpy path
+    (``DQLAB_COMPILED=0``, read at each call of ur)."""
+    if compiled_kernels:
+        pytest.importorskip("numba")
+    else:
+        monkeypatch.setenv("DQLAB_COMPILED", "0")
+
+
 def check_contract(result, batch):
     assert isinstance(result, IKResult)
     assert result.solutions.shape == batch + (8, 6) and result.valid.shape == batch + (8,)
@@ -438,10 +461,7 @@ def test_reference_batches_far_targets_and_one_set_of_flags(compiled_kernels, mo
     row and their distance as error, without a warning; exact and calibrated results carry
     the same flags, in the same order."""
     from dqlab.ik import closest_ur_solution
-    if compiled_kernels:
-        pytest.importorskip("numba")
-    else:
-        monkeypatch.setenv("DQLAB_COMPILED", "0")   # read at each call of ur
+    use_kernels(compiled_kernels, monkeypatch)
     robot = calibrated(94)
     robot.base = np.eye(4)
     robot.base[:3, :3], robot.base[:3, 3] = rot_z(0.3), (0.0, 0.1, 0.2)
@@ -537,21 +557,10 @@ def test_hard_poses_of_real_calibrations(compiled_kernels, monkeypatch):
     singularity with a whole shoulder missed by the exact arm's closed form (such a pose
     takes the wrist family's starts). Each is found, in a batch and one pose at a time,
     every valid row reproducing its pose to 1e-10 (independent forward kinematics)."""
-    import json
-    from pathlib import Path
-
-    from real_calibrations import real_calibrations
-
-    if compiled_kernels:
-        pytest.importorskip("numba")
-    else:
-        monkeypatch.setenv("DQLAB_COMPILED", "0")
-    path = Path(__file__).parent / "data" / "real_calibrations" / "hard_poses.json"
-    stored = json.loads(path.read_text(encoding="utf-8"))["configurations"]
-    robots = real_calibrations()
-    assert len(stored) >= 4 and sum(len(qs) for qs in stored.values()) >= 15
-    for name, qs in stored.items():
-        robot, q = robots[name], np.array(qs)
+    use_kernels(compiled_kernels, monkeypatch)
+    stored = hard_poses("configurations")
+    assert len(stored) >= 4 and sum(len(q) for _, q in stored.values()) >= 15
+    for name, (robot, q) in stored.items():
         T = robot.fk(q)
         result = ur(robot, T)
         assert max(e.max() for e in errors(robot, result, T)) <= 1e-10, name
@@ -594,23 +603,12 @@ def test_poses_with_more_than_eight_solutions(compiled_kernels, monkeypatch):
     (independent forward kinematics), and all of them are distinct joint vectors, so that
     the pose has at least nine solutions whatever the solver believes. ``closest_ur_solution``
     from the generating configuration returns it (the plain distance, and on its branch)."""
-    import json
-    from pathlib import Path
-
-    from real_calibrations import real_calibrations
-
     from dqlab.ik import closest_ur_solution
 
-    if compiled_kernels:
-        pytest.importorskip("numba")
-    else:
-        monkeypatch.setenv("DQLAB_COMPILED", "0")
-    path = Path(__file__).parent / "data" / "real_calibrations" / "hard_poses.json"
-    stored = json.loads(path.read_text(encoding="utf-8"))["beyond_eight"]
-    robots = real_calibrations()
-    assert len(stored) == 6 and sum(len(qs) for qs in stored.values()) >= 10
-    for name, qs in stored.items():
-        robot, q = robots[name], np.array(qs)
+    use_kernels(compiled_kernels, monkeypatch)
+    stored = hard_poses("beyond_eight")
+    assert len(stored) == 6 and sum(len(q) for _, q in stored.values()) >= 10
+    for name, (robot, q) in stored.items():
         T = robot.fk(q)
         result = ur(robot, T)
         check_contract(result, (len(q),))
@@ -634,24 +632,17 @@ def test_poses_with_more_than_eight_solutions(compiled_kernels, monkeypatch):
 def test_more_is_empty_on_an_exact_arm_and_printed_on_a_calibrated_one():
     """``result.more`` of an exact UR has no rows (its eight branches are every solution);
     ``repr`` of a calibrated pose with solutions beyond its rows lists them."""
-    import json
-    from pathlib import Path
-
-    from real_calibrations import real_calibrations
-
     X = ur5e().fk(np.array([[0.3, -1.2, 1.1, -0.4, 0.9, 0.2]] * 3))
     exact = ur(ur5e(), X)
     assert exact.more.solutions.shape == (3, 0, 6) and exact.more.valid.shape == (3, 0)
     assert ur(ur5e(), X[0]).more.count == 0
-    path = Path(__file__).parent / "data" / "real_calibrations" / "hard_poses.json"
-    name, qs = next(iter(json.loads(path.read_text(encoding="utf-8"))["beyond_eight"].items()))
-    robot = real_calibrations()[name]
-    result = ur(robot, robot.fk(np.array(qs[0])))
+    robot, qs = next(iter(hard_poses("beyond_eight").values()))
+    result = ur(robot, robot.fk(qs[0]))
     text = repr(result)
     more = int(result.more.count)
     assert more >= 1 and f"8 of 8 rows valid, {more} more beyond them" in text
     assert text.count("(more)") == more
-    both = ur(robot, robot.fk(np.array(qs)))
+    both = ur(robot, robot.fk(qs))
     assert (f"targets with solutions beyond the rows (result.more): 2, "
             f"{int(both.more.count.sum())} solutions") in repr(both)
 
@@ -666,16 +657,7 @@ def test_a_pose_missed_near_a_singularity_is_flagged():
     between them: the solutions beyond the rows hold no second copy of a row (no two
     solutions within 0.1 rad whose midpoint also reaches the pose, by independent forward
     kinematics)."""
-    import json
-    from pathlib import Path
-
-    from real_calibrations import real_calibrations
-
-    path = Path(__file__).parent / "data" / "real_calibrations" / "hard_poses.json"
-    stored = json.loads(path.read_text(encoding="utf-8"))["flagged"]
-    robots = real_calibrations()
-    for name, qs in stored.items():
-        robot, q = robots[name], np.array(qs)
+    for name, (robot, q) in hard_poses("flagged").items():
         T = robot.fk(q)
         result = ur(robot, T)
         assert result.flags["near_singular"].all(), name

@@ -5,7 +5,7 @@ d_i, \alpha_i` differ from the published ones by millimetres and milliradians (r
 :mod:`dqlab.ur.calibration`). The calibrated chain no longer has the exact UR shape the closed
 form of :func:`dqlab.ik.ur_closed_form.exact_ur` needs (axes 2, 3, 4 exactly parallel, the others
 exactly perpendicular), so ``dqlab.ik.ur`` hands such a robot to :func:`calibrated_ur`, which
-keeps its contract (every branch, flags, reasons, batches) in three steps:
+keeps its contract (every branch, flags, reasons, batches) in these steps:
 
 1. **The nearest exact UR** (:func:`nominal_ur`). Its lengths are read off the calibrated joint
    axes at :math:`q = 0` in the *arm plane*, the plane through joint 2 perpendicular to its
@@ -699,7 +699,7 @@ def _beyond(nearest, tool, solutions, valid, X_0T, tol, max_iter):
                          min(max_iter, _RESTART_ITER))
     q, converged, _, _, errors = _newton(*chain, q, X_0T[pose_of], tol, max_iter)
     q = wrap_angle(q)
-    with np.errstate(invalid="ignore"):
+    with np.errstate(invalid="ignore"):                 # (a first screen, on every start)
         new = (converged & (errors <= tol).all(axis=0)
                & ~(np.abs(wrap_angle(known - q[:, None])).max(axis=-1) < 1e-6).any(axis=-1))
     count = np.zeros(n, dtype=np.int64)
