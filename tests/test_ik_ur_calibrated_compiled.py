@@ -261,81 +261,126 @@ def poses_of_every_kind(robot, seed, random, near):
     return robot.fk(q)
 
 
+def at_the_wrist(robot, n, seed):
+    """Poses (4, 4) at the wrist singularity of robot's nearest exact arm (theta5 = 0 or pi
+    exactly), where only theta234 -+ theta6 is fixed: the closed form picks a member."""
+    exact = module.nominal_ur(robot)
+    rng = np.random.default_rng(seed)
+    q = rng.uniform(-np.pi, np.pi, (n, 6))
+    q[:, 4] = rng.choice([0.0, np.pi], n) - exact.links[4].theta_offset
+    return exact.fk(q)
+
+
+def assert_results_equal(fast, other, exactly, poses=..., elbow_offset=0.0):
+    """The IKResults fast and other are equal (at the poses ``poses`` of a batch): bit for
+    bit, or to the rounding: 1e-12, but 1e-6 rad on the rows of a stretched or folded elbow
+    (|sin theta3| below 1e-2, theta3 of the exact arm, whose joint offset is
+    ``elbow_offset``), where a wrist family's member is chosen at the edge of the reach and
+    the rounding of its theta234 is magnified in theta3 by a square root."""
+    for name in ("valid", "reason"):
+        np.testing.assert_array_equal(getattr(fast, name)[poses], getattr(other, name)[poses])
+    for name in ("solutions", "position_error", "rotation_error"):
+        a, b = getattr(fast, name)[poses], getattr(other, name)[poses]
+        if exactly:
+            np.testing.assert_array_equal(a, b)
+        elif name == "solutions":
+            stretched = np.abs(np.sin(b[..., 2] + elbow_offset)) < 1e-2
+            np.testing.assert_allclose(a[~stretched], b[~stretched], rtol=0, atol=1e-12)
+            np.testing.assert_allclose(a[stretched], b[stretched], rtol=0, atol=1e-6)
+        else:
+            np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
+    assert list(fast.flags) == list(other.flags)
+    for name, flag in fast.flags.items():
+        np.testing.assert_array_equal(flag[poses], other.flags[name][poses])
+
+
 @pytest.mark.parametrize("make", [calibrated, physically_calibrated])
-def test_compiled_exact_one_pose_equals_the_one_pose_closed_form(make):
+def test_compiled_exact_one_pose_equals_the_closed_form(make):
     """The exact arm's closed form of one pose, compiled (module._exact_one_pose), is the
     IKResult of the closed form's one-pose path on floats (dqlab._fast.ur_engine.solve_single)
-    bit for bit: solutions (joint offsets subtracted and wrapped), valid rows, errors and
-    flags, at three tolerances, on random poses, poses near each singularity and poses out
-    of reach; and None exactly where that path hands the pose to the batch path (a wrist
-    near its singularity, a wrist centre inside the shoulder cylinder, no valid row)."""
+    bit for bit wherever that path solves the pose: solutions (joint offsets subtracted and
+    wrapped), valid rows, errors and flags, at four tolerances (the solver's three and the
+    wrist family's 0.5), with and without a reference, on random poses, poses near each
+    singularity and out of reach. Where that path hands the pose to the batch path (a wrist
+    near its singularity), it is the batch path's, to the rounding: the members of a wrist
+    family chosen by the reference's theta6 and checked by forward kinematics, and the rows
+    moved along it to where the forearm reaches; with the wrist centre inside the shoulder
+    cylinder; and where no row is valid, its reason."""
     from dqlab._fast import ur_engine
     from dqlab.ik import ur_parameters
     assert compiled.ready()
     robot = make(51)
     nearest = module._nearest_exact(robot)
     assert any(nearest.exact[6:])                       # offsets to subtract
-    X = poses_of_every_kind(robot, 52, 150, 15)
+    X = np.concatenate([poses_of_every_kind(robot, 52, 150, 15), at_the_wrist(robot, 30, 53)])
     X[:10, :3, 3] *= 3.0                                 # out of reach
+    X[10:14, :3, 3] = [0.0, 0.0, 0.3]                    # wrist centre near the axis
+    references = np.random.default_rng(54).uniform(-np.pi, np.pi, (len(X), 6))
     prm = ur_parameters(nearest.robot)
     wide = 2 * nearest.position_gap
-    handed_over = compared = 0
-    for tol in (1e-9, wide, 10 * wide):
-        for T in X:
-            fast = module._exact_one_pose(nearest, T, tol, 5e-7, 1e-2)
-            floats = ur_engine.solve_single(nearest.robot, prm, T, tol, 5e-7, 1e-9, None)
-            assert (fast is None) == (floats is None)
-            if fast is None:
-                handed_over += 1
-                continue
-            compared += 1
-            for name in ("solutions", "valid", "position_error", "rotation_error", "reason"):
-                np.testing.assert_array_equal(getattr(fast, name), getattr(floats, name))
-            assert list(fast.flags) == list(floats.flags)
-            for name, flag in fast.flags.items():
-                np.testing.assert_array_equal(flag, floats.flags[name])
-    assert handed_over >= 30 and compared >= 500, (handed_over, compared)
+    d4, d6 = nearest.exact[3], nearest.exact[5]
+    counts = {"floats": 0, "batch": 0, "no row": 0, "inside": 0}
+    for tol in (1e-9, wide, 10 * wide, 0.5):
+        for T, reference in zip(X, references, strict=True):
+            for q_ref in (None, reference):
+                fast = module._exact_one_pose(nearest, T, q_ref, tol, 5e-7, 1e-2)
+                floats = ur_engine.solve_single(nearest.robot, prm, T, tol, 5e-7, 1e-9, q_ref,
+                                                None, 1e-2)
+                if floats is not None:
+                    counts["floats"] += 1
+                    assert_results_equal(fast, floats, exactly=True)
+                    continue
+                batch = ur_engine.solve_batch(nearest.robot, prm, T, tol, 5e-7, 1e-9, None,
+                                              q_ref, "equations", 1e-2)
+                x5, y5 = T[:2, 3] - d6 * T[:2, 2]
+                counts["inside"] += x5 * x5 + y5 * y5 < d4 * d4
+                counts["batch" if batch.valid.any() else "no row"] += 1
+                assert_results_equal(fast, batch, exactly=False,
+                                     elbow_offset=nearest.exact[8])
+    assert (counts["floats"] >= 1000 and counts["batch"] >= 200 and counts["no row"] >= 60
+            and counts["inside"] >= 20), counts
 
 
 @pytest.mark.parametrize("make", [calibrated, physically_calibrated])
 def test_compiled_exact_poses_equal_the_batch_closed_form(make):
     """The exact arm's closed form of a batch, compiled pose by pose with the poses it does
-    not solve handed to the closed form (module._exact_poses, what the batch path starts
-    from), is the closed form's own IKResult of the batch, at the three tolerances the
-    solver uses (tol, twice and twenty times the arms' gap: at the last, wrists up to about
-    0.01 rad from their singularity are at it): the poses handed over bit for bit; those
-    solved compiled (the one-pose closed form on floats, math's atan2) with the same valid
-    rows, flags and reasons and the same numbers to the rounding in which math's and
-    numpy's atan2 may differ."""
+    not solve handed to the closed form (module._exact_poses, what the batch path and the
+    wrist family's members start from), is the closed form's own IKResult of the batch, at
+    the tolerances the solver uses (tol, twice and twenty times the arms' gap, and 0.5 for
+    the wrist family: at the last two, wrists up to about 0.01 and 0.1 rad from their
+    singularity are at it), with references and without: the poses handed over (a wrist
+    centre far beyond reach) bit for bit; those solved compiled (a wrist centre inside the
+    shoulder cylinder too), with a valid row or with the reason of none, with the same
+    valid rows, flags and reasons and the same numbers to the rounding in which math's and
+    numpy's functions may differ."""
     assert compiled.ready()
     robot = make(54)
     nearest = module._nearest_exact(robot)
-    X = poses_of_every_kind(robot, 55, 1500, 50)
+    X = np.concatenate([poses_of_every_kind(robot, 55, 1500, 50), at_the_wrist(robot, 50, 56)])
     X[:20, :3, 3] *= 5.0                                 # out of reach
     X[20:30, :3, 3] = [0.0, 0.0, 0.3]                    # wrist centre near the axis
     X[30:35, :3, 3] = [[1e100, 0.0, 0.0], [0.0, -1e200, 0.0], [0.0, 0.0, 1e300],
                        [-3e16, 3e16, 3e16], [1e10, 0.0, 0.0]]          # far beyond reach
+    references = np.random.default_rng(57).uniform(-np.pi, np.pi, (len(X), 6))
     handed_over = []
-    for tol in (1e-9, 2 * nearest.position_gap, 20 * nearest.position_gap):
-        fast = module._exact_poses(nearest, X, tol, 5e-7, 1e-2, module._closed_form)
-        batch = ur(nearest.robot, X, tol=tol)
-        R = X[:, :3, :3].reshape(-1, 9).T
-        done = compiled.exact_poses(np.stack(quaternion_from_matrix_entries(*R), axis=-1),
-                                     X[:, :3, 3], X[:, :3, 2], nearest.exact, tol, 5e-7,
-                                     NEAR_WRIST, NEAR_SINGULAR)[-1]
-        handed_over.append(int((~done).sum()))
-        for name in ("valid", "reason"):
-            np.testing.assert_array_equal(getattr(fast, name), getattr(batch, name))
-        for name in ("solutions", "position_error", "rotation_error"):
-            a, b = getattr(fast, name), getattr(batch, name)
-            np.testing.assert_array_equal(a[~done], b[~done])
-            np.testing.assert_allclose(a[done], b[done], rtol=0, atol=1e-13)
-        assert list(fast.flags) == list(batch.flags)
-        for name, flag in batch.flags.items():
-            np.testing.assert_array_equal(fast.flags[name], flag)
-        assert not done[30:35].any() and (batch.position_error[30:34] >= 3e16).all()
-    assert batch.reason[:20].all() and batch.rotation_error.any()   # some rows of each kind
-    assert handed_over[0] < handed_over[2] < len(X) // 4, handed_over
+    for tol in (1e-9, 2 * nearest.position_gap, 20 * nearest.position_gap, 0.5):
+        for q_ref in (None, references):
+            fast = module._exact_poses(nearest, X, q_ref, tol, 5e-7, 1e-2, module._closed_form)
+            batch = ur(nearest.robot, X, tol=tol, q_ref=q_ref)
+            R = X[:, :3, :3].reshape(-1, 9).T
+            done = compiled.exact_poses(np.stack(quaternion_from_matrix_entries(*R), axis=-1),
+                                        X[:, :3, 3], X[:, :3, 2], X,
+                                        np.zeros(len(X)) if q_ref is None else q_ref[:, 5],
+                                        nearest.exact, tol, 5e-7, NEAR_WRIST,
+                                        NEAR_SINGULAR)[-1] != 0
+            handed_over.append(int((~done).sum()))
+            assert_results_equal(fast, batch, exactly=True, poses=~done)
+            assert_results_equal(fast, batch, exactly=False, poses=done,
+                                 elbow_offset=nearest.exact[8])
+            assert not done[30:34].any() and (batch.position_error[30:34] >= 3e16).all()
+            assert tol == 0.5 or batch.reason[:20].all()
+            assert batch.rotation_error.any()            # rows checked by forward kinematics
+    assert handed_over == [4] * 8                        # the four far beyond reach
 
 
 def spectra(rng, n):

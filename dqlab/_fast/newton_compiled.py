@@ -225,54 +225,74 @@ def deflated(links, tool, q, X_target, known, steps, *, stop, give_up_after, dam
     return out
 
 
-def exact_one_pose(flange, constants, tol, singular_tol, near_wrist, near_tol):
-    """``dqlab._fast.ur_engine.solve_single`` after the flange, compiled: the closed form of the
-    exact UR of ``constants`` (12,) (``d1, a2, a3, d4, d5, d6`` and the six joint offsets)
-    for the flange ``(q, p, z6)`` (rotation quaternion, position, z axis). The solutions (8, 6),
-    ``valid`` (8,), the errors (8,) and the flags (4,) wrist, shoulder and elbow singular and
-    near singular (``near_tol``) of the result that function builds, or None where it
-    returns None (a wrist within
-    ``near_wrist`` of its singularity or at it within ``tol``, the wrist centre inside the
-    shoulder cylinder, no valid row): the same steps of ``dqlab.ik.ur_steps`` in the same
-    order, on the same floats (tested equal bit for bit)."""
+def exact_one_pose(flange, X_target, theta6_ref, constants, tol, singular_tol, near_wrist,
+                   near_tol):
+    """The closed form of the exact UR of ``constants`` (12,) (``d1, a2, a3, d4, d5, d6`` and
+    the six joint offsets) for one flange pose, compiled: ``flange`` its ``(q, p, z6)``
+    (rotation quaternion, position, z axis) and ``X_target`` (4, 4) its transform,
+    ``theta6_ref`` the theta6 of ``q_ref`` (0 without one). The solutions (8, 6), ``valid``
+    (8,), the position and rotation errors (8,) each, the flags (4,) wrist, shoulder and
+    elbow singular and near singular (``near_tol``) and how it ended (:data:`SOLVED`, or the
+    reason no row is valid) of the closed form's result (``dqlab._fast.ur_engine``); None
+    where the wrist centre is far beyond reach (which the closed form's batch path solves
+    for a stand-in). The same steps of ``dqlab.ik.ur_steps`` in the same
+    order, on the same floats: equal bit for bit to the closed form's one-pose path
+    (``dqlab._fast.ur_engine.solve_single``), and near the wrist singularity, where that path
+    hands the pose to the batch path, to the batch path (a wrist family's members checked
+    by forward kinematics; tested equal to the rounding)."""
     q, p, z6 = flange
-    solutions, errors = np.zeros((8, 6)), np.zeros(8)
+    solutions, errors = np.zeros((8, 6)), np.zeros((2, 8))
     flags = np.zeros(4, dtype=np.bool_)
-    done = _exact_one_pose(q[0], q[1], q[2], q[3], p[0], p[1], p[2], z6[0], z6[1], z6[2],
-                        constants, float(tol), float(singular_tol), float(near_wrist),
-                        float(near_tol), solutions, errors, flags)
-    return (solutions, errors <= tol, errors, flags) if done else None
+    ended = _exact_one_pose(q[0], q[1], q[2], q[3], p[0], p[1], p[2], z6[0], z6[1], z6[2],
+                            np.ascontiguousarray(X_target, dtype=float), float(theta6_ref),
+                            constants, float(tol), float(singular_tol), float(near_wrist),
+                            float(near_tol), solutions, errors, flags)
+    if not ended:
+        return None
+    valid = (errors[0] <= tol) & (errors[1] <= tol)
+    return solutions, valid, errors[0], errors[1], flags, ended
 
 
-def exact_poses(Q, P, Z, constants, tol, singular_tol, near_wrist, near_tol):
+def exact_poses(Q, P, Z, X, theta6_ref, constants, tol, singular_tol, near_wrist, near_tol):
     """:func:`exact_one_pose` of n flanges at once, pose by pose in compiled code: rotation
-    quaternions ``Q`` (n, 4), positions ``P`` (n, 3) and z axes ``Z`` (n, 3). The solutions
-    (n, 8, 6), ``valid`` (n, 8), the errors (n, 8), the flags (n, 4) and ``done`` (n,):
-    False where :func:`exact_one_pose` returns None (those poses' other arrays are zeros)."""
+    quaternions ``Q`` (n, 4), positions ``P`` (n, 3), z axes ``Z`` (n, 3), transforms ``X``
+    (n, 4, 4) and ``theta6_ref`` (n,). The solutions (n, 8, 6), ``valid`` (n, 8), the
+    position and rotation errors (n, 8) each, the flags (n, 4) and how each ended (n,): 0
+    where :func:`exact_one_pose` returns None (those poses' other arrays are zeros)."""
     n = Q.shape[0]
-    solutions, errors = np.zeros((n, 8, 6)), np.zeros((n, 8))
-    flags, done = np.zeros((n, 4), dtype=np.bool_), np.zeros(n, dtype=np.bool_)
+    solutions, errors = np.zeros((n, 8, 6)), np.zeros((n, 2, 8))
+    flags, ended = np.zeros((n, 4), dtype=np.bool_), np.zeros(n, dtype=np.int64)
     _exact_poses(np.ascontiguousarray(Q, dtype=float), np.ascontiguousarray(P, dtype=float),
-                  np.ascontiguousarray(Z, dtype=float), constants, float(tol),
-                  float(singular_tol), float(near_wrist), float(near_tol), solutions, errors,
-                  flags, done)
-    return solutions, done[:, None] & (errors <= tol), errors, flags, done
+                 np.ascontiguousarray(Z, dtype=float), np.ascontiguousarray(X, dtype=float),
+                 np.ascontiguousarray(theta6_ref, dtype=float), constants, float(tol),
+                 float(singular_tol), float(near_wrist), float(near_tol), solutions, errors,
+                 flags, ended)
+    valid = (ended == SOLVED)[:, None] & (errors[:, 0] <= tol) & (errors[:, 1] <= tol)
+    return solutions, valid, errors[:, 0], errors[:, 1], flags, ended
 
 
-def _exact_poses(Q, P, Z, constants, tol, singular_tol, near_wrist, near_tol, solutions,
-                  errors, flags, done):
-    """:func:`exact_poses`' work: :func:`_exact_one_pose` of each pose, a pose it does not
-    solve cleared again."""
+def _exact_poses(Q, P, Z, X, theta6_ref, constants, tol, singular_tol, near_wrist, near_tol,
+                 solutions, errors, flags, ended):
+    """:func:`exact_poses`' work: :func:`_exact_one_pose` of each pose, a pose it hands on
+    cleared again."""
     for i in range(Q.shape[0]):
-        done[i] = _exact_one_pose(Q[i, 0], Q[i, 1], Q[i, 2], Q[i, 3], P[i, 0], P[i, 1], P[i, 2],
-                               Z[i, 0], Z[i, 1], Z[i, 2], constants, tol, singular_tol,
-                               near_wrist, near_tol, solutions[i], errors[i], flags[i])
-        if not done[i]:
+        ended[i] = _exact_one_pose(Q[i, 0], Q[i, 1], Q[i, 2], Q[i, 3], P[i, 0], P[i, 1], P[i, 2],
+                                  Z[i, 0], Z[i, 1], Z[i, 2], X[i], theta6_ref[i], constants,
+                                  tol, singular_tol, near_wrist, near_tol, solutions[i],
+                                  errors[i], flags[i])
+        if not ended[i]:
             solutions[i], errors[i], flags[i] = 0.0, 0.0, False
 
 
+#: What the closed form of :func:`exact_one_pose` ends with: a valid row, or none for the
+#: reason numbered (``dqlab.ik.ur_steps``' REASON_TOL, REASON_REACH, REASON_INNER,
+#: REASON_OUTER, REASON_SHOULDER); 0: handed on.
+SOLVED, NO_ROW_TOL, NO_ROW_REACH, NO_ROW_INNER, NO_ROW_OUTER, NO_ROW_SHOULDER = range(1, 7)
+_TOL, _REACH, _INNER, _OUTER, _SHOULDER = (NO_ROW_TOL, NO_ROW_REACH, NO_ROW_INNER,
+                                           NO_ROW_OUTER, NO_ROW_SHOULDER)
 _TWO_PI = 2.0 * math.pi
 _HALF_SQRT2 = math.sqrt(0.5)
+_UR_TWISTS = ((0.0, 1.0), (1.0, 0.0), (1.0, 0.0), (0.0, 1.0), (0.0, -1.0), (1.0, 0.0))
 _EPSILON = float(np.finfo(np.float64).eps)
 
 
@@ -599,16 +619,20 @@ def _wrap(theta):
     return w
 
 
-def _exact_one_pose(qw, qx, qy, qz, px, py, pz, zx, zy, zz, constants, tol, singular_tol,
-                 near_wrist, near_tol, solutions, errors, flags):
-    """:func:`exact_one_pose`'s work: ``solve_single``'s loop, each line the step of
-    ``dqlab.ik.ur_steps`` named beside it; False where that function returns None."""
+def _exact_one_pose(qw, qx, qy, qz, px, py, pz, zx, zy, zz, X_target, theta6_ref, constants,
+                    tol, singular_tol, near_wrist, near_tol, solutions, errors, flags):
+    """:func:`exact_one_pose`'s work: the closed form's steps, each line the step of
+    ``dqlab.ik.ur_steps`` (or the function of ``dqlab._fast.ur_engine``) named beside it;
+    ``errors`` (2, 8) the position and rotation errors. Returns :data:`SOLVED`, the number
+    of the reason where no row is valid, or 0 where the wrist centre is far beyond
+    reach."""
     d1, a2, a3, d4, d5, d6 = (constants[0], constants[1], constants[2], constants[3],
                               constants[4], constants[5])
     family_tol = tol / (8.0 * max(1.0, abs(d6)))       # dqlab._fast.ur_engine.wrist_family_tol
     offset = False
     for i in range(6):
         offset = offset or constants[6 + i] != 0.0
+    ref = constants[11] + theta6_ref                    # _wrist_family's theta6 wanted
     # target_rotation: r_D = q (1 - i) / sqrt 2
     rw = _HALF_SQRT2 * (qw * 1.0 - qx * -1.0 - qy * 0.0 - qz * 0.0)
     rx = _HALF_SQRT2 * (qw * -1.0 + qx * 1.0 + qy * 0.0 - qz * 0.0)
@@ -617,11 +641,15 @@ def _exact_one_pose(qw, qx, qy, qz, px, py, pz, zx, zy, zz, constants, tol, sing
     x5, y5, z5 = px - d6 * zx, py - d6 * zy, pz - d6 * zz          # wrist_center
     reach = math.sqrt(d4 * d4 + (abs(a2) + abs(a3) + abs(d5)) ** 2)  # far_wrist
     if not abs(x5) + abs(y5) + abs(z5 - d1) <= reach / _EPSILON:
-        return False
+        return 0
     any_valid = wrist_singular = elbow_singular = near = False
+    beyond = within = clipped = True      # every row's wrist-1 point beyond, within, either
+    radius = math.sqrt(x5 * x5 + y5 * y5)                            # shoulder_gap
+    shoulder_gap = max(-(x5 * x5 + y5 * y5 - d4 * d4), 0.0) / (d4 + radius)
     h = 0.0
     m = 2.0 * abs(a2 * a3)
     r_out, r_in = abs(a2 + a3), abs(a2 - a3)
+    X = np.zeros((4, 4))
     for s in range(2):
         shoulder = 1.0 if s == 0 else -1.0
         h2 = x5 * x5 + y5 * y5 - d4 * d4                            # shoulder_angles
@@ -632,8 +660,6 @@ def _exact_one_pose(qw, qx, qy, qz, px, py, pz, zx, zy, zz, constants, tol, sing
         theta1 = math.atan2(num_s + 0.0, num_c)
         r = math.sqrt(num_c * num_c + num_s * num_s)
         c1, s1 = (num_c / r, num_s / r) if r > 0.0 else (1.0, 0.0)
-        if h2 < 0.0:
-            return False
         big = math.sqrt(0.5 + 0.5 * abs(c1))                         # half_angle_cos_sin
         other = 0.5 * s1 / big
         if c1 >= 0.0:
@@ -651,28 +677,55 @@ def _exact_one_pose(qw, qx, qy, qz, px, py, pz, zx, zy, zz, constants, tol, sing
         half_sum = math.atan2(-Ly, Lw)
         half_diff = math.atan2(1.0 * Lx, -1.0 * Lz)                  # half_difference
         sin5 = 2.0 * s5bar * c5bar
-        if sin5 < near_wrist or min(s5bar, c5bar) <= family_tol:
-            return False
-        k = 1.0 / (c5bar * s5bar)                                    # theta234_sine_cosine
-        sin234, cos234 = k * (Lw * Lx + Ly * Lz), k * (Lx * Ly - Lw * Lz)
+        # at the wrist singularity for tol, a member of the wrist family (_wrist_family);
+        # rep0: theta5 near 0, where theta234 + theta6 is fixed (near pi, theta234 - theta6)
+        at_family = min(s5bar, c5bar) <= family_tol
+        rep0 = s5bar <= c5bar
+        sin234 = cos234 = 0.0
+        if not at_family:
+            k = 1.0 / (c5bar * s5bar)                                # theta234_sine_cosine
+            sin234, cos234 = k * (Lw * Lx + Ly * Lz), k * (Lx * Ly - Lw * Lz)
         for w in range(2):
             if w == 1:                                               # the flipped wrist
                 theta5 = -theta5 if theta5 != math.pi else theta5
                 half_diff = math.atan2(-1.0 * Lx, 1.0 * Lz)       # sigma = -1
                 sin234, cos234 = -sin234, -cos234
             theta234 = half_sum + half_diff
-            theta6 = _wrap(half_sum - half_diff)
-            u4, v4 = u5 - d5 * sin234, v5 + d5 * cos234             # wrist1_point
+            theta6 = half_sum - half_diff
+            s234, c234 = sin234, cos234
+            represented = at_family
+            if at_family:
+                want = 2.0 * half_sum - ref if rep0 else 2.0 * half_diff + ref
+                theta234, theta6 = _family_member(u5, v5, want, half_sum, half_diff, rep0,
+                                                  a2, a3, d5)
+                s234, c234 = math.sin(theta234), math.cos(theta234)
+            u4, v4 = u5 - d5 * s234, v5 + d5 * c234                 # wrist1_point
             rho2 = u4 * u4 + v4 * v4                                 # elbow_triangle
             rho = math.sqrt(rho2)
             outer = (r_out - rho) * (r_out + rho)
             inner = (rho - r_in) * (rho + r_in)
+            if (sin5 < near_wrist and not at_family
+                    and (outer < -tol * r_out or inner < -tol * r_in)):   # _out_of_reach:
+                theta234, theta6 = _family_member(u5, v5, theta234, half_sum, half_diff,
+                                                  rep0, a2, a3, d5)   # the nearest member
+                s234, c234 = math.sin(theta234), math.cos(theta234)  # that reaches
+                represented = True
+                u4, v4 = u5 - d5 * s234, v5 + d5 * c234
+                rho2 = u4 * u4 + v4 * v4
+                rho = math.sqrt(rho2)
+                outer = (r_out - rho) * (r_out + rho)
+                inner = (rho - r_in) * (rho + r_in)
+            theta6 = _wrap(theta6)
+            beyond = beyond and outer < 0.0                          # (_reasons)
+            within = within and inner < 0.0
+            clipped = clipped and (outer < 0.0 or inner < 0.0)
             kk = outer * inner
             kk = math.sqrt(kk if kk > 0.0 else 0.0)
             cos_num = rho2 - (a2 * a2 + a3 * a3)
             if a2 * a3 < 0:
                 cos_num = -cos_num
             angle3 = math.atan2(kk, cos_num)
+            gap = 0.0                                    # _clipping_distance
             if outer < 0.0 or inner < 0.0:
                 rho = math.sqrt(u4 * u4 + v4 * v4)                   # reach_gap
                 gap = rho - r_out
@@ -680,9 +733,11 @@ def _exact_one_pose(qw, qx, qy, qz, px, py, pz, zx, zy, zz, constants, tol, sing
                     gap = r_in - rho
                 if 0.0 > gap:
                     gap = 0.0
-                errors[4 * s + w] = errors[4 * s + 2 + w] = gap
-                if gap > tol:
-                    continue
+            if h2 < 0.0:                                 # inside the shoulder cylinder
+                gap = math.sqrt(shoulder_gap * shoulder_gap + gap * gap)
+            errors[0, 4 * s + w] = errors[0, 4 * s + 2 + w] = gap
+            if gap > tol and not represented:
+                continue
             for e in range(2):
                 row = 4 * s + 2 * e + w
                 elbow = 1.0 if e == 0 else -1.0
@@ -704,14 +759,79 @@ def _exact_one_pose(qw, qx, qy, qz, px, py, pz, zx, zy, zz, constants, tol, sing
                     if not inside:
                         for i in range(6):
                             t[i] = _wrap(t[i])
+                if represented:                                      # checked by forward
+                    _exact_flange(t, constants, X)                   # kinematics (_errors)
+                    _pose_errors(X, X_target, errors[:, row])
+                    if not (errors[0, row] <= tol and errors[1, row] <= tol):
+                        t[:] = 0.0                                   # (as finish() does)
+                        continue
                 elbow_singular = elbow_singular or kk / m < singular_tol
-                near = near or kk / m < near_tol
-            any_valid = True
-            wrist_singular = wrist_singular or sin5 < singular_tol
-            near = near or sin5 < near_tol
+                near = near or kk / m < near_tol or sin5 < near_tol
+                wrist_singular = wrist_singular or sin5 < singular_tol
+                any_valid = True
+    if not any_valid:                   # _reasons: the first step failing on every branch
+        if shoulder_gap > tol:
+            return _SHOULDER
+        return _OUTER if beyond else (_INNER if within else (_REACH if clipped else _TOL))
     flags[0], flags[1], flags[2] = wrist_singular, h < singular_tol * d4, elbow_singular
     flags[3] = near or h < near_tol * d4
-    return any_valid
+    return SOLVED
+
+
+def _family_member(u5, v5, want, half_sum, half_diff, rep0, a2, a3, d5):
+    """theta234 and theta6 of the member of a wrist family with theta234 nearest ``want``
+    that the arm reaches (``dqlab._fast.ur_engine._wrist_family``): theta234 + theta6 fixed
+    at ``2 half_sum`` where ``rep0`` (theta5 near 0), else theta234 - theta6 at
+    ``2 half_diff``; both wrapped."""
+    got = _feasible_theta234(u5, v5, want, a2, a3, d5)
+    theta6 = 2.0 * half_sum - got if rep0 else got - 2.0 * half_diff
+    return _wrap(got), _wrap(theta6)
+
+
+def _feasible_theta234(u5, v5, want, a2, a3, d5):
+    """``dqlab.ik.ur_steps.feasible_theta234`` of one wrist centre (u5, v5)."""
+    norm_p = math.sqrt(u5 * u5 + v5 * v5)
+    psi = math.atan2(v5, u5)
+    two_d5p = 2.0 * d5 * norm_p
+    u_ref = _wrap(want - psi)
+    sin_ref = math.sin(u_ref)
+    r_out, r_in = abs(a2 + a3), abs(a2 - a3)
+    s_lo_num = norm_p * norm_p + d5 * d5 - r_out * r_out
+    s_hi_num = norm_p * norm_p + d5 * d5 - r_in * r_in
+    if sin_ref * two_d5p >= s_lo_num and sin_ref * two_d5p <= s_hi_num:
+        return want
+    best, nearest = 0.5 * math.pi, math.inf      # nothing feasible: the outer tangency
+    for R, num in ((r_out, s_lo_num), (r_in, s_hi_num)):
+        f = (R - norm_p + d5) * (R + norm_p - d5) * (norm_p + d5 - R) * (norm_p + d5 + R)
+        if not f >= 0.0:
+            continue
+        c = math.sqrt(f)
+        for candidate in (math.atan2(num, c), math.atan2(num, -c)):
+            distance = abs(_wrap(candidate - u_ref))
+            if distance < nearest:
+                best, nearest = candidate, distance
+    return psi + best
+
+
+def _exact_flange(t, constants, X):
+    """X (4, 4): forward kinematics of the exact UR of ``constants`` at the joint values t
+    (6,), the product of its six standard DH transforms (twists pi/2, 0, 0, pi/2, -pi/2, 0)."""
+    lengths = ((0.0, constants[0]), (constants[1], 0.0), (constants[2], 0.0),
+               (0.0, constants[3]), (0.0, constants[4]), (0.0, constants[5]))   # (a, d)
+    for i in range(4):
+        for j in range(4):
+            X[i, j] = 1.0 if i == j else 0.0
+    for k in range(6):
+        theta = t[k] + constants[6 + k]
+        c, s = math.cos(theta), math.sin(theta)
+        a, d = lengths[k]
+        ca, sa = _UR_TWISTS[k]
+        for i in range(3):                  # X <- X A_k, A_k's columns one by one
+            x0, x1, x2 = X[i, 0], X[i, 1], X[i, 2]
+            X[i, 0] = x0 * c + x1 * s
+            X[i, 1] = -x0 * s * ca + x1 * c * ca + x2 * sa
+            X[i, 2] = x0 * s * sa - x1 * c * sa + x2 * ca
+            X[i, 3] = X[i, 3] + x0 * a * c + x1 * a * s + x2 * d
 
 
 def _one_pose(links, tool, q_start, found, X_0T, tol, stop, plain, max_iter, give_up_after,
@@ -893,7 +1013,8 @@ def _dot_rows(A, i, B, j):
 _Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE = (
     INDEX[name] for name in ("q0", "c0", "s0", "t00", "tp0", "F0", "x0", "act", "size"))
 _COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_size", "_same", "_unique",
-              "_wrap", "_exact_one_pose", "_exact_poses", "_one_pose", "_accept", "_gram",
+              "_wrap", "_exact_one_pose", "_family_member", "_feasible_theta234",
+              "_exact_flange", "_exact_poses", "_one_pose", "_accept", "_gram",
               "_smallest", "_largest_diagonal_column", "_times", "_rayleigh", "_are_new",
               "_load", "_recompute", "_kernel", "_outputs", "_pose_errors", "_dot_rows",
               "_deflated", "_cholesky", "_near_rows"]

@@ -95,6 +95,14 @@ from .._checks import as_float_array, rigid_rows
 from .._fast import ur_engine as exact_engine
 from .._fast.calibrated_entries import EntryChain
 from .._fast.calibrated_matrices import DAMPING, MatrixChain
+from .._fast.newton_compiled import (
+    NO_ROW_INNER,
+    NO_ROW_OUTER,
+    NO_ROW_REACH,
+    NO_ROW_SHOULDER,
+    NO_ROW_TOL,
+    SOLVED,
+)
 from .._fast.newton_compiled import accept as compiled_accept
 from .._fast.newton_compiled import are_new as compiled_are_new
 from .._fast.newton_compiled import deflated as compiled_deflated
@@ -116,7 +124,15 @@ from ..rotations import wrap_angle
 from .result import IKResult, check_ur_options, finish
 from .targets import RIGID_TOL, parse_targets, pose_errors
 from .ur_closed_form import branch_measures
-from .ur_steps import NEAR_SINGULAR, NEAR_WRIST
+from .ur_steps import (
+    NEAR_SINGULAR,
+    NEAR_WRIST,
+    REASON_INNER,
+    REASON_OUTER,
+    REASON_REACH,
+    REASON_SHOULDER,
+    REASON_TOL,
+)
 
 __all__ = ["calibrated_ur", "nominal_ur", "REASON_NOT_CONVERGED", "MAX_DISCREPANCY"]
 
@@ -152,6 +168,11 @@ _POLISH_NEAR = 0.04    # a valid row this near a singularity of the exact arm is
 _MORE = 8              # rows of result.more: a 6R arm has up to 16 solutions, 8 in the rows
 _MORE_WAYS = np.array([0.05, -0.05])   # the moves of the starts that seek more solutions
 _SAMPLES = np.random.default_rng(20260531).uniform(-np.pi, np.pi, (64, 6))
+#: The reason of the compiled closed form's result, by how it ended
+#: (``dqlab._fast.newton_compiled.SOLVED`` and the others).
+_REASON_OF = np.full(7, "", dtype=object)
+_REASON_OF[[SOLVED, NO_ROW_TOL, NO_ROW_REACH, NO_ROW_INNER, NO_ROW_OUTER, NO_ROW_SHOULDER]] = (
+    "", REASON_TOL, REASON_REACH, REASON_INNER, REASON_OUTER, REASON_SHOULDER)
 
 
 @dataclass(frozen=True)
@@ -382,21 +403,22 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
 
     near_limit = max(near_tol, _NEAR_GAPS * nearest.rotation_gap)
 
-    def exact_solutions(X, poses=None, tol=wide, near_tol=near_limit):
+    def exact_solutions(X, poses=None, tol=wide, near_tol=near_limit, ref=None):
         """The exact arm's closed form of the flanges X (m, 4, 4), which are those of the
-        poses ``poses`` (all n when None): each with its own reference (its near_singular
-        flag with the calibrated arm's threshold)."""
-        ref = None if references is None else (references if poses is None
-                                               else references[poses])
+        poses ``poses`` (all n when None): each with its own reference, or the references
+        ``ref`` (m, 6) given (its near_singular flag with the calibrated arm's threshold)."""
+        if ref is None and references is not None:
+            ref = references if poses is None else references[poses]
         if batch == () and X.shape[0] == 1:             # one pose (compiled, with numba)
-            if ref is None and compiled_ready():
-                result = _exact_one_pose(nearest, X[0], tol, singular_tol, near_tol)
+            if compiled_ready():
+                result = _exact_one_pose(nearest, X[0], None if ref is None else ref[0], tol,
+                                         singular_tol, near_tol)
                 if result is not None:
                     return result
             X, ref = X[0], None if ref is None else ref[0]
-        elif ref is None and pose_tol <= RIGID_TOL and compiled_ready():
+        elif pose_tol <= RIGID_TOL and compiled_ready():
             # (the targets are checked at least as strictly as the closed form checks them)
-            return _exact_poses(nearest, X, tol, singular_tol, near_tol, closed_form)
+            return _exact_poses(nearest, X, ref, tol, singular_tol, near_tol, closed_form)
         return closed_form(nearest, X, tol=tol, q_ref=ref, singular_tol=singular_tol,
                            near_tol=near_tol)
 
@@ -433,7 +455,7 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
     polished.converged[extra] &= polished.are_new(extra, polished.q[extra],   # keep them
                                                   polished.unique() & found)  # if new
     _repair(chain, nearest, polished, q0, found, exact_solutions, X_0T, X_T6, tol, max_iter)
-    _family(chain, nearest, polished, X_06, X_0T, closed_form, tol, max_iter)
+    _family(chain, nearest, polished, X_06, X_0T, exact_solutions, tol, max_iter)
     _deflate(chain, nearest, polished, X_0T, tol, max_iter)
     done = np.flatnonzero(polished.done)
     pe = start.position_error.reshape(n * 8).copy()
@@ -526,48 +548,52 @@ def _plain_pose(target, pose_tol):
             and rigid_rows(target, pose_tol) is not None)
 
 
-def _exact_one_pose(nearest, X_06, tol, singular_tol, near_tol):
+def _exact_one_pose(nearest, X_06, q_ref, tol, singular_tol, near_tol):
     """The exact arm's closed form of one flange pose ``X_06`` (4, 4) with the tolerance
-    ``tol``, compiled (``dqlab._fast.newton_compiled.exact_one_pose``): the :class:`IKResult` the
-    closed form's one-pose path gives (at its default ``pose_tol``), or None where that path
-    hands the pose to the batch path (and so does the caller)."""
-    rows = rigid_rows(X_06, RIGID_TOL)                  # that path's check, and its flange:
-    if rows is None:                                    # rotation quaternion, position, z6
-        return None
+    ``tol`` and the reference ``q_ref`` (6,) or None, compiled
+    (``dqlab._fast.newton_compiled.exact_one_pose``): the :class:`IKResult` the closed form
+    gives (at its default ``pose_tol``), or None where the pose is not a rigid transform to
+    that tolerance or its wrist centre is far beyond reach (the closed form then solves it,
+    or gives the error)."""
+    rows = rigid_rows(X_06, RIGID_TOL)                  # the closed form's check, and the
+    if rows is None:                                    # flange: rotation quaternion,
+        return None                                     # position, z6
     a, b, c = rows
     q = quaternion_from_matrix_entries(a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2])
-    done = compiled_exact_one_pose((q, (a[3], b[3], c[3]), (a[2], b[2], c[2])), nearest.exact,
-                                tol, singular_tol, NEAR_WRIST, near_tol)
+    done = compiled_exact_one_pose((q, (a[3], b[3], c[3]), (a[2], b[2], c[2])), X_06,
+                                   0.0 if q_ref is None else q_ref[5], nearest.exact, tol,
+                                   singular_tol, NEAR_WRIST, near_tol)
     if done is None:
         return None
-    solutions, valid, errors, flags = done
+    solutions, valid, pe, re, flags, ended = done
     flags = dict(zip(_FLAG_NAMES[:4], (np.array(flag) for flag in flags.tolist()),
                      strict=True))                      # wrist, shoulder, elbow, near
-    flags["unreachable"] = flags["not_converged"] = np.array(False)
-    return IKResult(solutions, valid, errors, np.zeros(8), flags, np.array("", dtype=object))
+    flags["unreachable"] = np.array(ended != SOLVED)
+    flags["not_converged"] = np.array(False)
+    return IKResult(solutions, valid, pe, re, flags, _REASON_OF[ended:ended + 1].reshape(()))
 
 
-def _exact_poses(nearest, X_06, tol, singular_tol, near_tol, closed_form):
+def _exact_poses(nearest, X_06, q_ref, tol, singular_tol, near_tol, closed_form):
     """The exact arm's closed form of the flange poses ``X_06`` (n, 4, 4) (rigid transforms,
-    checked) with the tolerance ``tol``, compiled pose by pose
-    (``dqlab._fast.newton_compiled.exact_poses``, the loop of :func:`_exact_one_pose`); the
-    poses that path hands on (a wrist near its singularity, a wrist centre inside the
-    shoulder cylinder, no valid row) are solved by ``closed_form`` itself. The
-    :class:`IKResult` ``closed_form`` gives for them all (tested equal)."""
+    checked) with the tolerance ``tol`` and the references ``q_ref`` (n, 6) or None,
+    compiled pose by pose (``dqlab._fast.newton_compiled.exact_poses``, the loop of
+    :func:`_exact_one_pose`); the poses that path hands on (a wrist centre far beyond
+    reach) are solved by ``closed_form`` itself.
+    The :class:`IKResult` ``closed_form`` gives for them all (tested equal)."""
     R = X_06[:, :3, :3]
     q = quaternion_from_matrix_entries(*(R[:, i, j] for i in range(3) for j in range(3)))
-    solutions, valid, errors, flags, done = compiled_exact_poses(
-        np.stack(q, axis=-1), X_06[:, :3, 3], X_06[:, :3, 2], nearest.exact, tol,
-        singular_tol, NEAR_WRIST, near_tol)
+    theta6 = np.zeros(X_06.shape[0]) if q_ref is None else q_ref[:, 5]
+    solutions, valid, errors, rotation_errors, flags, ended = compiled_exact_poses(
+        np.stack(q, axis=-1), X_06[:, :3, 3], X_06[:, :3, 2], X_06, theta6, nearest.exact,
+        tol, singular_tol, NEAR_WRIST, near_tol)
     flags = dict(zip(_FLAG_NAMES[:4], flags.T, strict=True))   # wrist, shoulder, elbow, near
-    flags["unreachable"] = np.zeros(done.shape, dtype=bool)
-    flags["not_converged"] = np.zeros(done.shape, dtype=bool)
-    rotation_errors = np.zeros(errors.shape)
-    reason = np.full(done.shape, "", dtype=object)
-    rest = np.flatnonzero(~done)
+    flags["unreachable"] = ended != SOLVED
+    flags["not_converged"] = np.zeros(ended.shape, dtype=bool)
+    reason = _REASON_OF[ended]
+    rest = np.flatnonzero(ended == 0)
     if rest.size:
         other = closed_form(nearest, X_06[rest], tol=tol, singular_tol=singular_tol,
-                            near_tol=near_tol)
+                            near_tol=near_tol, q_ref=None if q_ref is None else q_ref[rest])
         solutions[rest], valid[rest] = other.solutions, other.valid
         errors[rest], rotation_errors[rest] = other.position_error, other.rotation_error
         for name, flag in flags.items():
@@ -910,7 +936,7 @@ def _repair(chain, nearest, polished, q0, found, exact_solutions, X_0T, X_T6, to
     _restart(chain, polished, unique, owners, starts, X_0T, tol, max_iter, which)
 
 
-def _family(chain, nearest, polished, X_06, X_0T, closed_form, tol, max_iter):
+def _family(chain, nearest, polished, X_06, X_0T, exact_solutions, tol, max_iter):
     r"""Near the wrist singularity, seek the missing branches of a pose from the exact arm's
     wrist family.
 
@@ -943,7 +969,8 @@ def _family(chain, nearest, polished, X_06, X_0T, closed_form, tol, max_iter):
     references = np.zeros((member_of.size, 6))
     family = np.repeat(count, count) > 1                # else one member, theta_6 from 0
     references[:, 5] = np.where(family, -np.pi + 2.0 * np.pi / _FAMILY * j, 0.0)
-    members = closed_form(nearest, X_06[member_of], tol=0.5, q_ref=references)
+    members = exact_solutions(X_06[member_of], tol=0.5, near_tol=NEAR_SINGULAR,
+                              ref=references)
     solutions = _off_the_edge(nearest.robot, members.solutions, members.valid,
                               members.position_error, tol).reshape(-1, 6)
     ok = members.valid.reshape(-1)
