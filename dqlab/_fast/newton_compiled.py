@@ -23,9 +23,13 @@ and direction by inverse iteration wherever they are certain (``eigh`` answers e
 and is what the numpy path uses). :func:`exact_one_pose` is the nearest exact
 arm's closed form of one pose that the one-pose path starts from: the loop of
 ``dqlab._fast.ur_engine.solve_single`` over the steps of ``dqlab.ik.ur_steps``, written out on
-floats (tested equal to it bit for bit), and :func:`exact_poses` the same for a batch of
-poses, which the batch path starts from (the poses it does not solve go to the closed form's
-own batch path); :func:`deflated` the deflated Newton steps of its ``_deflate``.
+floats (tested equal to it bit for bit), with what the closed form's batch path adds (a
+wrist family's member near the wrist singularity, chosen by the reference's theta6 and
+checked by forward kinematics; the clipping inside the shoulder cylinder; the reason where
+no row is valid; tested equal to it to the rounding), and :func:`exact_poses` the same for
+a batch of poses, which the batch path and the wrist family's starts come from (a wrist
+centre far beyond reach goes to the closed form's own batch path); :func:`deflated` the
+deflated Newton steps of its ``_deflate``.
 :func:`ready` says whether numba is there and the environment variable ``DQLAB_COMPILED``
 (:mod:`dqlab._fast.compiled`, read again by :func:`refresh`) does not switch the compiled paths
 off; the first compilation takes seconds, and is cached on disk for the next processes.

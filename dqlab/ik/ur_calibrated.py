@@ -43,8 +43,9 @@ keeps its contract (every branch, flags, reasons, batches) in these steps:
    flagged ``"not_converged"``, never dropped silently. With numba installed (the ``fast``
    extra), these steps run compiled, on the eight branches of a pose at once
    (``dqlab._fast.newton_compiled``, tested to give the same solutions), and so does the
-   exact arm's closed form of step 2, pose by pose (tested equal to it bit for bit); numpy
-   runs them otherwise. One pose whose branches all converge, to distinct solutions, is
+   exact arm's closed form of step 2 (and of step 4's wrist family), pose by pose (tested
+   equal to it: bit for bit, and to the rounding at a wrist singularity); numpy runs them
+   otherwise. One pose whose branches all converge, to distinct solutions, is
    finished with a few calls (``_one_pose``, tested equal to the array path); the others go
    on to the restarts of ``_repair``.
 4. **The branches still missing**, near a singularity: members of the exact arm's wrist
@@ -641,13 +642,22 @@ def _one_pose(nearest, start, X_0T, tool, tol, singular_tol, max_iter, wide, nea
         solutions = wrap_angle(Q)
         flags = _flags(M, valid, singular_tol, d4, near)
         flags["not_converged"] = (exact & ~valid).any()
-    if _family_members(nearest, solutions, found, found)[0]:   # (found: all converged)
-        return None
-    solutions = _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol)
-    flags["near_singular"] = (flags["near_singular"] | start.flags["near_singular"]
-                              | _rows_near(nearest, solutions, valid, near).any())
-    flags = {name: np.array(flag, dtype=bool).reshape(()) for name, flag in flags.items()}
-    more = _beyond(nearest, tool, solutions, valid, X_0T[None], tol, max_iter)
+    if not found.all() and _family_members(nearest, solutions, found, found)[0]:
+        return None                                     # (found: all converged)
+    # a pose with no valid row near a singularity of the exact arm (most) has none to
+    # polish, none near at a lower threshold, and no solutions beyond its rows
+    polish = _rows_near(nearest, solutions, valid, _POLISH_NEAR).any()
+    if polish:
+        solutions = _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol)
+    if polish or near > _POLISH_NEAR:
+        flags["near_singular"] |= _rows_near(nearest, solutions, valid, near).any()
+    flags["near_singular"] |= start.flags["near_singular"]
+    flags = {name: np.array(bool(flag)) for name, flag in flags.items()}
+    if polish:
+        more = _beyond(nearest, tool, solutions, valid, X_0T[None], tol, max_iter)
+    else:
+        more = (np.zeros((1, _MORE, 6)), np.zeros((1, _MORE), dtype=bool),
+                np.zeros((1, _MORE)), np.zeros((1, _MORE)))
     return finish(solutions, valid, pe, re, flags,
                   np.array(REASON_NOT_CONVERGED if flags["unreachable"] else "", dtype=object),
                   more=_more_result(*more, ()))
@@ -903,7 +913,7 @@ def _repair(chain, nearest, polished, q0, found, exact_solutions, X_0T, X_T6, to
         sibling = wanted ^ bits
         ok = unique[sibling]
         owners.append(wanted[ok])
-        starts.append(_flip(nearest.robot, polished.q[sibling[ok]], bits))
+        starts.append(_flip(nearest, polished.q[sibling[ok]], bits))
     _restart(chain, polished, unique, np.concatenate(owners), np.concatenate(starts), X_0T,
              tol, max_iter)
     wanted = wanted[~unique[wanted]]                    # still missing after the flips
@@ -1206,14 +1216,15 @@ def _accept(polished, unique, owners, converged, q):
     return np.array(taken, dtype=np.int64)
 
 
-def _flip(exact, q, bits):
+def _flip(nearest, q, bits):
     r"""The exact arm's other elbow (``bits & 2``) and wrist (``bits & 1``) solutions of the
     joint vectors ``q`` (m, 6) for the same pose: with :math:`\theta = q + \theta^0`, the
     wrist flip :math:`(\theta_4 + \pi, -\theta_5, \theta_6 + \pi)` and the elbow flip
     :math:`(\theta_2 + 2\beta, -\theta_3, \theta_4 + 2\theta_3 - 2\beta)`,
-    :math:`\beta = \operatorname{atan2}(a_3 \sin\theta_3, a_2 + a_3 \cos\theta_3)`."""
-    offsets = np.array([lk.theta_offset for lk in exact.links])
-    a2, a3 = exact.links[1].a, exact.links[2].a
+    :math:`\beta = \operatorname{atan2}(a_3 \sin\theta_3, a_2 + a_3 \cos\theta_3)`
+    (the exact arm of ``nearest``, a :class:`_NearestExact`)."""
+    offsets = nearest.exact[6:]
+    a2, a3 = nearest.exact[1], nearest.exact[2]
     t = q + offsets
     if bits & 2:
         beta = np.arctan2(a3 * np.sin(t[:, 2]), a2 + a3 * np.cos(t[:, 2]))
