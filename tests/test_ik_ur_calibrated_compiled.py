@@ -383,6 +383,31 @@ def test_compiled_exact_poses_equal_the_batch_closed_form(make):
     assert handed_over == [4] * 8                        # the four far beyond reach
 
 
+@pytest.mark.parametrize("make", [calibrated, physically_calibrated])
+def test_compiled_exact_fk_equals_the_robot_fk(make):
+    """Forward kinematics of the nearest exact arm, compiled (what _repair corrects a pose
+    with), is Robot.fk of that arm to the rounding, with joint offsets, at random joint
+    vectors and at angles of many turns; and the flips of its restarts, one call for rows
+    of different flips, are the exact arm's other elbow and wrist."""
+    robot = make(58)
+    nearest = module._nearest_exact(robot)
+    assert any(nearest.exact[6:])
+    q = np.random.default_rng(59).uniform(-np.pi, np.pi, (500, 6))
+    q[:50] *= 7.0
+    np.testing.assert_allclose(compiled.exact_fk(q, nearest.exact), nearest.robot.fk(q),
+                               rtol=0, atol=1e-14)
+    # _flip, the restarts' starts: the elbow flip reaches the same pose, the wrist flip
+    # (theta4 + pi, -theta5, theta6 + pi) the same orientation (the arm then moves the wrist
+    # centre back, which Newton does); each row flipped by its own bits
+    bits = np.repeat([2, 1, 3, 0], 10)
+    flips, X = module._flip(nearest, q[:40], bits), nearest.robot.fk(q[:40])
+    X_flipped = nearest.robot.fk(flips)
+    np.testing.assert_allclose(X_flipped[:10], X[:10], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(X_flipped[:30, :3, :3], X[:30, :3, :3], rtol=0, atol=1e-12)
+    assert (np.abs(flips[:30] - q[:30]) > 1e-3).any(axis=1).all()
+    np.testing.assert_array_equal(flips[30:], q[30:40])
+
+
 def spectra(rng, n):
     """J^T J-like matrices Q diag(lambda) Q^T (n, 6, 6), the smallest eigenvalue a ratio of
     the largest spread from 1e-14 to 1, some within 1e-3 of the threshold 1e-4, some with

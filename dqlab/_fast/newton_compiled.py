@@ -28,8 +28,8 @@ wrist family's member near the wrist singularity, chosen by the reference's thet
 checked by forward kinematics; the clipping inside the shoulder cylinder; the reason where
 no row is valid; tested equal to it to the rounding), and :func:`exact_poses` the same for
 a batch of poses, which the batch path and the wrist family's starts come from (a wrist
-centre far beyond reach goes to the closed form's own batch path); :func:`deflated` the
-deflated Newton steps of its ``_deflate``.
+centre far beyond reach goes to the closed form's own batch path), :func:`exact_fk` that
+arm's forward kinematics; :func:`deflated` the deflated Newton steps of its ``_deflate``.
 :func:`ready` says whether numba is there and the environment variable ``DQLAB_COMPILED``
 (:mod:`dqlab._fast.compiled`, read again by :func:`refresh`) does not switch the compiled paths
 off; the first compilation takes seconds, and is cached on disk for the next processes.
@@ -53,8 +53,8 @@ from .newton_lanes import frames as lane_frames
 from .newton_lanes import size as lane_size
 from .newton_lanes import step as lane_step
 
-__all__ = ["ready", "refresh", "newton", "one_pose", "exact_one_pose", "exact_poses", "unique",
-           "are_new", "accept", "near_rows", "gram", "smallest", "deflated"]
+__all__ = ["ready", "refresh", "newton", "one_pose", "exact_one_pose", "exact_poses", "exact_fk",
+           "unique", "are_new", "accept", "near_rows", "gram", "smallest", "deflated"]
 
 _COMPILED = []     # the functions below the wrappers, compiled in place by ready()
 _READY = None      # whether numba is there (the kernels compiled), once known
@@ -153,6 +153,21 @@ def accept(owners, converged, q_starts, q, unique):
     k = _accept(np.ascontiguousarray(owners, dtype=np.int64), np.ascontiguousarray(converged),
                 np.ascontiguousarray(q_starts, dtype=float), q, unique, taken)
     return taken[:k]
+
+
+def exact_fk(q, constants):
+    """Forward kinematics (m, 4, 4) of the exact UR of ``constants`` (``_NearestExact.exact``)
+    at the joint vectors q (m, 6): ``Robot.fk`` of that arm (bare), compiled (tested equal
+    to the rounding)."""
+    X = np.zeros((q.shape[0], 4, 4))
+    _exact_fk(np.ascontiguousarray(q, dtype=float), np.asarray(constants, dtype=float), X)
+    return X
+
+
+def _exact_fk(q, constants, X):
+    """:func:`exact_fk`'s work."""
+    for i in range(q.shape[0]):
+        _exact_flange(q[i], constants, X[i])
 
 
 def near_rows(solutions, valid, constants, threshold):
@@ -1018,7 +1033,7 @@ _Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE = (
     INDEX[name] for name in ("q0", "c0", "s0", "t00", "tp0", "F0", "x0", "act", "size"))
 _COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_size", "_same", "_unique",
               "_wrap", "_exact_one_pose", "_family_member", "_feasible_theta234",
-              "_exact_flange", "_exact_poses", "_one_pose", "_accept", "_gram",
+              "_exact_flange", "_exact_fk", "_exact_poses", "_one_pose", "_accept", "_gram",
               "_smallest", "_largest_diagonal_column", "_times", "_rayleigh", "_are_new",
               "_load", "_recompute", "_kernel", "_outputs", "_pose_errors", "_dot_rows",
               "_deflated", "_cholesky", "_near_rows"]

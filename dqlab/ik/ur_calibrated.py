@@ -107,6 +107,7 @@ from .._fast.newton_compiled import (
 from .._fast.newton_compiled import accept as compiled_accept
 from .._fast.newton_compiled import are_new as compiled_are_new
 from .._fast.newton_compiled import deflated as compiled_deflated
+from .._fast.newton_compiled import exact_fk as compiled_exact_fk
 from .._fast.newton_compiled import exact_one_pose as compiled_exact_one_pose
 from .._fast.newton_compiled import exact_poses as compiled_exact_poses
 from .._fast.newton_compiled import gram as compiled_gram
@@ -169,6 +170,7 @@ _POLISH_NEAR = 0.04    # a valid row this near a singularity of the exact arm is
 _MORE = 8              # rows of result.more: a 6R arm has up to 16 solutions, 8 in the rows
 _MORE_WAYS = np.array([0.05, -0.05])   # the moves of the starts that seek more solutions
 _SAMPLES = np.random.default_rng(20260531).uniform(-np.pi, np.pi, (64, 6))
+_FLIPS = np.array([2, 1, 3])   # the flips of _repair's second restart: elbow, wrist, both
 #: The reason of the compiled closed form's result, by how it ended
 #: (``dqlab._fast.newton_compiled.SOLVED`` and the others).
 _REASON_OF = np.full(7, "", dtype=object)
@@ -381,7 +383,8 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
         closed_form = _closed_form
     else:                                               # a solver of the exact robot
         closed_form = _solver_of_robot(closed_form)
-    if _plain_pose(target, pose_tol):                  # one transform, checked on floats
+    plain = _plain_pose(target, pose_tol)
+    if plain:                                           # one transform, checked on floats
         batch, X_W = (), target[None]
     else:
         targets = parse_targets(target, tol=pose_tol)
@@ -404,16 +407,19 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
 
     near_limit = max(near_tol, _NEAR_GAPS * nearest.rotation_gap)
 
-    def exact_solutions(X, poses=None, tol=wide, near_tol=near_limit, ref=None):
+    def exact_solutions(X, poses=None, tol=wide, near_tol=near_limit, ref=None,
+                        checked=True):
         """The exact arm's closed form of the flanges X (m, 4, 4), which are those of the
         poses ``poses`` (all n when None): each with its own reference, or the references
-        ``ref`` (m, 6) given (its near_singular flag with the calibrated arm's threshold)."""
+        ``ref`` (m, 6) given (its near_singular flag with the calibrated arm's threshold).
+        ``checked``: X is known to be rigid to the closed form's tolerance (the flanges
+        of the targets once checked, and products of rigid transforms)."""
         if ref is None and references is not None:
             ref = references if poses is None else references[poses]
         if batch == () and X.shape[0] == 1:             # one pose (compiled, with numba)
             if compiled_ready():
                 result = _exact_one_pose(nearest, X[0], None if ref is None else ref[0], tol,
-                                         singular_tol, near_tol)
+                                         singular_tol, near_tol, checked)
                 if result is not None:
                     return result
             X, ref = X[0], None if ref is None else ref[0]
@@ -423,7 +429,7 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
         return closed_form(nearest, X, tol=tol, q_ref=ref, singular_tol=singular_tol,
                            near_tol=near_tol)
 
-    start = exact_solutions(X_06)
+    start = exact_solutions(X_06, checked=plain)
     start.solutions = _off_the_edge(nearest.robot, start.solutions, start.valid,
                                     start.position_error, tol)
     if batch == ():
@@ -549,17 +555,20 @@ def _plain_pose(target, pose_tol):
             and rigid_rows(target, pose_tol) is not None)
 
 
-def _exact_one_pose(nearest, X_06, q_ref, tol, singular_tol, near_tol):
+def _exact_one_pose(nearest, X_06, q_ref, tol, singular_tol, near_tol, checked=False):
     """The exact arm's closed form of one flange pose ``X_06`` (4, 4) with the tolerance
     ``tol`` and the reference ``q_ref`` (6,) or None, compiled
     (``dqlab._fast.newton_compiled.exact_one_pose``): the :class:`IKResult` the closed form
     gives (at its default ``pose_tol``), or None where the pose is not a rigid transform to
-    that tolerance or its wrist centre is far beyond reach (the closed form then solves it,
-    or gives the error)."""
-    rows = rigid_rows(X_06, RIGID_TOL)                  # the closed form's check, and the
-    if rows is None:                                    # flange: rotation quaternion,
-        return None                                     # position, z6
-    a, b, c = rows
+    that tolerance (checked unless ``checked``) or its wrist centre is far beyond reach (the
+    closed form then solves it, or gives the error)."""
+    if checked:                                         # the flange: rotation quaternion,
+        a, b, c = X_06[:3].tolist()                     # position, z6
+    else:
+        rows = rigid_rows(X_06, RIGID_TOL)              # (the closed form's check)
+        if rows is None:
+            return None
+        a, b, c = rows
     q = quaternion_from_matrix_entries(a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2])
     done = compiled_exact_one_pose((q, (a[3], b[3], c[3]), (a[2], b[2], c[2])), X_06,
                                    0.0 if q_ref is None else q_ref[5], nearest.exact, tol,
@@ -567,10 +576,9 @@ def _exact_one_pose(nearest, X_06, q_ref, tol, singular_tol, near_tol):
     if done is None:
         return None
     solutions, valid, pe, re, flags, ended = done
-    flags = dict(zip(_FLAG_NAMES[:4], (np.array(flag) for flag in flags.tolist()),
-                     strict=True))                      # wrist, shoulder, elbow, near
-    flags["unreachable"] = np.array(ended != SOLVED)
-    flags["not_converged"] = np.array(False)
+    flags = dict(zip(_FLAG_NAMES[:4], flags, strict=True))   # wrist, shoulder, elbow, near
+    flags["unreachable"] = np.bool_(ended != SOLVED)
+    flags["not_converged"] = np.bool_(False)
     return IKResult(solutions, valid, pe, re, flags, _REASON_OF[ended:ended + 1].reshape(()))
 
 
@@ -779,6 +787,15 @@ def _rows_near(nearest, solutions, valid, threshold):
     return valid & _near_rows(nearest.robot, solutions, threshold)
 
 
+def _exact_fk(nearest, q):
+    """Forward kinematics of the exact arm of ``nearest`` at the joint vectors q (m, 6):
+    ``Robot.fk``; with numba, compiled (``dqlab._fast.newton_compiled.exact_fk``, tested
+    equal)."""
+    if compiled_ready():
+        return compiled_exact_fk(q, nearest.exact)
+    return nearest.robot.fk(q)
+
+
 def _more_result(solutions, valid, pe, re, batch):
     """The :class:`IKResult` of :func:`_beyond`'s arrays, shaped for the targets ``batch``
     (its rows that are not valid hold zeros already, as :func:`finish` makes them)."""
@@ -898,7 +915,7 @@ def _repair(chain, nearest, polished, q0, found, exact_solutions, X_0T, X_T6, to
     if poses.size:
         first = 8 * poses + np.argmax(unique.reshape(-1, 8)[poses], axis=1)
         X_cal6 = polished.X[first] @ X_T6               # the calibrated flange at q*
-        X_exact6 = nearest.robot.fk(polished.q[first])
+        X_exact6 = _exact_fk(nearest, polished.q[first])
         corrected = exact_solutions(X_0T[poses] @ X_T6 @ rigid_inverse(X_cal6)
                                     @ X_exact6, poses)
         rows = (8 * poses[:, None] + np.arange(8)).reshape(-1)
@@ -908,14 +925,12 @@ def _repair(chain, nearest, polished, q0, found, exact_solutions, X_0T, X_T6, to
     wanted = np.flatnonzero(polished.done & ~unique)
     if not wanted.size:
         return
-    owners, starts = [], []
-    for bits in (2, 1, 3):                              # elbow, wrist, both
-        sibling = wanted ^ bits
-        ok = unique[sibling]
-        owners.append(wanted[ok])
-        starts.append(_flip(nearest, polished.q[sibling[ok]], bits))
-    _restart(chain, polished, unique, np.concatenate(owners), np.concatenate(starts), X_0T,
-             tol, max_iter)
+    bits = _FLIPS[:, None]                              # elbow, wrist, both (3, 1)
+    sibling = wanted ^ bits                             # (3, w)
+    ok = unique[sibling]
+    _restart(chain, polished, unique, np.broadcast_to(wanted, sibling.shape)[ok],
+             _flip(nearest, polished.q[sibling[ok]], np.broadcast_to(bits, ok.shape)[ok]),
+             X_0T, tol, max_iter)
     wanted = wanted[~unique[wanted]]                    # still missing after the flips
     wanted = wanted[found[wanted]]
     if not wanted.size:
@@ -968,6 +983,8 @@ def _family(chain, nearest, polished, X_06, X_0T, exact_solutions, tol, max_iter
     the missing branches of its pose, the branch of its own label
     (:func:`_branches`) first (:func:`_restart`)."""
     unique = polished.unique()
+    if unique.all():                                    # (no branch missing: no member)
+        return
     missing = ~unique.reshape(-1, 8)
     count = _family_members(nearest, polished.q, polished.done, unique)
     poses = np.flatnonzero(count)
@@ -1016,15 +1033,10 @@ def _offer(chain, polished, unique, missing, starts, pose_of, label, X_0T, tol, 
     ``label[j]``, each offered to every branch ``missing`` (n, 8) of its pose, the branch
     of its label first (:func:`_restart`, which takes for a branch the first start that
     converges to a solution its pose does not have)."""
-    owners, which, rank = [], [], []
-    for k in range(8):
-        offer = np.flatnonzero(missing[pose_of, k])
-        owners.append(8 * pose_of[offer] + k)
-        which.append(offer)
-        rank.append(label[offer] != k)
-    owners, which, rank = (np.concatenate(a) for a in (owners, which, rank))
-    if not owners.size:
+    k, which = np.nonzero(missing[pose_of].T)         # branch by branch, the starts in order
+    if not k.size:
         return
+    owners, rank = 8 * pose_of[which] + k, label[which] != k
     order = np.lexsort((which, rank))
     used, which = np.unique(which[order], return_inverse=True)   # each start stepped once
     _restart(chain, polished, unique, owners[order], starts[used], X_0T, tol, max_iter,
@@ -1217,21 +1229,27 @@ def _accept(polished, unique, owners, converged, q):
 
 
 def _flip(nearest, q, bits):
-    r"""The exact arm's other elbow (``bits & 2``) and wrist (``bits & 1``) solutions of the
-    joint vectors ``q`` (m, 6) for the same pose: with :math:`\theta = q + \theta^0`, the
-    wrist flip :math:`(\theta_4 + \pi, -\theta_5, \theta_6 + \pi)` and the elbow flip
-    :math:`(\theta_2 + 2\beta, -\theta_3, \theta_4 + 2\theta_3 - 2\beta)`,
-    :math:`\beta = \operatorname{atan2}(a_3 \sin\theta_3, a_2 + a_3 \cos\theta_3)`
-    (the exact arm of ``nearest``, a :class:`_NearestExact`)."""
+    r"""The joint vectors ``q`` (m, 6) flipped at the exact arm's elbow (``bits & 2``) and
+    wrist (``bits & 1``), ``bits`` (m,) one per vector: with :math:`\theta = q + \theta^0`,
+    the elbow flip :math:`(\theta_2 + 2\beta, -\theta_3, \theta_4 + 2\theta_3 - 2\beta)`,
+    :math:`\beta = \operatorname{atan2}(a_3 \sin\theta_3, a_2 + a_3 \cos\theta_3)`,
+    reaches the same pose, and the wrist flip :math:`(\theta_4 + \pi, -\theta_5, \theta_6 +
+    \pi)` the same orientation (the exact arm of ``nearest``, a :class:`_NearestExact`):
+    starts near the pose's other branches."""
     offsets = nearest.exact[6:]
     a2, a3 = nearest.exact[1], nearest.exact[2]
     t = q + offsets
-    if bits & 2:
-        beta = np.arctan2(a3 * np.sin(t[:, 2]), a2 + a3 * np.cos(t[:, 2]))
-        t[:, 1], t[:, 2], t[:, 3] = (t[:, 1] + 2.0 * beta, -t[:, 2],
-                                     t[:, 3] + 2.0 * t[:, 2] - 2.0 * beta)
-    if bits & 1:
-        t[:, 3], t[:, 4], t[:, 5] = t[:, 3] + np.pi, -t[:, 4], t[:, 5] + np.pi
+    elbow, wrist = (bits & 2).astype(bool), (bits & 1).astype(bool)
+    if elbow.any():
+        e = t[elbow]
+        beta = np.arctan2(a3 * np.sin(e[:, 2]), a2 + a3 * np.cos(e[:, 2]))
+        e[:, 1], e[:, 2], e[:, 3] = (e[:, 1] + 2.0 * beta, -e[:, 2],
+                                     e[:, 3] + 2.0 * e[:, 2] - 2.0 * beta)
+        t[elbow] = e
+    if wrist.any():
+        w = t[wrist]
+        w[:, 3], w[:, 4], w[:, 5] = w[:, 3] + np.pi, -w[:, 4], w[:, 5] + np.pi
+        t[wrist] = w
     return t - offsets
 
 
