@@ -490,6 +490,60 @@ def test_restarts_step_a_shared_start_once(numpy_path):
         assert (ua & ~a.converged).sum() == 0 and ua[rows[::3]].any()
 
 
+def copied(polished):
+    """A copy of a module._Polished, its arrays copied."""
+    return module._Polished(*(np.array(getattr(polished, name)) for name in
+                              ("q", "done", "converged", "X", "measures", "errors")))
+
+
+@pytest.mark.parametrize("which", ["UR10e (ur_calibration documentation)",
+                                   "UR3 (calibration.conf)", "synthetic, with a tool"])
+def test_compiled_repairs_equal_the_numpy_path(which, numpy_path, monkeypatch):
+    """The restarts of _repair, compiled pose by pose (dqlab._fast.newton_compiled.repair),
+    leave the branches of the poses that need them as the numpy path does: the same rows
+    restarted and converged, the same distinct solutions, the joint vectors to the
+    rounding (1e-8 rad: Newton stops at tol / 10, which a singularity magnifies), each
+    reproducing its pose. The states are the solver's own, recorded where it calls
+    _repair: poses near each singularity of two real calibrations and of a synthetic one
+    with a tool and a reference (theta6 for the wrist family's member of the corrected
+    pose's closed form)."""
+    from real_calibrations import real_calibrations
+    if which.startswith("synthetic"):
+        robot = calibrated(60)
+        robot.tool = np.eye(4)
+        robot.tool[:3, 3] = (0.0, 0.03, 0.15)
+        options = {"q_ref": np.array([0.1, -1.0, 1.0, 0.3, 0.2, 2.5])}
+    else:
+        robot, options = real_calibrations()[which], {}
+    q = np.concatenate([singular_poses(robot, kind, distance, 60, 61)
+                        for kind in ("wrist", "elbow", "shoulder") for distance in (1e-2, 1e-3)])
+    calls = []
+    repair = module._repair
+
+    def record(chain, nearest, polished, *rest):
+        calls.append((chain, nearest, copied(polished), *rest))
+        return repair(chain, nearest, polished, *rest)
+
+    monkeypatch.setattr(module, "_repair", record)
+    ur(robot, robot.fk(q), **options)
+    assert len(calls) == 1
+    chain, nearest, before, q0, found, exact_solutions, X_0T, X_T6, tol, max_iter, rest = \
+        calls[0]
+    fast, plain = copied(before), copied(before)
+    repair(chain, nearest, fast, q0, found, exact_solutions, X_0T, X_T6, tol, max_iter, rest)
+    numpy_path(repair, chain, nearest, plain, q0, found, exact_solutions, X_0T, X_T6, tol,
+               max_iter, rest)
+    restarted = fast.done & ~before.done | (fast.converged & ~before.converged)
+    assert restarted.sum() >= 20, restarted.sum()               # many rows restarted
+    for name in ("done", "converged"):
+        np.testing.assert_array_equal(getattr(fast, name), getattr(plain, name))
+    np.testing.assert_array_equal(module._unique(fast.q, fast.converged),
+                                  module._unique(plain.q, plain.converged))
+    gap = np.abs(np.angle(np.exp(1j * (fast.q - plain.q))))[fast.converged]
+    assert gap.max() < 1e-8
+    assert (fast.errors[:, fast.converged] <= tol).all()
+
+
 def test_compiled_deflation_equals_the_numpy_path(numpy_path):
     """The deflated Newton steps of _deflate, compiled and on numpy, from starts near known
     solutions (some converge to a new one, some wander and give up), with a tool: the same

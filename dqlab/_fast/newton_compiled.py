@@ -54,7 +54,7 @@ from .newton_lanes import size as lane_size
 from .newton_lanes import step as lane_step
 
 __all__ = ["ready", "refresh", "newton", "one_pose", "exact_one_pose", "exact_poses", "exact_fk",
-           "unique", "are_new", "accept", "near_rows", "gram", "smallest", "deflated"]
+           "unique", "are_new", "accept", "near_rows", "gram", "smallest", "deflated", "repair"]
 
 _COMPILED = []     # the functions below the wrappers, compiled in place by ready()
 _READY = None      # whether numba is there (the kernels compiled), once known
@@ -1029,11 +1029,354 @@ def _dot_rows(A, i, B, j):
     return A[i, 0] * B[j, 0] + A[i, 1] * B[j, 1] + A[i, 2] * B[j, 2]
 
 
+# --------------------------------------------------------------------------------------
+# The restarts of ``dqlab.ik.ur_calibrated._repair``, compiled
+
+
+def repair(links, tool, exact, theta6_ref, wide, singular_tol, near_wrist, near_tol, q, done,
+           converged, X, measures, errors, q0, found, X_0T, X_T6, tol, max_iter, *,
+           restart_iter, plain, stop_factor, give_up_after, damping, max_step, ways,
+           near_ratio):
+    """``dqlab.ik.ur_calibrated._repair`` compiled, pose by pose: the restarts of the
+    branches missing from each pose (the corrected closed form, the flips, the moves along
+    the most singular direction), the arrays of its ``_Polished`` (``q``, ``done``,
+    ``converged``, ``X``, ``measures``, ``errors``; C-contiguous) updated in place.
+    ``exact`` the nearest exact arm's constants, ``theta6_ref`` (n,) the theta6 of each
+    pose's reference (0 without one), ``wide``, ``singular_tol``, ``near_tol`` the
+    tolerances of its closed form there; ``q0`` (8 n, 6) the branches' starts and
+    ``found`` (8 n,) those the exact arm found; ``ways`` the moves along the most singular
+    direction and ``near_ratio`` the eigenvalue ratio below which a joint vector is near a
+    singularity. The same steps in the same order as that function (tested equal to the
+    rounding); the most singular direction by inverse iteration where it is certain, by
+    Jacobi's method elsewhere (``numpy.linalg.eigh``'s answer)."""
+    unique = np.empty(converged.shape[0], dtype=np.bool_)
+    _unique(q, converged, unique)
+    _repair(np.asarray(links, dtype=float), np.ascontiguousarray(tool, dtype=float),
+            np.asarray(exact, dtype=float), np.ascontiguousarray(theta6_ref, dtype=float),
+            float(wide), float(singular_tol), float(near_wrist), float(near_tol), q, done,
+            converged, X, measures, errors, np.ascontiguousarray(q0, dtype=float),
+            np.ascontiguousarray(found), np.ascontiguousarray(X_0T, dtype=float),
+            np.ascontiguousarray(X_T6, dtype=float), unique, float(stop_factor * tol),
+            int(min(plain, restart_iter, max_iter)), int(min(max_iter, restart_iter)),
+            int(give_up_after), float(damping), float(max_step),
+            np.asarray(ways, dtype=float), float(near_ratio))
+
+
+def _repair(links, tool, exact, theta6_ref, wide, singular_tol, near_wrist, near_tol, q, done,
+            converged, X, measures, errors, q0, found, X_0T, X_T6, unique, stop, plain,
+            max_iter, give_up_after, damping, max_step, ways, near_ratio):
+    """:func:`repair`'s work, pose by pose (the poses are independent)."""
+    for pose in range(X_0T.shape[0]):
+        base = 8 * pose
+        missing = False
+        for k in range(8):
+            missing = missing or (done[base + k] and not unique[base + k])
+        if not missing:
+            continue
+        restart = (links, tool, X_0T[pose], stop, plain, max_iter, give_up_after, damping,
+                   max_step, q, done, converged, X, measures, errors, unique)
+        _corrected_restarts(pose, exact, theta6_ref[pose], wide, singular_tol, near_wrist,
+                            near_tol, X_T6, restart)
+        wanted = np.empty(8, dtype=np.int64)
+        w = 0
+        for k in range(8):
+            if done[base + k] and not unique[base + k]:
+                wanted[w] = base + k
+                w += 1
+        if w == 0:
+            continue
+        _flip_restarts(wanted[:w], exact, restart)
+        v = 0
+        for i in range(w):                              # still missing, and found by the
+            row = wanted[i]                             # exact arm
+            if not unique[row] and found[row]:
+                wanted[v] = row
+                v += 1
+        if v:
+            _move_restarts(wanted[:v], q0, ways, near_ratio, restart)
+
+
+def _corrected_restarts(pose, exact, theta6_ref, wide, singular_tol, near_wrist, near_tol,
+                        X_T6, restart):
+    """_repair's first restarts: the exact arm's solutions of the pose corrected by the two
+    arms' difference at its first solution, for its missing branches."""
+    links, tool, X_0T, _, _, _, _, _, _, q, done, _, X, _, _, unique = restart
+    base = 8 * pose
+    first = -1
+    for k in range(8):
+        if unique[base + k]:
+            first = base + k
+            break
+    if first < 0:
+        return
+    X_cal6 = _times4(X[first], X_T6)                    # the calibrated flange at q*
+    X_exact6 = np.empty((4, 4))
+    _exact_flange(q[first], exact, X_exact6)
+    C = _times4(_times4(_times4(X_0T, X_T6), _rigid_inverse(X_cal6)), X_exact6)
+    qw, qx, qy, qz = _quaternion(C)
+    solutions, errs = np.zeros((8, 6)), np.zeros((2, 8))
+    flags = np.zeros(4, dtype=np.bool_)
+    ended = _exact_one_pose(qw, qx, qy, qz, C[0, 3], C[1, 3], C[2, 3], C[0, 2], C[1, 2],
+                            C[2, 2], C, theta6_ref, exact, wide, singular_tol, near_wrist,
+                            near_tol, solutions, errs, flags)
+    owners, starts = np.empty(8, dtype=np.int64), np.empty((8, 6))
+    m = 0
+    for k in range(8):
+        if (ended == SOLVED and errs[0, k] <= wide and errs[1, k] <= wide
+                and done[base + k] and not unique[base + k]):
+            owners[m] = base + k
+            starts[m] = solutions[k]
+            m += 1
+    _restart(owners[:m], starts[:m], np.arange(m), restart)
+
+
+def _flip_restarts(wanted, exact, restart):
+    """_repair's second restarts: each missing branch from its siblings' solutions flipped
+    at the exact arm's elbow, wrist, and both (``_flip``)."""
+    q, unique = restart[9], restart[15]
+    owners = np.empty(3 * wanted.shape[0], dtype=np.int64)
+    starts = np.empty((3 * wanted.shape[0], 6))
+    m = 0
+    for bits in (2, 1, 3):
+        for row in wanted:
+            sibling = row ^ bits
+            if unique[sibling]:
+                owners[m] = row
+                _flip(q[sibling], bits, exact, starts[m])
+                m += 1
+    _restart(owners[:m], starts[:m], np.arange(m), restart)
+
+
+def _move_restarts(wanted, q0, ways, near_ratio, restart):
+    """_repair's last restarts: each missing branch from its own start and from the other
+    shoulder's solutions, moved along the calibrated arm's most singular direction where
+    near a singularity (each vector moved, and each move stepped, once)."""
+    links, tool = restart[0], restart[1]
+    q, converged, unique = restart[9], restart[11], restart[15]
+    w = wanted.shape[0]
+    known = np.empty(4 * w, dtype=np.int64)             # the other shoulder's solutions,
+    count = 0                                           # sorted, each once
+    for row in wanted:
+        for bits in (4, 5, 6, 7):
+            sibling = row ^ bits
+            if unique[sibling]:
+                known[count] = sibling
+                count += 1
+    known = np.unique(known[:count])
+    vectors = np.empty((w + known.shape[0], 6))
+    for i in range(w):
+        vectors[i] = q0[wanted[i]]
+    for i in range(known.shape[0]):
+        vectors[w + i] = q[known[i]]
+    near, step = _near_singular_directions(links, tool, vectors, near_ratio)
+    n_ways = ways.shape[0]
+    owners = np.empty(n_ways * 5 * w, dtype=np.int64)
+    moves = np.empty(n_ways * 5 * w, dtype=np.int64)
+    m = 0
+    for b in range(5):                                  # base by base: the branch's own
+        rows = np.empty(w, dtype=np.int64)              # start, then each sibling's
+        source = np.empty(w, dtype=np.int64)
+        k = 0
+        for i in range(w):
+            keep = converged[wanted[i]] or near[i]
+            if not keep:
+                continue
+            if b == 0:
+                rows[k], source[k] = wanted[i], i
+                k += 1
+            else:
+                sibling = wanted[i] ^ (3 + b)
+                if unique[sibling]:
+                    rows[k] = wanted[i]
+                    source[k] = w + np.searchsorted(known, sibling)
+                    k += 1
+        for way in range(n_ways):                       # each way in turn, the vectors
+            for j in range(k):                          # near a singularity moved
+                if near[source[j]]:
+                    owners[m] = rows[j]
+                    moves[m] = n_ways * source[j] + way
+                    m += 1
+    if m == 0:
+        return
+    used = np.unique(moves[:m])                         # each move stepped once
+    which = np.searchsorted(used, moves[:m])
+    starts = np.empty((used.shape[0], 6))
+    for u in range(used.shape[0]):
+        vector, way = used[u] // n_ways, used[u] % n_ways
+        for j in range(6):
+            starts[u, j] = vectors[vector, j] + ways[way] * step[vector, j]
+    _restart(owners[:m], starts, which, restart)
+
+
+def _restart(owners, starts, which, restart):
+    """``dqlab.ik.ur_calibrated._restart`` of one pose: Newton from ``starts``, and row
+    ``owners[j]`` offered the solution from start ``which[j]``; the first that converges to
+    a solution the pose does not have replaces the row."""
+    (links, tool, X_target, stop, plain, max_iter, give_up_after, damping, max_step, q, done,
+     converged, X, measures, errors, unique) = restart
+    m = starts.shape[0]
+    if owners.shape[0] == 0:
+        return
+    q_new = starts.copy()
+    targets = np.empty((m, 4, 4))
+    for i in range(m):
+        targets[i] = X_target
+    ok = np.zeros(m, dtype=np.bool_)
+    X_new, measures_new, errors_new = np.zeros((m, 4, 4)), np.zeros((3, m)), np.zeros((2, m))
+    _kernel(links, tool, q_new, targets, stop, plain, max_iter, give_up_after, damping,
+            max_step, ok, X_new, measures_new, errors_new)
+    offered = np.empty((owners.shape[0], 6))
+    offered_ok = np.empty(owners.shape[0], dtype=np.bool_)
+    for j in range(owners.shape[0]):
+        offered[j] = q_new[which[j]]
+        offered_ok[j] = ok[which[j]]
+    taken = np.empty(owners.shape[0], dtype=np.int64)
+    for t in taken[:_accept(owners, offered_ok, offered, q, unique, taken)]:
+        row, s = owners[t], which[t]
+        converged[row] = done[row] = True
+        X[row] = X_new[s]
+        measures[:, row] = measures_new[:, s]
+        errors[:, row] = errors_new[:, s]
+
+
+def _flip(q, bits, exact, out):
+    """``dqlab.ik.ur_calibrated._flip`` of one joint vector q (6,) into ``out``."""
+    t = np.empty(6)
+    for i in range(6):
+        t[i] = q[i] + exact[6 + i]
+    if bits & 2:
+        a2, a3 = exact[1], exact[2]
+        beta = math.atan2(a3 * math.sin(t[2]), a2 + a3 * math.cos(t[2]))
+        t[1], t[2], t[3] = t[1] + 2.0 * beta, -t[2], t[3] + 2.0 * t[2] - 2.0 * beta
+    if bits & 1:
+        t[3], t[4], t[5] = t[3] + math.pi, -t[4], t[5] + math.pi
+    for i in range(6):
+        out[i] = t[i] - exact[6 + i]
+
+
+def _near_singular_directions(links, tool, q, ratio):
+    """``dqlab.ik.ur_calibrated._near_singular`` of the joint vectors q (m, 6): whether each
+    is near a singularity (m,) and the step direction (m, 6): the most singular direction
+    where near, 0 elsewhere."""
+    m = q.shape[0]
+    H = np.empty((m, 6, 6))
+    _gram(links, tool, q, H)
+    near, known = np.zeros(m, dtype=np.bool_), np.zeros(m, dtype=np.bool_)
+    V = np.zeros((m, 6))
+    _smallest(H, ratio, near, V, known)
+    for r in range(m):
+        if not known[r]:
+            near[r] = _jacobi_smallest(H[r], ratio, V[r])
+        if not near[r]:
+            V[r] = 0.0
+    return near, V
+
+
+def _jacobi_smallest(A, ratio, v):
+    """Whether the smallest eigenvalue of the symmetric A (6, 6) is below ``ratio`` times
+    the largest (the smallest clipped at 0), and its eigenvector in ``v``, largest entry
+    positive: cyclic Jacobi rotations until the off-diagonal entries vanish against the
+    diagonal."""
+    B = A.copy()
+    E = np.eye(6)
+    for _ in range(64):
+        off = 0.0
+        for i in range(6):
+            for j in range(i + 1, 6):
+                off += B[i, j] * B[i, j]
+        if off == 0.0:
+            break
+        for p in range(6):
+            for r in range(p + 1, 6):
+                if B[p, r] == 0.0:
+                    continue
+                theta = (B[r, r] - B[p, p]) / (2.0 * B[p, r])
+                t = (1.0 if theta >= 0.0 else -1.0) / (abs(theta) + math.sqrt(theta * theta
+                                                                                + 1.0))
+                c = 1.0 / math.sqrt(t * t + 1.0)
+                s = t * c
+                for k in range(6):                      # B <- J^T B J, E <- E J
+                    bkp, bkr = B[k, p], B[k, r]
+                    B[k, p], B[k, r] = c * bkp - s * bkr, s * bkp + c * bkr
+                for k in range(6):
+                    bpk, brk = B[p, k], B[r, k]
+                    B[p, k], B[r, k] = c * bpk - s * brk, s * bpk + c * brk
+                for k in range(6):
+                    ekp, ekr = E[k, p], E[k, r]
+                    E[k, p], E[k, r] = c * ekp - s * ekr, s * ekp + c * ekr
+    low = high = 0
+    for i in range(6):
+        if B[i, i] < B[low, low]:
+            low = i
+        if B[i, i] > B[high, high]:
+            high = i
+    top = 0
+    for i in range(6):
+        if abs(E[i, low]) > abs(E[top, low]):
+            top = i
+    sign = 1.0 if E[top, low] >= 0.0 else -1.0
+    for i in range(6):
+        v[i] = sign * E[i, low]
+    return max(B[low, low], 0.0) < ratio * B[high, high]
+
+
+def _times4(A, B):
+    """The product A B of two (4, 4) matrices."""
+    C = np.empty((4, 4))
+    for i in range(4):
+        for j in range(4):
+            C[i, j] = (A[i, 0] * B[0, j] + A[i, 1] * B[1, j] + A[i, 2] * B[2, j]
+                       + A[i, 3] * B[3, j])
+    return C
+
+
+def _rigid_inverse(T):
+    """The inverse of the rigid transform T (4, 4): (R^T, -R^T p)."""
+    inverse = np.zeros((4, 4))
+    for i in range(3):
+        for j in range(3):
+            inverse[i, j] = T[j, i]
+        inverse[i, 3] = -(T[0, i] * T[0, 3] + T[1, i] * T[1, 3] + T[2, i] * T[2, 3])
+    inverse[3, 3] = 1.0
+    return inverse
+
+
+def _quaternion(R):
+    """``dqlab._formulas.quaternion_from_matrix_entries`` of the rotation block of R on
+    floats: Shepperd's row of the largest diagonal entry of K = 4 q q^T, w >= 0."""
+    r00, r01, r02 = R[0, 0], R[0, 1], R[0, 2]
+    r10, r11, r12 = R[1, 0], R[1, 1], R[1, 2]
+    r20, r21, r22 = R[2, 0], R[2, 1], R[2, 2]
+    tr = r00 + r11 + r22
+    K = (1.0 + tr, 1.0 + r00 - r11 - r22, 1.0 - r00 + r11 - r22, 1.0 - r00 - r11 + r22,
+         r21 - r12, r02 - r20, r10 - r01, r01 + r10, r02 + r20, r12 + r21)
+    k = 1 if K[1] > K[0] else 0
+    if K[2] > K[k]:
+        k = 2
+    if K[3] > K[k]:
+        k = 3
+    if k == 0:
+        w, x, y, z = K[0], K[4], K[5], K[6]
+    elif k == 1:
+        w, x, y, z = K[4], K[1], K[7], K[8]
+    elif k == 2:
+        w, x, y, z = K[5], K[7], K[2], K[9]
+    else:
+        w, x, y, z = K[6], K[8], K[9], K[3]
+    s = 0.5 / math.sqrt(K[k])
+    if w < 0.0:
+        s = -s
+    return w * s, x * s, y * s, z * s
+
+
 _Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE = (
     INDEX[name] for name in ("q0", "c0", "s0", "t00", "tp0", "F0", "x0", "act", "size"))
 _COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_size", "_same", "_unique",
               "_wrap", "_exact_one_pose", "_family_member", "_feasible_theta234",
-              "_exact_flange", "_exact_fk", "_exact_poses", "_one_pose", "_accept", "_gram",
+              "_exact_flange", "_exact_fk", "_exact_poses", "_repair", "_corrected_restarts",
+              "_flip_restarts", "_move_restarts", "_restart", "_flip",
+              "_near_singular_directions", "_jacobi_smallest", "_times4", "_rigid_inverse",
+              "_quaternion", "_one_pose", "_accept", "_gram",
               "_smallest", "_largest_diagonal_column", "_times", "_rayleigh", "_are_new",
               "_load", "_recompute", "_kernel", "_outputs", "_pose_errors", "_dot_rows",
               "_deflated", "_cholesky", "_near_rows"]

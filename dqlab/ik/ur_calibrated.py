@@ -116,6 +116,7 @@ from .._fast.newton_compiled import newton as compiled_newton
 from .._fast.newton_compiled import one_pose as compiled_one_pose
 from .._fast.newton_compiled import ready as compiled_ready
 from .._fast.newton_compiled import refresh as compiled_refresh
+from .._fast.newton_compiled import repair as compiled_repair
 from .._fast.newton_compiled import smallest as compiled_smallest
 from .._fast.newton_compiled import unique as compiled_unique
 from .._formulas import quaternion_from_matrix_entries, rigid_inverse
@@ -461,7 +462,8 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
     polished.record(rows, *_newton(*chain, q0[rows], X_0T[rows // 8], tol, max_iter))
     polished.converged[extra] &= polished.are_new(extra, polished.q[extra],   # keep them
                                                   polished.unique() & found)  # if new
-    _repair(chain, nearest, polished, q0, found, exact_solutions, X_0T, X_T6, tol, max_iter)
+    _repair(chain, nearest, polished, q0, found, exact_solutions, X_0T, X_T6, tol, max_iter,
+            (references, wide, singular_tol, near_limit))
     _family(chain, nearest, polished, X_06, X_0T, exact_solutions, tol, max_iter)
     _deflate(chain, nearest, polished, X_0T, tol, max_iter)
     done = np.flatnonzero(polished.done)
@@ -886,7 +888,8 @@ def _checked_tool(tool, pose_tol):
     return tool
 
 
-def _repair(chain, nearest, polished, q0, found, exact_solutions, X_0T, X_T6, tol, max_iter):
+def _repair(chain, nearest, polished, q0, found, exact_solutions, X_0T, X_T6, tol, max_iter,
+            closed_form_options):
     r"""Restart the branches missing from a pose: converged onto another branch's solution
     (near a singularity the exact arm's start may lie on the wrong side of the calibrated
     arm's), or not converged. Restarts, in turn:
@@ -905,7 +908,21 @@ def _repair(chain, nearest, polished, q0, found, exact_solutions, X_0T, X_T6, to
 
     The first restart that converges to a solution the pose does not have yet replaces the
     branch; ``polished`` is updated in place. A joint vector that several branches of a pose
-    move (the same sibling's solution) is screened, and each of its moves stepped, once."""
+    move (the same sibling's solution) is screened, and each of its moves stepped, once.
+    ``exact_solutions`` is the exact arm's closed form of the poses, whose references,
+    tolerance, singular and near tolerances are ``closed_form_options``. With numba, all of
+    it is compiled, pose by pose (``dqlab._fast.newton_compiled.repair``, tested equal)."""
+    if compiled_ready():
+        references, wide, singular_tol, near_tol = closed_form_options
+        n = X_0T.shape[0]
+        compiled_repair(nearest.links, chain[1], nearest.exact,
+                        np.zeros(n) if references is None else references[:, 5], wide,
+                        singular_tol, NEAR_WRIST, near_tol, polished.q, polished.done,
+                        polished.converged, polished.X, polished.measures, polished.errors, q0,
+                        found, X_0T, X_T6, tol, max_iter, restart_iter=_RESTART_ITER,
+                        plain=_PLAIN_STEPS, stop_factor=_STOP, give_up_after=_GIVE_UP_AFTER,
+                        damping=DAMPING, max_step=_MAX_STEP, ways=_WAYS, near_ratio=_NEAR)
+        return
     unique = polished.unique()
     missing = polished.done & ~unique
     if not missing.any():
