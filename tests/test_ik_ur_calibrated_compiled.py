@@ -499,14 +499,14 @@ def copied(polished):
 @pytest.mark.parametrize("which", ["UR10e (ur_calibration documentation)",
                                    "UR3 (calibration.conf)", "synthetic, with a tool"])
 def test_compiled_repairs_equal_the_numpy_path(which, numpy_path, monkeypatch):
-    """The restarts of _repair, compiled pose by pose (dqlab._fast.newton_compiled.repair),
-    leave the branches of the poses that need them as the numpy path does: the same rows
-    restarted and converged, the same distinct solutions, the joint vectors to the
-    rounding (1e-8 rad: Newton stops at tol / 10, which a singularity magnifies), each
-    reproducing its pose. The states are the solver's own, recorded where it calls
-    _repair: poses near each singularity of two real calibrations and of a synthetic one
-    with a tool and a reference (theta6 for the wrist family's member of the corrected
-    pose's closed form)."""
+    """The repairs (_repair, _family and _deflate), compiled pose by pose
+    (dqlab._fast.newton_compiled.repairs), leave the branches of the poses that need them
+    as the numpy path does: the same rows restarted and converged, the same distinct
+    solutions, the joint vectors to the rounding (1e-8 rad: Newton stops at tol / 10,
+    which a singularity magnifies), each reproducing its pose. The states are the solver's
+    own, recorded where it calls the repairs: poses near each singularity of two real
+    calibrations and of a synthetic one with a tool and a reference (theta6 for the wrist
+    family's member of the corrected pose's closed form)."""
     from real_calibrations import real_calibrations
     if which.startswith("synthetic"):
         robot = calibrated(60)
@@ -518,21 +518,20 @@ def test_compiled_repairs_equal_the_numpy_path(which, numpy_path, monkeypatch):
     q = np.concatenate([singular_poses(robot, kind, distance, 60, 61)
                         for kind in ("wrist", "elbow", "shoulder") for distance in (1e-2, 1e-3)])
     calls = []
-    repair = module._repair
+    repairs = module._repairs
 
     def record(chain, nearest, polished, *rest):
         calls.append((chain, nearest, copied(polished), *rest))
-        return repair(chain, nearest, polished, *rest)
+        return repairs(chain, nearest, polished, *rest)
 
-    monkeypatch.setattr(module, "_repair", record)
+    monkeypatch.setattr(module, "_repairs", record)
     ur(robot, robot.fk(q), **options)
     assert len(calls) == 1
-    chain, nearest, before, q0, found, exact_solutions, X_0T, X_T6, tol, max_iter, rest = \
-        calls[0]
+    chain, nearest, before, *rest = calls[0]
+    tol = rest[6]
     fast, plain = copied(before), copied(before)
-    repair(chain, nearest, fast, q0, found, exact_solutions, X_0T, X_T6, tol, max_iter, rest)
-    numpy_path(repair, chain, nearest, plain, q0, found, exact_solutions, X_0T, X_T6, tol,
-               max_iter, rest)
+    repairs(chain, nearest, fast, *rest)
+    numpy_path(repairs, chain, nearest, plain, *rest)
     restarted = fast.done & ~before.done | (fast.converged & ~before.converged)
     assert restarted.sum() >= 20, restarted.sum()               # many rows restarted
     for name in ("done", "converged"):

@@ -54,7 +54,7 @@ from .newton_lanes import size as lane_size
 from .newton_lanes import step as lane_step
 
 __all__ = ["ready", "refresh", "newton", "one_pose", "exact_one_pose", "exact_poses", "exact_fk",
-           "unique", "are_new", "accept", "near_rows", "gram", "smallest", "deflated", "repair"]
+           "unique", "are_new", "accept", "near_rows", "gram", "smallest", "deflated", "repairs"]
 
 _COMPILED = []     # the functions below the wrappers, compiled in place by ready()
 _READY = None      # whether numba is there (the kernels compiled), once known
@@ -1030,70 +1030,92 @@ def _dot_rows(A, i, B, j):
 
 
 # --------------------------------------------------------------------------------------
-# The restarts of ``dqlab.ik.ur_calibrated._repair``, compiled
+# The repairs of ``dqlab.ik.ur_calibrated`` (_repair, _family, _deflate), compiled
 
 
-def repair(links, tool, exact, theta6_ref, wide, singular_tol, near_wrist, near_tol, q, done,
-           converged, X, measures, errors, q0, found, X_0T, X_T6, tol, max_iter, *,
-           restart_iter, plain, stop_factor, give_up_after, damping, max_step, ways,
-           near_ratio):
-    """``dqlab.ik.ur_calibrated._repair`` compiled, pose by pose: the restarts of the
-    branches missing from each pose (the corrected closed form, the flips, the moves along
-    the most singular direction), the arrays of its ``_Polished`` (``q``, ``done``,
-    ``converged``, ``X``, ``measures``, ``errors``; C-contiguous) updated in place.
-    ``exact`` the nearest exact arm's constants, ``theta6_ref`` (n,) the theta6 of each
-    pose's reference (0 without one), ``wide``, ``singular_tol``, ``near_tol`` the
-    tolerances of its closed form there; ``q0`` (8 n, 6) the branches' starts and
-    ``found`` (8 n,) those the exact arm found; ``ways`` the moves along the most singular
-    direction and ``near_ratio`` the eigenvalue ratio below which a joint vector is near a
-    singularity. The same steps in the same order as that function (tested equal to the
-    rounding); the most singular direction by inverse iteration where it is certain, by
-    Jacobi's method elsewhere (``numpy.linalg.eigh``'s answer)."""
+def repairs(links, tool, exact, theta6_ref, wide, singular_tol, near_wrist, near_tol, q, done,
+            converged, X, measures, errors, q0, found, X_0T, X_T6, X_06, tol, max_iter, *,
+            restart_iter, plain, stop_factor, give_up_after, damping, max_step, ways,
+            near_ratio, family, deflation_ways):
+    """``_repair``, ``_family`` and ``_deflate`` of ``dqlab.ik.ur_calibrated`` compiled, pose
+    by pose: the restarts of the branches missing from each pose (the corrected closed
+    form, the flips, the moves along the most singular direction), the wrist family's
+    members as starts, and deflated Newton; the arrays of its ``_Polished`` (``q``,
+    ``done``, ``converged``, ``X``, ``measures``, ``errors``; C-contiguous) updated in
+    place. ``exact`` the nearest exact arm's constants, ``theta6_ref`` (n,) the theta6 of
+    each pose's reference (0 without one), ``wide``, ``singular_tol``, ``near_tol`` the
+    tolerances of its closed form; ``q0`` (8 n, 6) the branches' starts, ``found`` (8 n,)
+    those the exact arm found, ``X_0T``, ``X_06`` (n, 4, 4) the targets and flanges;
+    ``ways`` the moves along the most singular direction of ``_repair``,
+    ``deflation_ways`` those of ``_deflate``, ``near_ratio`` the eigenvalue ratio below
+    which a joint vector is near a singularity, ``family`` the wrist family's numbers
+    (members, ``_NEAR_MEASURE``, ``_FEW_BRANCHES``, ``_FEW_WRIST``, the closed form's
+    tolerance and near_tol for them). The same steps in the same order as those functions
+    (tested equal to the rounding); the most singular direction by inverse iteration where
+    it is certain, by Jacobi's method elsewhere (``numpy.linalg.eigh``'s answer)."""
     unique = np.empty(converged.shape[0], dtype=np.bool_)
     _unique(q, converged, unique)
-    _repair(np.asarray(links, dtype=float), np.ascontiguousarray(tool, dtype=float),
-            np.asarray(exact, dtype=float), np.ascontiguousarray(theta6_ref, dtype=float),
-            float(wide), float(singular_tol), float(near_wrist), float(near_tol), q, done,
-            converged, X, measures, errors, np.ascontiguousarray(q0, dtype=float),
-            np.ascontiguousarray(found), np.ascontiguousarray(X_0T, dtype=float),
-            np.ascontiguousarray(X_T6, dtype=float), unique, float(stop_factor * tol),
-            int(min(plain, restart_iter, max_iter)), int(min(max_iter, restart_iter)),
-            int(give_up_after), float(damping), float(max_step),
-            np.asarray(ways, dtype=float), float(near_ratio))
+    members, near_measure, few_branches, few_wrist, member_tol, member_near = family
+    _repairs(np.asarray(links, dtype=float), np.ascontiguousarray(tool, dtype=float),
+             np.asarray(exact, dtype=float), np.ascontiguousarray(theta6_ref, dtype=float),
+             float(wide), float(singular_tol), float(near_wrist), float(near_tol), q, done,
+             converged, X, measures, errors, np.ascontiguousarray(q0, dtype=float),
+             np.ascontiguousarray(found), np.ascontiguousarray(X_0T, dtype=float),
+             np.ascontiguousarray(X_T6, dtype=float), np.ascontiguousarray(X_06, dtype=float),
+             unique, float(tol), float(stop_factor * tol),
+             int(min(plain, restart_iter, max_iter)), int(min(max_iter, restart_iter)),
+             int(give_up_after), float(damping), float(max_step),
+             np.asarray(ways, dtype=float), float(near_ratio),
+             (int(members), float(near_measure), int(few_branches), float(few_wrist),
+              float(member_tol), float(member_near)),
+             np.asarray(deflation_ways, dtype=float))
 
 
-def _repair(links, tool, exact, theta6_ref, wide, singular_tol, near_wrist, near_tol, q, done,
-            converged, X, measures, errors, q0, found, X_0T, X_T6, unique, stop, plain,
-            max_iter, give_up_after, damping, max_step, ways, near_ratio):
-    """:func:`repair`'s work, pose by pose (the poses are independent)."""
+def _repairs(links, tool, exact, theta6_ref, wide, singular_tol, near_wrist, near_tol, q, done,
+             converged, X, measures, errors, q0, found, X_0T, X_T6, X_06, unique, tol, stop,
+             plain, max_iter, give_up_after, damping, max_step, ways, near_ratio, family,
+             deflation_ways):
+    """:func:`repairs`' work, pose by pose (the poses are independent)."""
     for pose in range(X_0T.shape[0]):
-        base = 8 * pose
-        missing = False
-        for k in range(8):
-            missing = missing or (done[base + k] and not unique[base + k])
-        if not missing:
-            continue
         restart = (links, tool, X_0T[pose], stop, plain, max_iter, give_up_after, damping,
                    max_step, q, done, converged, X, measures, errors, unique)
-        _corrected_restarts(pose, exact, theta6_ref[pose], wide, singular_tol, near_wrist,
-                            near_tol, X_T6, restart)
-        wanted = np.empty(8, dtype=np.int64)
-        w = 0
-        for k in range(8):
-            if done[base + k] and not unique[base + k]:
-                wanted[w] = base + k
-                w += 1
-        if w == 0:
-            continue
-        _flip_restarts(wanted[:w], exact, restart)
-        v = 0
-        for i in range(w):                              # still missing, and found by the
-            row = wanted[i]                             # exact arm
-            if not unique[row] and found[row]:
-                wanted[v] = row
-                v += 1
-        if v:
-            _move_restarts(wanted[:v], q0, ways, near_ratio, restart)
+        _repair_restarts(pose, exact, theta6_ref[pose], wide, singular_tol, near_wrist,
+                         near_tol, q0, found, X_T6, ways, near_ratio, restart)
+        _family_restarts(pose, exact, X_06[pose], singular_tol, near_wrist, family, tol,
+                         restart)
+        _deflation_restarts(pose, exact, deflation_ways, near_ratio, family[1], max_iter,
+                            restart)
+
+
+def _repair_restarts(pose, exact, theta6_ref, wide, singular_tol, near_wrist, near_tol, q0,
+                     found, X_T6, ways, near_ratio, restart):
+    """``dqlab.ik.ur_calibrated._repair`` of one pose."""
+    done, unique = restart[10], restart[15]
+    base = 8 * pose
+    missing = False
+    for k in range(8):
+        missing = missing or (done[base + k] and not unique[base + k])
+    if not missing:
+        return
+    _corrected_restarts(pose, exact, theta6_ref, wide, singular_tol, near_wrist, near_tol,
+                        X_T6, restart)
+    wanted = np.empty(8, dtype=np.int64)
+    w = 0
+    for k in range(8):
+        if done[base + k] and not unique[base + k]:
+            wanted[w] = base + k
+            w += 1
+    if w == 0:
+        return
+    _flip_restarts(wanted[:w], exact, restart)
+    v = 0
+    for i in range(w):                                  # still missing, and found by the
+        row = wanted[i]                                 # exact arm
+        if not unique[row] and found[row]:
+            wanted[v] = row
+            v += 1
+    if v:
+        _move_restarts(wanted[:v], q0, ways, near_ratio, restart)
 
 
 def _corrected_restarts(pose, exact, theta6_ref, wide, singular_tol, near_wrist, near_tol,
@@ -1206,6 +1228,160 @@ def _move_restarts(wanted, q0, ways, near_ratio, restart):
         for j in range(6):
             starts[u, j] = vectors[vector, j] + ways[way] * step[vector, j]
     _restart(owners[:m], starts, which, restart)
+
+
+def _family_restarts(pose, exact, X_06, singular_tol, near_wrist, family, tol, restart):
+    """``dqlab.ik.ur_calibrated._family`` of one pose: the members of the exact arm's wrist
+    family (``family``: their number, the thresholds of ``_family_members`` and the
+    closed form's tolerance and near_tol there) offered to its missing branches."""
+    members, near_measure, few_branches, few_wrist, member_tol, member_near = family
+    q, done, converged, unique = restart[9], restart[10], restart[11], restart[15]
+    base = 8 * pose
+    _unique(q[base:base + 8], converged[base:base + 8], unique[base:base + 8])
+    have, wrist, near_wrist_found, count = 0, False, False, 0
+    for k in range(8):                                  # _family_members
+        sin5 = abs(math.sin(q[base + k, 4] + exact[10]))
+        if unique[base + k]:
+            have += 1
+            near_wrist_found = near_wrist_found or sin5 >= few_wrist
+        wrist = wrist or (done[base + k] and sin5 < near_measure)
+    if have == 8:
+        return
+    few = have <= few_branches
+    if wrist or (few and not near_wrist_found):
+        count = members
+    elif few:
+        count = 1
+    else:
+        return
+    qw, qx, qy, qz = _quaternion(X_06)
+    solutions, errs = np.zeros((8, 6)), np.zeros((2, 8))
+    flags = np.zeros(4, dtype=np.bool_)
+    starts, labels = np.empty((8 * count, 6)), np.empty(8 * count, dtype=np.int64)
+    m = 0
+    for j in range(count):
+        theta6 = -math.pi + 2.0 * math.pi / members * j if count > 1 else 0.0
+        solutions[:] = 0.0
+        errs[:] = 0.0
+        ended = _exact_one_pose(qw, qx, qy, qz, X_06[0, 3], X_06[1, 3], X_06[2, 3], X_06[0, 2],
+                                X_06[1, 2], X_06[2, 2], X_06, theta6, exact, member_tol,
+                                singular_tol, near_wrist, member_near, solutions, errs, flags)
+        if ended != SOLVED:
+            continue
+        for k in range(8):
+            if not (errs[0, k] <= member_tol and errs[1, k] <= member_tol):
+                continue
+            _off_the_edge(solutions[k], k, errs[0, k], tol, exact)
+            label = _branch(solutions[k], exact)
+            if not unique[base + label]:                # a start for a missing branch
+                starts[m] = solutions[k]
+                labels[m] = label
+                m += 1
+    missing = np.empty(8, dtype=np.bool_)
+    for k in range(8):
+        missing[k] = not unique[base + k]
+    _offer(pose, starts[:m], labels[:m], missing, restart)
+
+
+def _deflation_restarts(pose, exact, ways, near_ratio, near_measure, steps, restart):
+    """``dqlab.ik.ur_calibrated._deflate`` of one pose: deflated Newton from its solutions
+    near a singularity, moved along the most singular direction by ``ways``, offered to its
+    branches still missing."""
+    (links, tool, X_target, stop, _, _, give_up_after, damping, max_step, q, done, converged,
+     _, measures, _, unique) = restart
+    base = 8 * pose
+    _unique(q[base:base + 8], converged[base:base + 8], unique[base:base + 8])
+    wanted = np.empty(8, dtype=np.bool_)
+    moved = np.empty(8, dtype=np.int64)
+    any_wanted, count = False, 0
+    for k in range(8):
+        r = base + k
+        wanted[k] = done[r] and not unique[r]
+        any_wanted = any_wanted or wanted[k]
+        if unique[r] and min(measures[0, r], measures[1, r],
+                             measures[2, r] / exact[3]) < near_measure:
+            moved[count] = r
+            count += 1
+    if not any_wanted or count == 0:
+        return
+    near, direction = _near_singular_directions(links, tool, q[moved[:count]], near_ratio)
+    n_ways = ways.shape[0]
+    starts = np.empty((count * n_ways, 6))
+    m = 0
+    for i in range(count):
+        if near[i]:
+            for way in range(n_ways):
+                for j in range(6):
+                    starts[m, j] = q[moved[i], j] + ways[way] * direction[i, j]
+                m += 1
+    if m == 0:
+        return
+    known, have = np.zeros((m, 8, 6)), np.zeros((m, 8), dtype=np.bool_)
+    targets = np.empty((m, 4, 4))
+    for i in range(m):
+        targets[i] = X_target
+        for k in range(8):
+            if unique[base + k]:
+                have[i, k] = True
+                known[i, k] = q[base + k]
+    starts = starts[:m].copy()
+    _deflated(links, tool, starts, targets, known, have, steps, stop, give_up_after, damping,
+              max_step)
+    labels = np.empty(m, dtype=np.int64)
+    for i in range(m):
+        labels[i] = _branch(starts[i], exact)
+    _offer(pose, starts, labels, wanted, restart)
+
+
+def _offer(pose, starts, labels, missing, restart):
+    """``dqlab.ik.ur_calibrated._offer`` of one pose: each start offered to every branch
+    ``missing`` (8,), the branch of its label first, then the others in order; each start
+    stepped once (:func:`_restart`)."""
+    m = starts.shape[0]
+    owners = np.empty(8 * m, dtype=np.int64)
+    which = np.empty(8 * m, dtype=np.int64)
+    e = 0
+    for j in range(m):                                  # its own branch first ...
+        if missing[labels[j]]:
+            owners[e], which[e] = 8 * pose + labels[j], j
+            e += 1
+    for j in range(m):                                  # ... then the others
+        for k in range(8):
+            if missing[k] and k != labels[j]:
+                owners[e], which[e] = 8 * pose + k, j
+                e += 1
+    if e == 0:
+        return
+    used = np.unique(which[:e])                         # each start stepped once
+    _restart(owners[:e], starts[used], np.searchsorted(used, which[:e]), restart)
+
+
+def _off_the_edge(row, k, error, tol, exact):
+    """``dqlab.ik.ur_calibrated._off_the_edge`` of row k of a pose, valid with the error
+    ``error``: moved off the elbow singularity where it clips the elbow."""
+    if not error > tol:
+        return
+    theta3 = row[2] + exact[8]
+    if not abs(math.sin(theta3)) < 1e-6:
+        return
+    a2, a3 = exact[1], exact[2]
+    delta = max(math.sqrt(2.0 * abs(a2 + a3) * error / abs(a2 * a3)), 0.01)
+    up = 1.0 if k // 2 % 2 == 0 else -1.0
+    row[2] += up * _sign(math.cos(theta3)) * _sign(a2 * a3) * delta
+
+
+def _sign(x):
+    """numpy's sign of a float: -1, 0 or 1."""
+    return 1.0 if x > 0.0 else (-1.0 if x < 0.0 else 0.0)
+
+
+def _branch(q, exact):
+    """``dqlab.ik.ur_calibrated._branches`` of one joint vector: 4 s + 2 e + w from the signs
+    of ``branch_measures`` on the exact arm."""
+    t1, t2, t3, t4 = (q[1] + exact[7], q[2] + exact[8], q[3] + exact[9], q[4] + exact[10])
+    h = exact[1] * math.cos(t1) + exact[2] * math.cos(t1 + t2) + exact[4] * math.sin(
+        t1 + t2 + t3)
+    return 4 * (h < 0.0) + 2 * (math.sin(t2) < 0.0) + (math.sin(t4) < 0.0)
 
 
 def _restart(owners, starts, which, restart):
@@ -1373,7 +1549,9 @@ _Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE = (
     INDEX[name] for name in ("q0", "c0", "s0", "t00", "tp0", "F0", "x0", "act", "size"))
 _COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_size", "_same", "_unique",
               "_wrap", "_exact_one_pose", "_family_member", "_feasible_theta234",
-              "_exact_flange", "_exact_fk", "_exact_poses", "_repair", "_corrected_restarts",
+              "_exact_flange", "_exact_fk", "_exact_poses", "_repairs", "_repair_restarts",
+              "_corrected_restarts", "_family_restarts", "_deflation_restarts", "_offer",
+              "_off_the_edge", "_sign", "_branch",
               "_flip_restarts", "_move_restarts", "_restart", "_flip",
               "_near_singular_directions", "_jacobi_smallest", "_times4", "_rigid_inverse",
               "_quaternion", "_one_pose", "_accept", "_gram",

@@ -116,7 +116,7 @@ from .._fast.newton_compiled import newton as compiled_newton
 from .._fast.newton_compiled import one_pose as compiled_one_pose
 from .._fast.newton_compiled import ready as compiled_ready
 from .._fast.newton_compiled import refresh as compiled_refresh
-from .._fast.newton_compiled import repair as compiled_repair
+from .._fast.newton_compiled import repairs as compiled_repairs
 from .._fast.newton_compiled import smallest as compiled_smallest
 from .._fast.newton_compiled import unique as compiled_unique
 from .._formulas import quaternion_from_matrix_entries, rigid_inverse
@@ -164,6 +164,7 @@ _WAYS = np.array([0.05, -0.05, 0.2, -0.2, 0.6, -0.6])
 _NEAR_GAPS = 4.0       # near_singular on a calibrated arm: at least this many rotation gaps
 _NEAR_MEASURE = 0.1    # a singularity measure below which a pose's missing branches are sought
 _FAMILY = 6            # members of the exact arm's wrist family taken as starts
+_FAMILY_TOL = 0.5      # the closed form's tolerance for them
 _FEW_BRANCHES = 2      # a pose with this many branches or fewer ...
 _FEW_WRIST = 0.2       # ... none with |sin theta_5| above this, takes the family's starts
 _DEFLATION_WAYS = np.array([0.05, -0.05, 0.3, -0.3])   # the moves of a deflation's starts
@@ -462,10 +463,8 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
     polished.record(rows, *_newton(*chain, q0[rows], X_0T[rows // 8], tol, max_iter))
     polished.converged[extra] &= polished.are_new(extra, polished.q[extra],   # keep them
                                                   polished.unique() & found)  # if new
-    _repair(chain, nearest, polished, q0, found, exact_solutions, X_0T, X_T6, tol, max_iter,
-            (references, wide, singular_tol, near_limit))
-    _family(chain, nearest, polished, X_06, X_0T, exact_solutions, tol, max_iter)
-    _deflate(chain, nearest, polished, X_0T, tol, max_iter)
+    _repairs(chain, nearest, polished, q0, found, exact_solutions, X_06, X_0T, X_T6, tol,
+             max_iter, (references, wide, singular_tol, near_limit))
     done = np.flatnonzero(polished.done)
     pe = start.position_error.reshape(n * 8).copy()
     re = start.rotation_error.reshape(n * 8).copy()
@@ -888,8 +887,34 @@ def _checked_tool(tool, pose_tol):
     return tool
 
 
-def _repair(chain, nearest, polished, q0, found, exact_solutions, X_0T, X_T6, tol, max_iter,
-            closed_form_options):
+def _repairs(chain, nearest, polished, q0, found, exact_solutions, X_06, X_0T, X_T6, tol,
+             max_iter, closed_form_options):
+    """Steps 4 of the module: :func:`_repair`, :func:`_family` and :func:`_deflate` of the
+    poses, ``polished`` updated in place; ``exact_solutions`` the exact arm's closed form
+    of the poses, whose references, tolerance and singular and near tolerances are
+    ``closed_form_options``. With numba, the three run compiled, pose by pose
+    (``dqlab._fast.newton_compiled.repairs``, tested equal to them)."""
+    if not compiled_ready():
+        _repair(chain, nearest, polished, q0, found, exact_solutions, X_0T, X_T6, tol,
+                max_iter)
+        _family(chain, nearest, polished, X_06, X_0T, exact_solutions, tol, max_iter)
+        _deflate(chain, nearest, polished, X_0T, tol, max_iter)
+        return
+    references, wide, singular_tol, near_tol = closed_form_options
+    n = X_0T.shape[0]
+    compiled_repairs(nearest.links, chain[1], nearest.exact,
+                     np.zeros(n) if references is None else references[:, 5], wide,
+                     singular_tol, NEAR_WRIST, near_tol, polished.q, polished.done,
+                     polished.converged, polished.X, polished.measures, polished.errors, q0,
+                     found, X_0T, X_T6, X_06, tol, max_iter, restart_iter=_RESTART_ITER,
+                     plain=_PLAIN_STEPS, stop_factor=_STOP, give_up_after=_GIVE_UP_AFTER,
+                     damping=DAMPING, max_step=_MAX_STEP, ways=_WAYS, near_ratio=_NEAR,
+                     family=(_FAMILY, _NEAR_MEASURE, _FEW_BRANCHES, _FEW_WRIST, _FAMILY_TOL,
+                             NEAR_SINGULAR),
+                     deflation_ways=_DEFLATION_WAYS)
+
+
+def _repair(chain, nearest, polished, q0, found, exact_solutions, X_0T, X_T6, tol, max_iter):
     r"""Restart the branches missing from a pose: converged onto another branch's solution
     (near a singularity the exact arm's start may lie on the wrong side of the calibrated
     arm's), or not converged. Restarts, in turn:
@@ -909,20 +934,7 @@ def _repair(chain, nearest, polished, q0, found, exact_solutions, X_0T, X_T6, to
     The first restart that converges to a solution the pose does not have yet replaces the
     branch; ``polished`` is updated in place. A joint vector that several branches of a pose
     move (the same sibling's solution) is screened, and each of its moves stepped, once.
-    ``exact_solutions`` is the exact arm's closed form of the poses, whose references,
-    tolerance, singular and near tolerances are ``closed_form_options``. With numba, all of
-    it is compiled, pose by pose (``dqlab._fast.newton_compiled.repair``, tested equal)."""
-    if compiled_ready():
-        references, wide, singular_tol, near_tol = closed_form_options
-        n = X_0T.shape[0]
-        compiled_repair(nearest.links, chain[1], nearest.exact,
-                        np.zeros(n) if references is None else references[:, 5], wide,
-                        singular_tol, NEAR_WRIST, near_tol, polished.q, polished.done,
-                        polished.converged, polished.X, polished.measures, polished.errors, q0,
-                        found, X_0T, X_T6, tol, max_iter, restart_iter=_RESTART_ITER,
-                        plain=_PLAIN_STEPS, stop_factor=_STOP, give_up_after=_GIVE_UP_AFTER,
-                        damping=DAMPING, max_step=_MAX_STEP, ways=_WAYS, near_ratio=_NEAR)
-        return
+    With numba, this step runs compiled (:func:`_repairs`)."""
     unique = polished.unique()
     missing = polished.done & ~unique
     if not missing.any():
@@ -994,7 +1006,7 @@ def _family(chain, nearest, polished, X_06, X_0T, exact_solutions, tol, max_iter
     takes :data:`_FAMILY` members of the family as starts; a pose with at most
     :data:`_FEW_BRANCHES` solutions elsewhere (a whole shoulder of the calibrated arm's that
     the exact arm's closed form clips, centimetres off) takes one (:func:`_family_members`).
-    A member is the exact arm's closed form with a tolerance of 0.5 (which
+    A member is the exact arm's closed form with a tolerance of :data:`_FAMILY_TOL`, 0.5 (which
     makes every pose within :math:`|\theta_5| \lesssim 0.1` a family, and clipped rows
     valid) and references :math:`\theta_6 = -\pi + 2\pi j / 6`. Each start is offered to
     the missing branches of its pose, the branch of its own label
@@ -1013,7 +1025,7 @@ def _family(chain, nearest, polished, X_06, X_0T, exact_solutions, tol, max_iter
     references = np.zeros((member_of.size, 6))
     family = np.repeat(count, count) > 1                # else one member, theta_6 from 0
     references[:, 5] = np.where(family, -np.pi + 2.0 * np.pi / _FAMILY * j, 0.0)
-    members = exact_solutions(X_06[member_of], tol=0.5, near_tol=NEAR_SINGULAR,
+    members = exact_solutions(X_06[member_of], tol=_FAMILY_TOL, near_tol=NEAR_SINGULAR,
                               ref=references)
     solutions = _off_the_edge(nearest.robot, members.solutions, members.valid,
                               members.position_error, tol).reshape(-1, 6)
