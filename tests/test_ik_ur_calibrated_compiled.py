@@ -451,6 +451,29 @@ def test_smallest_eigenvector_where_certain_is_eighs():
     assert near_e.any() and (~near_e).any() and (~ok).any()      # ... but not at the edge
 
 
+def test_jacobi_smallest_eigenvector_is_eighs():
+    """Where inverse iteration is not certain, the compiled repairs ask Jacobi's rotations:
+    on the spectra of the test above (ratios from 1e-14 to 1, some at the threshold, some
+    with two small eigenvalues) and a singular matrix, the same near / not near as eigh
+    (but within 1e-12 of the threshold, where rounding decides), and the same direction
+    (largest entry positive) to 1e-9 where the two smallest eigenvalues are apart."""
+    compiled.ready()
+    H, lam = spectra(np.random.default_rng(62), 2000)
+    H[-1] = np.eye(6) - np.outer(np.ones(6), np.ones(6)) / 6     # singular
+    near_e, V_e = module._smallest_eigenvector(H)
+    near, V = np.zeros(len(H), dtype=bool), np.zeros((len(H), 6))
+    for r in range(len(H)):
+        near[r] = compiled._jacobi_smallest(H[r], 1e-4, V[r])
+    lam = np.sort(lam, axis=1)
+    ratio = lam[:, 0] / lam[:, -1]
+    clear = np.abs(ratio / 1e-4 - 1.0) > 1e-12
+    clear[-1] = True
+    np.testing.assert_array_equal(near[clear], near_e[clear])
+    apart = lam[:, 1] > 2 * lam[:, 0]
+    assert np.abs(V - V_e)[apart].max() < 1e-9
+    assert near[-1] and near.any() and (~near).any()
+
+
 def test_restarts_step_a_shared_start_once(numpy_path):
     """A start shared by several rows (given once, with which) leaves the same rows, joint
     vectors, errors and marks as the same start given once per row (fewer than _FEW_ROWS
@@ -530,7 +553,7 @@ def test_compiled_repairs_equal_the_numpy_path(which, numpy_path, monkeypatch):
     chain, nearest, before, *rest = calls[0]
     tol = rest[6]
     fast, plain = copied(before), copied(before)
-    repairs(chain, nearest, fast, *rest)
+    repairs(chain, nearest, fast, *rest, per_pose=True)
     numpy_path(repairs, chain, nearest, plain, *rest)
     restarted = fast.done & ~before.done | (fast.converged & ~before.converged)
     assert restarted.sum() >= 20, restarted.sum()               # many rows restarted

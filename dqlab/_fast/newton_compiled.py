@@ -29,7 +29,9 @@ checked by forward kinematics; the clipping inside the shoulder cylinder; the re
 no row is valid; tested equal to it to the rounding), and :func:`exact_poses` the same for
 a batch of poses, which the batch path and the wrist family's starts come from (a wrist
 centre far beyond reach goes to the closed form's own batch path), :func:`exact_fk` that
-arm's forward kinematics; :func:`deflated` the deflated Newton steps of its ``_deflate``.
+arm's forward kinematics; :func:`deflated` the deflated Newton steps of its ``_deflate``,
+and :func:`repairs` its steps 4 (``_repair``, ``_family`` and ``_deflate``) pose by pose,
+around the same kernels.
 :func:`ready` says whether numba is there and the environment variable ``DQLAB_COMPILED``
 (:mod:`dqlab._fast.compiled`, read again by :func:`refresh`) does not switch the compiled paths
 off; the first compilation takes seconds, and is cached on disk for the next processes.
@@ -39,7 +41,9 @@ rounding: after a step, the cosine and sine of each joint angle are turned by th
 (Taylor series of a step below 0.02 rad) instead of being computed again; and the most
 singular direction comes from inverse iteration instead of ``eigh`` (the same to 1e-9
 where the two smallest eigenvalues of :math:`J^\mathsf{T} J` are apart, tested; where they
-are not, neither direction is better defined than the other).
+are not, neither direction is better defined than the other), or, in :func:`repairs` where
+inverse iteration is not certain of it, from Jacobi's rotations (eigenvalues and vectors
+of a symmetric matrix, as ``eigh`` gives them).
 """
 
 import math

@@ -165,6 +165,7 @@ _NEAR_GAPS = 4.0       # near_singular on a calibrated arm: at least this many r
 _NEAR_MEASURE = 0.1    # a singularity measure below which a pose's missing branches are sought
 _FAMILY = 6            # members of the exact arm's wrist family taken as starts
 _FAMILY_TOL = 0.5      # the closed form's tolerance for them
+_PER_POSE = 8          # up to this many poses, the repairs run compiled pose by pose
 _FEW_BRANCHES = 2      # a pose with this many branches or fewer ...
 _FEW_WRIST = 0.2       # ... none with |sin theta_5| above this, takes the family's starts
 _DEFLATION_WAYS = np.array([0.05, -0.05, 0.3, -0.3])   # the moves of a deflation's starts
@@ -888,13 +889,18 @@ def _checked_tool(tool, pose_tol):
 
 
 def _repairs(chain, nearest, polished, q0, found, exact_solutions, X_06, X_0T, X_T6, tol,
-             max_iter, closed_form_options):
+             max_iter, closed_form_options, per_pose=None):
     """Steps 4 of the module: :func:`_repair`, :func:`_family` and :func:`_deflate` of the
     poses, ``polished`` updated in place; ``exact_solutions`` the exact arm's closed form
     of the poses, whose references, tolerance and singular and near tolerances are
-    ``closed_form_options``. With numba, the three run compiled, pose by pose
-    (``dqlab._fast.newton_compiled.repairs``, tested equal to them)."""
-    if not compiled_ready():
+    ``closed_form_options``. With numba, for up to :data:`_PER_POSE` poses (or as
+    ``per_pose`` says), the three run compiled, pose by pose
+    (``dqlab._fast.newton_compiled.repairs``, tested equal to them): for one pose the
+    numpy calls around the compiled kernels cost more than the steps; for more, the
+    kernels' eight lanes are filled with the restarts of several poses."""
+    if per_pose is None:
+        per_pose = X_0T.shape[0] <= _PER_POSE
+    if not (per_pose and compiled_ready()):
         _repair(chain, nearest, polished, q0, found, exact_solutions, X_0T, X_T6, tol,
                 max_iter)
         _family(chain, nearest, polished, X_06, X_0T, exact_solutions, tol, max_iter)
