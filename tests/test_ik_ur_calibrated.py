@@ -425,7 +425,7 @@ def test_one_pose_path_equals_the_array_path(compiled_kernels, monkeypatch):
         np.testing.assert_array_equal(one.more.valid, batch.more.valid[0])   # and beyond
         np.testing.assert_allclose(one.more.solutions, batch.more.solutions[0], rtol=0,
                                    atol=0 if compiled_kernels else 1e-9)
-    taken = np.array([r is not None for r in lean])
+    taken = np.array([result is not None for result, _ in lean])
     assert taken.size == len(X)                         # a batch of one does not take it
     assert 0.5 < taken.mean() < 1.0 and not taken[-1]   # ... nor does every single pose
 

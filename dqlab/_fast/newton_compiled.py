@@ -104,29 +104,80 @@ def newton(links, tool, q, X_target, tol, max_iter, *, plain, stop_factor, give_
     return q_out, converged, X, measures, errors
 
 
-def one_pose(links, tool, q_start, found, position_error, rotation_error, X_0T, tol,
-             max_iter, singular_tol, d4, near, near_singular, *, plain, stop_factor,
-             give_up_after, damping, max_step):
-    """``dqlab.ik.ur_calibrated._one_pose`` after the closed form, compiled: the Newton steps
-    of the rows ``found`` (8,) of ``q_start`` (8, 6) towards ``X_0T`` (4, 4), then the
-    result's arrays. None when the closed form found no row or missed one by ``near`` or
-    less, or when a row does not converge or two rows converge to the same solution (the
-    pose then takes the array path); else the solutions (8, 6) (wrapped,
-    zero where not valid), ``valid`` (8,), the position and rotation errors (8,) (the
-    polished rows' in place of the closed form's) and the flags (6,): wrist, shoulder and
-    elbow singular, near singular (a measure below ``near_singular``), unreachable, not
-    converged."""
+def one_pose(links, tool, exact, X_06, X_0T, theta6_ref, tol, wide, singular_tol,
+             near_wrist, near_tol, max_iter, *, plain, stop_factor, give_up_after, damping,
+             max_step, polish_near, family):
+    """``dqlab.ik.ur_calibrated._one_pose`` compiled: the exact arm's closed form of the flange
+    ``X_06`` (4, 4) (tolerance ``wide``, the reference's ``theta6_ref``), its rows clipped at
+    the elbow moved off it, the Newton steps of the rows it found towards ``X_0T`` (4, 4),
+    the test for the wrist family's starts (``family``: members, ``_NEAR_MEASURE``,
+    ``_FEW_BRANCHES``, ``_FEW_WRIST``) and for the valid rows near a singularity of the
+    exact arm (``polish_near``), and the near_singular flag. None when the pose needs the
+    array path: the closed form found no row or missed one by ten times ``wide`` or less, a
+    row does not converge or two converge to the same solution, or the pose seeks the wrist
+    family's starts. Else how it ended (1: done; 2: a valid row within ``polish_near`` of a
+    singularity, which the caller polishes and searches beyond), the solutions (8, 6)
+    (wrapped, zero where not valid), ``valid`` (8,), the position and rotation errors (8,)
+    (the polished rows' in place of the closed form's) and the flags (6,): wrist, shoulder
+    and elbow singular, near singular (a measure of the calibrated arm or, when done, of
+    the exact arm at a valid row or at its own rows, below ``near_tol``), unreachable, not
+    converged; and the closed form's own near-singular flag."""
     solutions, valid = np.zeros((8, 6)), np.zeros(8, dtype=np.bool_)
-    flags = np.zeros(6, dtype=np.bool_)
-    pe, re = np.array(position_error, dtype=float), np.array(rotation_error, dtype=float)
-    done = _one_pose(np.asarray(links, dtype=float), np.ascontiguousarray(tool, dtype=float),
-                     np.ascontiguousarray(q_start, dtype=float), np.ascontiguousarray(found),
-                     np.ascontiguousarray(X_0T, dtype=float), float(tol),
-                     float(stop_factor * tol), int(min(plain, max_iter)), int(max_iter),
-                     int(give_up_after), float(damping), float(max_step), float(singular_tol),
-                     float(d4), float(near), float(near_singular), solutions, valid, pe, re,
-                     flags)
-    return (solutions, valid, pe, re, flags) if done else None
+    pe, re = np.zeros(8), np.zeros(8)
+    flags, start_flags = np.zeros(6, dtype=np.bool_), np.zeros(4, dtype=np.bool_)
+    members, near_measure, few_branches, few_wrist = family
+    ended = _lean_pose(np.asarray(links, dtype=float), np.ascontiguousarray(tool, dtype=float),
+                       np.asarray(exact, dtype=float), np.ascontiguousarray(X_06, dtype=float),
+                       np.ascontiguousarray(X_0T, dtype=float), float(theta6_ref), float(tol),
+                       float(wide), float(singular_tol), float(near_wrist), float(near_tol),
+                       float(stop_factor * tol), int(min(plain, max_iter)), int(max_iter),
+                       int(give_up_after), float(damping), float(max_step), float(polish_near),
+                       (int(members), float(near_measure), int(few_branches),
+                        float(few_wrist)), solutions, valid, pe, re, flags, start_flags)
+    if not ended:
+        return None
+    return ended, solutions, valid, pe, re, flags, bool(start_flags[3])
+
+
+def _lean_pose(links, tool, exact, X_06, X_0T, theta6_ref, tol, wide, singular_tol, near_wrist,
+               near_tol, stop, plain, max_iter, give_up_after, damping, max_step, polish_near,
+               family, solutions, valid, pe, re, flags, start_flags):
+    """:func:`one_pose`'s work: 0 as soon as the pose needs the array path."""
+    qw, qx, qy, qz = _quaternion(X_06)
+    start, errors = np.zeros((8, 6)), np.zeros((2, 8))
+    if _exact_one_pose(qw, qx, qy, qz, X_06[0, 3], X_06[1, 3], X_06[2, 3], X_06[0, 2],
+                       X_06[1, 2], X_06[2, 2], X_06, theta6_ref, exact, wide, singular_tol,
+                       near_wrist, near_tol, start, errors, start_flags) != SOLVED:
+        return 0
+    found = np.empty(8, dtype=np.bool_)
+    for k in range(8):
+        found[k] = errors[0, k] <= wide and errors[1, k] <= wide
+        if found[k]:
+            _off_the_edge(start[k], k, errors[0, k], tol, exact)
+        pe[k], re[k] = errors[0, k], errors[1, k]
+    if not _one_pose(links, tool, start, found, X_0T, tol, stop, plain, max_iter, give_up_after,
+                     damping, max_step, singular_tol, exact[3], 10.0 * wide, near_tol,
+                     solutions, valid, pe, re, flags):
+        return 0
+    members, near_measure, few_branches, few_wrist = family
+    have, wrist = 0, False                              # _family_members (done, have: found):
+    for k in range(8):                                  # a pose missing a branch seeks the
+        if found[k]:                                    # family's starts near the wrist
+            have += 1                                   # singularity or with few branches
+            wrist = wrist or abs(math.sin(solutions[k, 4] + exact[10])) < near_measure
+    if have < 8 and (wrist or have <= few_branches):
+        return 0
+    near = np.zeros(8, dtype=np.bool_)
+    _near_rows(solutions, valid, exact, polish_near, near)
+    for k in range(8):
+        if near[k]:
+            return 2                                    # polish and search beyond: the caller
+    if near_tol > polish_near:
+        _near_rows(solutions, valid, exact, near_tol, near)
+        for k in range(8):
+            flags[3] = flags[3] or near[k]
+    flags[3] = flags[3] or start_flags[3]
+    return 1
 
 
 def unique(q, converged):
@@ -1558,7 +1609,7 @@ _COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_size", "_same", "
               "_off_the_edge", "_sign", "_branch",
               "_flip_restarts", "_move_restarts", "_restart", "_flip",
               "_near_singular_directions", "_jacobi_smallest", "_times4", "_rigid_inverse",
-              "_quaternion", "_one_pose", "_accept", "_gram",
+              "_quaternion", "_one_pose", "_lean_pose", "_accept", "_gram",
               "_smallest", "_largest_diagonal_column", "_times", "_rayleigh", "_are_new",
               "_load", "_recompute", "_kernel", "_outputs", "_pose_errors", "_dot_rows",
               "_deflated", "_cholesky", "_near_rows"]

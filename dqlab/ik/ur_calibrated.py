@@ -432,14 +432,17 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
         return closed_form(nearest, X, tol=tol, q_ref=ref, singular_tol=singular_tol,
                            near_tol=near_tol)
 
-    start = exact_solutions(X_06, checked=plain)
-    start.solutions = _off_the_edge(nearest.robot, start.solutions, start.valid,
-                                    start.position_error, tol)
+    start = None
     if batch == ():
-        result = _one_pose(nearest, start, X_0T[0], X_6T, tol, singular_tol, max_iter, wide,
-                           near_limit)
+        result, start = _one_pose(nearest, exact_solutions, X_06[0], X_0T[0], X_6T,
+                                  None if references is None else references[0], plain, tol,
+                                  singular_tol, max_iter, wide, near_limit)
         if result is not None:
             return result
+    if start is None:
+        start = exact_solutions(X_06, checked=plain)
+        start.solutions = _off_the_edge(nearest.robot, start.solutions, start.valid,
+                                        start.position_error, tol)
     q0 = start.solutions.reshape(n * 8, 6).copy()
     errors = start.position_error.reshape(n * 8)
     found = start.valid.reshape(n * 8)                 # the branches the exact arm found
@@ -613,59 +616,88 @@ def _exact_poses(nearest, X_06, q_ref, tol, singular_tol, near_tol, closed_form)
     return IKResult(solutions, valid, errors, rotation_errors, flags, reason)
 
 
-def _one_pose(nearest, start, X_0T, tool, tol, singular_tol, max_iter, wide, near):
-    """The result of :func:`calibrated_ur` for one pose (``start`` the exact arm's
-    :class:`IKResult` of it, ``X_0T`` (4, 4) the target in frame 0) with a few numpy calls,
-    when Newton from the exact arm's branches is all it takes: every branch the exact arm
-    found converges, to distinct solutions, none is missed by a little, and the pose does not
-    seek missing branches from the wrist family (:func:`_family_members`; five poses in
-    six). None otherwise, and the pose takes the array path, which this is tested equal to.
-    With numba, all of it after the closed form is one compiled call
-    (``dqlab._fast.newton_compiled.one_pose``)."""
-    found, pe, re = start.valid, start.position_error, start.rotation_error
+def _one_pose(nearest, exact_solutions, X_06, X_0T, tool, q_ref, checked, tol, singular_tol,
+              max_iter, wide, near):
+    """The result of :func:`calibrated_ur` for one pose (``X_06``, ``X_0T`` (4, 4) its
+    flange and target in frame 0, ``q_ref`` its reference or None, ``exact_solutions`` the
+    exact arm's closed form) with a few numpy calls, when Newton from the exact arm's
+    branches is all it takes: every branch the exact arm found converges, to distinct
+    solutions, none is missed by a little, and the pose does not seek missing branches from
+    the wrist family (:func:`_family_members`; five poses in six). Returns the result, or
+    None and the pose takes the array path, which this is tested equal to; and the exact
+    arm's :class:`IKResult` of the pose (its rows clipped at the elbow moved off it,
+    :func:`_off_the_edge`) where it was computed, else None. With numba, all of it but the
+    polish and the search beyond the rows is one compiled call
+    (``dqlab._fast.newton_compiled.one_pose``), the flange known rigid (``checked``, else
+    checked here as the closed form checks it)."""
     d4 = nearest.robot.links[3].d
-    if compiled_ready():
-        done = compiled_one_pose(nearest.links, tool, start.solutions, found, pe, re, X_0T,
-                                 tol, max_iter, singular_tol, d4, 10.0 * wide, near,
-                                 plain=_PLAIN_STEPS, stop_factor=_STOP,
-                                 give_up_after=_GIVE_UP_AFTER, damping=DAMPING,
-                                 max_step=_MAX_STEP)
+    if compiled_ready() and (checked or rigid_rows(X_06, RIGID_TOL) is not None):
+        done = compiled_one_pose(nearest.links, tool, nearest.exact, X_06, X_0T,
+                                 0.0 if q_ref is None else q_ref[5], tol, wide, singular_tol,
+                                 NEAR_WRIST, near, max_iter, plain=_PLAIN_STEPS,
+                                 stop_factor=_STOP, give_up_after=_GIVE_UP_AFTER,
+                                 damping=DAMPING, max_step=_MAX_STEP,
+                                 polish_near=_POLISH_NEAR,
+                                 family=(_FAMILY, _NEAR_MEASURE, _FEW_BRANCHES, _FEW_WRIST))
         if done is None:
-            return None
-        solutions, valid, pe, re, flags = done
-        flags = dict(zip(_FLAG_NAMES, flags, strict=True))
-    else:
-        if (~found & (pe <= 10.0 * wide)).any() or not found.any():
-            return None
-        rows = np.flatnonzero(found)
-        q, converged, _, measures, errors = _newton(nearest.links, tool, start.solutions[rows],
-                                                    np.broadcast_to(X_0T, (rows.size, 4, 4)),
-                                                    tol, max_iter)
-        Q, M = np.zeros((8, 6)), np.zeros((3, 8))
-        Q[rows], M[:, rows] = q, measures
-        if not converged.all() or (found & ~_unique(Q, found)).any():   # a restart: _repair
-            return None
-        exact = found & (pe <= tol)
-        pe, re = pe.copy(), re.copy()
-        pe[rows], re[rows] = errors
-        valid = found & (pe <= tol) & (re <= tol)
-        solutions = wrap_angle(Q)
-        flags = _flags(M, valid, singular_tol, d4, near)
-        flags["not_converged"] = (exact & ~valid).any()
+            return None, None
+        ended, solutions, valid, pe, re, flags, start_near = done
+        flags = dict(zip(_FLAG_NAMES, flags.tolist(), strict=True))
+        if ended == 1:                                  # (no row near a singularity)
+            return _one_pose_result(solutions, valid, pe, re, flags, None), None
+        return _near_a_singularity(nearest, tool, solutions, valid, pe, re, flags, start_near,
+                                   X_0T, tol, max_iter, near), None
+    start = exact_solutions(X_06[None], checked=checked)
+    start.solutions = _off_the_edge(nearest.robot, start.solutions, start.valid,
+                                    start.position_error, tol)
+    found, pe, re = start.valid, start.position_error, start.rotation_error
+    if (~found & (pe <= 10.0 * wide)).any() or not found.any():
+        return None, start
+    rows = np.flatnonzero(found)
+    q, converged, _, measures, errors = _newton(nearest.links, tool, start.solutions[rows],
+                                                np.broadcast_to(X_0T, (rows.size, 4, 4)),
+                                                tol, max_iter)
+    Q, M = np.zeros((8, 6)), np.zeros((3, 8))
+    Q[rows], M[:, rows] = q, measures
+    if not converged.all() or (found & ~_unique(Q, found)).any():   # a restart: _repair
+        return None, start
+    exact = found & (pe <= tol)
+    pe, re = pe.copy(), re.copy()
+    pe[rows], re[rows] = errors
+    valid = found & (pe <= tol) & (re <= tol)
+    solutions = wrap_angle(Q)
+    flags = _flags(M, valid, singular_tol, d4, near)
+    flags["not_converged"] = (exact & ~valid).any()
     if not found.all() and _family_members(nearest, solutions, found, found)[0]:
-        return None                                     # (found: all converged)
-    # a pose with no valid row near a singularity of the exact arm (most) has none to
-    # polish, none near at a lower threshold, and no solutions beyond its rows
+        return None, start                              # (found: all converged)
+    return _near_a_singularity(nearest, tool, solutions, valid, pe, re, flags,
+                               start.flags["near_singular"], X_0T, tol, max_iter, near), start
+
+
+def _near_a_singularity(nearest, tool, solutions, valid, pe, re, flags, start_near, X_0T, tol,
+                        max_iter, near):
+    """The end of :func:`_one_pose`: a pose with no valid row near a singularity of the
+    exact arm (most) has none to polish, none near at a lower threshold, and no solutions
+    beyond its rows; the others are polished (:func:`_polish`) and searched beyond
+    (:func:`_beyond`). The near_singular flag also counts the exact arm's measures at the
+    valid rows and its own (``start_near``)."""
     polish = _rows_near(nearest, solutions, valid, _POLISH_NEAR).any()
     if polish:
         solutions = _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol)
     if polish or near > _POLISH_NEAR:
-        flags["near_singular"] |= _rows_near(nearest, solutions, valid, near).any()
-    flags["near_singular"] |= start.flags["near_singular"]
+        flags["near_singular"] = flags["near_singular"] or bool(
+            _rows_near(nearest, solutions, valid, near).any())
+    flags["near_singular"] = bool(flags["near_singular"] or start_near)
+    more = _beyond(nearest, tool, solutions, valid, X_0T[None], tol, max_iter) if polish \
+        else None
+    return _one_pose_result(solutions, valid, pe, re, flags, more)
+
+
+def _one_pose_result(solutions, valid, pe, re, flags, more):
+    """The :class:`IKResult` of one pose: its flags as 0-d arrays, its reason, and ``more``
+    (:func:`_beyond`'s arrays, or None: no solution beyond the rows)."""
     flags = {name: np.array(bool(flag)) for name, flag in flags.items()}
-    if polish:
-        more = _beyond(nearest, tool, solutions, valid, X_0T[None], tol, max_iter)
-    else:
+    if more is None:
         more = (np.zeros((1, _MORE, 6)), np.zeros((1, _MORE), dtype=bool),
                 np.zeros((1, _MORE)), np.zeros((1, _MORE)))
     return finish(solutions, valid, pe, re, flags,
