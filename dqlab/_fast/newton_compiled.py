@@ -31,7 +31,8 @@ a batch of poses, which the batch path and the wrist family's starts come from (
 centre far beyond reach goes to the closed form's own batch path), :func:`exact_fk` that
 arm's forward kinematics; :func:`deflated` the deflated Newton steps of its ``_deflate``,
 and :func:`repairs` its steps 4 (``_repair``, ``_family`` and ``_deflate``) pose by pose,
-around the same kernels.
+around the same kernels; :func:`array_poses` its array path for a few poses, up to the
+search beyond the rows.
 :func:`ready` says whether numba is there and the environment variable ``DQLAB_COMPILED``
 (:mod:`dqlab._fast.compiled`, read again by :func:`refresh`) does not switch the compiled paths
 off; the first compilation takes seconds, and is cached on disk for the next processes.
@@ -58,7 +59,8 @@ from .newton_lanes import size as lane_size
 from .newton_lanes import step as lane_step
 
 __all__ = ["ready", "refresh", "newton", "one_pose", "exact_one_pose", "exact_poses", "exact_fk",
-           "unique", "are_new", "accept", "near_rows", "gram", "smallest", "deflated", "repairs"]
+           "unique", "are_new", "accept", "near_rows", "gram", "smallest", "deflated", "repairs",
+           "array_poses"]
 
 _COMPILED = []     # the functions below the wrappers, compiled in place by ready()
 _READY = None      # whether numba is there (the kernels compiled), once known
@@ -1126,6 +1128,199 @@ def repairs(links, tool, exact, theta6_ref, wide, singular_tol, near_wrist, near
              np.asarray(deflation_ways, dtype=float))
 
 
+def array_poses(links, tool, exact, X_06, X_0T, X_T6, theta6_ref, tol, wide, singular_tol,
+                near_wrist, near_tol, max_iter, *, restart_iter, plain, stop_factor,
+                give_up_after, damping, max_step, ways, near_ratio, family, deflation_ways,
+                polish_near):
+    """The array path of ``dqlab.ik.ur_calibrated.calibrated_ur`` for a few poses, compiled
+    pose by pose, up to the search beyond the rows: the exact arm's closed form of each
+    flange ``X_06`` (n, 4, 4) (tolerance ``wide``, the references' ``theta6_ref`` (n,)),
+    its branches missed by a little solved again at ten times ``wide``, Newton from them
+    towards ``X_0T`` (n, 4, 4), the repairs of :func:`repairs`, the polish of the valid rows
+    within ``polish_near`` of a singularity of the exact arm, and the flags. None when a
+    wrist centre is far beyond reach (the caller's array path); else the solutions (n, 8,
+    6) (wrapped; rows not valid as the steps left them), ``valid`` (n, 8), the position and
+    rotation errors (n, 8) each, the flags (n, 6) (wrist, shoulder and elbow singular, near
+    singular, unreachable, not converged) and how the closed form of each pose ended (n,),
+    with whether it found a branch (n,) (for the reason of a pose with no valid row). The
+    same steps in the same order as that path (tested equal)."""
+    n = X_0T.shape[0]
+    solutions, valid = np.zeros((n, 8, 6)), np.zeros((n, 8), dtype=np.bool_)
+    errors, flags = np.zeros((n, 2, 8)), np.zeros((n, 6), dtype=np.bool_)
+    ended, started = np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.bool_)
+    members, near_measure, few_branches, few_wrist, member_tol, member_near = family
+    done = _array_poses(np.asarray(links, dtype=float), np.ascontiguousarray(tool, dtype=float),
+                        np.asarray(exact, dtype=float), np.ascontiguousarray(X_06, dtype=float),
+                        np.ascontiguousarray(X_0T, dtype=float),
+                        np.ascontiguousarray(X_T6, dtype=float),
+                        np.ascontiguousarray(theta6_ref, dtype=float), float(tol), float(wide),
+                        float(singular_tol), float(near_wrist), float(near_tol),
+                        float(stop_factor * tol), int(min(plain, max_iter)), int(max_iter),
+                        int(min(plain, restart_iter, max_iter)),
+                        int(min(max_iter, restart_iter)), int(give_up_after), float(damping),
+                        float(max_step), np.asarray(ways, dtype=float), float(near_ratio),
+                        (int(members), float(near_measure), int(few_branches),
+                         float(few_wrist), float(member_tol), float(member_near)),
+                        np.asarray(deflation_ways, dtype=float), float(polish_near),
+                        int(plain), solutions, valid, errors, flags, ended, started)
+    if not done:
+        return None
+    return solutions, valid, errors[:, 0], errors[:, 1], flags, ended, started
+
+
+def _array_poses(links, tool, exact, X_06, X_0T, X_T6, theta6_ref, tol, wide, singular_tol,
+                 near_wrist, near_tol, stop, plain, max_iter, restart_plain, restart_iter,
+                 give_up_after, damping, max_step, ways, near_ratio, family, deflation_ways,
+                 polish_near, polish_steps, solutions, valid, errors, flags, ended, started):
+    """:func:`array_poses`' work: False as soon as a wrist centre is far beyond reach."""
+    n = X_0T.shape[0]
+    q, done, converged = np.zeros((8 * n, 6)), np.zeros(8 * n, dtype=np.bool_), \
+        np.zeros(8 * n, dtype=np.bool_)
+    X, measures, steps_errors = np.zeros((8 * n, 4, 4)), np.zeros((3, 8 * n)), \
+        np.zeros((2, 8 * n))
+    q0, found = np.zeros((8 * n, 6)), np.zeros(8 * n, dtype=np.bool_)
+    start_errors, start_near = np.zeros((2, 8 * n)), np.zeros(n, dtype=np.bool_)
+    start_flags = np.zeros(4, dtype=np.bool_)
+    flags_again = np.zeros(4, dtype=np.bool_)
+    for pose in range(n):                               # the exact arm's closed form
+        base = 8 * pose
+        C = X_06[pose]
+        qw, qx, qy, qz = _quaternion(C)
+        start_flags[:] = False
+        e = np.zeros((2, 8))
+        ended[pose] = _exact_one_pose(qw, qx, qy, qz, C[0, 3], C[1, 3], C[2, 3], C[0, 2],
+                                      C[1, 2], C[2, 2], C, theta6_ref[pose], exact, wide,
+                                      singular_tol, near_wrist, near_tol, q0[base:base + 8], e,
+                                      start_flags)
+        if ended[pose] == 0:
+            return False
+        start_near[pose] = start_flags[3]
+        near_any = False
+        for k in range(8):
+            r = base + k
+            start_errors[0, r], start_errors[1, r] = e[0, k], e[1, k]
+            found[r] = e[0, k] <= wide and e[1, k] <= wide
+            if found[r]:
+                _off_the_edge(q0[r], k, e[0, k], tol, exact)
+                started[pose] = True
+            near_any = near_any or (not found[r] and e[0, k] <= 10.0 * wide)
+        if near_any:                                    # the branches missed by a little
+            again, e2 = np.zeros((8, 6)), np.zeros((2, 8))
+            _exact_one_pose(qw, qx, qy, qz, C[0, 3], C[1, 3], C[2, 3], C[0, 2], C[1, 2],
+                            C[2, 2], C, theta6_ref[pose], exact, 10.0 * wide, singular_tol,
+                            near_wrist, near_tol, again, e2, flags_again)
+            for k in range(8):
+                r = base + k
+                if (not found[r] and e[0, k] <= 10.0 * wide and e2[0, k] <= 10.0 * wide
+                        and e2[1, k] <= 10.0 * wide):
+                    _off_the_edge(again[k], k, e2[0, k], tol, exact)
+                    q0[r] = again[k]
+                    done[r] = True                      # (started: marked below)
+        rows = np.empty(8, dtype=np.int64)              # Newton: the found branches, then
+        m = 0                                           # those missed by a little
+        for k in range(8):
+            if found[base + k]:
+                rows[m] = base + k
+                m += 1
+        for k in range(8):
+            if done[base + k] and not found[base + k]:
+                rows[m] = base + k
+                m += 1
+        targets = np.empty((m, 4, 4))
+        for j in range(m):
+            targets[j] = X_0T[pose]
+        qs = np.empty((m, 6))
+        for j in range(m):
+            qs[j] = q0[rows[j]]
+        ok, Xs = np.zeros(m, dtype=np.bool_), np.zeros((m, 4, 4))
+        ms, es = np.zeros((3, m)), np.zeros((2, m))
+        _kernel(links, tool, qs, targets, stop, plain, max_iter, give_up_after, damping,
+                max_step, ok, Xs, ms, es)
+        for j in range(m):
+            r = rows[j]
+            q[r], converged[r], done[r], X[r] = qs[j], ok[j], True, Xs[j]
+            measures[:, r], steps_errors[:, r] = ms[:, j], es[:, j]
+        unique = np.empty(8, dtype=np.bool_)
+        _unique(q[base:base + 8], converged[base:base + 8], unique)
+        extra = np.empty(8, dtype=np.int64)
+        x = 0
+        for k in range(8):
+            unique[k] = unique[k] and found[base + k]
+            if done[base + k] and not found[base + k]:
+                extra[x] = base + k
+                x += 1
+        if x:                                           # an extra row is kept if new
+            new = np.empty(x, dtype=np.bool_)
+            whole = np.zeros(8 * n, dtype=np.bool_)
+            whole[base:base + 8] = unique
+            _are_new(extra[:x], q[extra[:x]], q, whole, new)
+            for i in range(x):
+                converged[extra[i]] = converged[extra[i]] and new[i]
+    unique = np.empty(8 * n, dtype=np.bool_)            # steps 4: the repairs
+    _unique(q, converged, unique)
+    _repairs(links, tool, exact, theta6_ref, wide, singular_tol, near_wrist, near_tol, q, done,
+             converged, X, measures, steps_errors, q0, found, X_0T, X_T6, X_06, unique, tol,
+             stop, restart_plain, restart_iter, give_up_after, damping, max_step, ways,
+             near_ratio, family, deflation_ways)
+    d4 = exact[3]
+    near_rows = np.zeros(8, dtype=np.bool_)
+    for pose in range(n):                               # errors, validity, polish, flags
+        base = 8 * pose
+        f = flags[pose]
+        for k in range(8):
+            r = base + k
+            pe = steps_errors[0, r] if done[r] else start_errors[0, r]
+            re = steps_errors[1, r] if done[r] else start_errors[1, r]
+            errors[pose, 0, k], errors[pose, 1, k] = pe, re
+            valid[pose, k] = converged[r] and pe <= tol and re <= tol
+            for i in range(6):
+                solutions[pose, k, i] = _wrap(q[r, i])
+        _near_rows(solutions[pose], valid[pose], exact, polish_near, near_rows)
+        m = 0
+        for k in range(8):
+            m += near_rows[k]
+        if m:                                           # _polish
+            rows = np.empty(m, dtype=np.int64)
+            m = 0
+            for k in range(8):
+                if near_rows[k]:
+                    rows[m] = k
+                    m += 1
+            qs, targets = np.empty((m, 6)), np.empty((m, 4, 4))
+            for j in range(m):
+                qs[j], targets[j] = solutions[pose, rows[j]], X_0T[pose]
+            ok, Xs = np.zeros(m, dtype=np.bool_), np.zeros((m, 4, 4))
+            ms, es = np.zeros((3, m)), np.zeros((2, m))
+            _kernel(links, tool, qs, targets, stop, polish_steps, polish_steps, give_up_after,
+                    damping, max_step, ok, Xs, ms, es)
+            for j in range(m):
+                finite = True
+                for i in range(6):
+                    finite = finite and math.isfinite(qs[j, i])
+                if es[0, j] <= tol and es[1, j] <= tol and finite:
+                    k = rows[j]
+                    for i in range(6):
+                        solutions[pose, k, i] = _wrap(qs[j, i])
+                    errors[pose, 0, k], errors[pose, 1, k] = es[0, j], es[1, j]
+        any_valid = False                               # _flags
+        for k in range(8):
+            r = base + k
+            if valid[pose, k]:
+                any_valid = True
+                f[0] = f[0] or measures[0, r] < singular_tol
+                f[1] = f[1] or measures[2, r] / d4 < singular_tol
+                f[2] = f[2] or measures[1, r] < singular_tol
+                f[3] = f[3] or min(min(measures[0, r], measures[1, r]),
+                                   measures[2, r] / d4) < near_tol
+            f[5] = f[5] or (found[r] and start_errors[0, r] <= tol and not valid[pose, k])
+        f[4] = not any_valid
+        f[3] = f[3] or start_near[pose]
+        _near_rows(solutions[pose], valid[pose], exact, near_tol, near_rows)
+        for k in range(8):
+            f[3] = f[3] or near_rows[k]
+    return True
+
+
 def _repairs(links, tool, exact, theta6_ref, wide, singular_tol, near_wrist, near_tol, q, done,
              converged, X, measures, errors, q0, found, X_0T, X_T6, X_06, unique, tol, stop,
              plain, max_iter, give_up_after, damping, max_step, ways, near_ratio, family,
@@ -1604,7 +1799,8 @@ _Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE = (
     INDEX[name] for name in ("q0", "c0", "s0", "t00", "tp0", "F0", "x0", "act", "size"))
 _COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_size", "_same", "_unique",
               "_wrap", "_exact_one_pose", "_family_member", "_feasible_theta234",
-              "_exact_flange", "_exact_fk", "_exact_poses", "_repairs", "_repair_restarts",
+              "_exact_flange", "_exact_fk", "_exact_poses", "_array_poses", "_repairs",
+              "_repair_restarts",
               "_corrected_restarts", "_family_restarts", "_deflation_restarts", "_offer",
               "_off_the_edge", "_sign", "_branch",
               "_flip_restarts", "_move_restarts", "_restart", "_flip",

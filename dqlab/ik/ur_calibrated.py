@@ -106,6 +106,7 @@ from .._fast.newton_compiled import (
 )
 from .._fast.newton_compiled import accept as compiled_accept
 from .._fast.newton_compiled import are_new as compiled_are_new
+from .._fast.newton_compiled import array_poses as compiled_array_poses
 from .._fast.newton_compiled import deflated as compiled_deflated
 from .._fast.newton_compiled import exact_fk as compiled_exact_fk
 from .._fast.newton_compiled import exact_one_pose as compiled_exact_one_pose
@@ -439,6 +440,24 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
                                   singular_tol, max_iter, wide, near_limit)
         if result is not None:
             return result
+    if n <= _PER_POSE and pose_tol <= RIGID_TOL and compiled_ready():
+        # (the targets are checked at least as strictly as the closed form checks them)
+        done = compiled_array_poses(
+            nearest.links, X_6T, nearest.exact, X_06, X_0T, X_T6,
+            np.zeros(n) if references is None else references[:, 5], tol, wide,
+            singular_tol, NEAR_WRIST, near_limit, max_iter, restart_iter=_RESTART_ITER,
+            plain=_PLAIN_STEPS, stop_factor=_STOP, give_up_after=_GIVE_UP_AFTER,
+            damping=DAMPING, max_step=_MAX_STEP, ways=_WAYS, near_ratio=_NEAR,
+            family=(_FAMILY, _NEAR_MEASURE, _FEW_BRANCHES, _FEW_WRIST, _FAMILY_TOL,
+                    NEAR_SINGULAR),
+            deflation_ways=_DEFLATION_WAYS, polish_near=_POLISH_NEAR)
+        if done is not None:                            # (None: a wrist far beyond reach)
+            solutions, valid, pe, re, flags, ended, started = done
+            reason = np.where(started, REASON_NOT_CONVERGED, _REASON_OF[ended])
+            return _poses_result(nearest, X_6T, solutions.reshape(-1, 6), valid.reshape(-1),
+                                 pe.reshape(-1), re.reshape(-1),
+                                 dict(zip(_FLAG_NAMES, flags.T, strict=True)), reason, X_0T,
+                                 tol, max_iter, batch)
     if start is None:
         start = exact_solutions(X_06, checked=plain)
         start.solutions = _off_the_edge(nearest.robot, start.solutions, start.valid,
@@ -481,12 +500,19 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
     flags["near_singular"] |= _rows_near(nearest, solutions, valid,     # at its rows and
                                          near_limit).reshape(n, 8).any(axis=1)   # at ours
     flags["not_converged"] = (exact & ~valid).reshape(n, 8).any(axis=1)
-    reason = np.full(n, "", dtype=object)
-    none = ~valid.reshape(n, 8).any(axis=1)
     started = start.valid.reshape(n, 8).any(axis=1)
-    reason[none & started] = REASON_NOT_CONVERGED
-    reason[none & ~started] = start.reason.reshape(n)[none & ~started]
-    more = _beyond(nearest, X_6T, solutions, valid, X_0T, tol, max_iter)
+    reason = np.where(started, REASON_NOT_CONVERGED, start.reason.reshape(n))
+    return _poses_result(nearest, X_6T, solutions, valid, pe, re, flags, reason, X_0T, tol,
+                         max_iter, batch)
+
+
+def _poses_result(nearest, tool, solutions, valid, pe, re, flags, reason, X_0T, tol, max_iter,
+                  batch):
+    """The :class:`IKResult` of the array path: the rows (8 n, 6), their validity and errors
+    (8 n,), the flags (n,) each, the reason (n,) a pose would have without a valid row, and
+    the solutions beyond the rows (:func:`_beyond`), shaped for the targets ``batch``."""
+    reason = np.where(valid.reshape(-1, 8).any(axis=1), "", reason).astype(object)
+    more = _beyond(nearest, tool, solutions, valid, X_0T, tol, max_iter)
     return finish(solutions.reshape(batch + (8, 6)), valid.reshape(batch + (8,)),
                   pe.reshape(batch + (8,)), re.reshape(batch + (8,)),
                   {name: f.reshape(batch) for name, f in flags.items()},
