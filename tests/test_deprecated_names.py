@@ -1,6 +1,6 @@
-"""Former public names: each warns with a DeprecationWarning that names its new home and is
-the new object itself, for one version; then it is gone, with the error any missing name
-gives. The book, the tests, the benchmarks and the tools use the new names."""
+"""Former public names: each warned with a DeprecationWarning that named its new home, for
+one version; then it is gone, with the error any missing name gives. The book, the tests,
+the benchmarks and the tools use the new names."""
 
 import importlib
 import re
@@ -16,14 +16,13 @@ import dqlab.testing
 
 ROOT = Path(__file__).resolve().parents[1]
 
-#: (module, former name, new dotted name) of renamed functions, renamed in 0.1.6.
-RENAMED = [("dqlab.ik.ur_closed_form", "ur", "dqlab.ik.ur_solver.ur"),
-           ("dqlab.ik.ur_closed_form", "closest_ur_solution",
-            "dqlab.ik.ur_solver.closest_ur_solution"),
-           ("dqlab.ik.ur_closed_form", "ur_branch", "dqlab.ik.ur_solver.ur_branch")]
-#: The names renamed in 0.1.5 and removed in 0.1.7: modules, and (module, attribute) pairs.
+#: The names renamed in 0.1.5 and removed in 0.1.7, and those renamed in 0.1.6 and removed in
+#: 0.1.8: modules, and (module, attribute) pairs.
 REMOVED_MODULES = ["dqlab.scale", "dqlab.lab_arm"]
-REMOVED_ATTRIBUTES = [(dqlab.testing, "check_function"), (dqlab.identify, "calibrate")]
+REMOVED_ATTRIBUTES = [(dqlab.testing, "check_function"), (dqlab.identify, "calibrate"),
+                      (dqlab.ik.ur_closed_form, "ur"),
+                      (dqlab.ik.ur_closed_form, "closest_ur_solution"),
+                      (dqlab.ik.ur_closed_form, "ur_branch")]
 #: The former names as they would be written in code or prose.
 FORMER = re.compile(r"dqlab\.scale\b|from dqlab import [^\n]*\bscale\b|\blab_arm\b|"
                     r"uarm_swift_pro|UARM_SWIFT_PRO|\bcalibrate\(|testing import check_function|"
@@ -31,26 +30,7 @@ FORMER = re.compile(r"dqlab\.scale\b|from dqlab import [^\n]*\bscale\b|\blab_arm
                     r"ur_closed_form(\.| import [^\n]*\b)(ur|closest_ur_solution|ur_branch)\b")
 
 
-def _new(dotted):
-    module, _, name = dotted.rpartition(".")
-    return getattr(importlib.import_module(module), name)
-
-
-def test_each_former_name_warns_where_it_is_used_and_is_the_new_object():
-    for module, old, new in RENAMED:
-        with pytest.warns(DeprecationWarning, match=rf"^{module}\.{old} is deprecated: use "
-                                                    rf"{re.escape(new)}\b") as caught:
-            assert getattr(importlib.import_module(module), old) is _new(new)
-        assert caught[0].filename == __file__                  # the line that used the name
-    with pytest.warns(DeprecationWarning, match=r"^dqlab\.ik\.ur_closed_form\.ur is deprec"):
-        from dqlab.ik.ur_closed_form import ur
-    assert ur is _new("dqlab.ik.ur_solver.ur")
-    with pytest.raises(AttributeError, match="^module 'dqlab.ik.ur_closed_form' has no "
-                                             "attribute 'calibration'$"):
-        dqlab.ik.ur_closed_form.calibration                     # noqa: B018
-
-
-def test_the_names_removed_in_0_1_7_are_gone_with_the_ordinary_errors(monkeypatch):
+def test_the_removed_names_are_gone_with_the_ordinary_errors(monkeypatch):
     # Only dqlab's own folder answers for its submodules (an editable install of another
     # copy of dqlab adds a finder that would look in that copy's folder too).
     monkeypatch.setattr(sys, "meta_path", [f for f in sys.meta_path

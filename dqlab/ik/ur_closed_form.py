@@ -117,7 +117,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._checks import check_instance, check_scalar
-from .._deprecated import renamed_attributes
 from .._fast import ur_engine as engine
 from ..models import UR_SHAPE
 from ..robot import Robot
@@ -139,9 +138,6 @@ __all__ = ["exact_ur", "ur_parameters", "branch_measures", "distinct_solutions",
 
 #: Former names of this module, which solve any UR (exact or calibrated): now in
 #: :mod:`dqlab.ik.ur_solver`.
-__getattr__ = renamed_attributes(__name__, {
-    name: f"dqlab.ik.ur_solver.{name}" for name in ("ur", "closest_ur_solution", "ur_branch")})
-
 #: ``(shoulder, elbow, wrist)`` labels of the eight rows, in order ``k = 4 s + 2 e + w``.
 SOLUTION_ORDER = tuple(
     (s, e, w) for s in ("left", "right") for e in ("up", "down") for w in ("noflip", "flip"))
