@@ -174,7 +174,7 @@ def _lean_pose(links, tool, exact, X_06, X_0T, theta6_ref, tol, wide, singular_t
     for k in range(8):
         if near[k]:
             return 2                                    # polish and search beyond: the caller
-    if near_tol > polish_near:
+    if near_tol > polish_near:                          # (near: all False so far)
         _near_rows(solutions, valid, exact, near_tol, near)
         for k in range(8):
             flags[3] = flags[3] or near[k]
@@ -1275,6 +1275,7 @@ def _array_poses(links, tool, exact, X_06, X_0T, X_T6, theta6_ref, tol, wide, si
             valid[pose, k] = converged[r] and pe <= tol and re <= tol
             for i in range(6):
                 solutions[pose, k, i] = _wrap(q[r, i])
+        near_rows[:] = False
         _near_rows(solutions[pose], valid[pose], exact, polish_near, near_rows)
         m = 0
         for k in range(8):
@@ -1315,6 +1316,7 @@ def _array_poses(links, tool, exact, X_06, X_0T, X_T6, theta6_ref, tol, wide, si
             f[5] = f[5] or (found[r] and start_errors[0, r] <= tol and not valid[pose, k])
         f[4] = not any_valid
         f[3] = f[3] or start_near[pose]
+        near_rows[:] = False
         _near_rows(solutions[pose], valid[pose], exact, near_tol, near_rows)
         for k in range(8):
             f[3] = f[3] or near_rows[k]

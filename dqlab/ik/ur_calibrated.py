@@ -46,8 +46,12 @@ keeps its contract (every branch, flags, reasons, batches) in these steps:
    exact arm's closed form of step 2 (and of step 4's wrist family), pose by pose (tested
    equal to it: bit for bit, and to the rounding at a wrist singularity); numpy runs them
    otherwise. One pose whose branches all converge, to distinct solutions, is
-   finished with a few calls (``_one_pose``, tested equal to the array path); the others go
-   on to the restarts of ``_repair``.
+   finished with a few calls (``_one_pose``, with numba one compiled call; tested equal to
+   the array path); the others go on to the restarts of ``_repair``. With numba, the
+   array path of up to eight poses runs compiled pose by pose up to step 6
+   (``dqlab._fast.newton_compiled.array_poses``, tested equal to it), and so do steps 4
+   (``_repairs``); larger batches keep the array path, whose Newton kernels fill their
+   eight lanes with the restarts of several poses.
 4. **The branches still missing**, near a singularity: members of the exact arm's wrist
    family as starts (``_family``, also for a pose with at most two branches near the wrist
    singularity, or none, where the exact arm's closed form may miss a whole shoulder; such
@@ -166,7 +170,7 @@ _NEAR_GAPS = 4.0       # near_singular on a calibrated arm: at least this many r
 _NEAR_MEASURE = 0.1    # a singularity measure below which a pose's missing branches are sought
 _FAMILY = 6            # members of the exact arm's wrist family taken as starts
 _FAMILY_TOL = 0.5      # the closed form's tolerance for them
-_PER_POSE = 8          # up to this many poses, the repairs run compiled pose by pose
+_PER_POSE = 8          # up to this many poses, the array path runs compiled pose by pose
 _FEW_BRANCHES = 2      # a pose with this many branches or fewer ...
 _FEW_WRIST = 0.2       # ... none with |sin theta_5| above this, takes the family's starts
 _DEFLATION_WAYS = np.array([0.05, -0.05, 0.3, -0.3])   # the moves of a deflation's starts
