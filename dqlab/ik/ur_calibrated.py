@@ -653,7 +653,7 @@ def _one_pose(nearest, exact_solutions, X_06, X_0T, tool, q_ref, checked, tol, s
     exact arm's closed form) with a few numpy calls, when Newton from the exact arm's
     branches is all it takes: every branch the exact arm found converges, to distinct
     solutions, none is missed by a little, and the pose does not seek missing branches from
-    the wrist family (:func:`_family_members`; five poses in six). Returns the result, or
+    the wrist family (:func:`_family_members`; four poses in five). Returns the result, or
     None and the pose takes the array path, which this is tested equal to; and the exact
     arm's :class:`IKResult` of the pose (its rows clipped at the elbow moved off it,
     :func:`_off_the_edge`) where it was computed, else None. With numba, all of it but the
