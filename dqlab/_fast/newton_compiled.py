@@ -15,7 +15,7 @@ one used where numba is not installed (``pip install dqlab[fast]`` installs it; 
 in-browser chapters run without it).
 
 :func:`unique` and :func:`are_new` are ``_Polished.unique`` and ``_Polished.are_new`` of
-that module, compiled; :func:`one_pose` is its ``_one_pose`` after the closed form,
+that module, compiled; :func:`one_pose` is its ``_one_pose``, the closed form included,
 :func:`accept` its ``_accept`` (which restarts replace a row), :func:`near_rows` its
 ``_near_rows`` (which valid rows ``_polish`` steps further), :func:`gram` the
 :math:`J^\mathsf{T} J` of its ``_near_singular`` and :func:`smallest` that function's test
