@@ -451,6 +451,27 @@ def test_smallest_eigenvector_where_certain_is_eighs():
     assert near_e.any() and (~near_e).any() and (~ok).any()      # ... but not at the edge
 
 
+def test_compiled_quaternion_is_the_librarys_bit_for_bit():
+    """The compiled paths read a flange's rotation quaternion with newton_compiled._quaternion,
+    the float twin of dqlab._formulas.quaternion_from_matrix_entries (Shepperd): the same
+    floats on random rotations and on half turns about each axis and about random axes
+    (where each of the four rows of K is the largest)."""
+    from dqlab.rotations import rot_y, rot_z
+    compiled.ready()
+    rng = np.random.default_rng(65)
+    axes = rng.normal(size=(40, 3))
+    axes /= np.linalg.norm(axes, axis=1, keepdims=True)
+    half_turns = 2.0 * axes[:, :, None] * axes[:, None, :] - np.eye(3)
+    R = np.concatenate([np.linalg.qr(rng.normal(size=(400, 3, 3)))[0], half_turns,
+                        [rot_x(np.pi), rot_y(np.pi), rot_z(np.pi), np.eye(3)]])
+    R[:400] *= np.sign(np.linalg.det(R[:400]))[:, None, None]          # rotations
+    for rotation in R:
+        X = np.eye(4)
+        X[:3, :3] = rotation
+        assert compiled._quaternion(X) == quaternion_from_matrix_entries(
+            *rotation.ravel().tolist())
+
+
 def test_jacobi_smallest_eigenvector_is_eighs():
     """Where inverse iteration is not certain, the compiled repairs ask Jacobi's rotations:
     on the spectra of the test above (ratios from 1e-14 to 1, some at the threshold, some

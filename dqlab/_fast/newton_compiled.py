@@ -325,7 +325,7 @@ def exact_one_pose(flange, X_target, theta6_ref, constants, tol, singular_tol, n
                             float(near_tol), solutions, errors, flags)
     if not ended:
         return None
-    valid = (errors[0] <= tol) & (errors[1] <= tol)
+    valid = (ended == SOLVED) & (errors[0] <= tol) & (errors[1] <= tol)
     return solutions, valid, errors[0], errors[1], flags, ended
 
 

@@ -184,6 +184,16 @@ _FLIPS = np.array([2, 1, 3])   # the flips of _repair's second restart: elbow, w
 _REASON_OF = np.full(7, "", dtype=object)
 _REASON_OF[[SOLVED, NO_ROW_TOL, NO_ROW_REACH, NO_ROW_INNER, NO_ROW_OUTER, NO_ROW_SHOULDER]] = (
     "", REASON_TOL, REASON_REACH, REASON_INNER, REASON_OUTER, REASON_SHOULDER)
+#: The numbers of the compiled steps (``dqlab._fast.newton_compiled``): Newton's rules ...
+_NEWTON_STEPS = dict(plain=_PLAIN_STEPS, stop_factor=_STOP, give_up_after=_GIVE_UP_AFTER,
+                     damping=DAMPING, max_step=_MAX_STEP)
+#: ... the wrist family's: members, the tests of _family_members, the closed form's tol and
+#: near_tol for them ...
+_FAMILY_NUMBERS = (_FAMILY, _NEAR_MEASURE, _FEW_BRANCHES, _FEW_WRIST, _FAMILY_TOL,
+                   NEAR_SINGULAR)
+#: ... and the repairs' (steps 4).
+_REPAIR_STEPS = dict(_NEWTON_STEPS, restart_iter=_RESTART_ITER, ways=_WAYS, near_ratio=_NEAR,
+                     family=_FAMILY_NUMBERS, deflation_ways=_DEFLATION_WAYS)
 
 
 @dataclass(frozen=True)
@@ -449,12 +459,8 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
         done = compiled_array_poses(
             nearest.links, X_6T, nearest.exact, X_06, X_0T, X_T6,
             np.zeros(n) if references is None else references[:, 5], tol, wide,
-            singular_tol, NEAR_WRIST, near_limit, max_iter, restart_iter=_RESTART_ITER,
-            plain=_PLAIN_STEPS, stop_factor=_STOP, give_up_after=_GIVE_UP_AFTER,
-            damping=DAMPING, max_step=_MAX_STEP, ways=_WAYS, near_ratio=_NEAR,
-            family=(_FAMILY, _NEAR_MEASURE, _FEW_BRANCHES, _FEW_WRIST, _FAMILY_TOL,
-                    NEAR_SINGULAR),
-            deflation_ways=_DEFLATION_WAYS, polish_near=_POLISH_NEAR)
+            singular_tol, NEAR_WRIST, near_limit, max_iter, polish_near=_POLISH_NEAR,
+            **_REPAIR_STEPS)
         if done is not None:                            # (None: a wrist far beyond reach)
             solutions, valid, pe, re, flags, ended, started = done
             reason = np.where(started, REASON_NOT_CONVERGED, _REASON_OF[ended])
@@ -614,7 +620,7 @@ def _exact_one_pose(nearest, X_06, q_ref, tol, singular_tol, near_tol, checked=F
     flags = dict(zip(_FLAG_NAMES[:4], flags, strict=True))   # wrist, shoulder, elbow, near
     flags["unreachable"] = np.bool_(ended != SOLVED)
     flags["not_converged"] = np.bool_(False)
-    return IKResult(solutions, valid, pe, re, flags, _REASON_OF[ended:ended + 1].reshape(()))
+    return IKResult(solutions, valid, pe, re, flags, np.array(_REASON_OF[ended], dtype=object))
 
 
 def _exact_poses(nearest, X_06, q_ref, tol, singular_tol, near_tol, closed_form):
@@ -664,11 +670,8 @@ def _one_pose(nearest, exact_solutions, X_06, X_0T, tool, q_ref, checked, tol, s
     if compiled_ready() and (checked or rigid_rows(X_06, RIGID_TOL) is not None):
         done = compiled_one_pose(nearest.links, tool, nearest.exact, X_06, X_0T,
                                  0.0 if q_ref is None else q_ref[5], tol, wide, singular_tol,
-                                 NEAR_WRIST, near, max_iter, plain=_PLAIN_STEPS,
-                                 stop_factor=_STOP, give_up_after=_GIVE_UP_AFTER,
-                                 damping=DAMPING, max_step=_MAX_STEP,
-                                 polish_near=_POLISH_NEAR,
-                                 family=(_FAMILY, _NEAR_MEASURE, _FEW_BRANCHES, _FEW_WRIST))
+                                 NEAR_WRIST, near, max_iter, polish_near=_POLISH_NEAR,
+                                 family=_FAMILY_NUMBERS[:4], **_NEWTON_STEPS)
         if done is None:
             return None, None
         ended, solutions, valid, pe, re, flags, start_near = done
@@ -974,12 +977,7 @@ def _repairs(chain, nearest, polished, q0, found, exact_solutions, X_06, X_0T, X
                      np.zeros(n) if references is None else references[:, 5], wide,
                      singular_tol, NEAR_WRIST, near_tol, polished.q, polished.done,
                      polished.converged, polished.X, polished.measures, polished.errors, q0,
-                     found, X_0T, X_T6, X_06, tol, max_iter, restart_iter=_RESTART_ITER,
-                     plain=_PLAIN_STEPS, stop_factor=_STOP, give_up_after=_GIVE_UP_AFTER,
-                     damping=DAMPING, max_step=_MAX_STEP, ways=_WAYS, near_ratio=_NEAR,
-                     family=(_FAMILY, _NEAR_MEASURE, _FEW_BRANCHES, _FEW_WRIST, _FAMILY_TOL,
-                             NEAR_SINGULAR),
-                     deflation_ways=_DEFLATION_WAYS)
+                     found, X_0T, X_T6, X_06, tol, max_iter, **_REPAIR_STEPS)
 
 
 def _repair(chain, nearest, polished, q0, found, exact_solutions, X_0T, X_T6, tol, max_iter):
@@ -1369,9 +1367,7 @@ def _newton(links, tool, q, X_target, tol, max_iter):
     With numba installed, the same steps run compiled, eight branches at a time
     (:mod:`dqlab._fast.newton_compiled`, tested equal to this path)."""
     if compiled_ready():
-        return compiled_newton(links, tool, q, X_target, tol, max_iter, plain=_PLAIN_STEPS,
-                                stop_factor=_STOP, give_up_after=_GIVE_UP_AFTER,
-                                damping=DAMPING, max_step=_MAX_STEP)
+        return compiled_newton(links, tool, q, X_target, tol, max_iter, **_NEWTON_STEPS)
     m = q.shape[0]
     q = q.copy()
     converged, size = np.zeros(m, dtype=bool), np.zeros(m)
