@@ -22,7 +22,8 @@ W = 8
 LAYOUT = ([f"q{i}" for i in range(6)] + [f"c{i}" for i in range(6)]
           + [f"s{i}" for i in range(6)]
           + [f"t{i}{j}" for i in range(3) for j in range(3)] + [f"tp{i}" for i in range(3)]
-          + [f"F{k}" for k in range(48)] + [f"x{i}" for i in range(6)] + ["act", "size"])
+          + [f"F{k}" for k in range(48)] + [f"x{i}" for i in range(6)] + ["act", "size"]
+          + [f"g{i}" for i in range(6)])          # grad log m of a deflated step
 INDEX = {name: k for k, name in enumerate(LAYOUT)}
 
 
@@ -123,14 +124,24 @@ def residual():
     return b
 
 
-def step():
+def step(deflated=False):
     """The damped Newton step of every active lane, shortened; q and the cosines and sines
-    turned by it (Taylor series; steps of 0.02 rad or more are left for the caller)."""
-    head = ["def step(S, damping, max_step):",
-            '    """One damped Newton step of every lane whose ``act`` is not 0 (the step of',
-            '    the others is 0): x = (J^T J + lambda I)^-1 J^T e by Cholesky, shortened to',
-            '    max_step, then q += x and (c, s) turned by x (Taylor series to x^7; the',
-            '    caller recomputes the joints whose step is 0.02 rad or more)."""']
+    turned by it (Taylor series; steps of 0.02 rad or more are left for the caller).
+    ``deflated``: the step of deflated Newton instead, x / (1 - g . x) for the lane's
+    grad log m in g (``dqlab.ik.ur_calibrated._deflated_newton``)."""
+    if deflated:
+        head = ["def deflated_step(S, damping, max_step):",
+                '    """One deflated Newton step of every lane whose ``act`` is not 0 (the step',
+                '    of the others is 0): x of :func:`step` divided by 1 - g . x, g the',
+                "    lane's grad log m; an entry not finite made 0; shortened to max_step, then q",
+                '    and (c, s) turned by it as :func:`step` does. A lane whose Cholesky',
+                '    fails (x not a number) takes no step and gets ``act`` -1."""']
+    else:
+        head = ["def step(S, damping, max_step):",
+                '    """One damped Newton step of every lane whose ``act`` is not 0 (the step of',
+                '    the others is 0): x = (J^T J + lambda I)^-1 J^T e by Cholesky, shortened to',
+                '    max_step, then q += x and (c, s) turned by x (Taylor series to x^7; the',
+                '    caller recomputes the joints whose step is 0.02 rad or more)."""']
     b = residual()
     b += ["px = " + at("F36"), "py = " + at("F37"), "pz = " + at("F38")]
     b += ["J00 = -py", "J01 = px", "J02 = 0.0", "J03 = 0.0", "J04 = 0.0", "J05 = 1.0"]
@@ -164,10 +175,20 @@ def step():
         b.append(f"x{i} = (g{i}" + "".join(f" - H{k}{i} * x{k}" for k in range(i + 1, 6))
                  + f") * inv{i}")
     b.append("nan = " + " | ".join(f"(x{i} != x{i})" for i in range(6)))
+    if deflated:
+        b.append("scale = 1.0 - (0.0 + " + " + ".join(f"{at(f'g{i}')} * x{i}" for i in range(6))
+                 + ")")
+        for i in range(6):
+            b += [f"x{i} = x{i} / scale", f"x{i} = x{i} if abs(x{i}) < math.inf else 0.0"]
     b.append("longest = " + "max(" * 5 + "abs(x0)" + "".join(f", abs(x{i}))"
                                                            for i in range(1, 6)))
-    b.append("factor = math.nan if nan else min(1.0, max_step / max(longest, 1e-300))")
-    b.append(f"moving = {at('act')} != 0.0")
+    if deflated:
+        b.append("factor = min(1.0, max_step / max(longest, 1e-300))")
+        b.append(f"{at('act')} = -1.0 if nan else {at('act')}")
+        b.append(f"moving = {at('act')} > 0.0")
+    else:
+        b.append("factor = math.nan if nan else min(1.0, max_step / max(longest, 1e-300))")
+        b.append(f"moving = {at('act')} != 0.0")
     for i in range(6):
         b += [f"d = x{i} * factor if moving else 0.0",
               f"{at(f'x{i}')} = d",
@@ -209,7 +230,7 @@ def source():
              "#: where each variable of a lane lives in S (times W)",
              "INDEX = {" + ", ".join(f'"{k}": {v}' for k, v in INDEX.items()) + "}",
              "", ""]
-    for f in (angles, frames, step, size):
+    for f in (angles, frames, step, lambda: step(deflated=True), size):
         lines += f() + ["", ""]
     return "\n".join(lines).rstrip() + "\n"
 

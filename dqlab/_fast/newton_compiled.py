@@ -54,6 +54,7 @@ import numpy as np
 from .compiled import compile_in_place, compiled_allowed
 from .newton_lanes import INDEX, NV, W
 from .newton_lanes import angles as lane_angles
+from .newton_lanes import deflated_step as lane_deflated_step
 from .newton_lanes import frames as lane_frames
 from .newton_lanes import size as lane_size
 from .newton_lanes import step as lane_step
@@ -539,102 +540,58 @@ def _smallest(H, ratio, near, V, known):
 
 def _deflated(links, tool, q, X_target, known, have, steps, stop, give_up_after, damping,
               max_step):
-    """:func:`deflated`'s work, row by row: the chain's frames by DH products, the residual
-    and Jacobian at the TCP, the stop rules, the damped normal equations by Cholesky, the
-    deflation's scale and the shortening of ``_shortened``."""
-    T, N = np.empty((4, 4)), np.empty((4, 4))
-    Z, O = np.empty((6, 3)), np.empty((6, 3))
-    J, H, L = np.empty((6, 6)), np.empty((6, 6)), np.empty((6, 6))
-    e, g, y, step = np.empty(6), np.empty(6), np.empty(6), np.empty(6)
-    p = np.empty(3)
-    for r in range(q.shape[0]):
-        size, before0, before1 = math.inf, math.inf, math.inf
+    r""":func:`deflated`'s work, W rows at a time in the lanes of :func:`_kernel`: the
+    frames, the stop rules of ``_deflated_newton`` lane by lane, each lane's
+    :math:`\nabla \log m = \sum_k -2 d_k / (r_k^2 (1 + r_k^2))` (:math:`d_k` the wrapped
+    difference from known solution k, :math:`r_k^2 = \lVert d_k \rVert^2`), then the
+    deflated step of every lane still going (``newton_lanes.deflated_step``)."""
+    S = np.zeros(NV * W)
+    size, before0, before1 = np.empty(W), np.empty(W), np.empty(W)
+    rows = np.empty(W, dtype=np.int64)
+    d = np.empty(6)
+    m = q.shape[0]
+    for first in range(0, m, W):
+        n = min(W, m - first)
+        for r in range(W):
+            rows[r] = first + min(r, n - 1)                 # extra lanes repeat the last row
+            size[r], before0[r], before1[r] = math.inf, math.inf, math.inf
+        _load(links, q, X_target, rows, S)
         for iteration in range(steps + 1):
-            for i in range(4):
-                for j in range(4):
-                    T[i, j] = 1.0 if i == j else 0.0
-            for i in range(6):
-                for k in range(3):
-                    Z[i, k], O[i, k] = T[k, 2], T[k, 3]
-                ca, sa, a, d = links[i, 0], links[i, 1], links[i, 2], links[i, 3]
-                theta = q[r, i] + links[i, 4]
-                c, s = math.cos(theta), math.sin(theta)
-                for k in range(3):                      # T <- T A_i, A_i standard DH
-                    t0, t1, t2 = T[k, 0], T[k, 1], T[k, 2]
-                    N[k, 0] = t0 * c + t1 * s
-                    N[k, 1] = -t0 * s * ca + t1 * c * ca + t2 * sa
-                    N[k, 2] = t0 * s * sa - t1 * c * sa + t2 * ca
-                    N[k, 3] = t0 * a * c + t1 * a * s + t2 * d + T[k, 3]
-                for k in range(3):
-                    for j in range(4):
-                        T[k, j] = N[k, j]
-            for k in range(3):                          # the TCP: T tool
-                for j in range(4):
-                    N[k, j] = (T[k, 0] * tool[0, j] + T[k, 1] * tool[1, j]
-                               + T[k, 2] * tool[2, j] + (T[k, 3] if j == 3 else 0.0))
-            Xt = X_target[r]
-            for k in range(3):
-                p[k] = N[k, 3]
-                e[k] = Xt[k, 3] - p[k]
-            e[3] = 0.5 * (_dot_rows(Xt, 2, N, 1) - _dot_rows(Xt, 1, N, 2))
-            e[4] = 0.5 * (_dot_rows(Xt, 0, N, 2) - _dot_rows(Xt, 2, N, 0))
-            e[5] = 0.5 * (_dot_rows(Xt, 1, N, 0) - _dot_rows(Xt, 0, N, 1))
-            before0, before1 = before1, size            # the stop: _error_size, as numpy's
-            size = math.sqrt(max(e[0] * e[0] + e[1] * e[1] + e[2] * e[2],
-                                 e[3] * e[3] + e[4] * e[4] + e[5] * e[5]))
-            keep = size > stop
-            if iteration >= give_up_after:
-                keep = keep and size < 0.5 * before0
-            if iteration == steps or not keep:
-                break
-            for i in range(6):                          # J: linear rows first
-                zx, zy, zz = Z[i, 0], Z[i, 1], Z[i, 2]
-                rx, ry, rz = p[0] - O[i, 0], p[1] - O[i, 1], p[2] - O[i, 2]
-                J[0, i], J[1, i], J[2, i] = zy * rz - zz * ry, zz * rx - zx * rz, zx * ry - zy * rx
-                J[3, i], J[4, i], J[5, i] = zx, zy, zz
-            trace = 0.0
-            for a_ in range(6):
-                total = 0.0
-                for k in range(6):
-                    total += J[k, a_] * e[k]
-                g[a_] = total
-                for b in range(6):
-                    total = 0.0
-                    for k in range(6):
-                        total += J[k, a_] * J[k, b]
-                    H[a_, b] = total
-                trace += H[a_, a_]
-            if not _cholesky(H, damping / 6.0 * trace, L):   # H + lambda I = L L^T
-                break
-            for i in range(6):
-                x = g[i]
-                for k in range(i):
-                    x -= L[i, k] * y[k]
-                y[i] = x / L[i, i]
-            for i in range(5, -1, -1):
-                x = y[i]
-                for k in range(i + 1, 6):
-                    x -= L[k, i] * step[k]
-                step[i] = x / L[i, i]
-            dot = 0.0                                   # grad log m . step
-            for k in range(known.shape[1]):
-                if have[r, k]:
-                    r2 = 0.0
+            lane_frames(S, links, tool)
+            lane_size(S)
+            more = False
+            for r in range(W):
+                if S[_ACT * W + r] > 0.0:
+                    before0[r], before1[r] = before1[r], size[r]
+                    size[r] = S[_SIZE * W + r]
+                    keep = size[r] > stop               # (not a number stops too)
+                    if iteration >= give_up_after:
+                        keep = keep and size[r] < 0.5 * before0[r]
+                    if iteration == steps or not keep:
+                        S[_ACT * W + r] = 0.0
+                if S[_ACT * W + r] > 0.0:
+                    more = True
+                    row = rows[r]
                     for i in range(6):
-                        y[i] = _wrap(q[r, i] - known[r, k, i])
-                        r2 += y[i] * y[i]
-                    w = -2.0 / (r2 * (1.0 + r2))
-                    for i in range(6):
-                        dot += w * y[i] * step[i]
-            longest = 0.0
+                        S[(_G + i) * W + r] = 0.0
+                    for k in range(known.shape[1]):
+                        if have[row, k]:
+                            r2 = 0.0
+                            for i in range(6):
+                                d[i] = _wrap(S[(_Q + i) * W + r] - known[row, k, i])
+                                r2 += d[i] * d[i]
+                            w = -2.0 / (r2 * (1.0 + r2))
+                            for i in range(6):
+                                S[(_G + i) * W + r] += w * d[i]
+                else:
+                    S[_ACT * W + r] = 0.0
+            if not more:
+                break
+            lane_deflated_step(S, damping, max_step)
+            _recompute(links, S)
+        for r in range(n):
             for i in range(6):
-                step[i] = step[i] / (1.0 - dot)
-                if not math.isfinite(step[i]):
-                    step[i] = 0.0
-                longest = max(longest, abs(step[i]))
-            scale = min(1.0, max_step / max(longest, 1e-300))
-            for i in range(6):
-                q[r, i] += step[i] * scale
+                q[first + r, i] = S[(_Q + i) * W + r]
 
 
 def _cholesky(A, shift, L):
@@ -1797,12 +1754,12 @@ def _quaternion(R):
     return w * s, x * s, y * s, z * s
 
 
-_Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE = (
-    INDEX[name] for name in ("q0", "c0", "s0", "t00", "tp0", "F0", "x0", "act", "size"))
-_COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_size", "_same", "_unique",
-              "_wrap", "_exact_one_pose", "_family_member", "_feasible_theta234",
-              "_exact_flange", "_exact_fk", "_exact_poses", "_array_poses", "_repairs",
-              "_repair_restarts",
+_Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE, _G = (
+    INDEX[name] for name in ("q0", "c0", "s0", "t00", "tp0", "F0", "x0", "act", "size", "g0"))
+_COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_deflated_step", "lane_size",
+              "_same", "_unique", "_wrap", "_exact_one_pose", "_family_member",
+              "_feasible_theta234", "_exact_flange", "_exact_fk", "_exact_poses", "_array_poses",
+              "_repairs", "_repair_restarts",
               "_corrected_restarts", "_family_restarts", "_deflation_restarts", "_offer",
               "_off_the_edge", "_sign", "_branch",
               "_flip_restarts", "_move_restarts", "_restart", "_flip",
