@@ -654,17 +654,23 @@ def test_compiled_deflation_equals_the_numpy_path(numpy_path):
     assert np.mean(gap < 1e-6) > 0.9
 
 
-def test_compiled_near_rows_equal_the_numpy_path():
-    """The valid rows _polish steps further (within _POLISH_NEAR of a singularity of the
-    exact arm), picked in compiled code, are those of the numpy formula, on random rows and
-    rows at each singularity."""
+def test_compiled_nearness_equals_the_numpy_path():
+    """How near a singularity of the exact arm each valid row is (which rows _polish steps
+    further, which are flagged near singular), in compiled code, is the numpy formula's,
+    on random rows and rows at each singularity; at a singularity it is 0, and invalid rows
+    are infinitely far."""
     robot = calibrated(3)
     nearest = module._nearest_exact(robot)
     q = np.random.default_rng(4).uniform(-np.pi, np.pi, (400, 6))
     q[:50, 2] = -nearest.exact[8] + np.linspace(-0.1, 0.1, 50)       # elbow
     q[50:100, 4] = -nearest.exact[10] + np.linspace(-0.1, 0.1, 50)   # wrist
+    q[100, 2], q[101, 4] = -nearest.exact[8], -nearest.exact[10]      # at them
     valid = np.random.default_rng(5).random(400) < 0.8
-    near = compiled.near_rows(q, valid, nearest.exact, module._POLISH_NEAR)
-    expected = valid & module._near_rows(nearest.robot, q, module._POLISH_NEAR)
-    np.testing.assert_array_equal(near, expected)
+    valid[100:102] = True
+    fast = compiled.nearness(q, valid, nearest.exact)
+    plain = np.where(valid, module._exact_nearness(nearest.robot, q), np.inf)
+    np.testing.assert_allclose(fast, plain, rtol=1e-12, atol=1e-15)
+    assert np.isinf(fast[~valid]).all() and fast[100:102].max() < 1e-15
+    near = fast < module._POLISH_NEAR
+    np.testing.assert_array_equal(near, plain < module._POLISH_NEAR)
     assert 40 < near.sum() < 200

@@ -16,8 +16,9 @@ in-browser chapters run without it).
 
 :func:`unique` and :func:`are_new` are ``_Polished.unique`` and ``_Polished.are_new`` of
 that module, compiled; :func:`one_pose` is its ``_one_pose``, the closed form included,
-:func:`accept` its ``_accept`` (which restarts replace a row), :func:`near_rows` its
-``_near_rows`` (which valid rows ``_polish`` steps further), :func:`gram` the
+:func:`accept` its ``_accept`` (which restarts replace a row), :func:`nearness` its
+``_nearness`` (how near a singularity of the exact arm each row is: which valid rows
+``_polish`` steps further, which are flagged near singular), :func:`gram` the
 :math:`J^\mathsf{T} J` of its ``_near_singular`` and :func:`smallest` that function's test
 and direction by inverse iteration wherever they are certain (``eigh`` answers elsewhere,
 and is what the numpy path uses). :func:`exact_one_pose` is the nearest exact
@@ -60,7 +61,7 @@ from .newton_lanes import size as lane_size
 from .newton_lanes import step as lane_step
 
 __all__ = ["ready", "refresh", "newton", "one_pose", "exact_one_pose", "exact_poses", "exact_fk",
-           "unique", "are_new", "accept", "near_rows", "gram", "smallest", "deflated", "repairs",
+           "unique", "are_new", "accept", "nearness", "gram", "smallest", "deflated", "repairs",
            "array_poses"]
 
 _COMPILED = []     # the functions below the wrappers, compiled in place by ready()
@@ -228,30 +229,40 @@ def _exact_fk(q, constants, X):
         _exact_flange(q[i], constants, X[i])
 
 
-def near_rows(solutions, valid, constants, threshold):
-    r"""``dqlab.ik.ur_calibrated._near_rows`` compiled: which valid rows of ``solutions``
-    (m, 6) are within ``threshold`` of a singularity of the exact arm of ``constants``
-    (``_NearestExact.exact``): :math:`|\sin\theta_3|`, :math:`|\sin\theta_5|` or
-    :math:`|h| / |a_2|` below it."""
-    near = np.zeros(solutions.shape[0], dtype=np.bool_)
-    _near_rows(np.ascontiguousarray(solutions, dtype=float), np.ascontiguousarray(valid),
-               np.asarray(constants, dtype=float), float(threshold), near)
-    return near
+def nearness(solutions, valid, constants):
+    r"""``dqlab.ik.ur_calibrated._nearness`` compiled: how near a singularity of the exact arm
+    of ``constants`` (``_NearestExact.exact``) each valid row of ``solutions`` (m, 6) is, the
+    least of :math:`|\sin\theta_3|`, :math:`|\sin\theta_5|` and :math:`|h| / |a_2|`
+    (infinite where not valid)."""
+    out = np.full(solutions.shape[0], np.inf)
+    _nearness(np.ascontiguousarray(solutions, dtype=float), np.ascontiguousarray(valid),
+              np.asarray(constants, dtype=float), out)
+    return out
+
+
+def _nearness(solutions, valid, constants, out):
+    """:func:`nearness`' work."""
+    for r in range(solutions.shape[0]):
+        if valid[r]:
+            out[r] = _row_nearness(solutions[r], constants)
+
+
+def _row_nearness(q, constants):
+    """:func:`nearness` of one joint vector q (6,)."""
+    a2, a3, d5 = constants[1], constants[2], constants[4]
+    t2 = q[1] + constants[7]
+    t3 = q[2] + constants[8]
+    t4 = q[3] + constants[9]
+    t5 = q[4] + constants[10]
+    h = a2 * math.cos(t2) + a3 * math.cos(t2 + t3) + d5 * math.sin(t2 + t3 + t4)
+    return min(abs(math.sin(t3)), abs(math.sin(t5)), abs(h) / abs(a2))
 
 
 def _near_rows(solutions, valid, constants, threshold, near):
-    """:func:`near_rows`' work."""
-    a2, a3, d5 = constants[1], constants[2], constants[4]
+    """Which valid rows of ``solutions`` are within ``threshold`` of a singularity of the
+    exact arm (:func:`nearness` below it), into ``near``."""
     for r in range(solutions.shape[0]):
-        if not valid[r]:
-            continue
-        t2 = solutions[r, 1] + constants[7]
-        t3 = solutions[r, 2] + constants[8]
-        t4 = solutions[r, 3] + constants[9]
-        t5 = solutions[r, 4] + constants[10]
-        h = a2 * math.cos(t2) + a3 * math.cos(t2 + t3) + d5 * math.sin(t2 + t3 + t4)
-        near[r] = (abs(math.sin(t3)) < threshold or abs(math.sin(t5)) < threshold
-                   or abs(h) < threshold * abs(a2))
+        near[r] = valid[r] and _row_nearness(solutions[r], constants) < threshold
 
 
 def gram(links, tool, q):
@@ -1767,4 +1778,5 @@ _COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_deflated_step", "
               "_quaternion", "_one_pose", "_lean_pose", "_accept", "_gram",
               "_smallest", "_largest_diagonal_column", "_times", "_rayleigh", "_are_new",
               "_load", "_recompute", "_kernel", "_outputs", "_pose_errors", "_dot_rows",
-              "_deflated", "_cholesky", "_near_rows"]
+              "_deflated", "_cholesky", "_near_rows", "_nearness",
+              "_row_nearness"]

@@ -116,7 +116,7 @@ from .._fast.newton_compiled import exact_fk as compiled_exact_fk
 from .._fast.newton_compiled import exact_one_pose as compiled_exact_one_pose
 from .._fast.newton_compiled import exact_poses as compiled_exact_poses
 from .._fast.newton_compiled import gram as compiled_gram
-from .._fast.newton_compiled import near_rows as compiled_near_rows
+from .._fast.newton_compiled import nearness as compiled_nearness
 from .._fast.newton_compiled import newton as compiled_newton
 from .._fast.newton_compiled import one_pose as compiled_one_pose
 from .._fast.newton_compiled import ready as compiled_ready
@@ -503,26 +503,28 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
     re = start.rotation_error.reshape(n * 8).copy()
     pe[done], re[done] = polished.errors[:, done]
     valid = polished.converged & (pe <= tol) & (re <= tol)
-    solutions = _polish(nearest, X_6T, wrap_angle(polished.q), valid, pe, re, X_0T, tol)
+    solutions = wrap_angle(polished.q)
+    near = _nearness(nearest, solutions, valid)
+    solutions = _polish(nearest, X_6T, solutions, valid, pe, re, X_0T, tol, near)
     flags = _flags(polished.measures, valid, singular_tol, nearest.robot.links[3].d,
                    near_limit)
     flags["near_singular"] |= start.flags["near_singular"].reshape(n)   # the exact arm's,
-    flags["near_singular"] |= _rows_near(nearest, solutions, valid,     # at its rows and
-                                         near_limit).reshape(n, 8).any(axis=1)   # at ours
+    flags["near_singular"] |= (near < near_limit).reshape(n, 8).any(axis=1)  # at its rows
     flags["not_converged"] = (exact & ~valid).reshape(n, 8).any(axis=1)
     started = start.valid.reshape(n, 8).any(axis=1)
     reason = np.where(started, REASON_NOT_CONVERGED, start.reason.reshape(n))
     return _poses_result(nearest, X_6T, solutions, valid, pe, re, flags, reason, X_0T, tol,
-                         max_iter, batch)
+                         max_iter, batch, near)
 
 
 def _poses_result(nearest, tool, solutions, valid, pe, re, flags, reason, X_0T, tol, max_iter,
-                  batch):
+                  batch, near=None):
     """The :class:`IKResult` of the array path: the rows (8 n, 6), their validity and errors
     (8 n,), the flags (n,) each, the reason (n,) a pose would have without a valid row, and
-    the solutions beyond the rows (:func:`_beyond`), shaped for the targets ``batch``."""
+    the solutions beyond the rows (:func:`_beyond`; ``near`` the rows' :func:`_nearness`
+    where known), shaped for the targets ``batch``."""
     reason = np.where(valid.reshape(-1, 8).any(axis=1), "", reason).astype(object)
-    more = _beyond(nearest, tool, solutions, valid, X_0T, tol, max_iter)
+    more = _beyond(nearest, tool, solutions, valid, X_0T, tol, max_iter, near)
     return finish(solutions.reshape(batch + (8, 6)), valid.reshape(batch + (8,)),
                   pe.reshape(batch + (8,)), re.reshape(batch + (8,)),
                   {name: f.reshape(batch) for name, f in flags.items()},
@@ -714,15 +716,14 @@ def _near_a_singularity(nearest, tool, solutions, valid, pe, re, flags, start_ne
     beyond its rows; the others are polished (:func:`_polish`) and searched beyond
     (:func:`_beyond`). The near_singular flag also counts the exact arm's measures at the
     valid rows and its own (``start_near``)."""
-    polish = _rows_near(nearest, solutions, valid, _POLISH_NEAR).any()
+    nearness = _nearness(nearest, solutions, valid)
+    polish = (nearness < _POLISH_NEAR).any()
     if polish:
-        solutions = _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol)
-    if polish or near > _POLISH_NEAR:
-        flags["near_singular"] = flags["near_singular"] or bool(
-            _rows_near(nearest, solutions, valid, near).any())
-    flags["near_singular"] = bool(flags["near_singular"] or start_near)
-    more = _beyond(nearest, tool, solutions, valid, X_0T[None], tol, max_iter) if polish \
-        else None
+        solutions = _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol, nearness)
+    flags["near_singular"] = bool(flags["near_singular"] or start_near
+                                  or (nearness < near).any())
+    more = _beyond(nearest, tool, solutions, valid, X_0T[None], tol, max_iter, nearness) \
+        if polish else None
     return _one_pose_result(solutions, valid, pe, re, flags, more)
 
 
@@ -738,10 +739,9 @@ def _one_pose_result(solutions, valid, pe, re, flags, more):
                   more=_more_result(*more, ()))
 
 
-def _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol):
+def _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol, near):
     r"""The valid rows ``solutions`` (m, 6) (wrapped) near a singularity of the exact arm
-    (:math:`|\sin\theta_3|`, :math:`|\sin\theta_5|` or the wrist centre's distance
-    :math:`h` of :func:`_branches` over :math:`|a_2|` below :data:`_POLISH_NEAR`) taken
+    (their :func:`_nearness` ``near`` (m,) below :data:`_POLISH_NEAR`) taken
     ``_PLAIN_STEPS`` Newton steps further towards their targets ``X_0T``.
 
     A row stops once its errors are below a tenth of ``tol``; near a singularity, where
@@ -749,12 +749,11 @@ def _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol):
     joints :math:`10^{-10}/\sigma` from the solution (1e-5 rad at :math:`\sigma \approx
     10^{-5}`), and a solution that a singularity nearly pairs with another is not told
     apart from it. The steps further bring such a row to the solution (quadratic
-    convergence). The errors ``pe``, ``re`` (m,) of a row polished are updated in place;
-    returns the solutions, wrapped (``solutions`` itself if no row moves). ``X_0T`` holds
-    the targets of the poses whose rows are ``solutions``, eight each. With numba, the rows
-    near a singularity are picked in compiled code
-    (``dqlab._fast.newton_compiled.near_rows``, tested equal)."""
-    rows = np.flatnonzero(_rows_near(nearest, solutions, valid, _POLISH_NEAR))
+    convergence). The errors ``pe``, ``re`` and the nearness ``near`` (m,) of a row polished
+    are updated in place; returns the solutions, wrapped (``solutions`` itself if no row
+    moves). ``X_0T`` holds the targets of the poses whose rows are ``solutions``, eight
+    each."""
+    rows = np.flatnonzero(near < _POLISH_NEAR)
     if not rows.size:
         return solutions
     q, _, _, _, errors = _newton(nearest.links, tool, solutions[rows],
@@ -764,10 +763,11 @@ def _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol):
     solutions = solutions.copy()
     solutions[rows] = wrap_angle(q)
     pe[rows], re[rows] = errors[:, better]
+    near[rows] = _nearness(nearest, solutions[rows], valid[rows])
     return solutions
 
 
-def _beyond(nearest, tool, solutions, valid, X_0T, tol, max_iter):
+def _beyond(nearest, tool, solutions, valid, X_0T, tol, max_iter, near=None):
     r"""The solutions of each pose beyond its eight rows (``result.more``).
 
     Within about the two arms' gap of a singularity of the exact arm, the calibrated arm
@@ -775,7 +775,8 @@ def _beyond(nearest, tool, solutions, valid, X_0T, tol, max_iter):
     16): where the exact arm has two branches meeting, the calibrated one may have two
     solutions on either side. A pose whose eight rows ``solutions`` (8 n, 6), wrapped, are
     all ``valid`` (8 n,) and one of them within :data:`_POLISH_NEAR` of a singularity of
-    the exact arm (:func:`_near_rows`) and near singular on the calibrated arm
+    the exact arm (its :func:`_nearness`, ``near`` (8 n,) where known) and near singular on
+    the calibrated arm
     (:func:`_near_singular`) seeks more: deflated Newton (:func:`_deflated_newton`, the
     pose's eight rows deflated) from that row moved by :data:`_MORE_WAYS` along its most
     singular direction, then Newton (whose first steps, taken by every start, polish the
@@ -794,7 +795,9 @@ def _beyond(nearest, tool, solutions, valid, X_0T, tol, max_iter):
         full = np.repeat(valid.reshape(n, 8).all(axis=1), 8)
         if not full.any():
             return Q, V, PE, RE
-    rows = np.flatnonzero(_rows_near(nearest, solutions, valid & full, _POLISH_NEAR))
+    if near is None:
+        near = _nearness(nearest, solutions, valid)
+    rows = np.flatnonzero(full & (near < _POLISH_NEAR))
     if not rows.size:
         return Q, V, PE, RE
     singular, direction = _near_singular(nearest, tool, solutions[rows])
@@ -845,13 +848,13 @@ def _one_of(chain, q, known, X_target, tol):
     return bool(((position <= tol) & (rotation <= tol)).any())
 
 
-def _rows_near(nearest, solutions, valid, threshold):
-    """The ``valid`` (m,) rows of ``solutions`` (m, 6) within ``threshold`` of a singularity
-    of the exact arm (:func:`_near_rows`); with numba, compiled
-    (``dqlab._fast.newton_compiled.near_rows``, tested equal)."""
+def _nearness(nearest, solutions, valid):
+    """How near a singularity of the exact arm each ``valid`` (m,) row of ``solutions``
+    (m, 6) is (:func:`_exact_nearness`; infinite where not valid); with numba, compiled
+    (``dqlab._fast.newton_compiled.nearness``, tested equal)."""
     if compiled_ready():
-        return compiled_near_rows(solutions, valid, nearest.exact, threshold)
-    return valid & _near_rows(nearest.robot, solutions, threshold)
+        return compiled_nearness(solutions, valid, nearest.exact)
+    return np.where(valid, _exact_nearness(nearest.robot, solutions), np.inf)
 
 
 def _exact_fk(nearest, q):
@@ -870,13 +873,13 @@ def _more_result(solutions, valid, pe, re, batch):
                     pe.reshape(batch + (_MORE,)), re.reshape(batch + (_MORE,)), {})
 
 
-def _near_rows(exact, q, threshold):
-    r"""Which joint vectors q (m, 6) are within ``threshold`` of a singularity of the exact
-    arm: a measure of :func:`~dqlab.ik.ur_closed_form.branch_measures`,
-    :math:`|\sin\theta_3|`, :math:`|\sin\theta_5|` or :math:`|h| / |a_2|`, below it."""
+def _exact_nearness(exact, q):
+    r"""How near a singularity of the exact arm the joint vectors q (m, 6) are: the least of
+    its measures of :func:`~dqlab.ik.ur_closed_form.branch_measures`,
+    :math:`|\sin\theta_3|`, :math:`|\sin\theta_5|` and :math:`|h| / |a_2|`."""
     h, sin_theta3, sin_theta5 = branch_measures(exact, q)
-    return ((np.abs(sin_theta3) < threshold) | (np.abs(sin_theta5) < threshold)
-            | (np.abs(h) < threshold * abs(exact.links[1].a)))
+    return np.minimum(np.minimum(np.abs(sin_theta3), np.abs(sin_theta5)),
+                      np.abs(h) / abs(exact.links[1].a))
 
 
 @dataclass
