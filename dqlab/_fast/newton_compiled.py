@@ -62,7 +62,7 @@ from .newton_lanes import step as lane_step
 
 __all__ = ["ready", "refresh", "newton", "one_pose", "exact_one_pose", "exact_poses", "exact_fk",
            "unique", "are_new", "accept", "nearness", "gram", "smallest", "deflated", "repairs",
-           "array_poses"]
+           "array_poses", "array_start", "array_finish"]
 
 _COMPILED = []     # the functions below the wrappers, compiled in place by ready()
 _READY = None      # whether numba is there (the kernels compiled), once known
@@ -1136,6 +1136,60 @@ def array_poses(links, tool, exact, X_06, X_0T, X_T6, theta6_ref, tol, wide, sin
     return solutions, valid, errors[:, 0], errors[:, 1], flags, ended, started
 
 
+def array_start(links, tool, exact, X_06, X_0T, theta6_ref, tol, wide, singular_tol,
+                near_wrist, near_tol, max_iter, *, plain, stop_factor, give_up_after, damping,
+                max_step):
+    """The first steps of :func:`array_poses` for any number of poses, pose by pose, for a
+    caller that repairs the rows itself (the numpy path's repairs, whose Newton kernels
+    take the restarts of many poses together): the closed form, its branches missed by a
+    little solved again, Newton from them. None when a wrist centre is far beyond reach;
+    else the arrays of ``dqlab.ik.ur_calibrated._Polished`` (``q`` (8 n, 6), ``done``,
+    ``converged`` (8 n,), ``X`` (8 n, 4, 4), ``measures`` (3, 8 n), ``errors`` (2, 8 n)),
+    the starts ``q0`` (8 n, 6), the branches ``found`` (8 n,), the closed form's errors
+    (2, 8 n) and near flags (n,), how it ended (n,) and whether it started each pose (n,),
+    for :func:`array_finish`."""
+    n = X_0T.shape[0]
+    q, done, converged = np.zeros((8 * n, 6)), np.zeros(8 * n, dtype=np.bool_), \
+        np.zeros(8 * n, dtype=np.bool_)
+    X, measures, errors = np.zeros((8 * n, 4, 4)), np.zeros((3, 8 * n)), np.zeros((2, 8 * n))
+    q0, found = np.zeros((8 * n, 6)), np.zeros(8 * n, dtype=np.bool_)
+    start_errors, start_near = np.zeros((2, 8 * n)), np.zeros(n, dtype=np.bool_)
+    ended, started = np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.bool_)
+    if not _array_start(np.asarray(links, dtype=float), np.ascontiguousarray(tool, dtype=float),
+                        np.asarray(exact, dtype=float), np.ascontiguousarray(X_06, dtype=float),
+                        np.ascontiguousarray(X_0T, dtype=float),
+                        np.ascontiguousarray(theta6_ref, dtype=float), float(tol), float(wide),
+                        float(singular_tol), float(near_wrist), float(near_tol),
+                        float(stop_factor * tol), int(min(plain, max_iter)), int(max_iter),
+                        int(give_up_after), float(damping), float(max_step), q, done,
+                        converged, X, measures, errors, q0, found, start_errors, start_near,
+                        ended, started):
+        return None
+    return (q, done, converged, X, measures, errors, q0, found, start_errors, start_near, ended,
+            started)
+
+
+def array_finish(links, tool, exact, X_0T, tol, singular_tol, near_tol, q, done, converged,
+                 measures, errors, found, start_errors, start_near, *, plain, stop_factor,
+                 give_up_after, damping, max_step, polish_near):
+    """The last steps of :func:`array_poses`, pose by pose, after the repairs, from the
+    arrays of :func:`array_start` (repaired): the solutions (n, 8, 6) (wrapped), ``valid``
+    (n, 8), the position and rotation errors (n, 8) each, the flags (n, 6) and how near a
+    singularity of the exact arm each row is (8 n,) (``dqlab.ik.ur_calibrated._nearness``,
+    for the search beyond the rows)."""
+    n = X_0T.shape[0]
+    solutions, valid = np.zeros((n, 8, 6)), np.zeros((n, 8), dtype=np.bool_)
+    pose_errors, flags = np.zeros((n, 2, 8)), np.zeros((n, 6), dtype=np.bool_)
+    nearness = np.empty(8 * n)
+    _array_finish(np.asarray(links, dtype=float), np.ascontiguousarray(tool, dtype=float),
+                  np.asarray(exact, dtype=float), np.ascontiguousarray(X_0T, dtype=float),
+                  float(tol), float(singular_tol), float(near_tol), float(stop_factor * tol),
+                  int(give_up_after), float(damping), float(max_step), float(polish_near),
+                  int(plain), q, done, converged, measures, errors, found, start_errors,
+                  start_near, solutions, valid, pose_errors, flags, nearness)
+    return solutions, valid, pose_errors[:, 0], pose_errors[:, 1], flags, nearness
+
+
 def _array_poses(links, tool, exact, X_06, X_0T, X_T6, theta6_ref, tol, wide, singular_tol,
                  near_wrist, near_tol, stop, plain, max_iter, restart_plain, restart_iter,
                  give_up_after, damping, max_step, ways, near_ratio, family, deflation_ways,
@@ -1148,14 +1202,49 @@ def _array_poses(links, tool, exact, X_06, X_0T, X_T6, theta6_ref, tol, wide, si
         np.zeros((2, 8 * n))
     q0, found = np.zeros((8 * n, 6)), np.zeros(8 * n, dtype=np.bool_)
     start_errors, start_near = np.zeros((2, 8 * n)), np.zeros(n, dtype=np.bool_)
-    start_flags = np.zeros(4, dtype=np.bool_)
-    flags_again = np.zeros(4, dtype=np.bool_)
+    if not _array_start(links, tool, exact, X_06, X_0T, theta6_ref, tol, wide, singular_tol,
+                        near_wrist, near_tol, stop, plain, max_iter, give_up_after, damping,
+                        max_step, q, done, converged, X, measures, steps_errors, q0, found,
+                        start_errors, start_near, ended, started):
+        return False
+    unique = np.empty(8 * n, dtype=np.bool_)            # steps 4: the repairs
+    _unique(q, converged, unique)
+    _repairs(links, tool, exact, theta6_ref, wide, singular_tol, near_wrist, near_tol, q, done,
+             converged, X, measures, steps_errors, q0, found, X_0T, X_T6, X_06, unique, tol,
+             stop, restart_plain, restart_iter, give_up_after, damping, max_step, ways,
+             near_ratio, family, deflation_ways)
+    nearness = np.empty(8 * n)
+    _array_finish(links, tool, exact, X_0T, tol, singular_tol, near_tol, stop, give_up_after,
+                  damping, max_step, polish_near, polish_steps, q, done, converged, measures,
+                  steps_errors, found, start_errors, start_near, solutions, valid, errors,
+                  flags, nearness)
+    return True
+
+
+def _array_start(links, tool, exact, X_06, X_0T, theta6_ref, tol, wide, singular_tol,
+                 near_wrist, near_tol, stop, plain, max_iter, give_up_after, damping, max_step,
+                 q, done, converged, X, measures, steps_errors, q0, found, start_errors,
+                 start_near, ended, started):
+    """The array path's first steps, pose by pose: the exact arm's closed form, its branches
+    missed by a little solved again, Newton from them (``_Polished``'s arrays ``q``,
+    ``done``, ``converged``, ``X``, ``measures``, ``steps_errors`` filled, with the starts
+    ``q0``, the branches ``found``, the closed form's errors, near flags, ends and whether
+    it started each pose). False as soon as a wrist centre is far beyond reach."""
+    n = X_0T.shape[0]
+    start_flags, flags_again = np.zeros(4, dtype=np.bool_), np.zeros(4, dtype=np.bool_)
+    e, again, e2 = np.zeros((2, 8)), np.zeros((8, 6)), np.zeros((2, 8))
+    rows, unique = np.empty(8, dtype=np.int64), np.empty(8, dtype=np.bool_)
+    qs, targets = np.empty((8, 6)), np.empty((8, 4, 4))
+    ok, Xs = np.zeros(8, dtype=np.bool_), np.zeros((8, 4, 4))
+    ms, es = np.zeros((3, 8)), np.zeros((2, 8))
+    extra = np.empty(8 * n, dtype=np.int64)             # the branches missed by a little
+    x = 0
     for pose in range(n):                               # the exact arm's closed form
         base = 8 * pose
         C = X_06[pose]
         qw, qx, qy, qz = _quaternion(C)
         start_flags[:] = False
-        e = np.zeros((2, 8))
+        e[:] = 0.0
         ended[pose] = _exact_one_pose(qw, qx, qy, qz, C[0, 3], C[1, 3], C[2, 3], C[0, 2],
                                       C[1, 2], C[2, 2], C, theta6_ref[pose], exact, wide,
                                       singular_tol, near_wrist, near_tol, q0[base:base + 8], e,
@@ -1172,8 +1261,8 @@ def _array_poses(links, tool, exact, X_06, X_0T, X_T6, theta6_ref, tol, wide, si
                 _off_the_edge(q0[r], k, e[0, k], tol, exact)
                 started[pose] = True
             near_any = near_any or (not found[r] and e[0, k] <= 10.0 * wide)
-        if near_any:                                    # the branches missed by a little
-            again, e2 = np.zeros((8, 6)), np.zeros((2, 8))
+        if near_any:                                    # solved again at ten times wide
+            again[:], e2[:] = 0.0, 0.0
             _exact_one_pose(qw, qx, qy, qz, C[0, 3], C[1, 3], C[2, 3], C[0, 2], C[1, 2],
                             C[2, 2], C, theta6_ref[pose], exact, 10.0 * wide, singular_tol,
                             near_wrist, near_tol, again, e2, flags_again)
@@ -1183,58 +1272,67 @@ def _array_poses(links, tool, exact, X_06, X_0T, X_T6, theta6_ref, tol, wide, si
                         and e2[1, k] <= 10.0 * wide):
                     _off_the_edge(again[k], k, e2[0, k], tol, exact)
                     q0[r] = again[k]
-                    done[r] = True                      # (started: marked below)
-        rows = np.empty(8, dtype=np.int64)              # Newton: the found branches, then
-        m = 0                                           # those missed by a little
+                    done[r] = True
+                    extra[x] = r
+                    x += 1
+        m = 0                                           # Newton: the found branches
         for k in range(8):
             if found[base + k]:
                 rows[m] = base + k
+                qs[m], targets[m] = q0[base + k], X_0T[pose]
                 m += 1
-        for k in range(8):
-            if done[base + k] and not found[base + k]:
-                rows[m] = base + k
-                m += 1
-        targets = np.empty((m, 4, 4))
-        for j in range(m):
-            targets[j] = X_0T[pose]
-        qs = np.empty((m, 6))
-        for j in range(m):
-            qs[j] = q0[rows[j]]
-        ok, Xs = np.zeros(m, dtype=np.bool_), np.zeros((m, 4, 4))
-        ms, es = np.zeros((3, m)), np.zeros((2, m))
-        _kernel(links, tool, qs, targets, stop, plain, max_iter, give_up_after, damping,
-                max_step, ok, Xs, ms, es)
+        if m:
+            _kernel(links, tool, qs[:m], targets[:m], stop, plain, max_iter, give_up_after,
+                    damping, max_step, ok[:m], Xs[:m], ms[:, :m], es[:, :m])
         for j in range(m):
             r = rows[j]
             q[r], converged[r], done[r], X[r] = qs[j], ok[j], True, Xs[j]
             measures[:, r], steps_errors[:, r] = ms[:, j], es[:, j]
-        unique = np.empty(8, dtype=np.bool_)
+    if x == 0:
+        return True
+    # then those missed by a little, all together (they seldom converge, and each group of
+    # eight branches that the kernel takes together runs as long as its slowest)
+    qx_, targets_x = np.empty((x, 6)), np.empty((x, 4, 4))
+    for j in range(x):
+        qx_[j], targets_x[j] = q0[extra[j]], X_0T[extra[j] // 8]
+    ok_x, X_x = np.zeros(x, dtype=np.bool_), np.zeros((x, 4, 4))
+    ms_x, es_x = np.zeros((3, x)), np.zeros((2, x))
+    _kernel(links, tool, qx_, targets_x, stop, plain, max_iter, give_up_after, damping,
+            max_step, ok_x, X_x, ms_x, es_x)
+    for j in range(x):
+        r = extra[j]
+        q[r], converged[r], X[r] = qx_[j], ok_x[j], X_x[j]
+        measures[:, r], steps_errors[:, r] = ms_x[:, j], es_x[:, j]
+    whole = np.zeros(8 * n, dtype=np.bool_)             # an extra row is kept if new
+    new = np.empty(1, dtype=np.bool_)
+    j = 0
+    while j < x:
+        base = 8 * (extra[j] // 8)
         _unique(q[base:base + 8], converged[base:base + 8], unique)
-        extra = np.empty(8, dtype=np.int64)
-        x = 0
         for k in range(8):
-            unique[k] = unique[k] and found[base + k]
-            if done[base + k] and not found[base + k]:
-                extra[x] = base + k
-                x += 1
-        if x:                                           # an extra row is kept if new
-            new = np.empty(x, dtype=np.bool_)
-            whole = np.zeros(8 * n, dtype=np.bool_)
-            whole[base:base + 8] = unique
-            _are_new(extra[:x], q[extra[:x]], q, whole, new)
-            for i in range(x):
-                converged[extra[i]] = converged[extra[i]] and new[i]
-    unique = np.empty(8 * n, dtype=np.bool_)            # steps 4: the repairs
-    _unique(q, converged, unique)
-    _repairs(links, tool, exact, theta6_ref, wide, singular_tol, near_wrist, near_tol, q, done,
-             converged, X, measures, steps_errors, q0, found, X_0T, X_T6, X_06, unique, tol,
-             stop, restart_plain, restart_iter, give_up_after, damping, max_step, ways,
-             near_ratio, family, deflation_ways)
+            whole[base + k] = unique[k] and found[base + k]
+        while j < x and extra[j] < base + 8:            # (extra: by pose, in order)
+            _are_new(extra[j:j + 1], q[extra[j:j + 1]], q, whole, new)
+            converged[extra[j]] = converged[extra[j]] and new[0]
+            j += 1
+    return True
+
+
+def _array_finish(links, tool, exact, X_0T, tol, singular_tol, near_tol, stop, give_up_after,
+                  damping, max_step, polish_near, polish_steps, q, done, converged, measures,
+                  steps_errors, found, start_errors, start_near, solutions, valid, errors,
+                  flags, nearness):
+    """The array path's last steps, pose by pose, after the repairs: each row's errors
+    (Newton's where it ran, else the closed form's) and validity, the polish of the valid
+    rows within ``polish_near`` of a singularity of the exact arm, the flags, and how near
+    such a singularity each row is (``nearness``, infinite where not valid: ``_nearness``
+    of the rows polished)."""
+    n = X_0T.shape[0]
     d4 = exact[3]
-    near_rows = np.zeros(8, dtype=np.bool_)
     for pose in range(n):                               # errors, validity, polish, flags
         base = 8 * pose
         f = flags[pose]
+        m = 0
         for k in range(8):
             r = base + k
             pe = steps_errors[0, r] if done[r] else start_errors[0, r]
@@ -1243,16 +1341,14 @@ def _array_poses(links, tool, exact, X_06, X_0T, X_T6, theta6_ref, tol, wide, si
             valid[pose, k] = converged[r] and pe <= tol and re <= tol
             for i in range(6):
                 solutions[pose, k, i] = _wrap(q[r, i])
-        near_rows[:] = False
-        _near_rows(solutions[pose], valid[pose], exact, polish_near, near_rows)
-        m = 0
-        for k in range(8):
-            m += near_rows[k]
+            nearness[r] = _row_nearness(solutions[pose, k], exact) if valid[pose, k] \
+                else math.inf
+            m += nearness[r] < polish_near
         if m:                                           # _polish
             rows = np.empty(m, dtype=np.int64)
             m = 0
             for k in range(8):
-                if near_rows[k]:
+                if nearness[base + k] < polish_near:
                     rows[m] = k
                     m += 1
             qs, targets = np.empty((m, 6)), np.empty((m, 4, 4))
@@ -1271,6 +1367,7 @@ def _array_poses(links, tool, exact, X_06, X_0T, X_T6, theta6_ref, tol, wide, si
                     for i in range(6):
                         solutions[pose, k, i] = _wrap(qs[j, i])
                     errors[pose, 0, k], errors[pose, 1, k] = es[0, j], es[1, j]
+                    nearness[base + k] = _row_nearness(solutions[pose, k], exact)
         any_valid = False                               # _flags
         for k in range(8):
             r = base + k
@@ -1282,13 +1379,9 @@ def _array_poses(links, tool, exact, X_06, X_0T, X_T6, theta6_ref, tol, wide, si
                 f[3] = f[3] or min(min(measures[0, r], measures[1, r]),
                                    measures[2, r] / d4) < near_tol
             f[5] = f[5] or (found[r] and start_errors[0, r] <= tol and not valid[pose, k])
+            f[3] = f[3] or nearness[r] < near_tol
         f[4] = not any_valid
         f[3] = f[3] or start_near[pose]
-        near_rows[:] = False
-        _near_rows(solutions[pose], valid[pose], exact, near_tol, near_rows)
-        for k in range(8):
-            f[3] = f[3] or near_rows[k]
-    return True
 
 
 def _repairs(links, tool, exact, theta6_ref, wide, singular_tol, near_wrist, near_tol, q, done,
@@ -1770,7 +1863,7 @@ _Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE, _G = (
 _COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_deflated_step", "lane_size",
               "_same", "_unique", "_wrap", "_exact_one_pose", "_family_member",
               "_feasible_theta234", "_exact_flange", "_exact_fk", "_exact_poses", "_array_poses",
-              "_repairs", "_repair_restarts",
+              "_array_start", "_array_finish", "_repairs", "_repair_restarts",
               "_corrected_restarts", "_family_restarts", "_deflation_restarts", "_offer",
               "_off_the_edge", "_sign", "_branch",
               "_flip_restarts", "_move_restarts", "_restart", "_flip",

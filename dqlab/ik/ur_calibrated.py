@@ -48,10 +48,10 @@ keeps its contract (every branch, flags, reasons, batches) in these steps:
    otherwise. One pose whose branches all converge, to distinct solutions, is
    finished with a few calls (``_one_pose``, with numba one compiled call; tested equal to
    the array path); the others go on to the restarts of ``_repair``. With numba, the
-   array path of up to eight poses runs compiled pose by pose up to step 6
-   (``dqlab._fast.newton_compiled.array_poses``, tested equal to it), and so do steps 4
-   (``_repairs``); larger batches keep the array path, whose Newton kernels fill their
-   eight lanes with the restarts of several poses.
+   array path runs compiled pose by pose up to step 6 but for the repairs of a batch of
+   more than eight poses (``dqlab._fast.newton_compiled.array_poses``, ``array_start`` and
+   ``array_finish``, tested equal to it): those keep the numpy path's ``_repairs``, whose
+   Newton kernels fill their eight lanes with the restarts of several poses.
 4. **The branches still missing**, near a singularity: members of the exact arm's wrist
    family as starts (``_family``, also for a pose with at most two branches near the wrist
    singularity, or none, where the exact arm's closed form may miss a whole shoulder; such
@@ -110,7 +110,9 @@ from .._fast.newton_compiled import (
 )
 from .._fast.newton_compiled import accept as compiled_accept
 from .._fast.newton_compiled import are_new as compiled_are_new
+from .._fast.newton_compiled import array_finish as compiled_array_finish
 from .._fast.newton_compiled import array_poses as compiled_array_poses
+from .._fast.newton_compiled import array_start as compiled_array_start
 from .._fast.newton_compiled import deflated as compiled_deflated
 from .._fast.newton_compiled import exact_fk as compiled_exact_fk
 from .._fast.newton_compiled import exact_one_pose as compiled_exact_one_pose
@@ -468,6 +470,11 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
                                  pe.reshape(-1), re.reshape(-1),
                                  dict(zip(_FLAG_NAMES, flags.T, strict=True)), reason, X_0T,
                                  tol, max_iter, batch)
+    if start is None and pose_tol <= RIGID_TOL and compiled_ready():
+        result = _compiled_poses(nearest, exact_solutions, X_06, X_0T, X_6T, X_T6, references,
+                                 tol, wide, singular_tol, near_limit, max_iter, batch)
+        if result is not None:                          # (None: a wrist far beyond reach)
+            return result
     if start is None:
         start = exact_solutions(X_06, checked=plain)
         start.solutions = _off_the_edge(nearest.robot, start.solutions, start.valid,
@@ -514,6 +521,39 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
     started = start.valid.reshape(n, 8).any(axis=1)
     reason = np.where(started, REASON_NOT_CONVERGED, start.reason.reshape(n))
     return _poses_result(nearest, X_6T, solutions, valid, pe, re, flags, reason, X_0T, tol,
+                         max_iter, batch, near)
+
+
+def _compiled_poses(nearest, exact_solutions, X_06, X_0T, X_6T, X_T6, references, tol, wide,
+                    singular_tol, near_limit, max_iter, batch):
+    """The array path of :func:`calibrated_ur` for a batch, with numba: steps 2 and 3 pose by
+    pose in compiled code (``dqlab._fast.newton_compiled.array_start``: no array of every
+    row in numpy between the closed form and Newton), the repairs of steps 4 as the numpy
+    path makes them (:func:`_repairs`: the restarts of many poses fill the compiled
+    kernels' lanes), step 5 and the flags pose by pose again
+    (``dqlab._fast.newton_compiled.array_finish``), then step 6. Tested equal to the numpy
+    path. None when a wrist centre is far beyond reach (the numpy path's closed form solves
+    it for a stand-in)."""
+    n = X_0T.shape[0]
+    begun = compiled_array_start(nearest.links, X_6T, nearest.exact, X_06, X_0T,
+                                 np.zeros(n) if references is None else references[:, 5], tol,
+                                 wide, singular_tol, NEAR_WRIST, near_limit, max_iter,
+                                 **_NEWTON_STEPS)
+    if begun is None:
+        return None
+    q, done, converged, X, measures, errors, q0, found, start_errors, start_near, ended, \
+        started = begun
+    polished = _Polished(q, done, converged, X, measures, errors)
+    _repairs((nearest.links, X_6T), nearest, polished, q0, found, exact_solutions, X_06, X_0T,
+             X_T6, tol, max_iter, (references, wide, singular_tol, near_limit))
+    solutions, valid, pe, re, flags, near = compiled_array_finish(
+        nearest.links, X_6T, nearest.exact, X_0T, tol, singular_tol, near_limit, q, done,
+        converged, measures, errors, found, start_errors, start_near,
+        polish_near=_POLISH_NEAR, **_NEWTON_STEPS)
+    reason = np.where(started, REASON_NOT_CONVERGED, _REASON_OF[ended])
+    return _poses_result(nearest, X_6T, solutions.reshape(-1, 6), valid.reshape(-1),
+                         pe.reshape(-1), re.reshape(-1),
+                         dict(zip(_FLAG_NAMES, flags.T, strict=True)), reason, X_0T, tol,
                          max_iter, batch, near)
 
 
