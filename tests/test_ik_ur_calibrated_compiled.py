@@ -543,7 +543,7 @@ def copied(polished):
 @pytest.mark.parametrize("which", ["UR10e (ur_calibration documentation)",
                                    "UR3 (calibration.conf)", "synthetic, with a tool"])
 def test_compiled_repairs_equal_the_numpy_path(which, numpy_path, monkeypatch):
-    """The repairs (_repair, _family and _deflate), compiled pose by pose
+    """The repairs (_repair, _family and _deflate), compiled step by step
     (dqlab._fast.newton_compiled.repairs), leave the branches of the poses that need them
     as the numpy path does: the same rows restarted and converged, the same distinct
     solutions, the joint vectors to the rounding (1e-8 rad: Newton stops at tol / 10,
@@ -574,7 +574,7 @@ def test_compiled_repairs_equal_the_numpy_path(which, numpy_path, monkeypatch):
     chain, nearest, before, *rest = calls[0]
     tol = rest[6]
     fast, plain = copied(before), copied(before)
-    repairs(chain, nearest, fast, *rest, per_pose=True)
+    repairs(chain, nearest, fast, *rest)
     numpy_path(repairs, chain, nearest, plain, *rest)
     restarted = fast.done & ~before.done | (fast.converged & ~before.converged)
     assert restarted.sum() >= 20, restarted.sum()               # many rows restarted

@@ -31,9 +31,10 @@ no row is valid; tested equal to it to the rounding), and :func:`exact_poses` th
 a batch of poses, which the batch path and the wrist family's starts come from (a wrist
 centre far beyond reach goes to the closed form's own batch path), :func:`exact_fk` that
 arm's forward kinematics; :func:`deflated` the deflated Newton steps of its ``_deflate``,
-and :func:`repairs` its steps 4 (``_repair``, ``_family`` and ``_deflate``) pose by pose,
+and :func:`repairs` its steps 4 (``_repair``, ``_family`` and ``_deflate``) step by step,
 around the same kernels; :func:`array_poses` its array path for a few poses, up to the
-search beyond the rows.
+search beyond the rows, and :func:`array_start` and :func:`array_finish` the same for a
+batch, on either side of the repairs.
 :func:`ready` says whether numba is there and the environment variable ``DQLAB_COMPILED``
 (:mod:`dqlab._fast.compiled`, read again by :func:`refresh`) does not switch the compiled paths
 off; the first compilation takes seconds, and is cached on disk for the next processes.
@@ -1062,8 +1063,9 @@ def repairs(links, tool, exact, theta6_ref, wide, singular_tol, near_wrist, near
             converged, X, measures, errors, q0, found, X_0T, X_T6, X_06, tol, max_iter, *,
             restart_iter, plain, stop_factor, give_up_after, damping, max_step, ways,
             near_ratio, family, deflation_ways):
-    """``_repair``, ``_family`` and ``_deflate`` of ``dqlab.ik.ur_calibrated`` compiled, pose
-    by pose: the restarts of the branches missing from each pose (the corrected closed
+    """``_repair``, ``_family`` and ``_deflate`` of ``dqlab.ik.ur_calibrated`` compiled, step
+    by step as those functions take them, each step's starts of every pose stepped together:
+    the restarts of the branches missing from each pose (the corrected closed
     form, the flips, the moves along the most singular direction), the wrist family's
     members as starts, and deflated Newton; the arrays of its ``_Polished`` (``q``,
     ``done``, ``converged``, ``X``, ``measures``, ``errors``; C-contiguous) updated in
@@ -1140,9 +1142,9 @@ def array_start(links, tool, exact, X_06, X_0T, theta6_ref, tol, wide, singular_
                 near_wrist, near_tol, max_iter, *, plain, stop_factor, give_up_after, damping,
                 max_step):
     """The first steps of :func:`array_poses` for any number of poses, pose by pose, for a
-    caller that repairs the rows itself (the numpy path's repairs, whose Newton kernels
-    take the restarts of many poses together): the closed form, its branches missed by a
-    little solved again, Newton from them. None when a wrist centre is far beyond reach;
+    caller that repairs the rows between this and :func:`array_finish`
+    (:func:`repairs`): the closed form, its branches missed by a little solved again,
+    Newton from them. None when a wrist centre is far beyond reach;
     else the arrays of ``dqlab.ik.ur_calibrated._Polished`` (``q`` (8 n, 6), ``done``,
     ``converged`` (8 n,), ``X`` (8 n, 4, 4), ``measures`` (3, 8 n), ``errors`` (2, 8 n)),
     the starts ``q0`` (8 n, 6), the branches ``found`` (8 n,), the closed form's errors
@@ -1388,62 +1390,149 @@ def _repairs(links, tool, exact, theta6_ref, wide, singular_tol, near_wrist, nea
              converged, X, measures, errors, q0, found, X_0T, X_T6, X_06, unique, tol, stop,
              plain, max_iter, give_up_after, damping, max_step, ways, near_ratio, family,
              deflation_ways):
-    """:func:`repairs`' work, pose by pose (the poses are independent)."""
-    for pose in range(X_0T.shape[0]):
-        restart = (links, tool, X_0T[pose], stop, plain, max_iter, give_up_after, damping,
-                   max_step, q, done, converged, X, measures, errors, unique)
-        _repair_restarts(pose, exact, theta6_ref[pose], wide, singular_tol, near_wrist,
-                         near_tol, q0, found, X_T6, ways, near_ratio, restart)
-        _family_restarts(pose, exact, X_06[pose], singular_tol, near_wrist, family, tol,
-                         restart)
-        _deflation_restarts(pose, exact, deflation_ways, near_ratio, family[1], max_iter,
-                            restart)
+    """:func:`repairs`' work, step by step as the numpy path takes them: each step gathers
+    the starts of every pose (pose by pose: the poses are independent), then steps them all
+    together, so that the kernel's lanes are full (:func:`_run`), and offers each pose's
+    solutions to its rows in the order of its starts."""
+    n = X_0T.shape[0]
+    state = (links, tool, X_0T, stop, plain, max_iter, give_up_after, damping, max_step, q,
+             done, converged, X, measures, errors, unique)
+    missing = np.zeros(n, dtype=np.bool_)               # _repair: the corrected closed form
+    queue = _queue(8 * n)
+    for pose in range(n):
+        for k in range(8):
+            missing[pose] = missing[pose] or (done[8 * pose + k] and not unique[8 * pose + k])
+        if missing[pose]:
+            owners, starts = _corrected_starts(pose, exact, theta6_ref[pose], wide,
+                                               singular_tol, near_wrist, near_tol, X_T6, state)
+            queue = _push(queue, pose, owners, starts, np.arange(owners.shape[0]))
+    _run(queue, state)
+    wanted = np.empty(8, dtype=np.int64)                # the flips
+    queue = _cleared(queue)
+    for pose in range(n):
+        w = _wanted(pose, done, unique, found, False, wanted) if missing[pose] else 0
+        if w:
+            owners, starts = _flip_starts(wanted[:w], exact, q, unique)
+            queue = _push(queue, pose, owners, starts, np.arange(owners.shape[0]))
+    _run(queue, state)
+    queue = _cleared(queue)                             # the moves
+    for pose in range(n):
+        w = _wanted(pose, done, unique, found, True, wanted) if missing[pose] else 0
+        if w:
+            owners, starts, which = _move_starts(wanted[:w], q0, ways, near_ratio, links, tool,
+                                                 q, converged, unique)
+            queue = _push(queue, pose, owners, starts, which)
+    _run(queue, state)
+    queue = _cleared(queue)                             # _family
+    for pose in range(n):
+        count = _family_count(pose, exact, family, q, done, converged, unique)
+        if count:
+            owners, starts, which = _family_starts(pose, count, exact, X_06[pose],
+                                                   singular_tol, near_wrist, family, tol,
+                                                   unique)
+            queue = _push(queue, pose, owners, starts, which)
+    _run(queue, state)
+    _deflation(exact, deflation_ways, near_ratio, family[1], max_iter, state)
 
 
-def _repair_restarts(pose, exact, theta6_ref, wide, singular_tol, near_wrist, near_tol, q0,
-                     found, X_T6, ways, near_ratio, restart):
-    """``dqlab.ik.ur_calibrated._repair`` of one pose."""
-    done, unique = restart[10], restart[15]
-    base = 8 * pose
-    missing = False
-    for k in range(8):
-        missing = missing or (done[base + k] and not unique[base + k])
-    if not missing:
+def _queue(size):
+    """An empty queue of restarts for :func:`_run`: the rows offered a solution (``owners``),
+    the start each is offered (``which``), the starts and their poses, and how many of
+    each there are; room for ``size`` of each, grown as needed (:func:`_push`)."""
+    return (np.empty(size, dtype=np.int64), np.empty(size, dtype=np.int64),
+            np.empty((size, 6)), np.empty(size, dtype=np.int64), np.zeros(2, dtype=np.int64))
+
+
+def _cleared(queue):
+    """The queue emptied (its room kept)."""
+    queue[4][:] = 0
+    return queue
+
+
+def _push(queue, pose, owners, starts, which):
+    """The queue with the restarts of one pose appended: ``owners[j]`` offered start
+    ``which[j]`` of ``starts`` (which become the queue's next starts, of ``pose``); the
+    arrays of the queue grown (twice their size) when full."""
+    queued_owners, queued_which, queued_starts, poses, count = queue
+    o, s = count[0], count[1]
+    if o + owners.shape[0] > queued_owners.shape[0]:
+        size = max(2 * queued_owners.shape[0], o + owners.shape[0])
+        grown_owners, grown_which = np.empty(size, dtype=np.int64), np.empty(size, np.int64)
+        grown_owners[:o], grown_which[:o] = queued_owners[:o], queued_which[:o]
+        queued_owners, queued_which = grown_owners, grown_which
+    if s + starts.shape[0] > queued_starts.shape[0]:
+        size = max(2 * queued_starts.shape[0], s + starts.shape[0])
+        grown_starts, grown_poses = np.empty((size, 6)), np.empty(size, dtype=np.int64)
+        grown_starts[:s], grown_poses[:s] = queued_starts[:s], poses[:s]
+        queued_starts, poses = grown_starts, grown_poses
+    for j in range(owners.shape[0]):
+        queued_owners[o + j], queued_which[o + j] = owners[j], s + which[j]
+    for j in range(starts.shape[0]):
+        queued_starts[s + j], poses[s + j] = starts[j], pose
+    count[0], count[1] = o + owners.shape[0], s + starts.shape[0]
+    return queued_owners, queued_which, queued_starts, poses, count
+
+
+def _run(queue, state):
+    """``dqlab.ik.ur_calibrated._restart`` of the queued restarts: Newton from every start
+    towards its pose, eight at a time, then row ``owners[j]`` offered the solution from
+    start ``which[j]`` in the queue's order; the first that converges to a solution its
+    pose does not have replaces the row."""
+    (links, tool, X_0T, stop, plain, max_iter, give_up_after, damping, max_step, q, done,
+     converged, X, measures, errors, unique) = state
+    owners, which, starts, poses, count = queue
+    o, m = count[0], count[1]
+    if o == 0:
         return
-    _corrected_restarts(pose, exact, theta6_ref, wide, singular_tol, near_wrist, near_tol,
-                        X_T6, restart)
-    wanted = np.empty(8, dtype=np.int64)
+    q_new = starts[:m].copy()
+    targets = np.empty((m, 4, 4))
+    for i in range(m):
+        targets[i] = X_0T[poses[i]]
+    ok = np.zeros(m, dtype=np.bool_)
+    X_new, measures_new, errors_new = np.zeros((m, 4, 4)), np.zeros((3, m)), np.zeros((2, m))
+    _kernel(links, tool, q_new, targets, stop, plain, max_iter, give_up_after, damping,
+            max_step, ok, X_new, measures_new, errors_new)
+    offered = np.empty((o, 6))
+    offered_ok = np.empty(o, dtype=np.bool_)
+    for j in range(o):
+        offered[j] = q_new[which[j]]
+        offered_ok[j] = ok[which[j]]
+    taken = np.empty(o, dtype=np.int64)
+    for t in taken[:_accept(owners[:o], offered_ok, offered, q, unique, taken)]:
+        row, s = owners[t], which[t]
+        converged[row] = done[row] = True
+        X[row] = X_new[s]
+        measures[:, row] = measures_new[:, s]
+        errors[:, row] = errors_new[:, s]
+
+
+def _wanted(pose, done, unique, found, only_found, out):
+    """The rows of ``pose`` missing a branch (done, not unique; and ``found`` by the exact
+    arm if ``only_found``) into ``out``; how many."""
     w = 0
     for k in range(8):
-        if done[base + k] and not unique[base + k]:
-            wanted[w] = base + k
+        r = 8 * pose + k
+        if done[r] and not unique[r] and (found[r] or not only_found):
+            out[w] = r
             w += 1
-    if w == 0:
-        return
-    _flip_restarts(wanted[:w], exact, restart)
-    v = 0
-    for i in range(w):                                  # still missing, and found by the
-        row = wanted[i]                                 # exact arm
-        if not unique[row] and found[row]:
-            wanted[v] = row
-            v += 1
-    if v:
-        _move_restarts(wanted[:v], q0, ways, near_ratio, restart)
+    return w
 
 
-def _corrected_restarts(pose, exact, theta6_ref, wide, singular_tol, near_wrist, near_tol,
-                        X_T6, restart):
-    """_repair's first restarts: the exact arm's solutions of the pose corrected by the two
-    arms' difference at its first solution, for its missing branches."""
-    links, tool, X_0T, _, _, _, _, _, _, q, done, _, X, _, _, unique = restart
+def _corrected_starts(pose, exact, theta6_ref, wide, singular_tol, near_wrist, near_tol, X_T6,
+                      state):
+    """_repair's first restarts of one pose: the exact arm's solutions of the pose corrected
+    by the two arms' difference at its first solution, for its missing branches (owners
+    and starts)."""
+    X_0T, q, done, X, unique = state[2][pose], state[9], state[10], state[12], state[15]
     base = 8 * pose
+    owners, starts = np.empty(8, dtype=np.int64), np.empty((8, 6))
     first = -1
     for k in range(8):
         if unique[base + k]:
             first = base + k
             break
     if first < 0:
-        return
+        return owners[:0], starts[:0]
     X_cal6 = _times4(X[first], X_T6)                    # the calibrated flange at q*
     X_exact6 = np.empty((4, 4))
     _exact_flange(q[first], exact, X_exact6)
@@ -1454,7 +1543,6 @@ def _corrected_restarts(pose, exact, theta6_ref, wide, singular_tol, near_wrist,
     ended = _exact_one_pose(qw, qx, qy, qz, C[0, 3], C[1, 3], C[2, 3], C[0, 2], C[1, 2],
                             C[2, 2], C, theta6_ref, exact, wide, singular_tol, near_wrist,
                             near_tol, solutions, errs, flags)
-    owners, starts = np.empty(8, dtype=np.int64), np.empty((8, 6))
     m = 0
     for k in range(8):
         if (ended == SOLVED and errs[0, k] <= wide and errs[1, k] <= wide
@@ -1462,13 +1550,12 @@ def _corrected_restarts(pose, exact, theta6_ref, wide, singular_tol, near_wrist,
             owners[m] = base + k
             starts[m] = solutions[k]
             m += 1
-    _restart(owners[:m], starts[:m], np.arange(m), restart)
+    return owners[:m], starts[:m]
 
 
-def _flip_restarts(wanted, exact, restart):
+def _flip_starts(wanted, exact, q, unique):
     """_repair's second restarts: each missing branch from its siblings' solutions flipped
-    at the exact arm's elbow, wrist, and both (``_flip``)."""
-    q, unique = restart[9], restart[15]
+    at the exact arm's elbow, wrist, and both (``_flip``); owners and starts."""
     owners = np.empty(3 * wanted.shape[0], dtype=np.int64)
     starts = np.empty((3 * wanted.shape[0], 6))
     m = 0
@@ -1479,15 +1566,14 @@ def _flip_restarts(wanted, exact, restart):
                 owners[m] = row
                 _flip(q[sibling], bits, exact, starts[m])
                 m += 1
-    _restart(owners[:m], starts[:m], np.arange(m), restart)
+    return owners[:m], starts[:m]
 
 
-def _move_restarts(wanted, q0, ways, near_ratio, restart):
+def _move_starts(wanted, q0, ways, near_ratio, links, tool, q, converged, unique):
     """_repair's last restarts: each missing branch from its own start and from the other
     shoulder's solutions, moved along the calibrated arm's most singular direction where
-    near a singularity (each vector moved, and each move stepped, once)."""
-    links, tool = restart[0], restart[1]
-    q, converged, unique = restart[9], restart[11], restart[15]
+    near a singularity (each vector moved, and each move stepped, once); owners, starts
+    and which start each owner is offered."""
     w = wanted.shape[0]
     known = np.empty(4 * w, dtype=np.int64)             # the other shoulder's solutions,
     count = 0                                           # sorted, each once
@@ -1531,8 +1617,6 @@ def _move_restarts(wanted, q0, ways, near_ratio, restart):
                     owners[m] = rows[j]
                     moves[m] = n_ways * source[j] + way
                     m += 1
-    if m == 0:
-        return
     used = np.unique(moves[:m])                         # each move stepped once
     which = np.searchsorted(used, moves[:m])
     starts = np.empty((used.shape[0], 6))
@@ -1540,37 +1624,44 @@ def _move_restarts(wanted, q0, ways, near_ratio, restart):
         vector, way = used[u] // n_ways, used[u] % n_ways
         for j in range(6):
             starts[u, j] = vectors[vector, j] + ways[way] * step[vector, j]
-    _restart(owners[:m], starts, which, restart)
+    return owners[:m], starts, which
 
 
-def _family_restarts(pose, exact, X_06, singular_tol, near_wrist, family, tol, restart):
-    """``dqlab.ik.ur_calibrated._family`` of one pose: the members of the exact arm's wrist
-    family (``family``: their number, the thresholds of ``_family_members`` and the
-    closed form's tolerance and near_tol there) offered to its missing branches."""
-    members, near_measure, few_branches, few_wrist, member_tol, member_near = family
-    q, done, converged, unique = restart[9], restart[10], restart[11], restart[15]
+def _family_count(pose, exact, family, q, done, converged, unique):
+    """``dqlab.ik.ur_calibrated._family_members`` of one pose (its rows' uniqueness marked
+    first): how many members of the exact arm's wrist family it takes as starts."""
+    members, near_measure, few_branches, few_wrist = family[0], family[1], family[2], family[3]
     base = 8 * pose
     _unique(q[base:base + 8], converged[base:base + 8], unique[base:base + 8])
-    have, wrist, near_wrist_found, count = 0, False, False, 0
-    for k in range(8):                                  # _family_members
+    have, wrist, near_wrist_found = 0, False, False
+    for k in range(8):
         sin5 = abs(math.sin(q[base + k, 4] + exact[10]))
         if unique[base + k]:
             have += 1
             near_wrist_found = near_wrist_found or sin5 >= few_wrist
         wrist = wrist or (done[base + k] and sin5 < near_measure)
-    if have == 8:
-        return
     few = have <= few_branches
+    if have == 8:
+        return 0
     if wrist or (few and not near_wrist_found):
-        count = members
-    elif few:
-        count = 1
-    else:
-        return
+        return members
+    return 1 if few else 0
+
+
+def _family_starts(pose, count, exact, X_06, singular_tol, near_wrist, family, tol, unique):
+    """``dqlab.ik.ur_calibrated._family`` of one pose: ``count`` members of the exact arm's
+    wrist family (``family``: their number, the thresholds of ``_family_members`` and the
+    closed form's tolerance and near_tol there) offered to its missing branches (owners,
+    starts, which start each owner is offered: :func:`_offer`)."""
+    members, member_tol, member_near = family[0], family[4], family[5]
+    base = 8 * pose
+    missing = np.empty(8, dtype=np.bool_)
+    for k in range(8):
+        missing[k] = not unique[base + k]
+    starts, labels = np.empty((8 * count, 6)), np.empty(8 * count, dtype=np.int64)
     qw, qx, qy, qz = _quaternion(X_06)
     solutions, errs = np.zeros((8, 6)), np.zeros((2, 8))
     flags = np.zeros(4, dtype=np.bool_)
-    starts, labels = np.empty((8 * count, 6)), np.empty(8 * count, dtype=np.int64)
     m = 0
     for j in range(count):
         theta6 = -math.pi + 2.0 * math.pi / members * j if count > 1 else 0.0
@@ -1590,66 +1681,81 @@ def _family_restarts(pose, exact, X_06, singular_tol, near_wrist, family, tol, r
                 starts[m] = solutions[k]
                 labels[m] = label
                 m += 1
-    missing = np.empty(8, dtype=np.bool_)
-    for k in range(8):
-        missing[k] = not unique[base + k]
-    _offer(pose, starts[:m], labels[:m], missing, restart)
+    return _offer(pose, starts[:m], labels[:m], missing)
 
 
-def _deflation_restarts(pose, exact, ways, near_ratio, near_measure, steps, restart):
-    """``dqlab.ik.ur_calibrated._deflate`` of one pose: deflated Newton from its solutions
-    near a singularity, moved along the most singular direction by ``ways``, offered to its
-    branches still missing."""
-    (links, tool, X_target, stop, _, _, give_up_after, damping, max_step, q, done, converged,
-     _, measures, _, unique) = restart
-    base = 8 * pose
-    _unique(q[base:base + 8], converged[base:base + 8], unique[base:base + 8])
-    wanted = np.empty(8, dtype=np.bool_)
-    moved = np.empty(8, dtype=np.int64)
-    any_wanted, count = False, 0
-    for k in range(8):
-        r = base + k
-        wanted[k] = done[r] and not unique[r]
-        any_wanted = any_wanted or wanted[k]
-        if unique[r] and min(measures[0, r], measures[1, r],
-                             measures[2, r] / exact[3]) < near_measure:
-            moved[count] = r
-            count += 1
-    if not any_wanted or count == 0:
-        return
-    near, direction = _near_singular_directions(links, tool, q[moved[:count]], near_ratio)
+def _deflation(exact, ways, near_ratio, near_measure, steps, state):
+    """``dqlab.ik.ur_calibrated._deflate``: deflated Newton from the solutions of each pose
+    near a singularity, moved along the most singular direction by ``ways`` (every pose's
+    starts stepped together, :func:`_deflated`), then offered to the pose's branches still
+    missing (:func:`_run`)."""
+    (links, tool, X_0T, stop, _, _, give_up_after, damping, max_step, q, done, converged,
+     _, measures, _, unique) = state
+    n = X_0T.shape[0]
     n_ways = ways.shape[0]
-    starts = np.empty((count * n_ways, 6))
-    m = 0
-    for i in range(count):
-        if near[i]:
-            for way in range(n_ways):
-                for j in range(6):
-                    starts[m, j] = q[moved[i], j] + ways[way] * direction[i, j]
-                m += 1
+    wanted = np.zeros((n, 8), dtype=np.bool_)
+    first = np.zeros(n + 1, dtype=np.int64)             # pose i: starts first[i]:first[i+1]
+    starts = np.empty((8 * n_ways, 6))
+    moved = np.empty(8, dtype=np.int64)
+    for pose in range(n):
+        first[pose + 1] = first[pose]
+        base = 8 * pose
+        _unique(q[base:base + 8], converged[base:base + 8], unique[base:base + 8])
+        any_wanted, count = False, 0
+        for k in range(8):
+            r = base + k
+            wanted[pose, k] = done[r] and not unique[r]
+            any_wanted = any_wanted or wanted[pose, k]
+            if unique[r] and min(measures[0, r], measures[1, r],
+                                 measures[2, r] / exact[3]) < near_measure:
+                moved[count] = r
+                count += 1
+        if not any_wanted or count == 0:
+            continue
+        near, direction = _near_singular_directions(links, tool, q[moved[:count]], near_ratio)
+        m = first[pose]
+        if m + count * n_ways > starts.shape[0]:
+            grown = np.empty((max(2 * starts.shape[0], m + count * n_ways), 6))
+            grown[:m] = starts[:m]
+            starts = grown
+        for i in range(count):
+            if near[i]:
+                for way in range(n_ways):
+                    for j in range(6):
+                        starts[m, j] = q[moved[i], j] + ways[way] * direction[i, j]
+                    m += 1
+        first[pose + 1] = m
+    m = first[n]
     if m == 0:
         return
     known, have = np.zeros((m, 8, 6)), np.zeros((m, 8), dtype=np.bool_)
     targets = np.empty((m, 4, 4))
-    for i in range(m):
-        targets[i] = X_target
-        for k in range(8):
-            if unique[base + k]:
-                have[i, k] = True
-                known[i, k] = q[base + k]
+    for pose in range(n):
+        for i in range(first[pose], first[pose + 1]):
+            targets[i] = X_0T[pose]
+            for k in range(8):
+                if unique[8 * pose + k]:
+                    have[i, k] = True
+                    known[i, k] = q[8 * pose + k]
     starts = starts[:m].copy()
     _deflated(links, tool, starts, targets, known, have, steps, stop, give_up_after, damping,
               max_step)
-    labels = np.empty(m, dtype=np.int64)
-    for i in range(m):
-        labels[i] = _branch(starts[i], exact)
-    _offer(pose, starts, labels, wanted, restart)
+    queue = _queue(8 * m)
+    for pose in range(n):
+        if first[pose + 1] > first[pose]:
+            mine = starts[first[pose]:first[pose + 1]]
+            labels = np.empty(mine.shape[0], dtype=np.int64)
+            for i in range(mine.shape[0]):
+                labels[i] = _branch(mine[i], exact)
+            owners, used, which = _offer(pose, mine, labels, wanted[pose])
+            queue = _push(queue, pose, owners, used, which)
+    _run(queue, state)
 
 
-def _offer(pose, starts, labels, missing, restart):
+def _offer(pose, starts, labels, missing):
     """``dqlab.ik.ur_calibrated._offer`` of one pose: each start offered to every branch
     ``missing`` (8,), the branch of its label first, then the others in order; each start
-    stepped once (:func:`_restart`)."""
+    stepped once. The owners, the starts used and which of them each owner is offered."""
     m = starts.shape[0]
     owners = np.empty(8 * m, dtype=np.int64)
     which = np.empty(8 * m, dtype=np.int64)
@@ -1663,10 +1769,8 @@ def _offer(pose, starts, labels, missing, restart):
             if missing[k] and k != labels[j]:
                 owners[e], which[e] = 8 * pose + k, j
                 e += 1
-    if e == 0:
-        return
     used = np.unique(which[:e])                         # each start stepped once
-    _restart(owners[:e], starts[used], np.searchsorted(used, which[:e]), restart)
+    return owners[:e], starts[used], np.searchsorted(used, which[:e])
 
 
 def _off_the_edge(row, k, error, tol, exact):
@@ -1695,37 +1799,6 @@ def _branch(q, exact):
     h = exact[1] * math.cos(t1) + exact[2] * math.cos(t1 + t2) + exact[4] * math.sin(
         t1 + t2 + t3)
     return 4 * (h < 0.0) + 2 * (math.sin(t2) < 0.0) + (math.sin(t4) < 0.0)
-
-
-def _restart(owners, starts, which, restart):
-    """``dqlab.ik.ur_calibrated._restart`` of one pose: Newton from ``starts``, and row
-    ``owners[j]`` offered the solution from start ``which[j]``; the first that converges to
-    a solution the pose does not have replaces the row."""
-    (links, tool, X_target, stop, plain, max_iter, give_up_after, damping, max_step, q, done,
-     converged, X, measures, errors, unique) = restart
-    m = starts.shape[0]
-    if owners.shape[0] == 0:
-        return
-    q_new = starts.copy()
-    targets = np.empty((m, 4, 4))
-    for i in range(m):
-        targets[i] = X_target
-    ok = np.zeros(m, dtype=np.bool_)
-    X_new, measures_new, errors_new = np.zeros((m, 4, 4)), np.zeros((3, m)), np.zeros((2, m))
-    _kernel(links, tool, q_new, targets, stop, plain, max_iter, give_up_after, damping,
-            max_step, ok, X_new, measures_new, errors_new)
-    offered = np.empty((owners.shape[0], 6))
-    offered_ok = np.empty(owners.shape[0], dtype=np.bool_)
-    for j in range(owners.shape[0]):
-        offered[j] = q_new[which[j]]
-        offered_ok[j] = ok[which[j]]
-    taken = np.empty(owners.shape[0], dtype=np.int64)
-    for t in taken[:_accept(owners, offered_ok, offered, q, unique, taken)]:
-        row, s = owners[t], which[t]
-        converged[row] = done[row] = True
-        X[row] = X_new[s]
-        measures[:, row] = measures_new[:, s]
-        errors[:, row] = errors_new[:, s]
 
 
 def _flip(q, bits, exact, out):
@@ -1863,10 +1936,11 @@ _Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE, _G = (
 _COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_deflated_step", "lane_size",
               "_same", "_unique", "_wrap", "_exact_one_pose", "_family_member",
               "_feasible_theta234", "_exact_flange", "_exact_fk", "_exact_poses", "_array_poses",
-              "_array_start", "_array_finish", "_repairs", "_repair_restarts",
-              "_corrected_restarts", "_family_restarts", "_deflation_restarts", "_offer",
+              "_array_start", "_array_finish", "_repairs", "_queue", "_cleared", "_push",
+              "_run", "_wanted", "_corrected_starts", "_family_count", "_family_starts",
+              "_deflation", "_offer",
               "_off_the_edge", "_sign", "_branch",
-              "_flip_restarts", "_move_restarts", "_restart", "_flip",
+              "_flip_starts", "_move_starts", "_flip",
               "_near_singular_directions", "_jacobi_smallest", "_times4", "_rigid_inverse",
               "_quaternion", "_one_pose", "_lean_pose", "_accept", "_gram",
               "_smallest", "_largest_diagonal_column", "_times", "_rayleigh", "_are_new",

@@ -48,10 +48,11 @@ keeps its contract (every branch, flags, reasons, batches) in these steps:
    otherwise. One pose whose branches all converge, to distinct solutions, is
    finished with a few calls (``_one_pose``, with numba one compiled call; tested equal to
    the array path); the others go on to the restarts of ``_repair``. With numba, the
-   array path runs compiled pose by pose up to step 6 but for the repairs of a batch of
-   more than eight poses (``dqlab._fast.newton_compiled.array_poses``, ``array_start`` and
-   ``array_finish``, tested equal to it): those keep the numpy path's ``_repairs``, whose
-   Newton kernels fill their eight lanes with the restarts of several poses.
+   array path runs compiled up to step 6 (``dqlab._fast.newton_compiled.array_poses``;
+   for a batch of more than eight poses ``array_start``, ``repairs`` and ``array_finish``;
+   tested equal to it): steps 2, 3 and 5 pose by pose, the repairs of steps 4 step by step
+   as ``_repairs`` takes them, each step's restarts of every pose stepped together in the
+   Newton kernel's eight lanes.
 4. **The branches still missing**, near a singularity: members of the exact arm's wrist
    family as starts (``_family``, also for a pose with at most two branches near the wrist
    singularity, or none, where the exact arm's closed form may miss a whole shoulder; such
@@ -172,7 +173,7 @@ _NEAR_GAPS = 4.0       # near_singular on a calibrated arm: at least this many r
 _NEAR_MEASURE = 0.1    # a singularity measure below which a pose's missing branches are sought
 _FAMILY = 6            # members of the exact arm's wrist family taken as starts
 _FAMILY_TOL = 0.5      # the closed form's tolerance for them
-_PER_POSE = 8          # up to this many poses, the array path runs compiled pose by pose
+_PER_POSE = 8          # up to this many poses, the compiled array path is one call
 _FEW_BRANCHES = 2      # a pose with this many branches or fewer ...
 _FEW_WRIST = 0.2       # ... none with |sin theta_5| above this, takes the family's starts
 _DEFLATION_WAYS = np.array([0.05, -0.05, 0.3, -0.3])   # the moves of a deflation's starts
@@ -527,10 +528,8 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
 def _compiled_poses(nearest, exact_solutions, X_06, X_0T, X_6T, X_T6, references, tol, wide,
                     singular_tol, near_limit, max_iter, batch):
     """The array path of :func:`calibrated_ur` for a batch, with numba: steps 2 and 3 pose by
-    pose in compiled code (``dqlab._fast.newton_compiled.array_start``: no array of every
-    row in numpy between the closed form and Newton), the repairs of steps 4 as the numpy
-    path makes them (:func:`_repairs`: the restarts of many poses fill the compiled
-    kernels' lanes), step 5 and the flags pose by pose again
+    pose in compiled code (``dqlab._fast.newton_compiled.array_start``), the repairs of
+    steps 4 (:func:`_repairs`), step 5 and the flags pose by pose
     (``dqlab._fast.newton_compiled.array_finish``), then step 6. Tested equal to the numpy
     path. None when a wrist centre is far beyond reach (the numpy path's closed form solves
     it for a stand-in)."""
@@ -997,18 +996,15 @@ def _checked_tool(tool, pose_tol):
 
 
 def _repairs(chain, nearest, polished, q0, found, exact_solutions, X_06, X_0T, X_T6, tol,
-             max_iter, closed_form_options, per_pose=None):
+             max_iter, closed_form_options):
     """Steps 4 of the module: :func:`_repair`, :func:`_family` and :func:`_deflate` of the
     poses, ``polished`` updated in place; ``exact_solutions`` the exact arm's closed form
     of the poses, whose references, tolerance and singular and near tolerances are
-    ``closed_form_options``. With numba, for up to :data:`_PER_POSE` poses (or as
-    ``per_pose`` says), the three run compiled, pose by pose
-    (``dqlab._fast.newton_compiled.repairs``, tested equal to them): for one pose the
-    numpy calls around the compiled kernels cost more than the steps; for more, the
-    kernels' eight lanes are filled with the restarts of several poses."""
-    if per_pose is None:
-        per_pose = X_0T.shape[0] <= _PER_POSE
-    if not (per_pose and compiled_ready()):
+    ``closed_form_options``. With numba, the three run compiled
+    (``dqlab._fast.newton_compiled.repairs``, tested equal to them): step by step as here,
+    each step's starts gathered pose by pose and stepped all together, without the numpy
+    arrays of every row around the compiled kernels."""
+    if not compiled_ready():
         _repair(chain, nearest, polished, q0, found, exact_solutions, X_0T, X_T6, tol,
                 max_iter)
         _family(chain, nearest, polished, X_06, X_0T, exact_solutions, tol, max_iter)
