@@ -11,7 +11,7 @@ from dqlab.ik import IKResult, ur
 from dqlab.ik.ur_calibrated import REASON_NOT_CONVERGED, calibrated_ur, nominal_ur
 from dqlab.models import UR_SHAPE, ur3, ur5e, ur10e
 from dqlab.robot import Link, Robot
-from dqlab.rotations import rot_x, rot_z
+from dqlab.rotations import rot_x, rot_z, wrap_angle
 from dqlab.ur.calibration import robot_from_joint_origins
 
 
@@ -111,11 +111,18 @@ def check_contract(result, batch):
     assert (result.solutions[~result.valid] == 0).all()
     assert (np.abs(result.solutions) <= np.pi).all()
     assert (result.reason[result.count > 0] == "").all()
+    Q, V = result.solutions.reshape(-1, 8, 6), result.valid.reshape(-1, 8)
+    gap = np.abs(wrap_angle(Q[:, :, None] - Q[:, None, :])).max(axis=-1)
+    assert not ((gap < 1e-6) & V[:, :, None] & V[:, None, :]   # no two valid rows on one
+                & ~np.eye(8, dtype=bool)).any()                 # solution
     more = result.more                       # the solutions beyond the rows: eight more rows
     assert more.solutions.shape == batch + (8, 6) and more.valid.shape == batch + (8,)
     assert np.isfinite(more.solutions).all() and (more.solutions[~more.valid] == 0).all()
     assert (np.abs(more.solutions) <= np.pi).all()
-    assert not (more.valid.any(axis=-1) & (result.count < 8)).any()   # only full poses seek
+    # only full poses seek: every row valid, or on a valid row's solution (a repeat, made
+    # invalid, which keeps its errors)
+    reached = (result.position_error <= 1e-9) & (result.rotation_error <= 1e-9)
+    assert not (more.valid.any(axis=-1) & ~(result.valid | reached).all(axis=-1)).any()
 
 
 # --------------------------------------------------------------------------------------
@@ -645,6 +652,24 @@ def test_more_is_empty_on_an_exact_arm_and_printed_on_a_calibrated_one():
     both = ur(robot, robot.fk(qs))
     assert (f"targets with solutions beyond the rows (result.more): 2, "
             f"{int(both.more.count.sum())} solutions") in repr(both)
+
+
+@pytest.mark.parametrize("compiled_kernels", [True, False])
+def test_two_rows_on_one_solution(compiled_kernels, monkeypatch):
+    """A pose of a real calibration (tests/data/real_calibrations/hard_poses.json,
+    "repeated") where branch 0's start converged to branch 4's solution: once both rows were
+    listed valid, and the configuration the pose came from was missing without a flag. A
+    row on a solution a row of lower number has is invalid, keeps its errors, and flags
+    not_converged (it started from a solution of the exact arm), one pose or in a batch."""
+    use_kernels(compiled_kernels, monkeypatch)
+    for name, (robot, q) in hard_poses("repeated").items():
+        T = robot.fk(q)
+        for result in (ur(robot, T), *(ur(robot, x) for x in T)):
+            check_contract(result, result.valid.shape[:-1])
+            missed = ~(distance_to(result, q) < 1e-6)
+            assert (result.flags["not_converged"] | ~missed).all(), name
+            reached = (result.position_error <= 1e-9) & (result.rotation_error <= 1e-9)
+            assert (reached & ~result.valid).any(), name     # the repeat, kept invalid
 
 
 def test_a_pose_missed_near_a_singularity_is_flagged():

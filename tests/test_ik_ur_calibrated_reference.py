@@ -13,11 +13,11 @@ solutions are its valid rows and those beyond them, ``result.more``):
   solutions differ has a solution near a singularity (flagged ``near_singular`` by both):
   the fast solver finds eight and solutions beyond them, the reference seven. Both find the
   configuration each target came from, every time.
-- near-singular configurations (within a milliradian of theta_5 = 0, pi or theta_3 = 0): 98
-  of 108 have the same solution sets, 85 the same rows; the rows both hold agree to
-  1.8e-8 rad (both take three Newton steps more near a singularity of the exact arm). 16
+- near-singular configurations (within a milliradian of theta_5 = 0, pi or theta_3 = 0): 97
+  of 108 have the same solution sets, 87 the same rows; the rows both hold agree to
+  1.6e-8 rad (both take three Newton steps more near a singularity of the exact arm). 16
   poses have solutions beyond their rows in the fast solver, 15 in the reference. At the
-  other 10, where a pose has nine or ten solutions, or solutions that do not follow the
+  other 11, where a pose has nine or ten solutions, or solutions that do not follow the
   exact arm's branches, the two repairs start from different points and one of them
   misses one to four solutions the other finds. The generating configuration: the fast
   solver 105 of 108, the reference 100 (97 and 94 among the rows alone).

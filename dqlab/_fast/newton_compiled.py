@@ -126,10 +126,12 @@ def one_pose(links, tool, exact, X_06, X_0T, theta6_ref, tol, wide, singular_tol
     (the polished rows' in place of the closed form's) and the flags (6,): wrist, shoulder
     and elbow singular, near singular (a measure of the calibrated arm or, when done, of
     the exact arm at a valid row or at its own rows, below ``near_tol``), unreachable, not
-    converged; and the closed form's own near-singular flag."""
+    converged; the closed form's own near-singular flag, and its exact solutions (8,)
+    (found, and within ``tol``: a row of them that does not end valid is not_converged)."""
     solutions, valid = np.zeros((8, 6)), np.zeros(8, dtype=np.bool_)
     pe, re = np.zeros(8), np.zeros(8)
     flags, start_flags = np.zeros(6, dtype=np.bool_), np.zeros(4, dtype=np.bool_)
+    exact_rows = np.zeros(8, dtype=np.bool_)
     members, near_measure, few_branches, few_wrist = family
     ended = _lean_pose(np.asarray(links, dtype=float), np.ascontiguousarray(tool, dtype=float),
                        np.asarray(exact, dtype=float), np.ascontiguousarray(X_06, dtype=float),
@@ -138,15 +140,16 @@ def one_pose(links, tool, exact, X_06, X_0T, theta6_ref, tol, wide, singular_tol
                        float(stop_factor * tol), int(min(plain, max_iter)), int(max_iter),
                        int(give_up_after), float(damping), float(max_step), float(polish_near),
                        (int(members), float(near_measure), int(few_branches),
-                        float(few_wrist)), solutions, valid, pe, re, flags, start_flags)
+                        float(few_wrist)), solutions, valid, pe, re, flags, start_flags,
+                       exact_rows)
     if not ended:
         return None
-    return ended, solutions, valid, pe, re, flags, bool(start_flags[3])
+    return ended, solutions, valid, pe, re, flags, bool(start_flags[3]), exact_rows
 
 
 def _lean_pose(links, tool, exact, X_06, X_0T, theta6_ref, tol, wide, singular_tol, near_wrist,
                near_tol, stop, plain, max_iter, give_up_after, damping, max_step, polish_near,
-               family, solutions, valid, pe, re, flags, start_flags):
+               family, solutions, valid, pe, re, flags, start_flags, exact_rows):
     """:func:`one_pose`'s work: 0 as soon as the pose needs the array path."""
     qw, qx, qy, qz = _quaternion(X_06)
     start, errors = np.zeros((8, 6)), np.zeros((2, 8))
@@ -157,6 +160,7 @@ def _lean_pose(links, tool, exact, X_06, X_0T, theta6_ref, tol, wide, singular_t
     found = np.empty(8, dtype=np.bool_)
     for k in range(8):
         found[k] = errors[0, k] <= wide and errors[1, k] <= wide
+        exact_rows[k] = found[k] and errors[0, k] <= tol
         if found[k]:
             _off_the_edge(start[k], k, errors[0, k], tol, exact)
         pe[k], re[k] = errors[0, k], errors[1, k]
@@ -1061,8 +1065,8 @@ def _dot_rows(A, i, B, j):
 
 def repairs(links, tool, exact, theta6_ref, wide, singular_tol, near_wrist, near_tol, q, done,
             converged, X, measures, errors, q0, found, X_0T, X_T6, X_06, tol, max_iter, *,
-            restart_iter, plain, stop_factor, give_up_after, damping, max_step, ways,
-            near_ratio, family, deflation_ways):
+            restart_iter, restart_give_up, plain, stop_factor, give_up_after, damping,
+            max_step, ways, near_ratio, family, deflation_ways, deflation_iter):
     """``_repair``, ``_family`` and ``_deflate`` of ``dqlab.ik.ur_calibrated`` compiled, step
     by step as those functions take them, each step's starts of every pose stepped together:
     the restarts of the branches missing from each pose (the corrected closed
@@ -1091,17 +1095,18 @@ def repairs(links, tool, exact, theta6_ref, wide, singular_tol, near_wrist, near
              np.ascontiguousarray(X_T6, dtype=float), np.ascontiguousarray(X_06, dtype=float),
              unique, float(tol), float(stop_factor * tol),
              int(min(plain, restart_iter, max_iter)), int(min(max_iter, restart_iter)),
-             int(give_up_after), float(damping), float(max_step),
+             int(restart_give_up), float(damping), float(max_step),
              np.asarray(ways, dtype=float), float(near_ratio),
              (int(members), float(near_measure), int(few_branches), float(few_wrist),
               float(member_tol), float(member_near)),
-             np.asarray(deflation_ways, dtype=float))
+             np.asarray(deflation_ways, dtype=float), int(min(max_iter, deflation_iter)),
+             int(give_up_after))
 
 
 def array_poses(links, tool, exact, X_06, X_0T, X_T6, theta6_ref, tol, wide, singular_tol,
-                near_wrist, near_tol, max_iter, *, restart_iter, plain, stop_factor,
-                give_up_after, damping, max_step, ways, near_ratio, family, deflation_ways,
-                polish_near):
+                near_wrist, near_tol, max_iter, *, restart_iter, restart_give_up, plain,
+                stop_factor, give_up_after, damping, max_step, ways, near_ratio, family,
+                deflation_ways, deflation_iter, polish_near):
     """The array path of ``dqlab.ik.ur_calibrated.calibrated_ur`` for a few poses, compiled
     pose by pose, up to the search beyond the rows: the exact arm's closed form of each
     flange ``X_06`` (n, 4, 4) (tolerance ``wide``, the references' ``theta6_ref`` (n,)),
@@ -1111,13 +1116,15 @@ def array_poses(links, tool, exact, X_06, X_0T, X_T6, theta6_ref, tol, wide, sin
     wrist centre is far beyond reach (the caller's array path); else the solutions (n, 8,
     6) (wrapped; rows not valid as the steps left them), ``valid`` (n, 8), the position and
     rotation errors (n, 8) each, the flags (n, 6) (wrist, shoulder and elbow singular, near
-    singular, unreachable, not converged) and how the closed form of each pose ended (n,),
-    with whether it found a branch (n,) (for the reason of a pose with no valid row). The
-    same steps in the same order as that path (tested equal)."""
+    singular, unreachable, not converged), how the closed form of each pose ended (n,),
+    with whether it found a branch (n,) (for the reason of a pose with no valid row), and
+    the rows made invalid as repeats of a row of lower number (n, 8). The same steps in the
+    same order as that path (tested equal)."""
     n = X_0T.shape[0]
     solutions, valid = np.zeros((n, 8, 6)), np.zeros((n, 8), dtype=np.bool_)
     errors, flags = np.zeros((n, 2, 8)), np.zeros((n, 6), dtype=np.bool_)
     ended, started = np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.bool_)
+    repeated = np.zeros((n, 8), dtype=np.bool_)
     members, near_measure, few_branches, few_wrist, member_tol, member_near = family
     done = _array_poses(np.asarray(links, dtype=float), np.ascontiguousarray(tool, dtype=float),
                         np.asarray(exact, dtype=float), np.ascontiguousarray(X_06, dtype=float),
@@ -1127,15 +1134,17 @@ def array_poses(links, tool, exact, X_06, X_0T, X_T6, theta6_ref, tol, wide, sin
                         float(singular_tol), float(near_wrist), float(near_tol),
                         float(stop_factor * tol), int(min(plain, max_iter)), int(max_iter),
                         int(min(plain, restart_iter, max_iter)),
-                        int(min(max_iter, restart_iter)), int(give_up_after), float(damping),
+                        int(min(max_iter, restart_iter)), int(give_up_after),
+                        int(restart_give_up), float(damping),
                         float(max_step), np.asarray(ways, dtype=float), float(near_ratio),
                         (int(members), float(near_measure), int(few_branches),
                          float(few_wrist), float(member_tol), float(member_near)),
-                        np.asarray(deflation_ways, dtype=float), float(polish_near),
-                        int(plain), solutions, valid, errors, flags, ended, started)
+                        np.asarray(deflation_ways, dtype=float),
+                        int(min(max_iter, deflation_iter)), float(polish_near),
+                        int(plain), solutions, valid, errors, flags, ended, started, repeated)
     if not done:
         return None
-    return solutions, valid, errors[:, 0], errors[:, 1], flags, ended, started
+    return solutions, valid, errors[:, 0], errors[:, 1], flags, ended, started, repeated
 
 
 def array_start(links, tool, exact, X_06, X_0T, theta6_ref, tol, wide, singular_tol,
@@ -1176,26 +1185,27 @@ def array_finish(links, tool, exact, X_0T, tol, singular_tol, near_tol, q, done,
                  give_up_after, damping, max_step, polish_near):
     """The last steps of :func:`array_poses`, pose by pose, after the repairs, from the
     arrays of :func:`array_start` (repaired): the solutions (n, 8, 6) (wrapped), ``valid``
-    (n, 8), the position and rotation errors (n, 8) each, the flags (n, 6) and how near a
-    singularity of the exact arm each row is (8 n,) (``dqlab.ik.ur_calibrated._nearness``,
-    for the search beyond the rows)."""
+    (n, 8), the position and rotation errors (n, 8) each, the flags (n, 6), how near a
+    singularity of the exact arm each row is (8 n,) (``dqlab.ik.ur_calibrated._nearness``)
+    and the rows made invalid as repeats (n, 8) (both for the search beyond the rows)."""
     n = X_0T.shape[0]
     solutions, valid = np.zeros((n, 8, 6)), np.zeros((n, 8), dtype=np.bool_)
     pose_errors, flags = np.zeros((n, 2, 8)), np.zeros((n, 6), dtype=np.bool_)
-    nearness = np.empty(8 * n)
+    nearness, repeated = np.empty(8 * n), np.zeros((n, 8), dtype=np.bool_)
     _array_finish(np.asarray(links, dtype=float), np.ascontiguousarray(tool, dtype=float),
                   np.asarray(exact, dtype=float), np.ascontiguousarray(X_0T, dtype=float),
                   float(tol), float(singular_tol), float(near_tol), float(stop_factor * tol),
                   int(give_up_after), float(damping), float(max_step), float(polish_near),
                   int(plain), q, done, converged, measures, errors, found, start_errors,
-                  start_near, solutions, valid, pose_errors, flags, nearness)
-    return solutions, valid, pose_errors[:, 0], pose_errors[:, 1], flags, nearness
+                  start_near, solutions, valid, pose_errors, flags, nearness, repeated)
+    return solutions, valid, pose_errors[:, 0], pose_errors[:, 1], flags, nearness, repeated
 
 
 def _array_poses(links, tool, exact, X_06, X_0T, X_T6, theta6_ref, tol, wide, singular_tol,
                  near_wrist, near_tol, stop, plain, max_iter, restart_plain, restart_iter,
-                 give_up_after, damping, max_step, ways, near_ratio, family, deflation_ways,
-                 polish_near, polish_steps, solutions, valid, errors, flags, ended, started):
+                 give_up_after, restart_give_up, damping, max_step, ways, near_ratio, family,
+                 deflation_ways, deflation_steps, polish_near, polish_steps, solutions, valid,
+                 errors, flags, ended, started, repeated):
     """:func:`array_poses`' work: False as soon as a wrist centre is far beyond reach."""
     n = X_0T.shape[0]
     q, done, converged = np.zeros((8 * n, 6)), np.zeros(8 * n, dtype=np.bool_), \
@@ -1213,13 +1223,13 @@ def _array_poses(links, tool, exact, X_06, X_0T, X_T6, theta6_ref, tol, wide, si
     _unique(q, converged, unique)
     _repairs(links, tool, exact, theta6_ref, wide, singular_tol, near_wrist, near_tol, q, done,
              converged, X, measures, steps_errors, q0, found, X_0T, X_T6, X_06, unique, tol,
-             stop, restart_plain, restart_iter, give_up_after, damping, max_step, ways,
-             near_ratio, family, deflation_ways)
+             stop, restart_plain, restart_iter, restart_give_up, damping, max_step, ways,
+             near_ratio, family, deflation_ways, deflation_steps, give_up_after)
     nearness = np.empty(8 * n)
     _array_finish(links, tool, exact, X_0T, tol, singular_tol, near_tol, stop, give_up_after,
                   damping, max_step, polish_near, polish_steps, q, done, converged, measures,
                   steps_errors, found, start_errors, start_near, solutions, valid, errors,
-                  flags, nearness)
+                  flags, nearness, repeated)
     return True
 
 
@@ -1323,14 +1333,16 @@ def _array_start(links, tool, exact, X_06, X_0T, theta6_ref, tol, wide, singular
 def _array_finish(links, tool, exact, X_0T, tol, singular_tol, near_tol, stop, give_up_after,
                   damping, max_step, polish_near, polish_steps, q, done, converged, measures,
                   steps_errors, found, start_errors, start_near, solutions, valid, errors,
-                  flags, nearness):
+                  flags, nearness, repeated):
     """The array path's last steps, pose by pose, after the repairs: each row's errors
     (Newton's where it ran, else the closed form's) and validity, the polish of the valid
-    rows within ``polish_near`` of a singularity of the exact arm, the flags, and how near
-    such a singularity each row is (``nearness``, infinite where not valid: ``_nearness``
-    of the rows polished)."""
+    rows within ``polish_near`` of a singularity of the exact arm, the rows on a solution a
+    row of lower number has (``repeated``, made invalid), the flags, and how near such a
+    singularity each row is (``nearness``, infinite where not valid: ``_nearness`` of the
+    rows polished)."""
     n = X_0T.shape[0]
     d4 = exact[3]
+    distinct = np.empty(8, dtype=np.bool_)
     for pose in range(n):                               # errors, validity, polish, flags
         base = 8 * pose
         f = flags[pose]
@@ -1370,6 +1382,12 @@ def _array_finish(links, tool, exact, X_0T, tol, singular_tol, near_tol, stop, g
                         solutions[pose, k, i] = _wrap(qs[j, i])
                     errors[pose, 0, k], errors[pose, 1, k] = es[0, j], es[1, j]
                     nearness[base + k] = _row_nearness(solutions[pose, k], exact)
+        _unique(solutions[pose], valid[pose], distinct)  # a row on another's solution
+        for k in range(8):
+            if valid[pose, k] and not distinct[k]:
+                valid[pose, k] = False
+                repeated[pose, k] = True
+                nearness[base + k] = math.inf
         any_valid = False                               # _flags
         for k in range(8):
             r = base + k
@@ -1389,7 +1407,7 @@ def _array_finish(links, tool, exact, X_0T, tol, singular_tol, near_tol, stop, g
 def _repairs(links, tool, exact, theta6_ref, wide, singular_tol, near_wrist, near_tol, q, done,
              converged, X, measures, errors, q0, found, X_0T, X_T6, X_06, unique, tol, stop,
              plain, max_iter, give_up_after, damping, max_step, ways, near_ratio, family,
-             deflation_ways):
+             deflation_ways, deflation_steps, deflation_give_up):
     """:func:`repairs`' work, step by step as the numpy path takes them: each step gathers
     the starts of every pose (pose by pose: the poses are independent), then steps them all
     together, so that the kernel's lanes are full (:func:`_run`), and offers each pose's
@@ -1432,7 +1450,8 @@ def _repairs(links, tool, exact, theta6_ref, wide, singular_tol, near_wrist, nea
                                                    unique)
             queue = _push(queue, pose, owners, starts, which)
     _run(queue, state)
-    _deflation(exact, deflation_ways, near_ratio, family[1], max_iter, state)
+    _deflation(exact, deflation_ways, near_ratio, family[1], deflation_steps, deflation_give_up,
+               state)
 
 
 def _queue(size):
@@ -1684,13 +1703,13 @@ def _family_starts(pose, count, exact, X_06, singular_tol, near_wrist, family, t
     return _offer(pose, starts[:m], labels[:m], missing)
 
 
-def _deflation(exact, ways, near_ratio, near_measure, steps, state):
+def _deflation(exact, ways, near_ratio, near_measure, steps, give_up_after, state):
     """``dqlab.ik.ur_calibrated._deflate``: deflated Newton from the solutions of each pose
     near a singularity, moved along the most singular direction by ``ways`` (every pose's
     starts stepped together, :func:`_deflated`), then offered to the pose's branches still
     missing (:func:`_run`)."""
-    (links, tool, X_0T, stop, _, _, give_up_after, damping, max_step, q, done, converged,
-     _, measures, _, unique) = state
+    (links, tool, X_0T, stop, _, _, _, damping, max_step, q, done, converged, _, measures, _,
+     unique) = state
     n = X_0T.shape[0]
     n_ways = ways.shape[0]
     wanted = np.zeros((n, 8), dtype=np.bool_)

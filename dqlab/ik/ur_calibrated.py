@@ -38,8 +38,9 @@ keeps its contract (every branch, flags, reasons, batches) in these steps:
    \operatorname{tr}(J^\mathsf{T}J)/6` (a guard at exact singularities, negligible
    elsewhere); steps longer than half a radian are shortened. A branch stops when its error
    is below a tenth of ``tol`` (or stops improving); it is valid when forward kinematics of the
-   calibrated chain reproduces the target to ``tol``. A branch that started from a solution
-   of the exact arm but does not get there is kept as an invalid row with its errors and
+   calibrated chain reproduces the target to ``tol`` (and is not another row's solution). A
+   branch that started from a solution of the exact arm but does not get there, or gets to
+   a solution a row of lower number has, is kept as an invalid row with its errors and
    flagged ``"not_converged"``, never dropped silently. With numba installed (the ``fast``
    extra), these steps run compiled, on the eight branches of a pose at once
    (``dqlab._fast.newton_compiled``, tested to give the same solutions), and so does the
@@ -162,7 +163,9 @@ _GIVE_UP_AFTER = 8     # steps after which a branch must keep halving its error
 _FEW_ROWS = 192        # up to this many branches, the kernel working on whole matrices
 _PLAIN_STEPS = 3       # first steps taken by every branch together, none stopped
 _BLOCK = 2048          # branches per block of the Newton steps
-_RESTART_ITER = 10     # Newton steps of a restart at most
+_RESTART_ITER = 16     # Newton steps of a restart at most ...
+_RESTART_GIVE_UP = 8   # ... after which it must keep halving its error
+_DEFLATION_ITER = 10   # deflated Newton steps at most
 _NEAR = 1e-4          # near a singularity: smallest eigenvalue of J^T J below _NEAR largest
 #: The flags of a result, in order (the compiled one-pose path returns them so).
 _FLAG_NAMES = ("wrist_singular", "shoulder_singular", "elbow_singular", "near_singular",
@@ -195,8 +198,9 @@ _NEWTON_STEPS = dict(plain=_PLAIN_STEPS, stop_factor=_STOP, give_up_after=_GIVE_
 _FAMILY_NUMBERS = (_FAMILY, _NEAR_MEASURE, _FEW_BRANCHES, _FEW_WRIST, _FAMILY_TOL,
                    NEAR_SINGULAR)
 #: ... and the repairs' (steps 4).
-_REPAIR_STEPS = dict(_NEWTON_STEPS, restart_iter=_RESTART_ITER, ways=_WAYS, near_ratio=_NEAR,
-                     family=_FAMILY_NUMBERS, deflation_ways=_DEFLATION_WAYS)
+_REPAIR_STEPS = dict(_NEWTON_STEPS, restart_iter=_RESTART_ITER, restart_give_up=_RESTART_GIVE_UP,
+                     ways=_WAYS, near_ratio=_NEAR, family=_FAMILY_NUMBERS,
+                     deflation_ways=_DEFLATION_WAYS, deflation_iter=_DEFLATION_ITER)
 
 
 @dataclass(frozen=True)
@@ -371,7 +375,8 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
         nearest exact UR's at a valid row: :math:`|\sin\theta_3|`, :math:`|\sin\theta_5|`,
         :math:`|h| / |a_2|`), ``"unreachable"``, and
         ``"not_converged"`` (a branch started from a solution of the exact arm did not
-        converge; its row is invalid and keeps its errors): the keys of the exact closed
+        converge, or converged to a solution a row of lower number has; its row is invalid
+        and keeps its errors): the keys of the exact closed
         form's result, in its order; ``reason``; ``more``: the solutions beyond the eight
         rows, (..., 8, 6), valid where a pose has one (step 6 of the module).
 
@@ -465,12 +470,13 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
             singular_tol, NEAR_WRIST, near_limit, max_iter, polish_near=_POLISH_NEAR,
             **_REPAIR_STEPS)
         if done is not None:                            # (None: a wrist far beyond reach)
-            solutions, valid, pe, re, flags, ended, started = done
+            solutions, valid, pe, re, flags, ended, started, repeated = done
             reason = np.where(started, REASON_NOT_CONVERGED, _REASON_OF[ended])
             return _poses_result(nearest, X_6T, solutions.reshape(-1, 6), valid.reshape(-1),
                                  pe.reshape(-1), re.reshape(-1),
                                  dict(zip(_FLAG_NAMES, flags.T, strict=True)), reason, X_0T,
-                                 tol, max_iter, batch)
+                                 tol, max_iter, batch,
+                                 repeated=repeated.reshape(-1))
     if start is None and pose_tol <= RIGID_TOL and compiled_ready():
         result = _compiled_poses(nearest, exact_solutions, X_06, X_0T, X_6T, X_T6, references,
                                  tol, wide, singular_tol, near_limit, max_iter, batch)
@@ -514,6 +520,9 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
     solutions = wrap_angle(polished.q)
     near = _nearness(nearest, solutions, valid)
     solutions = _polish(nearest, X_6T, solutions, valid, pe, re, X_0T, tol, near)
+    repeated = _repeated(solutions, valid)
+    valid &= ~repeated
+    near[repeated] = np.inf
     flags = _flags(polished.measures, valid, singular_tol, nearest.robot.links[3].d,
                    near_limit)
     flags["near_singular"] |= start.flags["near_singular"].reshape(n)   # the exact arm's,
@@ -522,7 +531,7 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
     started = start.valid.reshape(n, 8).any(axis=1)
     reason = np.where(started, REASON_NOT_CONVERGED, start.reason.reshape(n))
     return _poses_result(nearest, X_6T, solutions, valid, pe, re, flags, reason, X_0T, tol,
-                         max_iter, batch, near)
+                         max_iter, batch, near, repeated)
 
 
 def _compiled_poses(nearest, exact_solutions, X_06, X_0T, X_6T, X_T6, references, tol, wide,
@@ -545,7 +554,7 @@ def _compiled_poses(nearest, exact_solutions, X_06, X_0T, X_6T, X_T6, references
     polished = _Polished(q, done, converged, X, measures, errors)
     _repairs((nearest.links, X_6T), nearest, polished, q0, found, exact_solutions, X_06, X_0T,
              X_T6, tol, max_iter, (references, wide, singular_tol, near_limit))
-    solutions, valid, pe, re, flags, near = compiled_array_finish(
+    solutions, valid, pe, re, flags, near, repeated = compiled_array_finish(
         nearest.links, X_6T, nearest.exact, X_0T, tol, singular_tol, near_limit, q, done,
         converged, measures, errors, found, start_errors, start_near,
         polish_near=_POLISH_NEAR, **_NEWTON_STEPS)
@@ -553,17 +562,18 @@ def _compiled_poses(nearest, exact_solutions, X_06, X_0T, X_6T, X_T6, references
     return _poses_result(nearest, X_6T, solutions.reshape(-1, 6), valid.reshape(-1),
                          pe.reshape(-1), re.reshape(-1),
                          dict(zip(_FLAG_NAMES, flags.T, strict=True)), reason, X_0T, tol,
-                         max_iter, batch, near)
+                         max_iter, batch, near, repeated.reshape(-1))
 
 
 def _poses_result(nearest, tool, solutions, valid, pe, re, flags, reason, X_0T, tol, max_iter,
-                  batch, near=None):
+                  batch, near=None, repeated=None):
     """The :class:`IKResult` of the array path: the rows (8 n, 6), their validity and errors
     (8 n,), the flags (n,) each, the reason (n,) a pose would have without a valid row, and
     the solutions beyond the rows (:func:`_beyond`; ``near`` the rows' :func:`_nearness`
-    where known), shaped for the targets ``batch``."""
+    where known, ``repeated`` the rows made invalid as repeats), shaped for the targets
+    ``batch``."""
     reason = np.where(valid.reshape(-1, 8).any(axis=1), "", reason).astype(object)
-    more = _beyond(nearest, tool, solutions, valid, X_0T, tol, max_iter, near)
+    more = _beyond(nearest, tool, solutions, valid, X_0T, tol, max_iter, near, repeated)
     return finish(solutions.reshape(batch + (8, 6)), valid.reshape(batch + (8,)),
                   pe.reshape(batch + (8,)), re.reshape(batch + (8,)),
                   {name: f.reshape(batch) for name, f in flags.items()},
@@ -715,12 +725,12 @@ def _one_pose(nearest, exact_solutions, X_06, X_0T, tool, q_ref, checked, tol, s
                                  family=_FAMILY_NUMBERS[:4], **_NEWTON_STEPS)
         if done is None:
             return None, None
-        ended, solutions, valid, pe, re, flags, start_near = done
+        ended, solutions, valid, pe, re, flags, start_near, exact = done
         flags = dict(zip(_FLAG_NAMES, flags.tolist(), strict=True))
         if ended == 1:                                  # (no row near a singularity)
             return _one_pose_result(solutions, valid, pe, re, flags, None), None
         return _near_a_singularity(nearest, tool, solutions, valid, pe, re, flags, start_near,
-                                   X_0T, tol, max_iter, near), None
+                                   exact, X_0T, tol, max_iter, near), None
     start = exact_solutions(X_06[None], checked=checked)
     start.solutions = _off_the_edge(nearest.robot, start.solutions, start.valid,
                                     start.position_error, tol)
@@ -745,24 +755,34 @@ def _one_pose(nearest, exact_solutions, X_06, X_0T, tool, q_ref, checked, tol, s
     if not found.all() and _family_members(nearest, solutions, found, found)[0]:
         return None, start                              # (found: all converged)
     return _near_a_singularity(nearest, tool, solutions, valid, pe, re, flags,
-                               start.flags["near_singular"], X_0T, tol, max_iter, near), start
+                               start.flags["near_singular"], exact, X_0T, tol, max_iter,
+                               near), start
 
 
-def _near_a_singularity(nearest, tool, solutions, valid, pe, re, flags, start_near, X_0T, tol,
-                        max_iter, near):
+def _near_a_singularity(nearest, tool, solutions, valid, pe, re, flags, start_near, exact,
+                        X_0T, tol, max_iter, near):
     """The end of :func:`_one_pose`: a pose with no valid row near a singularity of the
     exact arm (most) has none to polish, none near at a lower threshold, and no solutions
-    beyond its rows; the others are polished (:func:`_polish`) and searched beyond
-    (:func:`_beyond`). The near_singular flag also counts the exact arm's measures at the
-    valid rows and its own (``start_near``)."""
+    beyond its rows; the others are polished (:func:`_polish`), lose a row the polish
+    brought to another's solution (:func:`_repeated`; not_converged if it was one of the
+    ``exact`` arm's solutions) and are searched beyond (:func:`_beyond`). The near_singular
+    flag also counts the exact arm's measures at the valid rows and its own
+    (``start_near``)."""
     nearness = _nearness(nearest, solutions, valid)
     polish = (nearness < _POLISH_NEAR).any()
     if polish:
         solutions = _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol, nearness)
+        repeated = _repeated(solutions, valid)
+        if repeated.any():
+            valid = valid & ~repeated
+            nearness[repeated] = np.inf
+            flags["not_converged"] = bool(flags["not_converged"] or (exact & repeated).any())
+    else:
+        repeated = None
     flags["near_singular"] = bool(flags["near_singular"] or start_near
                                   or (nearness < near).any())
-    more = _beyond(nearest, tool, solutions, valid, X_0T[None], tol, max_iter, nearness) \
-        if polish else None
+    more = _beyond(nearest, tool, solutions, valid, X_0T[None], tol, max_iter, nearness,
+                   repeated) if polish else None
     return _one_pose_result(solutions, valid, pe, re, flags, more)
 
 
@@ -806,32 +826,33 @@ def _polish(nearest, tool, solutions, valid, pe, re, X_0T, tol, near):
     return solutions
 
 
-def _beyond(nearest, tool, solutions, valid, X_0T, tol, max_iter, near=None):
+def _beyond(nearest, tool, solutions, valid, X_0T, tol, max_iter, near=None, repeated=None):
     r"""The solutions of each pose beyond its eight rows (``result.more``).
 
     Within about the two arms' gap of a singularity of the exact arm, the calibrated arm
     may reach a pose in ten or twelve joint vectors, not eight (a general 6R arm has up to
     16): where the exact arm has two branches meeting, the calibrated one may have two
     solutions on either side. A pose whose eight rows ``solutions`` (8 n, 6), wrapped, are
-    all ``valid`` (8 n,) and one of them within :data:`_POLISH_NEAR` of a singularity of
-    the exact arm (its :func:`_nearness`, ``near`` (8 n,) where known) and near singular on
-    the calibrated arm
-    (:func:`_near_singular`) seeks more: deflated Newton (:func:`_deflated_newton`, the
-    pose's eight rows deflated) from that row moved by :data:`_MORE_WAYS` along its most
-    singular direction, then Newton (whose first steps, taken by every start, polish the
-    joints as :func:`_polish` does). A solution valid to ``tol`` and not one of the
-    pose's rows nor of the ones found before it (:func:`_one_of`) fills the pose's next row
-    of ``more``. Returns the solutions (n, 8, 6), their validity (n, 8) and their position and
-    rotation errors (n, 8) each."""
+    all ``valid`` (8 n,) or ``repeated`` (invalid as another row's solution: the pose
+    misses one), and one of them within :data:`_POLISH_NEAR` of a singularity of the exact
+    arm (its :func:`_nearness`, ``near`` (8 n,) where known) and near singular on the
+    calibrated arm (:func:`_near_singular`), seeks more: deflated Newton
+    (:func:`_deflated_newton`, the pose's eight rows deflated) from that row moved by
+    :data:`_MORE_WAYS` along its most singular direction, then Newton (whose first steps,
+    taken by every start, polish the joints as :func:`_polish` does). A solution valid to
+    ``tol`` and not one of the pose's rows nor of the ones found before it
+    (:func:`_one_of`) fills the pose's next row of ``more``. Returns the solutions
+    (n, 8, 6), their validity (n, 8) and their position and rotation errors (n, 8) each."""
     n = valid.size // 8
     Q, V = np.zeros((n, _MORE, 6)), np.zeros((n, _MORE), dtype=bool)
     PE, RE = np.zeros((n, _MORE)), np.zeros((n, _MORE))
+    covered = valid if repeated is None else valid | repeated
     if n == 1:                                          # (one pose: fewer calls)
-        if not valid.all():
+        if not covered.all():
             return Q, V, PE, RE
         full = valid
     else:
-        full = np.repeat(valid.reshape(n, 8).all(axis=1), 8)
+        full = valid & np.repeat(covered.reshape(n, 8).all(axis=1), 8)
         if not full.any():
             return Q, V, PE, RE
     if near is None:
@@ -849,7 +870,7 @@ def _beyond(nearest, tool, solutions, valid, X_0T, tol, max_iter, near=None):
     known = solutions.reshape(n, 8, 6)[pose_of]
     chain = (nearest.links, tool)
     q = _deflated_newton(chain, starts, X_0T[pose_of], known, tol,
-                         min(max_iter, _RESTART_ITER))
+                         min(max_iter, _DEFLATION_ITER))
     q, converged, _, _, errors = _newton(*chain, q, X_0T[pose_of], tol, max_iter)
     q = wrap_angle(q)
     with np.errstate(invalid="ignore"):                 # (a first screen, on every start)
@@ -910,6 +931,17 @@ def _more_result(solutions, valid, pe, re, batch):
     (its rows that are not valid hold zeros already, as :func:`finish` makes them)."""
     return IKResult(solutions.reshape(batch + (_MORE, 6)), valid.reshape(batch + (_MORE,)),
                     pe.reshape(batch + (_MORE,)), re.reshape(batch + (_MORE,)), {})
+
+
+def _repeated(solutions, valid):
+    """The valid rows of ``solutions`` (8 n, 6) that repeat a valid row of lower number of
+    their pose (joint-wise within 1e-6 rad, :func:`_unique`): near a singularity the polish,
+    or a branch that converged to another's solution which the repairs could not replace,
+    may leave two rows on one solution; the later is not a solution of its own branch.
+    With numba, compiled (``dqlab._fast.newton_compiled.unique``)."""
+    if compiled_ready():
+        return valid & ~compiled_unique(solutions, valid)
+    return valid & ~_unique(solutions, valid)
 
 
 def _exact_nearness(exact, q):
@@ -1201,7 +1233,7 @@ def _deflate(chain, nearest, polished, X_0T, tol, max_iter):
     it ends, plain Newton finishes, and a solution the pose does not have fills a missing
     branch (:func:`_offer`). Only for the branches started from the exact arm (the others
     are missing because nothing reaches them, as the exact arm's closed form says), at most
-    ``_RESTART_ITER`` deflated steps. ``polished`` is updated in place."""
+    ``_DEFLATION_ITER`` deflated steps. ``polished`` is updated in place."""
     unique = polished.unique()
     wanted = polished.done & ~unique
     poses = np.flatnonzero(wanted.reshape(-1, 8).any(axis=1))
@@ -1223,7 +1255,7 @@ def _deflate(chain, nearest, polished, X_0T, tol, max_iter):
     known = np.where(unique[rows, None], polished.q[rows], np.nan).reshape(-1, 8, 6)
     q = _deflated_newton(chain, starts, X_0T[pose_of],
                          known[np.repeat(moved // 8, ways.size)], tol,
-                         min(max_iter, _RESTART_ITER))
+                         min(max_iter, _DEFLATION_ITER))
     _offer(chain, polished, unique, wanted.reshape(-1, 8), q, pose_of,
            _branches(nearest.robot, q), X_0T, tol, max_iter)
 
@@ -1335,7 +1367,7 @@ def _restart(chain, polished, unique, owners, starts, X_0T, tol, max_iter, which
     poses = np.empty(starts.shape[0], dtype=np.int64)
     poses[which] = owners // 8
     q, converged, X, measures, errors = _newton(*chain, starts, X_0T[poses], tol,
-                                                min(max_iter, _RESTART_ITER))
+                                                min(max_iter, _RESTART_ITER), _RESTART_GIVE_UP)
     q, converged = q[which], converged[which]
     if compiled_ready():
         taken = compiled_accept(owners, converged, q, polished.q, unique)
@@ -1387,10 +1419,10 @@ def _flip(nearest, q, bits):
     return t - offsets
 
 
-def _newton(links, tool, q, X_target, tol, max_iter):
+def _newton(links, tool, q, X_target, tol, max_iter, give_up_after=_GIVE_UP_AFTER):
     """Newton steps from the joint vectors ``q`` (m, 6) towards the poses ``X_target``
     (m, 4, 4) of frame 0, until each row's position and rotation errors (Euclidean) are
-    below ``_STOP tol``, or it stops making progress (after ``_GIVE_UP_AFTER`` steps, less
+    below ``_STOP tol``, or it stops making progress (after ``give_up_after`` steps, less
     than halving its error in two steps), or ``max_iter`` steps. Returns the joint vectors,
     whether each converged, the TCP poses (m, 4, 4), the singularity measures (3, m) at
     them and their position and rotation errors (2, m) (:func:`pose_errors`).
@@ -1406,7 +1438,8 @@ def _newton(links, tool, q, X_target, tol, max_iter):
     With numba installed, the same steps run compiled, eight branches at a time
     (:mod:`dqlab._fast.newton_compiled`, tested equal to this path)."""
     if compiled_ready():
-        return compiled_newton(links, tool, q, X_target, tol, max_iter, **_NEWTON_STEPS)
+        return compiled_newton(links, tool, q, X_target, tol, max_iter,
+                               **dict(_NEWTON_STEPS, give_up_after=give_up_after))
     m = q.shape[0]
     q = q.copy()
     converged, size = np.zeros(m, dtype=bool), np.zeros(m)
@@ -1422,7 +1455,7 @@ def _newton(links, tool, q, X_target, tol, max_iter):
         for i in range(0, left.size, _BLOCK):
             rows = left[i:i + _BLOCK]
             q[rows], converged[rows], X[rows], measures[:, rows] = _newton_rows(
-                links, tool, q[rows], X_target[rows], tol, plain, max_iter)
+                links, tool, q[rows], X_target[rows], tol, plain, max_iter, give_up_after)
     lost = np.flatnonzero(~np.isfinite(q).all(axis=1))  # a step that overflowed: back to 0
     if lost.size:
         q[lost] = np.where(np.isfinite(q[lost]), q[lost], 0.0)
@@ -1453,7 +1486,7 @@ def _error_size(e):
     return np.sqrt(np.maximum(ee[:, :3].sum(axis=1), ee[:, 3:].sum(axis=1)))
 
 
-def _newton_rows(links, tool, q, X_target, tol, first, max_iter):
+def _newton_rows(links, tool, q, X_target, tol, first, max_iter, give_up_after):
     """Steps ``first`` to ``max_iter`` of :func:`_newton`, each row stopped as soon as it is
     below the stop or no longer halving its error (returns as :func:`_newton` does)."""
     m = q.shape[0]
@@ -1472,7 +1505,7 @@ def _newton_rows(links, tool, q, X_target, tol, first, max_iter):
         before[:, active] = before[1, active], size[active]
         size[active] = _error_size(e)
         keep = size[active] > stop             # NaN stops too
-        if iteration >= _GIVE_UP_AFTER:        # no longer making progress: give up
+        if iteration >= give_up_after:         # no longer making progress: give up
             keep &= size[active] < 0.5 * before[0, active]
         if iteration == max_iter or not keep.any():
             break
