@@ -39,9 +39,11 @@ def real_ur5e_calibration():
 
 def rounding_as_zero(text):
     """The text with every number below 1e-12 in size written 0: the errors at the level of
-    rounding, which differ between machines and between the compiled and numpy paths."""
-    return re.sub(r"-?\d+(?:\.\d+)?e-\d+",
+    rounding, which differ between machines and between the compiled and numpy paths; and
+    each run of spaces one space (a table's columns are as wide as those errors)."""
+    text = re.sub(r"-?\d+(?:\.\d+)?e-\d+",
                   lambda m: "0" if abs(float(m.group())) < 1e-12 else m.group(), text)
+    return re.sub(r" +", " ", text)
 
 
 def test_readme_practitioner_example_runs_and_prints_what_it_shows():

@@ -1077,6 +1077,8 @@ def repairs(links, tool, exact, theta6_ref, wide, singular_tol, near_wrist, near
     each pose's reference (0 without one), ``wide``, ``singular_tol``, ``near_tol`` the
     tolerances of its closed form; ``q0`` (8 n, 6) the branches' starts, ``found`` (8 n,)
     those the exact arm found, ``X_0T``, ``X_06`` (n, 4, 4) the targets and flanges;
+    ``restart_iter`` and ``restart_give_up`` a restart's Newton steps at most and after
+    which it must keep halving its error, ``deflation_iter`` the deflated steps at most;
     ``ways`` the moves along the most singular direction of ``_repair``,
     ``deflation_ways`` those of ``_deflate``, ``near_ratio`` the eigenvalue ratio below
     which a joint vector is near a singularity, ``family`` the wrist family's numbers
