@@ -455,6 +455,11 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
         return closed_form(nearest, X, tol=tol, q_ref=ref, singular_tol=singular_tol,
                            near_tol=near_tol)
 
+    if n == 0:                                          # an empty batch: nothing to solve
+        return _poses_result(nearest, X_6T, np.zeros((0, 6)), np.zeros(0, dtype=bool),
+                             np.zeros(0), np.zeros(0),
+                             {name: np.zeros(0, dtype=bool) for name in _FLAG_NAMES},
+                             np.zeros(0, dtype=object), X_0T, tol, max_iter, batch)
     start = None
     if batch == ():
         result, start = _one_pose(nearest, exact_solutions, X_06[0], X_0T[0], X_6T,
