@@ -178,6 +178,22 @@ class Registry(dict):
 _FOLDER = []
 
 
+def warm_ik_batches(robot):
+    """A case's setup (run before its calls, outside the time limit) for ``dqlab.ik.ur`` on a
+    calibrated ``robot``: a good call of one pose compiles the one-pose path only, and a bad
+    value of one (a tolerance too tight for any branch, say) takes the array paths, whose
+    first compilation on a fresh cache takes longer than :data:`TIME_LIMIT`. A batch of
+    three poses and one of twelve compile them (the paths of at most eight poses and of
+    more)."""
+    from dqlab import ik
+
+    def setup(folder):
+        q = np.random.default_rng(0).uniform(-np.pi, np.pi, (12, 6))
+        ik.ur(robot, robot.fk(q[:3]))
+        ik.ur(robot, robot.fk(q))
+    return setup
+
+
 def folder():
     """The folder of the case being run (its working directory)."""
     return _FOLDER[-1]

@@ -12,7 +12,16 @@ import inspect
 
 import numpy as np
 import pytest
-from _sweep import Any, Arg, Registry, S, joints_reach_target, reaches_target, sweep_test
+from _sweep import (
+    Any,
+    Arg,
+    Registry,
+    S,
+    joints_reach_target,
+    reaches_target,
+    sweep_test,
+    warm_ik_batches,
+)
 
 import dqlab
 from dqlab import dynamics, ik, jacobian, testing
@@ -219,6 +228,7 @@ for _name, (_f, _args) in OTHER_CALLS.items():
     _module = "robot" if _name.startswith("Robot") else _name.split(".")[0]
     CASES.add(_module, _name, _positional(_f, _names), check=CHECKS.get(_name),
               **{n: _arg(_f, v) for n, v in zip(_names, _args, strict=True)})
+CASES["ik.ur(calibrated)"].setup = warm_ik_batches(CALIBRATED)
 
 
 def _holds(assertion):

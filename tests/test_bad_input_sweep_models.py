@@ -16,6 +16,7 @@ target, chosen joints lie within the limits, G-code holds only firmware commands
 parses and MJCF loads in MuJoCo.
 """
 
+import functools
 import math
 import re
 import socket
@@ -40,6 +41,7 @@ from _sweep import (
     numbers_finite,
     reaches_target,
     sweep_test,
+    warm_ik_batches,
 )
 from test_ur_calibration import _conf_text, _deltas, dh_origins, ros_yaml
 
@@ -326,7 +328,8 @@ add(M, "ik.ur_closed_form.branch_measures",
     robot=O(UR5E, names=ROBOT_NAMES, extra={"calibrated UR3": CALIBRATED}), q=A(Q6))
 add(M, "ik.ur(calibrated)", ik.ur, robot=O(CALIBRATED), target=A(X_CALIBRATED, extra={
     "at 1e200 m": Fine(X_CALIBRATED + np.pad([[0, 0, 0, 1e200]], ((0, 3), (0, 0))))}),
-    tol=S(1e-9, inf_ok=True), q_ref=A(Q6, none_ok=True), check=reaches_target())
+    tol=S(1e-9, inf_ok=True), q_ref=A(Q6, none_ok=True), check=reaches_target()
+    ).setup = warm_ik_batches(CALIBRATED)
 add(M, "calibrated_ur_reference", calibrated_ur_reference, robot=O(CALIBRATED, extra={
     "an exact UR5e": Fine(UR5E), "the 6R": models.six_r()}), target=A(X_CALIBRATED, extra={
         "at 1e200 m": Fine(X_CALIBRATED + np.pad([[0, 0, 0, 1e200]], ((0, 3), (0, 0))))}),
@@ -550,13 +553,16 @@ add(M, "robot_from_ros_calibration", lambda **kw: calibration.robot_from_ros_cal
     expected_hash=T(INFO.hash, none_ok=True, only=("number", "list")), name=T("", none_ok=True))
 
 
-def _setup(folder):
+def _setup(folder, then=None):
+    """The files the cases read, then a case's own setup (``then``)."""
     (folder / "calibration.conf").write_text(_conf_text(_deltas(CALIBRATED, UR5E)))
     (folder / "calibration.yaml").write_text(_ROS)
+    if then is not None:
+        then(folder)
 
 
 for _case in CASES.values():
-    _case.setup = _setup
+    _case.setup = functools.partial(_setup, then=_case.setup)
 
 
 @pytest.fixture(scope="module", autouse=True)

@@ -674,3 +674,27 @@ def test_compiled_nearness_equals_the_numpy_path():
     near = fast < module._POLISH_NEAR
     np.testing.assert_array_equal(near, plain < module._POLISH_NEAR)
     assert 40 < near.sum() < 200
+
+
+def test_targets_far_beyond_reach_skip_the_compiled_array_paths(numpy_path, monkeypatch):
+    """A batch of targets a million reaches away is answered by the exact arm's closed form
+    (no branch to start from; nothing compiled beyond the closed form), and one with such a
+    target among others takes the numpy path: the same results as the numpy path's, the
+    others solved."""
+    from real_calibrations import real_calibrations
+    robot = real_calibrations()["UR5e (ur_calibration log)"]
+    q = np.random.default_rng(70).uniform(-np.pi, np.pi, (12, 6))
+    X = robot.fk(q)
+    X[:2, :3, 3] = [(1e100, 0.0, 0.0), (0.0, -3e7, 1.0)]
+    monkeypatch.setattr(module, "compiled_array_start", None)      # (not called)
+    monkeypatch.setattr(module, "compiled_array_poses", None)
+    for batch in (X[:2], X[:1], X):
+        fast, plain = ur(robot, batch), numpy_path(ur, robot, batch)
+        np.testing.assert_array_equal(fast.valid, plain.valid)
+        np.testing.assert_allclose(fast.solutions, plain.solutions, rtol=0, atol=1e-8)
+        np.testing.assert_allclose(fast.position_error[:2], plain.position_error[:2])
+        for name in fast.flags:
+            np.testing.assert_array_equal(fast.flags[name], plain.flags[name], err_msg=name)
+        np.testing.assert_array_equal(fast.reason, plain.reason)
+    assert not fast.valid[:2].any() and fast.flags["unreachable"][:2].all()
+    assert fast.valid[2:].any(axis=-1).all() and "far" in fast.reason[0]

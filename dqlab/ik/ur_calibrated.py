@@ -177,6 +177,7 @@ _NEAR_MEASURE = 0.1    # a singularity measure below which a pose's missing bran
 _FAMILY = 6            # members of the exact arm's wrist family taken as starts
 _FAMILY_TOL = 0.5      # the closed form's tolerance for them
 _PER_POSE = 8          # up to this many poses, the compiled array path is one call
+_FAR = 1e6             # a flange this many reaches away takes the numpy path (see _within)
 _FEW_BRANCHES = 2      # a pose with this many branches or fewer ...
 _FEW_WRIST = 0.2       # ... none with |sin theta_5| above this, takes the family's starts
 _DEFLATION_WAYS = np.array([0.05, -0.05, 0.3, -0.3])   # the moves of a deflation's starts
@@ -467,7 +468,12 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
                                   singular_tol, max_iter, wide, near_limit)
         if result is not None:
             return result
-    if n <= _PER_POSE and pose_tol <= RIGID_TOL and compiled_ready():
+    within = _within(nearest, X_06)
+    if not within.any():                                # none of them in reach
+        return _far_beyond(nearest, exact_solutions(X_06, checked=plain), X_6T, X_0T, tol,
+                           max_iter, batch)
+    compiled = pose_tol <= RIGID_TOL and compiled_ready() and within.all()
+    if n <= _PER_POSE and compiled:
         # (the targets are checked at least as strictly as the closed form checks them)
         done = compiled_array_poses(
             nearest.links, X_6T, nearest.exact, X_06, X_0T, X_T6,
@@ -482,7 +488,7 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
                                  dict(zip(_FLAG_NAMES, flags.T, strict=True)), reason, X_0T,
                                  tol, max_iter, batch,
                                  repeated=repeated.reshape(-1))
-    if start is None and pose_tol <= RIGID_TOL and compiled_ready():
+    if start is None and compiled:
         result = _compiled_poses(nearest, exact_solutions, X_06, X_0T, X_6T, X_T6, references,
                                  tol, wide, singular_tol, near_limit, max_iter, batch)
         if result is not None:                          # (None: a wrist far beyond reach)
@@ -537,6 +543,32 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
     reason = np.where(started, REASON_NOT_CONVERGED, start.reason.reshape(n))
     return _poses_result(nearest, X_6T, solutions, valid, pe, re, flags, reason, X_0T, tol,
                          max_iter, batch, near, repeated)
+
+
+def _within(nearest, X_06):
+    r"""Which flanges of ``X_06`` (n, 4, 4) lie within :data:`_FAR` reaches of the exact
+    arm's shoulder (its reach :math:`\sqrt{d_4^2 + (|a_2| + |a_3| + |d_5|)^2}`, and d1 and
+    d6 more), (n,). Beyond, no arm near it reaches them, and the compiled array paths would
+    hand them on to the numpy path (a wrist centre far beyond reach is solved for a stand-in
+    there): a batch with one goes to it at once, without compiling them, and one with
+    nothing else is answered by the exact arm's closed form (:func:`_far_beyond`)."""
+    d1, a2, a3, d4, d5, d6 = np.abs(nearest.exact[:6])
+    reach = math.hypot(d4, a2 + a3 + d5) + d1 + d6
+    return np.abs(X_06[:, :3, 3]).sum(axis=-1) <= _FAR * reach
+
+
+def _far_beyond(nearest, start, tool, X_0T, tol, max_iter, batch):
+    """The result of poses none of which is within :data:`_FAR` reaches (:func:`_within`),
+    from the exact arm's closed form of them, ``start``: no valid row, its errors, its
+    near_singular flag and its reason (the numpy path's result for them, without its Newton
+    steps and restarts, which start from no branch)."""
+    n = X_0T.shape[0]
+    flags = {name: np.zeros(n, dtype=bool) for name in _FLAG_NAMES}
+    flags["unreachable"][:] = True
+    flags["near_singular"] = start.flags["near_singular"].reshape(n).copy()
+    return _poses_result(nearest, tool, np.zeros((8 * n, 6)), np.zeros(8 * n, dtype=bool),
+                         start.position_error.reshape(-1), start.rotation_error.reshape(-1),
+                         flags, start.reason.reshape(n), X_0T, tol, max_iter, batch)
 
 
 def _compiled_poses(nearest, exact_solutions, X_06, X_0T, X_6T, X_T6, references, tol, wide,
