@@ -1306,16 +1306,16 @@ def _array_start(links, tool, exact, X_06, X_0T, theta6_ref, tol, wide, singular
         return True
     # then those missed by a little, all together (they seldom converge, and each group of
     # eight branches that the kernel takes together runs as long as its slowest)
-    qx_, targets_x = np.empty((x, 6)), np.empty((x, 4, 4))
+    q_x, targets_x = np.empty((x, 6)), np.empty((x, 4, 4))
     for j in range(x):
-        qx_[j], targets_x[j] = q0[extra[j]], X_0T[extra[j] // 8]
+        q_x[j], targets_x[j] = q0[extra[j]], X_0T[extra[j] // 8]
     ok_x, X_x = np.zeros(x, dtype=np.bool_), np.zeros((x, 4, 4))
     ms_x, es_x = np.zeros((3, x)), np.zeros((2, x))
-    _kernel(links, tool, qx_, targets_x, stop, plain, max_iter, give_up_after, damping,
+    _kernel(links, tool, q_x, targets_x, stop, plain, max_iter, give_up_after, damping,
             max_step, ok_x, X_x, ms_x, es_x)
     for j in range(x):
         r = extra[j]
-        q[r], converged[r], X[r] = qx_[j], ok_x[j], X_x[j]
+        q[r], converged[r], X[r] = q_x[j], ok_x[j], X_x[j]
         measures[:, r], steps_errors[:, r] = ms_x[:, j], es_x[:, j]
     whole = np.zeros(8 * n, dtype=np.bool_)             # an extra row is kept if new
     new = np.empty(1, dtype=np.bool_)
