@@ -457,10 +457,8 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
                            near_tol=near_tol)
 
     if n == 0:                                          # an empty batch: nothing to solve
-        return _poses_result(nearest, X_6T, np.zeros((0, 6)), np.zeros(0, dtype=bool),
-                             np.zeros(0), np.zeros(0),
-                             {name: np.zeros(0, dtype=bool) for name in _FLAG_NAMES},
-                             np.zeros(0, dtype=object), X_0T, tol, max_iter, batch)
+        return _unsolved(nearest, X_6T, X_0T, np.zeros(0), np.zeros(0), np.zeros(0, bool),
+                         np.zeros(0, dtype=object), tol, max_iter, batch)
     start = None
     if batch == ():
         result, start = _one_pose(nearest, exact_solutions, X_06[0], X_0T[0], X_6T,
@@ -469,9 +467,10 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
         if result is not None:
             return result
     within = _within(nearest, X_06)
-    if not within.any():                                # none of them in reach
-        return _far_beyond(nearest, exact_solutions(X_06, checked=plain), X_6T, X_0T, tol,
-                           max_iter, batch)
+    if not within.any():                                # none of them in reach: the exact
+        start = exact_solutions(X_06, checked=plain)    # arm's errors, flag and reason
+        return _unsolved(nearest, X_6T, X_0T, start.position_error, start.rotation_error,
+                         start.flags["near_singular"], start.reason, tol, max_iter, batch)
     compiled = pose_tol <= RIGID_TOL and compiled_ready() and within.all()
     if n <= _PER_POSE and compiled:
         # (the targets are checked at least as strictly as the closed form checks them)
@@ -482,12 +481,8 @@ def calibrated_ur(robot: Robot, target: ArrayLike, closed_form=None, *, tol: flo
             **_REPAIR_STEPS)
         if done is not None:                            # (None: a wrist far beyond reach)
             solutions, valid, pe, re, flags, ended, started, repeated = done
-            reason = np.where(started, REASON_NOT_CONVERGED, _REASON_OF[ended])
-            return _poses_result(nearest, X_6T, solutions.reshape(-1, 6), valid.reshape(-1),
-                                 pe.reshape(-1), re.reshape(-1),
-                                 dict(zip(_FLAG_NAMES, flags.T, strict=True)), reason, X_0T,
-                                 tol, max_iter, batch,
-                                 repeated=repeated.reshape(-1))
+            return _compiled_result(nearest, X_6T, solutions, valid, pe, re, flags, ended,
+                                    started, None, repeated, X_0T, tol, max_iter, batch)
     if start is None and compiled:
         result = _compiled_poses(nearest, exact_solutions, X_06, X_0T, X_6T, X_T6, references,
                                  tol, wide, singular_tol, near_limit, max_iter, batch)
@@ -551,24 +546,25 @@ def _within(nearest, X_06):
     d6 more), (n,). Beyond, no arm near it reaches them, and the compiled array paths would
     hand them on to the numpy path (a wrist centre far beyond reach is solved for a stand-in
     there): a batch with one goes to it at once, without compiling them, and one with
-    nothing else is answered by the exact arm's closed form (:func:`_far_beyond`)."""
+    nothing else is answered by the exact arm's closed form (:func:`_unsolved`)."""
     d1, a2, a3, d4, d5, d6 = np.abs(nearest.exact[:6])
     reach = math.hypot(d4, a2 + a3 + d5) + d1 + d6
     return np.abs(X_06[:, :3, 3]).sum(axis=-1) <= _FAR * reach
 
 
-def _far_beyond(nearest, start, tool, X_0T, tol, max_iter, batch):
-    """The result of poses none of which is within :data:`_FAR` reaches (:func:`_within`),
-    from the exact arm's closed form of them, ``start``: no valid row, its errors, its
-    near_singular flag and its reason (the numpy path's result for them, without its Newton
-    steps and restarts, which start from no branch)."""
+def _unsolved(nearest, tool, X_0T, pe, re, near_singular, reason, tol, max_iter, batch):
+    """The result of poses with no valid row and nothing to start from: an empty batch, or
+    poses none of which is within :data:`_FAR` reaches (:func:`_within`), given the exact
+    arm's errors ``pe``, ``re`` (n, 8), near_singular flags and reasons (n,) (the numpy
+    path's result for them, without its Newton steps and restarts, which start from no
+    branch)."""
     n = X_0T.shape[0]
     flags = {name: np.zeros(n, dtype=bool) for name in _FLAG_NAMES}
     flags["unreachable"][:] = True
-    flags["near_singular"] = start.flags["near_singular"].reshape(n).copy()
+    flags["near_singular"] = np.array(near_singular, dtype=bool).reshape(n)
     return _poses_result(nearest, tool, np.zeros((8 * n, 6)), np.zeros(8 * n, dtype=bool),
-                         start.position_error.reshape(-1), start.rotation_error.reshape(-1),
-                         flags, start.reason.reshape(n), X_0T, tol, max_iter, batch)
+                         pe.reshape(-1), re.reshape(-1), flags, reason.reshape(n), X_0T, tol,
+                         max_iter, batch)
 
 
 def _compiled_poses(nearest, exact_solutions, X_06, X_0T, X_6T, X_T6, references, tol, wide,
@@ -595,8 +591,18 @@ def _compiled_poses(nearest, exact_solutions, X_06, X_0T, X_6T, X_T6, references
         nearest.links, X_6T, nearest.exact, X_0T, tol, singular_tol, near_limit, q, done,
         converged, measures, errors, found, start_errors, start_near,
         polish_near=_POLISH_NEAR, **_NEWTON_STEPS)
+    return _compiled_result(nearest, X_6T, solutions, valid, pe, re, flags, ended, started,
+                            near, repeated, X_0T, tol, max_iter, batch)
+
+
+def _compiled_result(nearest, tool, solutions, valid, pe, re, flags, ended, started, near,
+                     repeated, X_0T, tol, max_iter, batch):
+    """:func:`_poses_result` of the compiled array paths' arrays, pose by pose: the
+    solutions (n, 8, 6), ``valid``, errors and ``repeated`` (n, 8), the flags (n, 6) in the
+    order of :data:`_FLAG_NAMES`, how each pose's closed form ended and whether it started
+    (n,) (the reason of a pose with no valid row), ``near`` (8 n,) or None."""
     reason = np.where(started, REASON_NOT_CONVERGED, _REASON_OF[ended])
-    return _poses_result(nearest, X_6T, solutions.reshape(-1, 6), valid.reshape(-1),
+    return _poses_result(nearest, tool, solutions.reshape(-1, 6), valid.reshape(-1),
                          pe.reshape(-1), re.reshape(-1),
                          dict(zip(_FLAG_NAMES, flags.T, strict=True)), reason, X_0T, tol,
                          max_iter, batch, near, repeated.reshape(-1))
