@@ -210,6 +210,37 @@ def test_the_lanes_cosines_and_sines_are_the_librarys():
     assert worst <= 2.3e-16, worst
 
 
+
+def test_the_lanes_recompute_the_joints_that_took_a_long_step():
+    """After a step, the joints that moved 0.02 rad or more (or by no number) get the
+    cosine and sine of their new angle, as the lanes compute them at a start; the others
+    keep the values their step turned, bit for bit."""
+    assert compiled.ready()
+    W, index = compiled.W, compiled.INDEX
+    rng = np.random.default_rng(49)
+    links = np.zeros((6, 5))
+    links[:, 4] = rng.uniform(-1.0, 1.0, 6)
+    S = np.zeros(compiled.NV * W)
+    for _ in range(50):
+        S[:] = rng.uniform(-1.0, 1.0, S.size)           # turned values: anything
+        q = slice(index["q0"] * W, (index["q0"] + 6) * W)
+        x = slice(index["x0"] * W, (index["x0"] + 6) * W)
+        cs = slice(index["c0"] * W, (index["s0"] + 6) * W)
+        S[q] = rng.uniform(-4 * np.pi, 4 * np.pi, 6 * W)
+        S[x] = rng.choice([0.0, 0.019, -0.0199, 0.02, -0.3, 2.0, np.nan], 6 * W)
+        before = S.copy()
+        compiled.lane_recompute(S, links)
+        fresh = before.copy()
+        compiled.lane_angles(fresh, links)
+        long_step = ~(np.abs(before[x]) < 0.02)
+        assert long_step.any() and not long_step.all()
+        changed = np.tile(long_step, 2)                 # (c0..c5, s0..s5 lane by lane)
+        assert np.array_equal(S[cs][changed], fresh[cs][changed])
+        assert np.array_equal(S[cs][~changed], before[cs][~changed])
+        outside = np.ones(S.size, dtype=bool)
+        outside[cs] = False
+        assert np.array_equal(S[outside], before[outside], equal_nan=True)
+
 def test_compiled_gram_and_acceptance_equal_the_numpy_path(numpy_path):
     """J^T J from the lanes' frames equals the matrix kernel's to rounding (with a tool, at
     and near singular configurations); the restarts' acceptance takes the same starts and

@@ -91,15 +91,25 @@ def horner(coefficients):
     return text
 
 
-def angles():
-    """The cosines and sines of the joint angles q + theta0 of every lane."""
-    head = ["def angles(S, L):",
-            '    """c and s of every lane: the cosine and sine of q_i + theta0_i (the angle',
-            "    reduced by multiples of pi/2, then fdlibm's polynomials; within an ulp or two",
-            '    of the library functions)."""']
+def angles(recompute=False):
+    """The cosines and sines of the joint angles q + theta0 of every lane; with
+    ``recompute``, only of the joints whose last step was 0.02 rad or more (or not a
+    number), the others keeping the values their step turned."""
+    if recompute:
+        head = ["def recompute(S, L):",
+                '    """c and s of the joints whose step x_i was 0.02 rad or more (or not a',
+                "    number), from their new angle as angles computes them; the others keep the",
+                '    values the step turned (its Taylor series is for short steps)."""']
+    else:
+        head = ["def angles(S, L):",
+                '    """c and s of every lane: the cosine and sine of q_i + theta0_i (the angle',
+                "    reduced by multiples of pi/2, then fdlibm's polynomials; within an ulp or two",
+                '    of the library functions)."""']
     head += [f"    t{i} = L[{i}, 4]" for i in range(6)]
     b = []
     for i in range(6):
+        c, s = at(f"c{i}"), at(f"s{i}")
+        long_step = f"not abs({at(f'x{i}')}) < 0.02"
         b += [f"x = {at(f'q{i}')} + t{i}",
               "k = np.rint(x * 0.6366197723675814)",
               f"u = ((x - k * {PIO2[0]}) - k * {PIO2[1]}) - k * {PIO2[2]}",
@@ -107,10 +117,10 @@ def angles():
               f"sn = u + u * z * ({horner(SIN)})",
               f"cn = 1.0 - 0.5 * z + z * z * ({horner(COS)})",
               "m = k - 4.0 * np.floor(0.25 * k)",
-              f"{at(f'c{i}')} = cn if m == 0.0 else (-sn if m == 1.0 else "
-              "(-cn if m == 2.0 else sn))",
-              f"{at(f's{i}')} = sn if m == 0.0 else (cn if m == 1.0 else "
-              "(-sn if m == 2.0 else -cn))"]
+              f"{c} = (cn if m == 0.0 else (-sn if m == 1.0 else "
+              f"(-cn if m == 2.0 else sn)))" + (f" if {long_step} else {c}" if recompute else ""),
+              f"{s} = (sn if m == 0.0 else (cn if m == 1.0 else "
+              f"(-sn if m == 2.0 else -cn)))" + (f" if {long_step} else {s}" if recompute else "")]
     return head + [f"    for r in range({W}):"] + ["        " + line for line in b]
 
 
@@ -230,7 +240,8 @@ def source():
              "#: where each variable of a lane lives in S (times W)",
              "INDEX = {" + ", ".join(f'"{k}": {v}' for k, v in INDEX.items()) + "}",
              "", ""]
-    for f in (angles, frames, step, lambda: step(deflated=True), size):
+    for f in (angles, lambda: angles(recompute=True), frames, step,
+              lambda: step(deflated=True), size):
         lines += f() + ["", ""]
     return "\n".join(lines).rstrip() + "\n"
 

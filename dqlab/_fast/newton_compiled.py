@@ -58,6 +58,7 @@ from .newton_lanes import INDEX, NV, W
 from .newton_lanes import angles as lane_angles
 from .newton_lanes import deflated_step as lane_deflated_step
 from .newton_lanes import frames as lane_frames
+from .newton_lanes import recompute as lane_recompute
 from .newton_lanes import size as lane_size
 from .newton_lanes import step as lane_step
 
@@ -947,13 +948,12 @@ def _load(links, q, X_target, rows, S):
 
 def _recompute(links, S):
     """Cosines and sines of the joints whose step was 0.02 rad or more (or not a number),
-    from their new angle (the Taylor series of the lanes' step is for short steps)."""
-    for r in range(W):
-        for i in range(6):
-            if not abs(S[(_X + i) * W + r]) < 0.02:
-                theta = S[(_Q + i) * W + r] + links[i, 4]
-                S[(_C + i) * W + r] = math.cos(theta)
-                S[(_S + i) * W + r] = math.sin(theta)
+    from their new angle (the Taylor series of the lanes' step is for short steps): all
+    lanes at once (``newton_lanes.recompute``) when one has such a step."""
+    for k in range(_X * W, (_X + 6) * W):
+        if not abs(S[k]) < 0.02:
+            lane_recompute(S, links)
+            return
 
 
 def _kernel(links, tool, q, X_target, stop, plain, max_iter, give_up_after, damping,
@@ -1954,7 +1954,8 @@ def _quaternion(R):
 
 _Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE, _G = (
     INDEX[name] for name in ("q0", "c0", "s0", "t00", "tp0", "F0", "x0", "act", "size", "g0"))
-_COMPILED += ["lane_angles", "lane_frames", "lane_step", "lane_deflated_step", "lane_size",
+_COMPILED += ["lane_angles", "lane_recompute", "lane_frames", "lane_step", "lane_deflated_step",
+              "lane_size",
               "_same", "_unique", "_wrap", "_exact_one_pose", "_family_member",
               "_feasible_theta234", "_exact_flange", "_exact_fk", "_exact_poses", "_array_poses",
               "_array_start", "_array_finish", "_repairs", "_queue", "_cleared", "_push",
