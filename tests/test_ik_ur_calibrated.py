@@ -123,6 +123,10 @@ def check_contract(result, batch):
     # invalid, which keeps its errors)
     reached = (result.position_error <= 1e-9) & (result.rotation_error <= 1e-9)
     assert not (more.valid.any(axis=-1) & ~(result.valid | reached).all(axis=-1)).any()
+    # a general 6R arm reaches a pose in an even number of joint vectors: a pose with an odd
+    # count (the rows and beyond) misses one, and says so
+    odd = (result.valid.sum(axis=-1) + more.valid.sum(axis=-1)) % 2 == 1
+    assert result.flags["not_converged"][odd].all()
 
 
 # --------------------------------------------------------------------------------------
@@ -562,7 +566,10 @@ def test_hard_poses_of_real_calibrations(compiled_kernels, monkeypatch):
     UR, where a row stopped at 1e-10 of pose error lies up to 1e-4 rad from its solution
     (the valid rows near a singularity are polished further), and near the wrist
     singularity with a whole shoulder missed by the exact arm's closed form (such a pose
-    takes the wrist family's starts). Each is found, in a batch and one pose at a time,
+    takes the wrist family's starts; and the whole family where the one start of a shoulder
+    the exact arm clips is at the wrist singularity, the UR3's last pose, whose
+    configuration is 2.7 rad along the family from that start). Each is found, in a batch
+    and one pose at a time,
     every valid row reproducing its pose to 1e-10 (independent forward kinematics)."""
     use_kernels(compiled_kernels, monkeypatch)
     stored = hard_poses("configurations")
@@ -670,6 +677,29 @@ def test_two_rows_on_one_solution(compiled_kernels, monkeypatch):
             assert (result.flags["not_converged"] | ~missed).all(), name
             reached = (result.position_error <= 1e-9) & (result.rotation_error <= 1e-9)
             assert (reached & ~result.valid).any(), name     # the repeat, kept invalid
+
+
+@pytest.mark.parametrize("compiled_kernels", [True, False])
+def test_an_odd_count_of_solutions_is_flagged(compiled_kernels, monkeypatch):
+    """Poses of the UR3's calibration (tests/data/real_calibrations/hard_poses.json, "odd")
+    whose configuration the solver misses, once without a flag, 0.06 from the exact arm's
+    shoulder or elbow singularity: it finds three solutions (each reaching the pose to
+    1e-10, by independent forward kinematics), and the configuration is none of them: a
+    fourth. A general 6R arm reaches a pose in an even number of joint vectors (the real
+    roots of a polynomial of degree 16), so an odd count says one is missing: such a pose
+    is flagged not_converged, in a batch and one pose at a time, on both paths."""
+    use_kernels(compiled_kernels, monkeypatch)
+    for name, (robot, q) in hard_poses("odd").items():
+        T = robot.fk(q)
+        batch = ur(robot, T)
+        assert max(e.max() for e in errors(robot, batch, T)) <= 1e-10, name
+        for i, result in enumerate((batch, *(ur(robot, x) for x in T))):
+            check_contract(result, result.valid.shape[:-1])
+            configurations = q if i == 0 else q[i - 1]
+            missed = ~(distance_to_every(result, configurations) < 1e-6)
+            count = result.valid.sum(axis=-1) + result.more.valid.sum(axis=-1)
+            assert (result.flags["not_converged"] | ~missed).all(), (name, i)
+            assert ((count % 2 == 1) | ~missed).all(), (name, i)
 
 
 def test_a_pose_missed_near_a_singularity_is_flagged():

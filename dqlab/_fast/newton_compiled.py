@@ -1672,37 +1672,57 @@ def _family_count(pose, exact, family, q, done, converged, unique):
 def _family_starts(pose, count, exact, X_06, singular_tol, near_wrist, family, tol, unique):
     """``dqlab.ik.ur_calibrated._family`` of one pose: ``count`` members of the exact arm's
     wrist family (``family``: their number, the thresholds of ``_family_members`` and the
-    closed form's tolerance and near_tol there) offered to its missing branches (owners,
-    starts, which start each owner is offered: :func:`_offer`)."""
-    members, member_tol, member_near = family[0], family[4], family[5]
+    closed form's tolerance and near_tol there), or all of them where the one member's
+    start for a missing branch is at the wrist singularity, offered to its missing branches
+    (owners, starts, which start each owner is offered: :func:`_offer`)."""
+    members, near_measure = family[0], family[1]
     base = 8 * pose
     missing = np.empty(8, dtype=np.bool_)
     for k in range(8):
         missing[k] = not unique[base + k]
-    starts, labels = np.empty((8 * count, 6)), np.empty(8 * count, dtype=np.int64)
+    starts = np.empty((8 * max(count, members), 6))
+    labels = np.empty(8 * max(count, members), dtype=np.int64)
     qw, qx, qy, qz = _quaternion(X_06)
+    m = 0
+    if count == 1:
+        m = _member_starts(0.0, qw, qx, qy, qz, X_06, exact, singular_tol, near_wrist, family,
+                           tol, unique, base, starts, labels, 0)
+        for i in range(m):
+            if abs(math.sin(starts[i, 4] + exact[10])) < near_measure:
+                count, m = members, 0                   # the whole family instead
+                break
+    if count > 1:
+        for j in range(count):
+            m = _member_starts(-math.pi + 2.0 * math.pi / members * j, qw, qx, qy, qz, X_06,
+                               exact, singular_tol, near_wrist, family, tol, unique, base,
+                               starts, labels, m)
+    return _offer(pose, starts[:m], labels[:m], missing)
+
+
+def _member_starts(theta6, qw, qx, qy, qz, X_06, exact, singular_tol, near_wrist, family, tol,
+                   unique, base, starts, labels, m):
+    """``dqlab.ik.ur_calibrated._members`` of one member (the reference ``theta6``): its
+    rows valid to the family's tolerance, moved off the elbow singularity, for the missing
+    branches of the pose whose rows begin at ``base``, appended to ``starts`` and their
+    ``labels`` from m on; how many there are then."""
+    member_tol, member_near = family[4], family[5]
     solutions, errs = np.zeros((8, 6)), np.zeros((2, 8))
     flags = np.zeros(4, dtype=np.bool_)
-    m = 0
-    for j in range(count):
-        theta6 = -math.pi + 2.0 * math.pi / members * j if count > 1 else 0.0
-        solutions[:] = 0.0
-        errs[:] = 0.0
-        ended = _exact_one_pose(qw, qx, qy, qz, X_06[0, 3], X_06[1, 3], X_06[2, 3], X_06[0, 2],
-                                X_06[1, 2], X_06[2, 2], X_06, theta6, exact, member_tol,
-                                singular_tol, near_wrist, member_near, solutions, errs, flags)
-        if ended != SOLVED:
+    ended = _exact_one_pose(qw, qx, qy, qz, X_06[0, 3], X_06[1, 3], X_06[2, 3], X_06[0, 2],
+                            X_06[1, 2], X_06[2, 2], X_06, theta6, exact, member_tol,
+                            singular_tol, near_wrist, member_near, solutions, errs, flags)
+    if ended != SOLVED:
+        return m
+    for k in range(8):
+        if not (errs[0, k] <= member_tol and errs[1, k] <= member_tol):
             continue
-        for k in range(8):
-            if not (errs[0, k] <= member_tol and errs[1, k] <= member_tol):
-                continue
-            _off_the_edge(solutions[k], k, errs[0, k], tol, exact)
-            label = _branch(solutions[k], exact)
-            if not unique[base + label]:                # a start for a missing branch
-                starts[m] = solutions[k]
-                labels[m] = label
-                m += 1
-    return _offer(pose, starts[:m], labels[:m], missing)
+        _off_the_edge(solutions[k], k, errs[0, k], tol, exact)
+        label = _branch(solutions[k], exact)
+        if not unique[base + label]:                    # a start for a missing branch
+            starts[m] = solutions[k]
+            labels[m] = label
+            m += 1
+    return m
 
 
 def _deflation(exact, ways, near_ratio, near_measure, steps, give_up_after, state):
@@ -1960,7 +1980,7 @@ _COMPILED += ["lane_angles", "lane_recompute", "lane_frames", "lane_step", "lane
               "_feasible_theta234", "_exact_flange", "_exact_fk", "_exact_poses", "_array_poses",
               "_array_start", "_array_finish", "_repairs", "_queue", "_cleared", "_push",
               "_run", "_wanted", "_corrected_starts", "_family_count", "_family_starts",
-              "_deflation", "_offer",
+              "_deflation", "_offer", "_member_starts",
               "_off_the_edge", "_sign", "_branch",
               "_flip_starts", "_move_starts", "_flip",
               "_near_singular_directions", "_jacobi_smallest", "_times4", "_rigid_inverse",

@@ -611,12 +611,14 @@ def _compiled_result(nearest, tool, solutions, valid, pe, re, flags, ended, star
 def _poses_result(nearest, tool, solutions, valid, pe, re, flags, reason, X_0T, tol, max_iter,
                   batch, near=None, repeated=None):
     """The :class:`IKResult` of the array path: the rows (8 n, 6), their validity and errors
-    (8 n,), the flags (n,) each, the reason (n,) a pose would have without a valid row, and
+    (8 n,), the flags (n,) each (not_converged also where a pose's solutions are odd in
+    number, :func:`_odd_count`), the reason (n,) a pose would have without a valid row, and
     the solutions beyond the rows (:func:`_beyond`; ``near`` the rows' :func:`_nearness`
     where known, ``repeated`` the rows made invalid as repeats), shaped for the targets
     ``batch``."""
     reason = np.where(valid.reshape(-1, 8).any(axis=1), "", reason).astype(object)
     more = _beyond(nearest, tool, solutions, valid, X_0T, tol, max_iter, near, repeated)
+    flags["not_converged"] = flags["not_converged"] | _odd_count(valid.reshape(-1, 8), more[1])
     return finish(solutions.reshape(batch + (8, 6)), valid.reshape(batch + (8,)),
                   pe.reshape(batch + (8,)), re.reshape(batch + (8,)),
                   {name: f.reshape(batch) for name, f in flags.items()},
@@ -830,12 +832,14 @@ def _near_a_singularity(nearest, tool, solutions, valid, pe, re, flags, start_ne
 
 
 def _one_pose_result(solutions, valid, pe, re, flags, more):
-    """The :class:`IKResult` of one pose: its flags as 0-d arrays, its reason, and ``more``
+    """The :class:`IKResult` of one pose: its flags as 0-d arrays (not_converged also where
+    its solutions are odd in number, :func:`_odd_count`), its reason, and ``more``
     (:func:`_beyond`'s arrays, or None: no solution beyond the rows)."""
-    flags = {name: np.array(bool(flag)) for name, flag in flags.items()}
     if more is None:
         more = (np.zeros((1, _MORE, 6)), np.zeros((1, _MORE), dtype=bool),
                 np.zeros((1, _MORE)), np.zeros((1, _MORE)))
+    flags["not_converged"] = bool(flags["not_converged"]) or bool(_odd_count(valid, more[1][0]))
+    flags = {name: np.array(bool(flag)) for name, flag in flags.items()}
     return finish(solutions, valid, pe, re, flags,
                   np.array(REASON_NOT_CONVERGED if flags["unreachable"] else "", dtype=object),
                   more=_more_result(*more, ()))
@@ -985,6 +989,18 @@ def _repeated(solutions, valid):
     if compiled_ready():
         return valid & ~compiled_unique(solutions, valid)
     return valid & ~_unique(solutions, valid)
+
+
+def _odd_count(valid, more_valid):
+    r"""Whether a pose has an odd number of solutions: its valid rows ``valid`` (..., 8) and
+    the solutions beyond them ``more_valid`` (..., 8), (...). A general 6R arm, as a
+    calibrated UR is, reaches a pose in an even number of joint vectors: they are the real
+    roots of a polynomial of degree 16 whose other roots come in complex pairs, and two
+    real ones meet and vanish together at a singularity (Raghavan and Roth, *Inverse
+    kinematics of the general 6R manipulator and related linkages*, J. Mech. Des. 115,
+    1993). An odd count means a solution is missing: such a pose is flagged
+    ``"not_converged"``."""
+    return (valid.sum(axis=-1) + more_valid.sum(axis=-1)) % 2 == 1
 
 
 def _exact_nearness(exact, q):
@@ -1185,10 +1201,14 @@ def _family(chain, nearest, polished, X_06, X_0T, exact_solutions, tol, max_iter
     arm's closed form may miss a whole shoulder of the calibrated arm's, or every branch),
     takes :data:`_FAMILY` members of the family as starts; a pose with at most
     :data:`_FEW_BRANCHES` solutions elsewhere (a whole shoulder of the calibrated arm's that
-    the exact arm's closed form clips, centimetres off) takes one (:func:`_family_members`).
+    the exact arm's closed form clips, centimetres off) takes one (:func:`_family_members`),
+    or the whole family where that one's start for a missing branch is at the wrist
+    singularity (:math:`|\sin\theta_5|` below :data:`_NEAR_MEASURE`: the shoulder clipped is
+    also within the gap of it, and its solution may lie anywhere along the family).
     A member is the exact arm's closed form with a tolerance of :data:`_FAMILY_TOL`, 0.5 (which
     makes every pose within :math:`|\theta_5| \lesssim 0.1` a family, and clipped rows
-    valid) and references :math:`\theta_6 = -\pi + 2\pi j / 6`. Each start is offered to
+    valid) and references :math:`\theta_6 = -\pi + 2\pi j / 6` (the one member: 0,
+    :func:`_members`). Each start is offered to
     the missing branches of its pose, the branch of its own label
     (:func:`_branches`) first (:func:`_restart`)."""
     unique = polished.unique()
@@ -1200,22 +1220,39 @@ def _family(chain, nearest, polished, X_06, X_0T, exact_solutions, tol, max_iter
     if not poses.size:
         return
     count = count[poses]
+    one = np.flatnonzero(count == 1)
+    if one.size:                                        # its start at the wrist singularity:
+        q, label, ok = _members(nearest, exact_solutions, X_06, poses[one],   # the family
+                                np.zeros(one.size), tol)
+        ok &= missing[np.repeat(poses[one], 8), label]
+        wrist = ok & (np.abs(np.sin(q[:, 4] + nearest.robot.links[4].theta_offset))
+                      < _NEAR_MEASURE)
+        count[one[wrist.reshape(-1, 8).any(axis=1)]] = _FAMILY
     member_of = np.repeat(poses, count)                 # one entry per member
     j = np.arange(member_of.size) - np.repeat(np.cumsum(count) - count, count)
-    references = np.zeros((member_of.size, 6))
     family = np.repeat(count, count) > 1                # else one member, theta_6 from 0
-    references[:, 5] = np.where(family, -np.pi + 2.0 * np.pi / _FAMILY * j, 0.0)
-    members = exact_solutions(X_06[member_of], tol=_FAMILY_TOL, near_tol=NEAR_SINGULAR,
-                              ref=references)
-    solutions = _off_the_edge(nearest.robot, members.solutions, members.valid,
-                              members.position_error, tol).reshape(-1, 6)
-    ok = members.valid.reshape(-1)
-    label = _branches(nearest.robot, solutions)
+    solutions, label, ok = _members(nearest, exact_solutions, X_06, member_of,
+                                    np.where(family, -np.pi + 2.0 * np.pi / _FAMILY * j, 0.0),
+                                    tol)
     pose_of = np.repeat(member_of, 8)
     ok &= missing[pose_of, label]                       # a start for a missing branch
     _offer(chain, polished, unique, missing, solutions[ok], pose_of[ok], label[ok], X_0T,
            tol, max_iter)
 
+
+def _members(nearest, exact_solutions, X_06, member_of, theta6, tol):
+    """Members of the exact arm's wrist family for :func:`_family`: its closed form of the
+    flanges ``X_06[member_of]`` with the tolerance :data:`_FAMILY_TOL` and the references
+    :math:`\theta_6` ``theta6`` (k,); the rows (8 k, 6), moved off the elbow singularity
+    where they clip the elbow (:func:`_off_the_edge`), their branches (:func:`_branches`)
+    and whether each is valid (8 k,)."""
+    references = np.zeros((member_of.size, 6))
+    references[:, 5] = theta6
+    members = exact_solutions(X_06[member_of], tol=_FAMILY_TOL, near_tol=NEAR_SINGULAR,
+                              ref=references)
+    solutions = _off_the_edge(nearest.robot, members.solutions, members.valid,
+                              members.position_error, tol).reshape(-1, 6)
+    return solutions, _branches(nearest.robot, solutions), members.valid.reshape(-1)
 
 
 def _family_members(nearest, q, done, have):

@@ -36,7 +36,7 @@ from ..robot import Robot
 from ..rotations import wrap_angle
 from .result import IKResult, check_ur_options, finish
 from .targets import parse_targets, pose_errors
-from .ur_calibrated import REASON_NOT_CONVERGED, nominal_ur
+from .ur_calibrated import REASON_NOT_CONVERGED, _odd_count, nominal_ur
 from .ur_closed_form import ROW_NAMES, branch_measures, exact_ur
 from .ur_solver import ur_branch
 from .ur_steps import NEAR_SINGULAR
@@ -182,6 +182,7 @@ def calibrated_ur_reference(robot: Robot, target: ArrayLike, *, tol: float = 1e-
             m = len(more)
             q[1, i, :m], valid[1, i, :m] = more, True
             pe[1, i, :m], re[1, i, :m] = pose_errors(arm.fk(more), X_0T[i])
+    flags["not_converged"] |= _odd_count(valid[0], valid[1])     # (a solution is missing)
     b = targets.batch
     more = finish(q[1].reshape(b + (8, 6)), valid[1].reshape(b + (8,)),
                   pe[1].reshape(b + (8,)), re[1].reshape(b + (8,)), {})
