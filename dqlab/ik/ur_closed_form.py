@@ -326,9 +326,10 @@ def exact_ur(robot: Robot, target: ArrayLike, *, tol: float = 1e-9,
         ``singular_tol``), ``"near_singular"`` (a valid solution within ``near_tol`` of
         one),
         ``"unreachable"`` (no valid solution) and ``"not_converged"`` (on a calibrated UR, a
-        branch of the nearest exact arm did not converge on the calibrated chain; never set
-        by the exact closed form, which has nothing to converge: one set of keys for every
-        UR); ``reason`` (...) says why a pose has no
+        branch of the nearest exact arm did not converge on the calibrated chain, or the
+        pose has an odd number of solutions, one missing; never set by the exact closed
+        form, which has nothing to converge: one set of keys for every UR); ``reason``
+        (...) says why a pose has no
         solution. Branches that coincide at a singularity are all returned (equal rows);
         :func:`distinct_solutions` marks the first of each group. For a batch, the arrays
         are stored with the poses last in memory (as the solver computes them) and given as
