@@ -24,6 +24,8 @@ Newton step (:func:`newton_step`):
    not only its pose, to the solution. A pose whose eight rows are all valid, one near a
    singularity, seeks solutions beyond them the same way (``result.more``: within the
    arms' gap of a singularity, a calibrated arm may reach a pose in ten or twelve ways).
+   A pose left with an odd number of solutions misses one (a general 6R arm has an even
+   number) and is flagged ``"not_converged"``.
 
 The fast solver is tested against it on six real calibrations
 (``tests/test_ik_ur_calibrated_reference.py``).
@@ -36,7 +38,7 @@ from ..robot import Robot
 from ..rotations import wrap_angle
 from .result import IKResult, check_ur_options, finish
 from .targets import parse_targets, pose_errors
-from .ur_calibrated import REASON_NOT_CONVERGED, _odd_count, nominal_ur
+from .ur_calibrated import REASON_NOT_CONVERGED, nominal_ur
 from .ur_closed_form import ROW_NAMES, branch_measures, exact_ur
 from .ur_solver import ur_branch
 from .ur_steps import NEAR_SINGULAR
@@ -182,7 +184,9 @@ def calibrated_ur_reference(robot: Robot, target: ArrayLike, *, tol: float = 1e-
             m = len(more)
             q[1, i, :m], valid[1, i, :m] = more, True
             pe[1, i, :m], re[1, i, :m] = pose_errors(arm.fk(more), X_0T[i])
-    flags["not_converged"] |= _odd_count(valid[0], valid[1])     # (a solution is missing)
+    # a general 6R arm reaches a pose in an even number of joint vectors (the real roots of
+    # a polynomial of degree 16): an odd count of solutions, rows and beyond, misses one
+    flags["not_converged"] |= (valid[0].sum(axis=-1) + valid[1].sum(axis=-1)) % 2 == 1
     b = targets.batch
     more = finish(q[1].reshape(b + (8, 6)), valid[1].reshape(b + (8,)),
                   pe[1].reshape(b + (8,)), re[1].reshape(b + (8,)), {})
