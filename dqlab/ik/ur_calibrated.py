@@ -927,9 +927,15 @@ def _beyond(nearest, tool, solutions, valid, X_0T, tol, max_iter, near=None, rep
                          min(max_iter, _DEFLATION_ITER))
     q, converged, _, _, errors = _newton(*chain, q, X_0T[pose_of], tol, max_iter)
     q = wrap_angle(q)
-    with np.errstate(invalid="ignore"):                 # (a first screen, on every start)
-        new = (converged & (errors <= tol).all(axis=0)
-               & ~(np.abs(wrap_angle(known - q[:, None])).max(axis=-1) < 1e-6).any(axis=-1))
+    with np.errstate(invalid="ignore"):                 # (a first screen: every start that
+        new = converged & (errors <= tol).all(axis=0)   # reached the pose, against its rows)
+    reached = np.flatnonzero(new)
+    if compiled_ready():
+        new[reached] = compiled_are_new(8 * pose_of[reached], q[reached], solutions,
+                                        np.ones(valid.size, dtype=bool))
+    else:
+        new[reached] = ~(np.abs(wrap_angle(known[reached] - q[reached, None])).max(axis=-1)
+                         < 1e-6).any(axis=-1)
     count = np.zeros(n, dtype=np.int64)
     rows_of = solutions.reshape(n, 8, 6)
     for j in np.flatnonzero(new):                       # a few: each against those before
