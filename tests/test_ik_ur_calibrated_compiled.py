@@ -241,6 +241,19 @@ def test_the_lanes_recompute_the_joints_that_took_a_long_step():
         outside[cs] = False
         assert np.array_equal(S[outside], before[outside], equal_nan=True)
 
+def test_distinct_small_integers_are_unique_and_searchsorted():
+    """The repairs' distinct starts (``_distinct``): numpy's ``unique`` of small integers
+    and each one's rank among them (``searchsorted``), empty and repeated values too."""
+    assert compiled.ready()
+    rng = np.random.default_rng(50)
+    for size in (1, 2, 7, 48, 300):
+        for count in (0, 1, 5, 40):
+            values = rng.integers(0, size, count)
+            used, rank = compiled._distinct(values, size)
+            np.testing.assert_array_equal(used, np.unique(values))
+            np.testing.assert_array_equal(rank, np.searchsorted(np.unique(values), values))
+
+
 def test_compiled_gram_and_acceptance_equal_the_numpy_path(numpy_path):
     """J^T J from the lanes' frames equals the matrix kernel's to rounding (with a tool, at
     and near singular configurations); the restarts' acceptance takes the same starts and

@@ -1638,8 +1638,7 @@ def _move_starts(wanted, q0, ways, near_ratio, links, tool, q, converged, unique
                     owners[m] = rows[j]
                     moves[m] = n_ways * source[j] + way
                     m += 1
-    used = np.unique(moves[:m])                         # each move stepped once
-    which = np.searchsorted(used, moves[:m])
+    used, which = _distinct(moves[:m], n_ways * vectors.shape[0])   # each move stepped once
     starts = np.empty((used.shape[0], 6))
     for u in range(used.shape[0]):
         vector, way = used[u] // n_ways, used[u] % n_ways
@@ -1810,8 +1809,28 @@ def _offer(pose, starts, labels, missing):
             if missing[k] and k != labels[j]:
                 owners[e], which[e] = 8 * pose + k, j
                 e += 1
-    used = np.unique(which[:e])                         # each start stepped once
-    return owners[:e], starts[used], np.searchsorted(used, which[:e])
+    used, rank = _distinct(which[:e], m)                # each start stepped once
+    return owners[:e], starts[used], rank
+
+
+def _distinct(values, size):
+    """The distinct ``values`` (k,), each below ``size``, in increasing order, and the rank
+    of each value among them: ``np.unique`` and ``np.searchsorted`` of small integers,
+    without sorting."""
+    seen = np.zeros(size, dtype=np.bool_)
+    for v in values:
+        seen[v] = True
+    order = np.empty(size, dtype=np.int64)
+    used = np.empty(size, dtype=np.int64)
+    k = 0
+    for v in range(size):
+        if seen[v]:
+            order[v], used[k] = k, v
+            k += 1
+    rank = np.empty(values.shape[0], dtype=np.int64)
+    for j in range(values.shape[0]):
+        rank[j] = order[values[j]]
+    return used[:k], rank
 
 
 def _off_the_edge(row, k, error, tol, exact):
@@ -1980,7 +1999,7 @@ _COMPILED += ["lane_angles", "lane_recompute", "lane_frames", "lane_step", "lane
               "_feasible_theta234", "_exact_flange", "_exact_fk", "_exact_poses", "_array_poses",
               "_array_start", "_array_finish", "_repairs", "_queue", "_cleared", "_push",
               "_run", "_wanted", "_corrected_starts", "_family_count", "_family_starts",
-              "_deflation", "_offer", "_member_starts",
+              "_deflation", "_offer", "_distinct", "_member_starts",
               "_off_the_edge", "_sign", "_branch",
               "_flip_starts", "_move_starts", "_flip",
               "_near_singular_directions", "_jacobi_smallest", "_times4", "_rigid_inverse",
