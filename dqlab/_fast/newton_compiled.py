@@ -1020,26 +1020,26 @@ def _kernel(links, tool, q, X_target, stop, plain, max_iter, give_up_after, damp
                 q[row, i] = S[(_Q + i) * W + r]
             for k in range(48):
                 F[k] = S[(_F + k) * W + r]
-            _outputs(F, X_target[row], X[row], measures[:, row], errors[:, row])
+            _outputs(F, X_target, X, measures, errors, row)
 
 
-def _outputs(F, X_target, X, measures, errors):
-    """The TCP pose X (4, 4), the singularity measures (3,) and the pose errors (2,) from
-    a branch's frames F."""
+def _outputs(F, X_target, X, measures, errors, row):
+    """Row ``row`` of the TCP poses X (m, 4, 4), the singularity measures (3, m) and the
+    pose errors (2, m) against ``X_target[row]``, from a branch's frames F."""
     for i in range(3):
         for j in range(3):
-            X[i, j] = F[39 + 3 * i + j]
-        X[i, 3] = F[36 + i]
-    X[3, 3] = 1.0
+            X[row, i, j] = F[39 + 3 * i + j]
+        X[row, i, 3] = F[36 + i]
+    X[row, 3, 3] = 1.0
     z3x, z3y, z3z = F[6], F[7], F[8]                    # |z3 x z5|, |x2 x x3|, shoulder
     z5x, z5y, z5z = F[12], F[13], F[14]
-    measures[0] = math.sqrt((z3y * z5z - z3z * z5y) ** 2 + (z3z * z5x - z3x * z5z) ** 2
-                            + (z3x * z5y - z3y * z5x) ** 2)
+    measures[0, row] = math.sqrt((z3y * z5z - z3z * z5y) ** 2 + (z3z * z5x - z3x * z5z) ** 2
+                                 + (z3x * z5y - z3y * z5x) ** 2)
     ax, ay, az, bx, by, bz = F[30], F[31], F[32], F[33], F[34], F[35]
-    measures[1] = math.sqrt((ay * bz - az * by) ** 2 + (az * bx - ax * bz) ** 2
-                            + (ax * by - ay * bx) ** 2)
-    measures[2] = abs(F[0] * F[28] - F[1] * F[27]) / math.hypot(F[0], F[1])
-    _pose_errors(X, X_target, errors)
+    measures[1, row] = math.sqrt((ay * bz - az * by) ** 2 + (az * bx - ax * bz) ** 2
+                                 + (ax * by - ay * bx) ** 2)
+    measures[2, row] = abs(F[0] * F[28] - F[1] * F[27]) / math.hypot(F[0], F[1])
+    _pose_errors(X[row], X_target[row], errors[:, row])
 
 
 def _pose_errors(X, X_target, out):
@@ -1293,15 +1293,26 @@ def _array_start(links, tool, exact, X_06, X_0T, theta6_ref, tol, wide, singular
         for k in range(8):
             if found[base + k]:
                 rows[m] = base + k
-                qs[m], targets[m] = q0[base + k], X_0T[pose]
+                for i in range(6):
+                    qs[m, i] = q0[base + k, i]
+                for i in range(4):
+                    for j in range(4):
+                        targets[m, i, j] = X_0T[pose, i, j]
                 m += 1
         if m:
             _kernel(links, tool, qs[:m], targets[:m], stop, plain, max_iter, give_up_after,
                     damping, max_step, ok[:m], Xs[:m], ms[:, :m], es[:, :m])
-        for j in range(m):
+        for j in range(m):                              # (entry by entry: no views)
             r = rows[j]
-            q[r], converged[r], done[r], X[r] = qs[j], ok[j], True, Xs[j]
-            measures[:, r], steps_errors[:, r] = ms[:, j], es[:, j]
+            converged[r], done[r] = ok[j], True
+            for i in range(6):
+                q[r, i] = qs[j, i]
+            for i in range(4):
+                for k in range(4):
+                    X[r, i, k] = Xs[j, i, k]
+            for i in range(3):
+                measures[i, r] = ms[i, j]
+            steps_errors[0, r], steps_errors[1, r] = es[0, j], es[1, j]
     if x == 0:
         return True
     # then those missed by a little, all together (they seldom converge, and each group of
