@@ -163,7 +163,7 @@ def _lean_pose(links, tool, exact, X_06, X_0T, theta6_ref, tol, wide, singular_t
         found[k] = errors[0, k] <= wide and errors[1, k] <= wide
         exact_rows[k] = found[k] and errors[0, k] <= tol
         if found[k]:
-            _off_the_edge(start[k], k, errors[0, k], tol, exact)
+            _off_the_edge(start, k, k, errors[0, k], tol, exact)
         pe[k], re[k] = errors[0, k], errors[1, k]
     if not _one_pose(links, tool, start, found, X_0T, tol, stop, plain, max_iter, give_up_after,
                      damping, max_step, singular_tol, exact[3], 10.0 * wide, near_tol,
@@ -402,13 +402,19 @@ def _same(u, v):
 def _unique(q, converged, out):
     """out (8 n,): the converged rows that repeat no converged row before them in their pose."""
     for pose in range(q.shape[0] // 8):
-        for i in range(8 * pose, 8 * pose + 8):
-            out[i] = converged[i]
-            if converged[i]:
-                for k in range(8 * pose, i):
-                    if converged[k] and _same(q[k], q[i]):
-                        out[i] = False
-                        break
+        _unique_pose(q, converged, out, 8 * pose)
+
+
+def _unique_pose(q, converged, out, base):
+    """:func:`_unique` of the pose whose rows begin at ``base`` (rows base..base + 7 of the
+    arrays, read and written in place: no views)."""
+    for i in range(base, base + 8):
+        out[i] = converged[i]
+        if converged[i]:
+            for k in range(base, i):
+                if converged[k] and _same(q[k], q[i]):
+                    out[i] = False
+                    break
 
 
 def _are_new(rows, q_rows, q, unique, out):
@@ -798,22 +804,23 @@ def _exact_one_pose(qw, qx, qy, qz, px, py, pz, zx, zy, zz, X_target, theta6_ref
                 k2 = (a3 / m) * kk
                 theta2 = math.atan2(v4 * k1 - elbow * (u4 * k2) + 0.0,
                                     u4 * k1 + elbow * (v4 * k2))
-                t = solutions[row]
-                t[0], t[1], t[2] = theta1, theta2, theta3
-                t[3], t[4], t[5] = _wrap(theta234 - theta2 - theta3), theta5, theta6
+                solutions[row, 0], solutions[row, 1], solutions[row, 2] = theta1, theta2, theta3
+                solutions[row, 3] = _wrap(theta234 - theta2 - theta3)
+                solutions[row, 4], solutions[row, 5] = theta5, theta6
                 if offset:
                     inside = True
                     for i in range(6):
-                        t[i] = t[i] - constants[6 + i]
-                        inside = inside and -math.pi < t[i] <= math.pi
+                        solutions[row, i] = solutions[row, i] - constants[6 + i]
+                        inside = inside and -math.pi < solutions[row, i] <= math.pi
                     if not inside:
                         for i in range(6):
-                            t[i] = _wrap(t[i])
+                            solutions[row, i] = _wrap(solutions[row, i])
                 if represented:                                      # checked by forward
-                    _exact_flange(t, constants, X)                   # kinematics (_errors)
+                    _exact_flange(solutions[row], constants, X)      # kinematics (_errors)
                     _pose_errors(X, X_target, errors[:, row])
                     if not (errors[0, row] <= tol and errors[1, row] <= tol):
-                        t[:] = 0.0                                   # (as finish() does)
+                        for i in range(6):                           # (as finish() does)
+                            solutions[row, i] = 0.0
                         continue
                 elbow_singular = elbow_singular or kk / m < singular_tol
                 near = near or kk / m < near_tol or sin5 < near_tol
@@ -1272,7 +1279,7 @@ def _array_start(links, tool, exact, X_06, X_0T, theta6_ref, tol, wide, singular
             start_errors[0, r], start_errors[1, r] = e[0, k], e[1, k]
             found[r] = e[0, k] <= wide and e[1, k] <= wide
             if found[r]:
-                _off_the_edge(q0[r], k, e[0, k], tol, exact)
+                _off_the_edge(q0, r, k, e[0, k], tol, exact)
                 started[pose] = True
             near_any = near_any or (not found[r] and e[0, k] <= 10.0 * wide)
         if near_any:                                    # solved again at ten times wide
@@ -1284,8 +1291,9 @@ def _array_start(links, tool, exact, X_06, X_0T, theta6_ref, tol, wide, singular
                 r = base + k
                 if (not found[r] and e[0, k] <= 10.0 * wide and e2[0, k] <= 10.0 * wide
                         and e2[1, k] <= 10.0 * wide):
-                    _off_the_edge(again[k], k, e2[0, k], tol, exact)
-                    q0[r] = again[k]
+                    _off_the_edge(again, k, k, e2[0, k], tol, exact)
+                    for i in range(6):
+                        q0[r, i] = again[k, i]
                     done[r] = True
                     extra[x] = r
                     x += 1
@@ -1663,7 +1671,7 @@ def _family_count(pose, exact, family, q, done, converged, unique):
     first): how many members of the exact arm's wrist family it takes as starts."""
     members, near_measure, few_branches, few_wrist = family[0], family[1], family[2], family[3]
     base = 8 * pose
-    _unique(q[base:base + 8], converged[base:base + 8], unique[base:base + 8])
+    _unique_pose(q, converged, unique, base)
     have, wrist, near_wrist_found = 0, False, False
     for k in range(8):
         sin5 = abs(math.sin(q[base + k, 4] + exact[10]))
@@ -1726,7 +1734,7 @@ def _member_starts(theta6, qw, qx, qy, qz, X_06, exact, singular_tol, near_wrist
     for k in range(8):
         if not (errs[0, k] <= member_tol and errs[1, k] <= member_tol):
             continue
-        _off_the_edge(solutions[k], k, errs[0, k], tol, exact)
+        _off_the_edge(solutions, k, k, errs[0, k], tol, exact)
         label = _branch(solutions[k], exact)
         if not unique[base + label]:                    # a start for a missing branch
             starts[m] = solutions[k]
@@ -1751,7 +1759,7 @@ def _deflation(exact, ways, near_ratio, near_measure, steps, give_up_after, stat
     for pose in range(n):
         first[pose + 1] = first[pose]
         base = 8 * pose
-        _unique(q[base:base + 8], converged[base:base + 8], unique[base:base + 8])
+        _unique_pose(q, converged, unique, base)
         any_wanted, count = False, 0
         for k in range(8):
             r = base + k
@@ -1844,18 +1852,18 @@ def _distinct(values, size):
     return used[:k], rank
 
 
-def _off_the_edge(row, k, error, tol, exact):
-    """``dqlab.ik.ur_calibrated._off_the_edge`` of row k of a pose, valid with the error
-    ``error``: moved off the elbow singularity where it clips the elbow."""
+def _off_the_edge(rows, r, k, error, tol, exact):
+    """``dqlab.ik.ur_calibrated._off_the_edge`` of ``rows[r]``, branch k of a pose, valid
+    with the error ``error``: moved off the elbow singularity where it clips the elbow."""
     if not error > tol:
         return
-    theta3 = row[2] + exact[8]
+    theta3 = rows[r, 2] + exact[8]
     if not abs(math.sin(theta3)) < 1e-6:
         return
     a2, a3 = exact[1], exact[2]
     delta = max(math.sqrt(2.0 * abs(a2 + a3) * error / abs(a2 * a3)), 0.01)
     up = 1.0 if k // 2 % 2 == 0 else -1.0
-    row[2] += up * _sign(math.cos(theta3)) * _sign(a2 * a3) * delta
+    rows[r, 2] += up * _sign(math.cos(theta3)) * _sign(a2 * a3) * delta
 
 
 def _sign(x):
@@ -2006,7 +2014,7 @@ _Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE, _G = (
     INDEX[name] for name in ("q0", "c0", "s0", "t00", "tp0", "F0", "x0", "act", "size", "g0"))
 _COMPILED += ["lane_angles", "lane_recompute", "lane_frames", "lane_step", "lane_deflated_step",
               "lane_size",
-              "_same", "_unique", "_wrap", "_exact_one_pose", "_family_member",
+              "_same", "_unique", "_unique_pose", "_wrap", "_exact_one_pose", "_family_member",
               "_feasible_theta234", "_exact_flange", "_exact_fk", "_exact_poses", "_array_poses",
               "_array_start", "_array_finish", "_repairs", "_queue", "_cleared", "_push",
               "_run", "_wanted", "_corrected_starts", "_family_count", "_family_starts",
