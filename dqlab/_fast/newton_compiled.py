@@ -405,6 +405,15 @@ def _unique(q, converged, out):
         _unique_pose(q, converged, out, 8 * pose)
 
 
+def _full(unique, base):
+    """Whether the eight rows of the pose that begin at ``base`` are all ``unique`` (eight
+    distinct solutions: no branch missing)."""
+    for i in range(base, base + 8):
+        if not unique[i]:
+            return False
+    return True
+
+
 def _unique_pose(q, converged, out, base):
     """:func:`_unique` of the pose whose rows begin at ``base`` (rows base..base + 7 of the
     arrays, read and written in place: no views)."""
@@ -1464,7 +1473,8 @@ def _repairs(links, tool, exact, theta6_ref, wide, singular_tol, near_wrist, nea
     _run(queue, state)
     queue = _cleared(queue)                             # _family
     for pose in range(n):
-        count = _family_count(pose, exact, family, q, done, converged, unique)
+        count = 0 if _full(unique, 8 * pose) else _family_count(pose, exact, family, q,
+                                                                  done, converged, unique)
         if count:
             owners, starts, which = _family_starts(pose, count, exact, X_06[pose],
                                                    singular_tol, near_wrist, family, tol,
@@ -1759,6 +1769,8 @@ def _deflation(exact, ways, near_ratio, near_measure, steps, give_up_after, stat
     for pose in range(n):
         first[pose + 1] = first[pose]
         base = 8 * pose
+        if _full(unique, base):                         # (eight distinct solutions: none wanted)
+            continue
         _unique_pose(q, converged, unique, base)
         any_wanted, count = False, 0
         for k in range(8):
@@ -2013,8 +2025,8 @@ def _quaternion(R):
 _Q, _C, _S, _T, _TP, _F, _X, _ACT, _SIZE, _G = (
     INDEX[name] for name in ("q0", "c0", "s0", "t00", "tp0", "F0", "x0", "act", "size", "g0"))
 _COMPILED += ["lane_angles", "lane_recompute", "lane_frames", "lane_step", "lane_deflated_step",
-              "lane_size",
-              "_same", "_unique", "_unique_pose", "_wrap", "_exact_one_pose", "_family_member",
+              "lane_size", "_same", "_unique", "_unique_pose", "_full", "_wrap",
+              "_exact_one_pose", "_family_member",
               "_feasible_theta234", "_exact_flange", "_exact_fk", "_exact_poses", "_array_poses",
               "_array_start", "_array_finish", "_repairs", "_queue", "_cleared", "_push",
               "_run", "_wanted", "_corrected_starts", "_family_count", "_family_starts",
