@@ -163,7 +163,8 @@ def _lean_pose(links, tool, exact, X_06, X_0T, theta6_ref, tol, wide, singular_t
         found[k] = errors[0, k] <= wide and errors[1, k] <= wide
         exact_rows[k] = found[k] and errors[0, k] <= tol
         if found[k]:
-            _off_the_edge(start, k, k, errors[0, k], tol, exact)
+            if errors[0, k] > tol:                          # (a clipped row)
+                _off_the_edge(start, k, k, errors[0, k], tol, exact)
         pe[k], re[k] = errors[0, k], errors[1, k]
     if not _one_pose(links, tool, start, found, X_0T, tol, stop, plain, max_iter, give_up_after,
                      damping, max_step, singular_tol, exact[3], 10.0 * wide, near_tol,
@@ -620,7 +621,8 @@ def _deflated(links, tool, q, X_target, known, have, steps, stop, give_up_after,
             if not more:
                 break
             lane_deflated_step(S, damping, max_step)
-            _recompute(links, S)
+            if _long_step(S):
+                lane_recompute(S, links)
         for r in range(n):
             for i in range(6):
                 q[first + r, i] = S[(_Q + i) * W + r]
@@ -962,14 +964,15 @@ def _load(links, q, X_target, rows, S):
     lane_angles(S, links)
 
 
-def _recompute(links, S):
-    """Cosines and sines of the joints whose step was 0.02 rad or more (or not a number),
-    from their new angle (the Taylor series of the lanes' step is for short steps): all
-    lanes at once (``newton_lanes.recompute``) when one has such a step."""
+def _long_step(S):
+    """Whether a lane's joint took a step of 0.02 rad or more (or not a number): then the
+    cosines and sines of such joints come from their new angle, all lanes at once
+    (``newton_lanes.recompute``; the Taylor series of the lanes' step is for short
+    steps)."""
     for k in range(_X * W, (_X + 6) * W):
         if not abs(S[k]) < 0.02:
-            lane_recompute(S, links)
-            return
+            return True
+    return False
 
 
 def _kernel(links, tool, q, X_target, stop, plain, max_iter, give_up_after, damping,
@@ -990,7 +993,8 @@ def _kernel(links, tool, q, X_target, stop, plain, max_iter, give_up_after, damp
         for _ in range(plain):
             lane_frames(S, links, tool)
             lane_step(S, damping, max_step)
-            _recompute(links, S)
+            if _long_step(S):
+                lane_recompute(S, links)
         lane_frames(S, links, tool)
         lane_size(S)
         more = False
@@ -1016,7 +1020,8 @@ def _kernel(links, tool, q, X_target, stop, plain, max_iter, give_up_after, damp
             if not more:
                 break
             lane_step(S, damping, max_step)
-            _recompute(links, S)
+            if _long_step(S):
+                lane_recompute(S, links)
             lane_frames(S, links, tool)
             lane_size(S)
             iteration += 1
@@ -1288,7 +1293,8 @@ def _array_start(links, tool, exact, X_06, X_0T, theta6_ref, tol, wide, singular
             start_errors[0, r], start_errors[1, r] = e[0, k], e[1, k]
             found[r] = e[0, k] <= wide and e[1, k] <= wide
             if found[r]:
-                _off_the_edge(q0, r, k, e[0, k], tol, exact)
+                if e[0, k] > tol:                               # (a clipped row)
+                    _off_the_edge(q0, r, k, e[0, k], tol, exact)
                 started[pose] = True
             near_any = near_any or (not found[r] and e[0, k] <= 10.0 * wide)
         if near_any:                                    # solved again at ten times wide
@@ -1300,7 +1306,8 @@ def _array_start(links, tool, exact, X_06, X_0T, theta6_ref, tol, wide, singular
                 r = base + k
                 if (not found[r] and e[0, k] <= 10.0 * wide and e2[0, k] <= 10.0 * wide
                         and e2[1, k] <= 10.0 * wide):
-                    _off_the_edge(again, k, k, e2[0, k], tol, exact)
+                    if e2[0, k] > tol:                          # (a clipped row)
+                        _off_the_edge(again, k, k, e2[0, k], tol, exact)
                     for i in range(6):
                         q0[r, i] = again[k, i]
                     done[r] = True
@@ -1744,7 +1751,8 @@ def _member_starts(theta6, qw, qx, qy, qz, X_06, exact, singular_tol, near_wrist
     for k in range(8):
         if not (errs[0, k] <= member_tol and errs[1, k] <= member_tol):
             continue
-        _off_the_edge(solutions, k, k, errs[0, k], tol, exact)
+        if errs[0, k] > tol:                                # (a clipped row)
+            _off_the_edge(solutions, k, k, errs[0, k], tol, exact)
         label = _branch(solutions[k], exact)
         if not unique[base + label]:                    # a start for a missing branch
             starts[m] = solutions[k]
@@ -2036,6 +2044,6 @@ _COMPILED += ["lane_angles", "lane_recompute", "lane_frames", "lane_step", "lane
               "_near_singular_directions", "_jacobi_smallest", "_times4", "_rigid_inverse",
               "_quaternion", "_one_pose", "_lean_pose", "_accept", "_gram",
               "_smallest", "_largest_diagonal_column", "_times", "_rayleigh", "_are_new",
-              "_load", "_recompute", "_kernel", "_outputs", "_pose_errors", "_dot_rows",
+              "_load", "_long_step", "_kernel", "_outputs", "_pose_errors", "_dot_rows",
               "_deflated", "_cholesky", "_near_rows", "_nearness",
               "_row_nearness"]
