@@ -464,7 +464,7 @@ def _accept(owners, converged, q_starts, q, unique, taken):
 
 def _gram(links, tool, q, H):
     """:func:`gram`'s work, W rows at a time."""
-    S = np.zeros(NV * W)
+    S = np.empty(NV * W)                                # (every entry written before read)
     J = np.empty((6, 6))
     m = q.shape[0]
     for first in range(0, m, W):
@@ -979,7 +979,7 @@ def _kernel(links, tool, q, X_target, stop, plain, max_iter, give_up_after, damp
             max_step, converged, X, measures, errors):
     """Every branch (rows of q, in place), W at a time: the plain steps of all lanes, then
     each lane stepped while its rule says go on (the others take steps of 0)."""
-    S = np.zeros(NV * W)
+    S = np.empty(NV * W)                                # (every entry written before read)
     F = np.empty(48)
     size, before0, before1 = np.empty(W), np.empty(W), np.empty(W)
     going = np.zeros(W, dtype=np.bool_)
