@@ -254,7 +254,7 @@ _RIGID_TOL = 1e-9
 
 
 def _check_transform_like(T, name):
-    """A base or tool transform, checked once where it enters: one rigid 4x4 transform
+    r"""A base or tool transform, checked once where it enters: one rigid 4x4 transform
     (:func:`dqlab.transforms.check_transform` with an absolute tolerance of 1e-9 on
     :math:`R^\top R - I`), the error naming the argument."""
     if T is None:

@@ -34,7 +34,7 @@ _FLOAT64 = np.dtype(np.float64)
 
 
 class CompiledChain:
-    """The precomputed constants of a chain and its unrolled products.
+    r"""The precomputed constants of a chain and its unrolled products.
 
     Parameters
     ----------

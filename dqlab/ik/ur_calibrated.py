@@ -1254,7 +1254,7 @@ def _family(chain, nearest, polished, X_06, X_0T, exact_solutions, tol, max_iter
 
 
 def _members(nearest, exact_solutions, X_06, member_of, theta6, tol):
-    """Members of the exact arm's wrist family for :func:`_family`: its closed form of the
+    r"""Members of the exact arm's wrist family for :func:`_family`: its closed form of the
     flanges ``X_06[member_of]`` with the tolerance :data:`_FAMILY_TOL` and the references
     :math:`\theta_6` ``theta6`` (k,); the rows (8 k, 6), moved off the elbow singularity
     where they clip the elbow (:func:`_off_the_edge`), their branches (:func:`_branches`)
