@@ -81,6 +81,18 @@ def test_no_reach_into_another_objects_private_attributes(path):
     assert not reach, f"{module_name(path)} reaches into private attributes: {reach}"
 
 
+@pytest.mark.parametrize("path", SOURCES, ids=lambda p: str(p.relative_to(PACKAGE)))
+def test_no_docstring_holds_a_control_character(path):
+    """A backslash of LaTeX in a docstring that is not raw may begin an escape
+    (``\\theta`` reads as a tab and 'heta', ``\\beta`` as a backspace and 'eta'): such a
+    docstring is raw."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    bad = [getattr(node, "name", "module") for node in ast.walk(tree)
+           if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef))
+           and any(c in (ast.get_docstring(node, clean=False) or "") for c in "\t\b\f\a\v")]
+    assert not bad, f"{path.name}: a docstring with an escape (make it raw): {bad}"
+
+
 def test_the_imports_between_dqlab_modules_have_no_cycle():
     graph = {name: set(dqlab_edges(path)) - {name} for name, path in MODULES.items()}
     state = {}
