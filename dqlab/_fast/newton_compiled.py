@@ -164,7 +164,7 @@ def _lean_pose(links, tool, exact, X_06, X_0T, theta6_ref, tol, wide, singular_t
         exact_rows[k] = found[k] and errors[0, k] <= tol
         if found[k]:
             if errors[0, k] > tol:                          # (a clipped row)
-                _off_the_edge(start, k, k, errors[0, k], tol, exact)
+                _off_the_edge(start, k, k, errors[0, k], exact)
         pe[k], re[k] = errors[0, k], errors[1, k]
     if not _one_pose(links, tool, start, found, X_0T, tol, stop, plain, max_iter, give_up_after,
                      damping, max_step, singular_tol, exact[3], 10.0 * wide, near_tol,
@@ -1294,7 +1294,7 @@ def _array_start(links, tool, exact, X_06, X_0T, theta6_ref, tol, wide, singular
             found[r] = e[0, k] <= wide and e[1, k] <= wide
             if found[r]:
                 if e[0, k] > tol:                               # (a clipped row)
-                    _off_the_edge(q0, r, k, e[0, k], tol, exact)
+                    _off_the_edge(q0, r, k, e[0, k], exact)
                 started[pose] = True
             near_any = near_any or (not found[r] and e[0, k] <= 10.0 * wide)
         if near_any:                                    # solved again at ten times wide
@@ -1307,7 +1307,7 @@ def _array_start(links, tool, exact, X_06, X_0T, theta6_ref, tol, wide, singular
                 if (not found[r] and e[0, k] <= 10.0 * wide and e2[0, k] <= 10.0 * wide
                         and e2[1, k] <= 10.0 * wide):
                     if e2[0, k] > tol:                          # (a clipped row)
-                        _off_the_edge(again, k, k, e2[0, k], tol, exact)
+                        _off_the_edge(again, k, k, e2[0, k], exact)
                     for i in range(6):
                         q0[r, i] = again[k, i]
                     done[r] = True
@@ -1752,7 +1752,7 @@ def _member_starts(theta6, qw, qx, qy, qz, X_06, exact, singular_tol, near_wrist
         if not (errs[0, k] <= member_tol and errs[1, k] <= member_tol):
             continue
         if errs[0, k] > tol:                                # (a clipped row)
-            _off_the_edge(solutions, k, k, errs[0, k], tol, exact)
+            _off_the_edge(solutions, k, k, errs[0, k], exact)
         label = _branch(solutions[k], exact)
         if not unique[base + label]:                    # a start for a missing branch
             starts[m] = solutions[k]
@@ -1872,11 +1872,10 @@ def _distinct(values, size):
     return used[:k], rank
 
 
-def _off_the_edge(rows, r, k, error, tol, exact):
+def _off_the_edge(rows, r, k, error, exact):
     """``dqlab.ik.ur_calibrated._off_the_edge`` of ``rows[r]``, branch k of a pose, valid
-    with the error ``error``: moved off the elbow singularity where it clips the elbow."""
-    if not error > tol:
-        return
+    with the error ``error`` above the tolerance (a clipped row; the callers test it before
+    the call): moved off the elbow singularity where it clips the elbow."""
     theta3 = rows[r, 2] + exact[8]
     if not abs(math.sin(theta3)) < 1e-6:
         return

@@ -930,12 +930,8 @@ def _beyond(nearest, tool, solutions, valid, X_0T, tol, max_iter, near=None, rep
     with np.errstate(invalid="ignore"):                 # (a first screen: every start that
         new = converged & (errors <= tol).all(axis=0)   # reached the pose, against its rows)
     reached = np.flatnonzero(new)
-    if compiled_ready():
-        new[reached] = compiled_are_new(8 * pose_of[reached], q[reached], solutions,
-                                        np.ones(valid.size, dtype=bool))
-    else:
-        new[reached] = ~(np.abs(wrap_angle(known[reached] - q[reached, None])).max(axis=-1)
-                         < 1e-6).any(axis=-1)
+    new[reached] = _are_new(8 * pose_of[reached], q[reached], solutions,
+                            np.ones(valid.size, dtype=bool))
     count = np.zeros(n, dtype=np.int64)
     rows_of = solutions.reshape(n, 8, 6)
     for j in np.flatnonzero(new):                       # a few: each against those before
@@ -1061,18 +1057,26 @@ class _Polished:
 
     def are_new(self, rows, q, unique):
         """Whether each joint vector ``q[j]`` differs from every unique row of the pose of
-        ``rows[j]``."""
-        if compiled_ready():
-            return compiled_are_new(rows, q, self.q, unique)
-        Q = np.where(unique[:, None], self.q, np.nan).reshape(-1, 8, 6)[rows // 8]
-        with np.errstate(invalid="ignore"):
-            same = np.abs(wrap_angle(Q - q[:, None])).max(axis=-1) < 1e-6
-        return ~same.any(axis=-1)
+        ``rows[j]`` (:func:`_are_new`)."""
+        return _are_new(rows, q, self.q, unique)
 
     def is_new(self, row, q, unique):
         """Whether the joint vector ``q`` (6,) differs from every unique row of the pose of
         ``row``."""
         return bool(self.are_new(np.array([row]), q[None], unique)[0])
+
+
+def _are_new(rows, q, known, unique):
+    """Whether each joint vector ``q[j]`` (m, 6) differs (some joint by 1e-6 rad or more,
+    modulo 2 pi) from every row of ``known`` (8 n, 6) marked ``unique`` (8 n,) of the pose
+    of row ``rows[j]``, (m,); with numba, compiled
+    (``dqlab._fast.newton_compiled.are_new``, tested equal)."""
+    if compiled_ready():
+        return compiled_are_new(rows, q, known, unique)
+    Q = np.where(unique[:, None], known, np.nan).reshape(-1, 8, 6)[rows // 8]
+    with np.errstate(invalid="ignore"):
+        same = np.abs(wrap_angle(Q - q[:, None])).max(axis=-1) < 1e-6
+    return ~same.any(axis=-1)
 
 
 def _unique(q, converged):
@@ -1238,8 +1242,7 @@ def _family(chain, nearest, polished, X_06, X_0T, exact_solutions, tol, max_iter
         q, label, ok = _members(nearest, exact_solutions, X_06, poses[one],   # the family
                                 np.zeros(one.size), tol)
         ok &= missing[np.repeat(poses[one], 8), label]
-        wrist = ok & (np.abs(np.sin(q[:, 4] + nearest.robot.links[4].theta_offset))
-                      < _NEAR_MEASURE)
+        wrist = ok & (_wrist_measure(nearest, q) < _NEAR_MEASURE)
         count[one[wrist.reshape(-1, 8).any(axis=1)]] = _FAMILY
     member_of = np.repeat(poses, count)                 # one entry per member
     j = np.arange(member_of.size) - np.repeat(np.cumsum(count) - count, count)
@@ -1278,13 +1281,18 @@ def _family_members(nearest, q, done, have):
     ones included, :math:`\theta_6` from 0) if it has at most :data:`_FEW_BRANCHES` solutions
     otherwise; none else.
     (m,) integers; one pose alone (:func:`_one_pose`) asks too."""
-    sin5 = np.abs(np.sin(q[:, 4] + nearest.robot.links[4].theta_offset)).reshape(-1, 8)
+    sin5 = _wrist_measure(nearest, q).reshape(-1, 8)
     have = have.reshape(-1, 8)
     missing = ~have.all(axis=1)
     wrist = (done.reshape(-1, 8) & (sin5 < _NEAR_MEASURE)).any(axis=1)
     few = have.sum(axis=1) <= _FEW_BRANCHES
     near_wrist = few & ~(have & (sin5 >= _FEW_WRIST)).any(axis=1)
     return np.where(missing & (wrist | near_wrist), _FAMILY, np.where(missing & few, 1, 0))
+
+
+def _wrist_measure(nearest, q):
+    r""":math:`|\sin\theta_5|` of the exact arm at the joint vectors q (m, 6), (m,)."""
+    return np.abs(np.sin(q[:, 4] + nearest.robot.links[4].theta_offset))
 
 
 def _offer(chain, polished, unique, missing, starts, pose_of, label, X_0T, tol, max_iter):
