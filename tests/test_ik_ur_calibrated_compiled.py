@@ -254,6 +254,40 @@ def test_distinct_small_integers_are_unique_and_searchsorted():
             np.testing.assert_array_equal(rank, np.searchsorted(np.unique(values), values))
 
 
+def test_a_repeated_start_is_stepped_once_on_both_paths():
+    """A start equal to an earlier one of its pose (the wrist family's members away from
+    the wrist singularity are one joint vector) is stepped once: numpy's
+    ``_stepped_once`` names the first equal start of the pose (against a loop over the
+    pairs), and the compiled queue (``_push``, pose by pose) holds each distinct start
+    once and offers every owner the start equal to its own."""
+    assert compiled.ready()
+    rng = np.random.default_rng(51)
+    pool = rng.uniform(-np.pi, np.pi, (4, 6))
+    for count in (1, 6, 30):
+        poses = np.sort(rng.integers(0, 3, count))
+        starts = pool[rng.integers(0, pool.shape[0], count)]
+        first = module._stepped_once(starts, poses)
+        expected = [next(i for i in range(j + 1) if poses[i] == poses[j]
+                         and np.array_equal(starts[i], starts[j])) for j in range(count)]
+        np.testing.assert_array_equal(first, expected)
+        queue = compiled._queue(2)
+        for pose in np.unique(poses):
+            mine = np.flatnonzero(poses == pose)
+            owners = np.repeat(8 * pose + np.arange(2), mine.size)
+            which = np.tile(np.arange(mine.size), 2)
+            queue = compiled._push(queue, pose, owners, starts[mine], which)
+        queued_owners, queued_which, queued_starts, queued_poses, (o, m) = queue
+        assert m == np.unique(np.column_stack([poses, starts]), axis=0).shape[0]
+        assert o == 2 * count
+        for j in range(o):
+            pose = queued_owners[j] // 8
+            assert queued_poses[queued_which[j]] == pose
+        offered = queued_starts[queued_which[:o]]
+        mine_in_order = np.concatenate([np.tile(starts[poses == pose], (2, 1))
+                                        for pose in np.unique(poses)])
+        np.testing.assert_array_equal(offered, mine_in_order)
+
+
 def test_compiled_gram_and_acceptance_equal_the_numpy_path(numpy_path):
     """J^T J from the lanes' frames equals the matrix kernel's to rounding (with a tool, at
     and near singular configurations); the restarts' acceptance takes the same starts and

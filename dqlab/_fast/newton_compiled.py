@@ -1508,8 +1508,10 @@ def _cleared(queue):
 
 def _push(queue, pose, owners, starts, which):
     """The queue with the restarts of one pose appended: ``owners[j]`` offered start
-    ``which[j]`` of ``starts`` (which become the queue's next starts, of ``pose``); the
-    arrays of the queue grown (twice their size) when full."""
+    ``which[j]`` of ``starts`` (which become the queue's next starts, of ``pose``; a start
+    equal to one before it is queued once, and its owners offered that one, as
+    ``dqlab.ik.ur_calibrated._stepped_once`` does); the arrays of the queue grown (twice
+    their size) when full."""
     queued_owners, queued_which, queued_starts, poses, count = queue
     o, s = count[0], count[1]
     if o + owners.shape[0] > queued_owners.shape[0]:
@@ -1522,12 +1524,31 @@ def _push(queue, pose, owners, starts, which):
         grown_starts, grown_poses = np.empty((size, 6)), np.empty(size, dtype=np.int64)
         grown_starts[:s], grown_poses[:s] = queued_starts[:s], poses[:s]
         queued_starts, poses = grown_starts, grown_poses
-    for j in range(owners.shape[0]):
-        queued_owners[o + j], queued_which[o + j] = owners[j], s + which[j]
+    place = np.empty(starts.shape[0], dtype=np.int64)  # where each start is queued
+    kept = s
     for j in range(starts.shape[0]):
-        queued_starts[s + j], poses[s + j] = starts[j], pose
-    count[0], count[1] = o + owners.shape[0], s + starts.shape[0]
+        place[j] = kept
+        for i in range(s, kept):
+            if _equal(queued_starts, i, starts, j):
+                place[j] = i
+                break
+        if place[j] == kept:
+            for k in range(6):
+                queued_starts[kept, k] = starts[j, k]
+            poses[kept] = pose
+            kept += 1
+    for j in range(owners.shape[0]):
+        queued_owners[o + j], queued_which[o + j] = owners[j], place[which[j]]
+    count[0], count[1] = o + owners.shape[0], kept
     return queued_owners, queued_which, queued_starts, poses, count
+
+
+def _equal(A, i, B, j):
+    """Whether rows A[i] and B[j] (6,) are the same joint vector, joint by joint."""
+    for k in range(6):
+        if A[i, k] != B[j, k]:
+            return False
+    return True
 
 
 def _run(queue, state):
@@ -2036,7 +2057,7 @@ _COMPILED += ["lane_angles", "lane_recompute", "lane_frames", "lane_step", "lane
               "_exact_one_pose", "_family_member",
               "_feasible_theta234", "_exact_flange", "_exact_fk", "_exact_poses", "_array_poses",
               "_array_start", "_array_finish", "_repairs", "_queue", "_cleared", "_push",
-              "_run", "_wanted", "_corrected_starts", "_family_count", "_family_starts",
+              "_equal", "_run", "_wanted", "_corrected_starts", "_family_count", "_family_starts",
               "_deflation", "_offer", "_distinct", "_member_starts",
               "_off_the_edge", "_sign", "_branch",
               "_flip_starts", "_move_starts", "_flip",

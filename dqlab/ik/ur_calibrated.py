@@ -1460,14 +1460,16 @@ def _restart(chain, polished, unique, owners, starts, X_0T, tol, max_iter, which
     """Newton from ``starts`` (k, 6); row ``owners[j]`` is offered the solution reached from
     start ``which[j]`` (start j without ``which``; the owners of a start are rows of one
     pose, whose target it steps to). The first start of a row that converges to a solution
-    its pose does not have replaces the row."""
+    its pose does not have replaces the row. Starts equal to one before them are stepped
+    once (:func:`_stepped_once`)."""
     if not owners.size:
         return
     if which is None:
         which = np.arange(owners.size)
-    poses = np.empty(starts.shape[0], dtype=np.int64)
+    poses = np.full(starts.shape[0], -1)              # (-1: a start no row is offered)
     poses[which] = owners // 8
-    q, converged, X, measures, errors = _newton(*chain, starts, X_0T[poses], tol,
+    used, which = np.unique(_stepped_once(starts, poses)[which], return_inverse=True)
+    q, converged, X, measures, errors = _newton(*chain, starts[used], X_0T[poses[used]], tol,
                                                 min(max_iter, _RESTART_ITER), _RESTART_GIVE_UP)
     q, converged = q[which], converged[which]
     if compiled_ready():
@@ -1476,6 +1478,22 @@ def _restart(chain, polished, unique, owners, starts, X_0T, tol, max_iter, which
         taken = _accept(polished, unique, owners, converged, q)
     polished.record(owners[taken], q[taken], True, X[which[taken]], measures[:, which[taken]],
                     errors[:, which[taken]])
+
+
+def _stepped_once(starts, poses):
+    """For each of the starts (m, 6), of the poses ``poses`` (m,), the first start of its
+    pose equal to it, joint by joint (itself if none before it is): a start repeated
+    converges where the first does, and is stepped once. (The members of the exact arm's
+    wrist family hold one joint vector for each branch away from the wrist singularity;
+    the moves of two rows that hold one start are the same moves.)"""
+    keys = np.column_stack([poses, starts])
+    order = np.lexsort(keys.T[::-1])                    # (stable: equal keys by index)
+    ordered = keys[order]
+    new = np.ones(order.size, dtype=bool)
+    new[1:] = (ordered[1:] != ordered[:-1]).any(axis=1)
+    first = np.empty_like(order)
+    first[order] = order[np.flatnonzero(new)][np.cumsum(new) - 1]
+    return first
 
 
 def _accept(polished, unique, owners, converged, q):
