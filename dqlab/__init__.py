@@ -9,7 +9,7 @@ array-likes and works on the last axis, broadcasting over leading axes.
 
 import importlib
 
-__version__ = "0.1.10"
+__version__ = "0.1.11"
 
 # The math core the chapters use, re-exported at the top level (``dqlab.quaternion_product``,
 # the public contract of ../shared/DESIGN.md among them); every other function is reached
